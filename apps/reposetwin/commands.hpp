@@ -1,0 +1,14 @@
+// The subcommands of `reposetwin`; each add_*_command registers one on the app.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace reposetwin::cli {
+
+/// Exit code set by the subcommand that ran (0 = success).
+int exit_code();
+void set_exit_code(int code);
+
+void add_run_command(CLI::App& app);
+
+}  // namespace reposetwin::cli

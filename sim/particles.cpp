@@ -1,0 +1,51 @@
+#include "sim/particles.hpp"
+
+#include <cassert>
+
+namespace reposetwin::sim {
+
+void Particles::permute(const std::vector<std::size_t>& order) {
+  assert(order.size() == size());
+#define REPOSETWIN_PERMUTE_FIELD(type, name, doc)                             \
+  {                                                                           \
+    std::vector<type> tmp(order.size());                                      \
+    for (std::size_t i = 0; i < order.size(); ++i) tmp[i] = name[order[i]];   \
+    name.swap(tmp);                                                           \
+  }
+  REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_PERMUTE_FIELD)
+#undef REPOSETWIN_PERMUTE_FIELD
+}
+
+void Particles::keep(const std::vector<char>& flags) {
+  assert(flags.size() == size());
+  std::vector<std::size_t> order;
+  order.reserve(size());
+  for (std::size_t i = 0; i < flags.size(); ++i)
+    if (flags[i]) order.push_back(i);
+#define REPOSETWIN_KEEP_FIELD(type, name, doc)                                \
+  {                                                                           \
+    std::vector<type> tmp(order.size());                                      \
+    for (std::size_t i = 0; i < order.size(); ++i) tmp[i] = name[order[i]];   \
+    name.swap(tmp);                                                           \
+  }
+  REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_KEEP_FIELD)
+#undef REPOSETWIN_KEEP_FIELD
+}
+
+std::size_t Particles::add(const Vec3& position, double r, double density, std::int32_t mat,
+                           std::int64_t pid) {
+  const double m = density * 4.0 / 3.0 * 3.14159265358979323846 * r * r * r;
+  x.push_back(position);
+  v.push_back(Vec3::Zero());
+  w.push_back(Vec3::Zero());
+  force.push_back(Vec3::Zero());
+  torque.push_back(Vec3::Zero());
+  radius.push_back(r);
+  mass.push_back(m);
+  inertia.push_back(0.4 * m * r * r);
+  material.push_back(mat);
+  id.push_back(pid);
+  return size() - 1;
+}
+
+}  // namespace reposetwin::sim
