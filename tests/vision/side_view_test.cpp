@@ -1,0 +1,114 @@
+// Tests of vision/side_view against cones drawn analytically (tests/vision/synthetic.hpp).
+#include "vision/side_view.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tests/vision/synthetic.hpp"
+
+namespace reposetwin::vision {
+namespace {
+
+using synthetic::SideScene;
+
+double true_theta_deg(double h, double d) {
+  return std::atan(2.0 * h / d) * 180.0 / synthetic::kPi;
+}
+
+TEST(SideView, CleanConeGivesThetaAndSize) {
+  for (double h : {40.0, 60.0, 90.0}) {
+    SideScene s;
+    s.height_mm = h;
+    s.diameter_mm = 200.0;
+    const SideProfile p = measure_side_pixels(synthetic::draw_side(s));
+    const double theta = true_theta_deg(h, 200.0);
+    EXPECT_NEAR(p.theta_deg, theta, 0.3) << "H = " << h;
+    EXPECT_NEAR(p.left.angle_deg, theta, 0.5) << "H = " << h;
+    EXPECT_NEAR(p.right.angle_deg, theta, 0.5) << "H = " << h;
+    EXPECT_NEAR(p.height_px, h / s.mm_per_px, 1.0);
+    EXPECT_NEAR(p.diameter_px, 200.0 / s.mm_per_px, 1.5);
+    EXPECT_NEAR(p.plate.v_at(640.0), s.plate_v, 0.3);  // the plate line, detected
+    EXPECT_NEAR(p.plate.tilt_deg(), 0.0, 0.05);
+    EXPECT_GT(p.sigma_theta_deg, 0.0);
+    EXPECT_LT(p.sigma_theta_deg, 0.3);
+  }
+}
+
+TEST(SideView, AnyScaleAndOffCentre) {
+  SideScene s;
+  s.mm_per_px = 0.6;  // a small pile in the image
+  s.height_mm = 70.0;
+  s.diameter_mm = 180.0;
+  s.axis_u = 800.0;
+  s.bar_offset_mm = -250.0;
+  const SideProfile p = measure_side_pixels(synthetic::draw_side(s));
+  EXPECT_NEAR(p.theta_deg, true_theta_deg(70.0, 180.0), 0.3);
+  EXPECT_NEAR(0.5 * (p.toe_left.x + p.toe_right.x), 800.0, 1.0);
+}
+
+TEST(SideView, TiltedPlateLine) {
+  SideScene s;
+  s.tilt_deg = 1.5;
+  const SideProfile p = measure_side_pixels(synthetic::draw_side(s));
+  EXPECT_NEAR(p.plate.tilt_deg(), 1.5, 0.05);
+  EXPECT_NEAR(p.theta_deg, true_theta_deg(60.0, 200.0), 0.3);
+  EXPECT_NEAR(p.left.angle_deg, true_theta_deg(60.0, 200.0), 0.5);
+  EXPECT_NEAR(p.right.angle_deg, true_theta_deg(60.0, 200.0), 0.5);
+}
+
+TEST(SideView, HardPhotoConditions) {
+  SideScene s;
+  s.height_mm = 65.0;
+  s.diameter_mm = 210.0;
+  s.look.noise_sigma = 8.0;
+  s.look.blur_sigma_px = 1.5;
+  s.look.lighting_gradient = 0.2;
+  s.look.backdrop_texture = 12.0;
+  s.look.pile_speckle = 0.08;
+  s.look.seed = 7;
+  const SideProfile p = measure_side_pixels(synthetic::draw_side(s));
+  const double theta = true_theta_deg(65.0, 210.0);
+  EXPECT_NEAR(p.theta_deg, theta, 0.5);
+  EXPECT_NEAR(p.left.angle_deg, theta, 0.5);
+  EXPECT_NEAR(p.right.angle_deg, theta, 0.5);
+  EXPECT_GT(p.left.residual_px, 0.0);
+}
+
+TEST(SideView, RegionOfInterestKeepsFullImageCoordinates) {
+  SideScene s;
+  SideSettings set;
+  set.roi = cv::Rect(200, 200, 900, 400);
+  const SideProfile p = measure_side_pixels(synthetic::draw_side(s), set);
+  EXPECT_NEAR(p.plate.v_at(640.0), s.plate_v, 0.3);
+  EXPECT_NEAR(p.apex.y, s.plate_v - 60.0 / s.mm_per_px, 1.0);
+  EXPECT_NEAR(p.theta_deg, true_theta_deg(60.0, 200.0), 0.3);
+  // A region that cuts the apex off is refused rather than measured.
+  set.roi = cv::Rect(200, 300, 900, 400);
+  EXPECT_THROW(measure_side_pixels(synthetic::draw_side(s), set), std::runtime_error);
+}
+
+TEST(SideView, BadInputThrows) {
+  EXPECT_THROW(measure_side_pixels(cv::Mat()), std::invalid_argument);
+  EXPECT_THROW(measure_side_pixels(cv::Mat(400, 600, CV_8UC3, cv::Scalar(0, 0, 0))),
+               std::invalid_argument);
+  EXPECT_THROW(measure_side_pixels(cv::Mat(400, 600, CV_8UC3, cv::Scalar(200, 200, 200))),
+               std::invalid_argument);
+  // A plate but no pile.
+  SideScene s;
+  s.height_mm = 0.5;
+  s.scale_bar = false;
+  try {
+    measure_side_pixels(synthetic::draw_side(s), {}, "empty.png");
+    FAIL() << "expected an exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("empty.png"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no pile"), std::string::npos) << e.what();
+  }
+  SideSettings bad;
+  bad.flank_band_low = 0.9;
+  EXPECT_THROW(measure_side_pixels(synthetic::draw_side(SideScene{}), bad), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace reposetwin::vision

@@ -1,0 +1,205 @@
+#include "vision/image.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace reposetwin::vision {
+namespace {
+
+std::string str(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+// Monomials u^i v^j with i + j <= degree at normalised coordinates in [-1, 1].
+void monomials(double x, double y, int degree, float* out) {
+  int k = 0;
+  for (int d = 0; d <= degree; ++d) {
+    for (int i = d; i >= 0; --i) {
+      const int j = d - i;
+      out[k++] = static_cast<float>(std::pow(x, i) * std::pow(y, j));
+    }
+  }
+}
+
+int monomial_count(int degree) { return (degree + 1) * (degree + 2) / 2; }
+
+}  // namespace
+
+cv::Mat load_image(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw std::invalid_argument(path + ": image file does not exist or is not a regular file");
+  cv::Mat img;
+  try {
+    img = cv::imread(path, cv::IMREAD_COLOR);
+  } catch (const cv::Exception& e) {
+    throw std::invalid_argument(path + ": cannot decode image (" + e.what() + ")");
+  }
+  if (img.empty())
+    throw std::invalid_argument(path + ": not an image OpenCV can decode (or the image is empty)");
+  return img;
+}
+
+cv::Mat gray_levels(const cv::Mat& image, const std::string& where) {
+  if (image.empty()) throw std::invalid_argument(where + ": image is empty (0 x 0 pixels)");
+  const int depth = image.depth();
+  if (depth != CV_8U && depth != CV_16U)
+    throw std::invalid_argument(where + ": image depth must be 8 or 16 bit, got OpenCV depth " +
+                                str(depth));
+  cv::Mat gray;
+  switch (image.channels()) {
+    case 1:
+      gray = image;
+      break;
+    case 3:
+      cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+      break;
+    case 4:
+      cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY);
+      break;
+    default:
+      throw std::invalid_argument(where + ": image must have 1, 3 or 4 channels, got " +
+                                  str(image.channels()));
+  }
+  cv::Mat out;
+  gray.convertTo(out, CV_32F, depth == CV_16U ? 255.0 / 65535.0 : 1.0);
+  return out;
+}
+
+void check_contrast(const cv::Mat& gray, const std::string& where, double min_contrast) {
+  if (gray.empty()) throw std::invalid_argument(where + ": image is empty (0 x 0 pixels)");
+  cv::Mat g8;
+  gray.convertTo(g8, CV_8U);
+  const int channels[] = {0};
+  const int bins[] = {256};
+  const float range[] = {0.f, 256.f};
+  const float* ranges[] = {range};
+  cv::Mat hist;
+  cv::calcHist(&g8, 1, channels, cv::Mat(), hist, 1, bins, ranges);
+  const double total = static_cast<double>(g8.total());
+  double cum = 0.0;
+  int p1 = -1, p99 = 255;
+  for (int i = 0; i < 256; ++i) {
+    cum += hist.at<float>(i);
+    if (p1 < 0 && cum >= 0.01 * total) p1 = i;
+    if (cum >= 0.99 * total) {
+      p99 = i;
+      break;
+    }
+  }
+  double max_level = 0.0;
+  cv::minMaxLoc(gray, nullptr, &max_level);
+  if (max_level < min_contrast)
+    throw std::invalid_argument(where + ": image is all black (brightest grey level " +
+                                str(max_level) + ")");
+  if (p99 - p1 < min_contrast)
+    throw std::invalid_argument(where +
+                                ": image has no contrast (grey levels 1st-99th percentile " +
+                                str(p1) + ".." + str(p99) + ")");
+}
+
+double otsu_threshold(const cv::Mat& values, double lo, double hi, const cv::Mat& mask) {
+  CV_Assert(values.type() == CV_32F && hi > lo);
+  cv::Mat v8;
+  values.convertTo(v8, CV_8U, 255.0 / (hi - lo), -lo * 255.0 / (hi - lo));
+  cv::Mat samples;
+  if (mask.empty()) {
+    samples = v8.isContinuous() ? v8.reshape(1, 1) : v8.clone().reshape(1, 1);
+  } else {
+    std::vector<uchar> kept;
+    kept.reserve(static_cast<size_t>(cv::countNonZero(mask)));
+    for (int r = 0; r < v8.rows; ++r) {
+      const uchar* m = mask.ptr<uchar>(r);
+      const uchar* p = v8.ptr<uchar>(r);
+      for (int c = 0; c < v8.cols; ++c)
+        if (m[c]) kept.push_back(p[c]);
+    }
+    if (kept.empty()) return 0.5 * (lo + hi);
+    samples = cv::Mat(kept, true).reshape(1, 1);
+  }
+  cv::Mat dummy;
+  const double t8 = cv::threshold(samples, dummy, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
+  return lo + (t8 + 0.5) * (hi - lo) / 255.0;
+}
+
+cv::Mat estimate_backdrop(const cv::Mat& gray, const FlatFieldSettings& s,
+                          const std::string& where) {
+  if (s.degree < 0 || s.degree > 4)
+    throw std::invalid_argument(where + ": flat_field.degree must be 0..4, got " + str(s.degree));
+  if (s.work_width_px < 16)
+    throw std::invalid_argument(where + ": flat_field.work_width_px must be >= 16, got " +
+                                str(s.work_width_px));
+  const double scale = std::min(1.0, static_cast<double>(s.work_width_px) / gray.cols);
+  cv::Mat small;
+  cv::resize(gray, small, cv::Size(), scale, scale, cv::INTER_AREA);
+  if (small.empty()) throw std::runtime_error(where + ": image too small for a backdrop estimate");
+
+  // First guess: Otsu's bright class is the backdrop.
+  const double t = otsu_threshold(small, 0.0, 256.0);
+  cv::Mat is_backdrop = small > t;
+  const int nk = monomial_count(s.degree);
+  cv::Mat coef = cv::Mat::zeros(nk, 1, CV_32F);
+  cv::Mat fit;
+  // Design matrix for every pixel of the small image (normalised coordinates).
+  cv::Mat design(small.rows * small.cols, nk, CV_32F);
+  for (int r = 0; r < small.rows; ++r) {
+    for (int c = 0; c < small.cols; ++c) {
+      const double x = small.cols > 1 ? 2.0 * c / (small.cols - 1) - 1.0 : 0.0;
+      const double y = small.rows > 1 ? 2.0 * r / (small.rows - 1) - 1.0 : 0.0;
+      monomials(x, y, s.degree, design.ptr<float>(r * small.cols + c));
+    }
+  }
+  const cv::Mat values = small.reshape(1, small.rows * small.cols);
+  for (int it = 0; it <= s.iterations; ++it) {
+    const cv::Mat flags = is_backdrop.reshape(1, small.rows * small.cols);
+    const int n = cv::countNonZero(flags);
+    if (n < 4 * nk)
+      throw std::runtime_error(where + ": no backdrop found (only " + str(n) +
+                               " bright pixels in the downsampled image)");
+    cv::Mat a(n, nk, CV_32F), b(n, 1, CV_32F);
+    int k = 0;
+    for (int i = 0; i < flags.rows; ++i) {
+      if (!flags.at<uchar>(i)) continue;
+      design.row(i).copyTo(a.row(k));
+      b.at<float>(k) = values.at<float>(i);
+      ++k;
+    }
+    cv::solve(a, b, coef, cv::DECOMP_QR);
+    fit = cv::Mat(design * coef).reshape(1, small.rows);
+    if (it == s.iterations) break;
+    cv::Mat rel;
+    cv::absdiff(small, fit, rel);
+    is_backdrop = rel < s.backdrop_band * cv::max(fit, 1.0);
+  }
+  cv::Mat full;
+  cv::resize(fit, full, gray.size(), 0, 0, cv::INTER_LINEAR);
+  return cv::max(full, 1.0);
+}
+
+cv::Mat flat_field(const cv::Mat& gray, const cv::Mat& backdrop, const FlatFieldSettings& settings,
+                   const std::string& where) {
+  cv::Mat level;
+  if (backdrop.empty()) {
+    level = estimate_backdrop(gray, settings, where);
+  } else {
+    level = gray_levels(backdrop, where + ": backdrop image");
+    if (level.size() != gray.size())
+      throw std::invalid_argument(where + ": backdrop image is " + str(level.cols) + "x" +
+                                  str(level.rows) + " but the image is " + str(gray.cols) + "x" +
+                                  str(gray.rows));
+    level = cv::max(level, 1.0);
+  }
+  cv::Mat out;
+  cv::divide(gray, level, out);
+  return out;
+}
+
+}  // namespace reposetwin::vision
