@@ -1,0 +1,57 @@
+// renderer: offscreen pictures of a pile of spheres as the lab's cameras would take them.
+//
+// Design note. A pile holds 1e4 to 1e6 spheres, and the measurement wants their silhouettes
+// exact, so spheres are not meshed: each is one instanced screen-space quad bounding its
+// projection, and the fragment shader casts the pixel's ray at the sphere, discards misses and
+// writes the hit's depth (gl_FragDepth), which is exact for any sphere size at a cost of a few
+// dozen flops per covered pixel. The plate, funnel or column and the scale reference are small
+// triangle meshes drawn with the same projection.
+//
+// The projection reproduces camera::project exactly: positions go to the camera frame on the CPU
+// in double precision, and the GL projection maps u = cx + f x / z (or cx + f x) to the pixel
+// whose centre is at integer u, rows top first. Lens distortion is not something a linear
+// projection can do, so a distorted camera is rendered as its undistorted twin on a canvas large
+// enough to hold every ray the lens sees, then warped with cv::remap through maps computed from
+// camera::undistort_normalised: every point lands where camera::project puts it.
+//
+// Determinism: fixed draw order, no blending, per-particle tints from a counter-based hash of
+// (seed, index); llvmpipe's tiled rasterisation is deterministic, so the same input gives the
+// same bytes.
+#pragma once
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "camera/camera.hpp"
+#include "render/scene.hpp"
+
+namespace reposetwin::render {
+
+/// Owns an offscreen GL context, the shaders and the buffers; reuse one for many renders.
+/// Not thread-safe: use one per thread.
+class Renderer {
+ public:
+  /// Creates the context and compiles the shaders. Throws std::runtime_error on GL failure.
+  Renderer();
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  /// Renders the scene through `cam` at the camera's resolution: an 8-bit BGR image, top row
+  /// first. Throws std::invalid_argument on bad input (see validate(scene, cam, options)).
+  cv::Mat render(const Scene& scene, const camera::Camera& cam, const RenderOptions& options = {});
+
+  /// The GL version and renderer strings, for provenance.
+  std::string gl_description() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// One-shot convenience: a fresh Renderer for a single image.
+cv::Mat render_image(const Scene& scene, const camera::Camera& cam,
+                     const RenderOptions& options = {});
+
+}  // namespace reposetwin::render
