@@ -35,17 +35,20 @@ void Particles::keep(const std::vector<char>& flags) {
 std::size_t Particles::add(const Vec3& position, double r, double density, std::int32_t mat,
                            std::int64_t pid) {
   const double m = density * 4.0 / 3.0 * 3.14159265358979323846 * r * r * r;
-  x.push_back(position);
-  v.push_back(Vec3::Zero());
-  w.push_back(Vec3::Zero());
-  force.push_back(Vec3::Zero());
-  torque.push_back(Vec3::Zero());
-  radius.push_back(r);
-  mass.push_back(m);
-  inertia.push_back(0.4 * m * r * r);
-  material.push_back(mat);
-  id.push_back(pid);
-  return size() - 1;
+  const std::size_t i = size();
+  resize(i + 1);  // every field of the list grows; those not set below are value-initialised
+  x[i] = position;
+  v[i].setZero();
+  w[i].setZero();
+  force[i].setZero();
+  torque[i].setZero();
+  radius[i] = r;
+  mass[i] = m;
+  inertia[i] = 0.4 * m * r * r;
+  material[i] = mat;
+  id[i] = pid;
+  wall_history[i] = WallHistory{};
+  return i;
 }
 
 }  // namespace reposetwin::sim

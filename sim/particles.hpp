@@ -6,13 +6,20 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "sim/contact.hpp"
+
 namespace reposetwin::sim {
 
-using Vec3 = Eigen::Vector3d;
+/// Most walls a scene may have (plate, funnel, column, gate, ...).
+inline constexpr int kMaxWalls = 6;
+
+/// The contact history of one particle with each wall.
+using WallHistory = std::array<ContactHistory, kMaxWalls>;
 
 // X(type, name, unit and meaning)
 #define REPOSETWIN_PARTICLE_FIELDS(X)                                   \
@@ -25,7 +32,8 @@ using Vec3 = Eigen::Vector3d;
   X(double, mass, "mass [kg]")                                          \
   X(double, inertia, "moment of inertia, 2/5 m r^2 [kg m^2]")           \
   X(std::int32_t, material, "material index into Model::materials")     \
-  X(std::int64_t, id, "stable particle id, unchanged by reordering")
+  X(std::int64_t, id, "stable particle id, unchanged by reordering")         \
+  X(WallHistory, wall_history, "tangential and rolling springs per wall")
 
 /// Per-particle arrays, all of the same length.
 struct Particles {

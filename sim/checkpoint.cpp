@@ -1,0 +1,151 @@
+#include "sim/checkpoint.hpp"
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <type_traits>
+
+namespace reposetwin::sim {
+namespace {
+
+constexpr char kMagic[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '1'};
+
+class Writer {
+ public:
+  explicit Writer(std::ofstream& out) : out_(out) {}
+  template <class T>
+  void pod(const T& v) {
+    static_assert(std::is_standard_layout_v<T>);  // plain data (Eigen fixed vectors included)
+    out_.write(reinterpret_cast<const char*>(&v), sizeof(T));
+  }
+  template <class T>
+  void vec(const std::vector<T>& v) {
+    static_assert(std::is_standard_layout_v<T>);  // plain data (Eigen fixed vectors included)
+    pod<std::uint64_t>(v.size());
+    out_.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(T)));
+  }
+
+ private:
+  std::ofstream& out_;
+};
+
+class Reader {
+ public:
+  Reader(std::ifstream& in, const std::string& path) : in_(in), path_(path) {}
+  template <class T>
+  void pod(T& v) {
+    in_.read(reinterpret_cast<char*>(&v), sizeof(T));
+    check();
+  }
+  template <class T>
+  void vec(std::vector<T>& v) {
+    std::uint64_t n = 0;
+    pod(n);
+    if (n > (std::uint64_t{1} << 34) / sizeof(T)) fail("an array length is implausible");
+    v.resize(n);
+    in_.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
+    check();
+  }
+  [[noreturn]] void fail(const std::string& what) {
+    throw std::runtime_error(path_ + ": checkpoint " + what);
+  }
+
+ private:
+  void check() {
+    if (!in_) fail("is truncated");
+  }
+  std::ifstream& in_;
+  std::string path_;
+};
+
+}  // namespace
+
+void write_checkpoint(const World& world, const std::string& path) {
+  const State& s = world.state();
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error(path + ": cannot write checkpoint");
+    out.write(kMagic, sizeof kMagic);
+    Writer w(out);
+    w.pod(world.model().dt);
+    w.pod<std::uint64_t>(world.model().walls.size());
+#define REPOSETWIN_WRITE_FIELD(type, name, doc) w.vec(s.particles.name);
+    REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_WRITE_FIELD)
+#undef REPOSETWIN_WRITE_FIELD
+    w.pod(s.time);
+    w.pod(s.step);
+    w.pod(s.next_id);
+    w.pod(s.forces_valid);
+    w.vec(s.walls);
+    const NeighborList& nl = s.neighbors;
+    w.pod(nl.skin);
+    w.pod(nl.builds);
+    w.vec(nl.start);
+    w.vec(nl.second);
+    w.vec(nl.history);
+    w.vec(nl.in_start);
+    w.vec(nl.in_pairs);
+    w.vec(nl.x_at_build);
+    w.vec(s.pair_overlap);
+    out.flush();
+    if (!out) throw std::runtime_error(path + ": checkpoint write failed");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw std::runtime_error(path + ": cannot move the checkpoint into place");
+}
+
+void read_checkpoint(World& world, const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot open checkpoint");
+  char magic[8];
+  in.read(magic, sizeof magic);
+  Reader r(in, path);
+  if (!in || std::memcmp(magic, kMagic, sizeof kMagic) != 0) r.fail("is not a ReposeTwin checkpoint");
+  double dt = 0.0;
+  r.pod(dt);
+  if (dt != world.model().dt) r.fail("was made with another time step");
+  std::uint64_t nwalls = 0;
+  r.pod(nwalls);
+  if (nwalls != world.model().walls.size()) r.fail("was made with another number of walls");
+  State s;
+#define REPOSETWIN_READ_FIELD(type, name, doc) r.vec(s.particles.name);
+  REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_READ_FIELD)
+#undef REPOSETWIN_READ_FIELD
+  const std::size_t n = s.particles.x.size();
+#define REPOSETWIN_CHECK_FIELD(type, name, doc) \
+  if (s.particles.name.size() != n) r.fail("has particle arrays of different lengths");
+  REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_CHECK_FIELD)
+#undef REPOSETWIN_CHECK_FIELD
+  r.pod(s.time);
+  r.pod(s.step);
+  r.pod(s.next_id);
+  r.pod(s.forces_valid);
+  r.vec(s.walls);
+  NeighborList& nl = s.neighbors;
+  r.pod(nl.skin);
+  r.pod(nl.builds);
+  r.vec(nl.start);
+  r.vec(nl.second);
+  r.vec(nl.history);
+  r.vec(nl.in_start);
+  r.vec(nl.in_pairs);
+  r.vec(nl.x_at_build);
+  r.vec(s.pair_overlap);
+  if (s.walls.size() != nwalls) r.fail("has an inconsistent wall count");
+  const std::size_t np = nl.second.size();
+  if (nl.history.size() != np || s.pair_overlap.size() != np)
+    r.fail("has an inconsistent neighbor list");
+  for (std::int32_t j : nl.second)
+    if (j < 0 || static_cast<std::size_t>(j) >= n) r.fail("has a neighbor index out of range");
+  s.pair_force.assign(np, Vec3::Zero());
+  s.pair_torque_i.assign(np, Vec3::Zero());
+  s.pair_torque_j.assign(np, Vec3::Zero());
+  nl.parallel_min = static_cast<std::size_t>(world.model().settings.parallel_min_particles);
+  world.state() = std::move(s);
+}
+
+}  // namespace reposetwin::sim

@@ -1,0 +1,23 @@
+// Checkpoints: the whole State in one binary file, from which a run resumes bit-identically.
+//
+// The particle arrays are written by iterating the particle field list, so a new field is saved
+// without touching this code. The neighbor list (with every contact's spring history) is saved
+// as it is, so the resumed run rebuilds it at exactly the same steps as an uninterrupted one.
+// Files are written to a temporary name and renamed into place (never half a checkpoint).
+#pragma once
+
+#include <string>
+
+#include "sim/world.hpp"
+
+namespace reposetwin::sim {
+
+/// Writes the world's state (and the time step it was made with) to `path` atomically.
+void write_checkpoint(const World& world, const std::string& path);
+
+/// Replaces the world's state by the checkpoint's. Throws std::runtime_error naming the path if
+/// the file is unreadable, truncated, of another format, or made with another time step or
+/// wall count.
+void read_checkpoint(World& world, const std::string& path);
+
+}  // namespace reposetwin::sim

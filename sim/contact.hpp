@@ -1,0 +1,223 @@
+// Contact laws as small stateless kernels (after LAMMPS GRANULAR's gran_sub_mod_* classes).
+//
+// Design note. Each kernel takes plain parameters and the geometry of one contact and returns a
+// force or torque; contact history (the tangential spring, the rolling spring) is passed in and
+// updated explicitly, so a kernel can be tested one contact at a time against closed forms.
+// Conventions for one contact between body i and body j (j may be a wall):
+//   n        unit normal pointing from j to i,
+//   delta    overlap r_i + r_j - |x_i - x_j| > 0 (for a wall, r_i - distance),
+//   a_i, a_j lever arms, centre to contact point (r - delta/2 for a pair, r - delta on a wall),
+//   v_rel    velocity of i relative to j at the contact point,
+//   forces and torques returned act on i; body j receives -force and its own torque.
+// The equations cited are those of EDEM's Hertz-Mindlin (no slip) model, as also used by
+// LIGGGHTS (normal_model hertz, tangential_model history) and LAMMPS (hertz/material, mindlin).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products
+#include <cmath>
+#include <cstddef>
+#include <string_view>
+
+namespace reposetwin::sim {
+
+using Vec3 = Eigen::Vector3d;
+
+/// Rolling resistance laws (Ai, Chen, Rotter, Ooi 2011, Powder Technol. 206:269).
+enum class RollingModel {
+  kNone,  // no rolling resistance
+  kCdt,   // type A: constant directional torque (EDEM "standard", LIGGGHTS cdt)
+  kEpsd,  // type C: elastic-plastic spring-dashpot (EDEM type C, LIGGGHTS epsd2)
+};
+
+/// One row per rolling model: the scene file's keyword and, because mu_r values do not port
+/// between codes otherwise, exactly which radius and which angular velocity the law uses.
+struct RollingModelInfo {
+  std::string_view keyword;
+  RollingModel model;
+  std::string_view torque;
+  std::string_view radius;
+  std::string_view angular_velocity;
+};
+
+inline constexpr RollingModelInfo kRollingModels[] = {
+    {"none", RollingModel::kNone, "none", "-", "-"},
+    {"cdt", RollingModel::kCdt,
+     "M_i = -mu_r |F_n| a_i w_i/|w_i| on each body separately (EDEM Standard, type A)",
+     "a_i: the body's own centre-to-contact distance (about R_i, as EDEM)",
+     "w_i: the body's own angular velocity (as EDEM; LIGGGHTS cdt uses w_i - w_j and R*)"},
+    {"epsd", RollingModel::kEpsd,
+     "incremental spring k_r = k_t R_r^2 on the relative rolling rotation, capped at "
+     "mu_r |F_n| R_r; viscous damping 2 eta_r sqrt(I_r k_r) below the cap (type C, LIGGGHTS epsd2)",
+     "R_r = R* = R_i R_j / (R_i + R_j) (R_i on a wall), as LIGGGHTS and LAMMPS",
+     "w_r = (w_i - w_j) minus its twist component along n"},
+};
+
+/// Looks a rolling model up by keyword; returns nullptr if unknown.
+inline const RollingModelInfo* find_rolling_model(std::string_view keyword) {
+  for (const auto& row : kRollingModels)
+    if (row.keyword == keyword) return &row;
+  return nullptr;
+}
+
+inline std::string_view rolling_model_keyword(RollingModel m) {
+  for (const auto& row : kRollingModels)
+    if (row.model == m) return row.keyword;
+  return "?";
+}
+
+/// Constants of a material pair, derived once per run (Model::finalize).
+struct ContactConstants {
+  double e_star = 0.0;   // 1/E* = (1-nu_i^2)/E_i + (1-nu_j^2)/E_j [Pa]
+  double g_star = 0.0;   // 1/G* = 2(2-nu_i)(1+nu_i)/E_i + 2(2-nu_j)(1+nu_j)/E_j [Pa]
+  double beta = 0.0;     // ln e / sqrt(ln^2 e + pi^2) [-] (0 for e = 1)
+  double mu_s = 0.0;     // Coulomb friction [-]
+  double mu_r = 0.0;     // rolling resistance coefficient [-]
+  double eta_r = 0.0;    // EPSD rolling damping ratio [-]
+  RollingModel rolling = RollingModel::kNone;
+};
+
+/// Damping factor beta from the coefficient of restitution e (EDEM, LIGGGHTS, LAMMPS):
+/// beta = ln e / sqrt(ln^2 e + pi^2). With the Hertz spring and the damping below, the
+/// rebound/approach speed ratio of a head-on collision equals e exactly.
+inline double damping_beta(double restitution) {
+  constexpr double kPi = 3.14159265358979323846;
+  if (restitution >= 1.0) return 0.0;
+  const double l = std::log(restitution);
+  return l / std::sqrt(l * l + kPi * kPi);
+}
+
+/// Everything a kernel needs about one contact.
+struct ContactInput {
+  Vec3 n;            // unit normal, from j to i
+  double delta;      // overlap [m], > 0
+  double r_eff;      // R* [m]
+  double m_eff;      // m* [kg]
+  double i_roll;     // I_r, effective rolling inertia [kg m^2] (EPSD damping)
+  double a_i, a_j;   // lever arms [m] (a_j = 0 for a wall)
+  Vec3 v_rel;        // velocity of i relative to j at the contact point [m/s]
+  Vec3 w_i, w_j;     // angular velocities [rad/s] (w_j = 0 for a wall)
+};
+
+/// History carried by a contact from step to step.
+struct ContactHistory {
+  Vec3 tangential = Vec3::Zero();  // tangential spring displacement of i relative to j [m]
+  Vec3 rolling = Vec3::Zero();     // EPSD spring torque acting on i [N m]
+};
+
+struct ContactOutput {
+  Vec3 force;     // on i [N]
+  Vec3 torque_i;  // on i [N m]
+  Vec3 torque_j;  // on j [N m]
+  double normal;  // signed normal force magnitude (elastic + damping) [N]
+};
+
+/// Hertz normal force with restitution damping (EDEM Hertz-Mindlin):
+///   F_n = 4/3 E* sqrt(R*) delta^1.5 - 2 sqrt(5/6) beta sqrt(S_n m*) v_n,
+///   S_n = 2 E* sqrt(R* delta),   v_n = v_rel . n (negative while approaching).
+/// Returns the signed magnitude along n (the damping may make it slightly attractive at the
+/// end of the contact; this is what makes the restitution exact). Also returns S_n.
+inline double hertz_normal(const ContactConstants& c, double delta, double r_eff, double m_eff,
+                           double v_n, double* s_n) {
+  const double sqrt_rd = std::sqrt(r_eff * delta);
+  *s_n = 2.0 * c.e_star * sqrt_rd;
+  const double elastic = (4.0 / 3.0) * c.e_star * sqrt_rd * delta;
+  const double damp = 2.0 * 0.91287092917527685576 * c.beta * std::sqrt(*s_n * m_eff);  // sqrt(5/6)
+  return elastic + damp * v_n;  // beta < 0 and v_n < 0 on approach: damping repels
+}
+
+/// Mindlin no-slip tangential force on an incremental spring with Coulomb cap (EDEM):
+///   S_t = 8 G* sqrt(R* delta), F_t = -S_t s - 2 sqrt(5/6) beta sqrt(S_t m*) v_t ... with
+/// |F_t| <= mu_s F_n. The spring s is first rotated into the current tangent plane keeping its
+/// length; when the cap is reached the spring is truncated to -F_t / S_t (no damping in slip).
+inline Vec3 mindlin_tangential(const ContactConstants& c, const Vec3& n, double delta,
+                               double r_eff, double m_eff, const Vec3& v_t, double f_n,
+                               double dt, Vec3& spring) {
+  // Rotate the spring into the current tangent plane, preserving its magnitude.
+  const double len = spring.norm();
+  if (len > 0.0) {
+    spring -= spring.dot(n) * n;
+    const double len2 = spring.norm();
+    spring *= len2 > 0.0 ? len / len2 : 0.0;
+  }
+  spring += v_t * dt;
+  const double s_t = 8.0 * c.g_star * std::sqrt(r_eff * delta);
+  const double gamma_t = -2.0 * 0.91287092917527685576 * c.beta * std::sqrt(s_t * m_eff);
+  Vec3 f = -s_t * spring - gamma_t * v_t;
+  const double cap = c.mu_s * std::max(f_n, 0.0);
+  const double fmag = f.norm();
+  if (fmag > cap) {
+    f *= fmag > 0.0 ? cap / fmag : 0.0;
+    spring = s_t > 0.0 ? Vec3(-f / s_t) : Vec3::Zero();
+  }
+  return f;
+}
+
+/// Type A, constant directional torque on one body: M = -mu_r |F_n| a w/|w|.
+inline Vec3 rolling_cdt(double mu_r, double f_n, double lever, const Vec3& w) {
+  const double wn = w.norm();
+  if (wn <= 0.0) return Vec3::Zero();
+  return (-mu_r * std::max(f_n, 0.0) * lever / wn) * w;
+}
+
+/// Type C, elastic-plastic spring-dashpot (Ai et al. 2011, eqs. 13-19; LIGGGHTS epsd2):
+///   k_r = S_t R_r^2, M_k <- M_k - k_r w_r dt, |M_k| <= mu_r F_n R_r,
+///   M_d = -2 eta_r sqrt(I_r k_r) w_r while |M_k| is below the cap (zero at the cap).
+/// Returns the torque on i; j receives its negative. `spring` is the torque M_k on i.
+inline Vec3 rolling_epsd(const ContactConstants& c, const Vec3& n, double delta, double r_eff,
+                         double i_roll, const Vec3& w_i, const Vec3& w_j, double f_n, double dt,
+                         Vec3& spring) {
+  Vec3 w_r = w_i - w_j;
+  w_r -= w_r.dot(n) * n;  // rolling only: remove the twist about n
+  const double len = spring.norm();
+  if (len > 0.0) {
+    spring -= spring.dot(n) * n;
+    const double len2 = spring.norm();
+    spring *= len2 > 0.0 ? len / len2 : 0.0;
+  }
+  const double k_r = 8.0 * c.g_star * std::sqrt(r_eff * delta) * r_eff * r_eff;
+  spring -= k_r * dt * w_r;
+  const double cap = c.mu_r * std::max(f_n, 0.0) * r_eff;
+  const double m = spring.norm();
+  if (m >= cap) {
+    spring *= m > 0.0 ? cap / m : 0.0;
+    return spring;
+  }
+  return spring - (2.0 * c.eta_r * std::sqrt(i_roll * k_r)) * w_r;
+}
+
+/// The full Hertz-Mindlin contact with rolling resistance: normal, tangential, rolling.
+inline ContactOutput hertz_mindlin(const ContactConstants& c, const ContactInput& in, double dt,
+                                   ContactHistory& h) {
+  ContactOutput out;
+  const double v_n = in.v_rel.dot(in.n);
+  double s_n = 0.0;
+  const double f_n = hertz_normal(c, in.delta, in.r_eff, in.m_eff, v_n, &s_n);
+  const Vec3 v_t = in.v_rel - v_n * in.n;
+  const Vec3 f_t =
+      mindlin_tangential(c, in.n, in.delta, in.r_eff, in.m_eff, v_t, f_n, dt, h.tangential);
+  out.normal = f_n;
+  out.force = f_n * in.n + f_t;
+  // Lever from i's centre to the contact point is -a_i n; from j's centre it is +a_j n.
+  const Vec3 nxf = in.n.cross(f_t);
+  out.torque_i = -in.a_i * nxf;
+  out.torque_j = -in.a_j * nxf;
+  switch (c.rolling) {
+    case RollingModel::kNone:
+      break;
+    case RollingModel::kCdt:
+      out.torque_i += rolling_cdt(c.mu_r, f_n, in.a_i, in.w_i);
+      out.torque_j += rolling_cdt(c.mu_r, f_n, in.a_j, in.w_j);
+      break;
+    case RollingModel::kEpsd: {
+      const Vec3 m = rolling_epsd(c, in.n, in.delta, in.r_eff, in.i_roll, in.w_i, in.w_j, f_n,
+                                  dt, h.rolling);
+      out.torque_i += m;
+      out.torque_j -= m;
+      break;
+    }
+  }
+  return out;
+}
+
+}  // namespace reposetwin::sim

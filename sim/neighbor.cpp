@@ -1,0 +1,233 @@
+#include "sim/neighbor.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <unordered_map>
+
+namespace reposetwin::sim {
+namespace {
+
+std::uint64_t pair_key(std::int64_t id_a, std::int64_t id_b) {
+  assert(id_a >= 0 && id_a < (std::int64_t{1} << 32) && id_b >= 0 &&
+         id_b < (std::int64_t{1} << 32));
+  return (static_cast<std::uint64_t>(id_a) << 32) | static_cast<std::uint64_t>(id_b);
+}
+
+void build_incoming(NeighborList& list, std::size_t n);
+
+bool is_active(const ContactHistory& h) {
+  return h.tangential.squaredNorm() > 0.0 || h.rolling.squaredNorm() > 0.0;
+}
+
+/// A dense grid over the particles' bounding box.
+struct Grid {
+  Vec3 origin;
+  double h = 1.0;
+  int nx = 1, ny = 1, nz = 1;
+  int cell_of(const Vec3& x, int* ix, int* iy, int* iz) const {
+    *ix = std::clamp(static_cast<int>((x.x() - origin.x()) / h), 0, nx - 1);
+    *iy = std::clamp(static_cast<int>((x.y() - origin.y()) / h), 0, ny - 1);
+    *iz = std::clamp(static_cast<int>((x.z() - origin.z()) / h), 0, nz - 1);
+    return (*iz * ny + *iy) * nx + *ix;
+  }
+};
+
+Grid make_grid(const Particles& p, double skin) {
+  Vec3 lo = p.x[0], hi = p.x[0];
+  double r_min = p.radius[0];
+  for (std::size_t i = 1; i < p.size(); ++i) {
+    lo = lo.cwiseMin(p.x[i]);
+    hi = hi.cwiseMax(p.x[i]);
+    r_min = std::min(r_min, p.radius[i]);
+  }
+  Grid g;
+  g.origin = lo;
+  g.h = 2.0 * r_min + skin;
+  const Vec3 ext = hi - lo;
+  // Keep the grid no larger than a few cells per particle (sparse or scattered particles).
+  const double max_cells = 8.0 * static_cast<double>(p.size()) + 1000.0;
+  for (;;) {
+    const double cells = (std::floor(ext.x() / g.h) + 1) * (std::floor(ext.y() / g.h) + 1) *
+                         (std::floor(ext.z() / g.h) + 1);
+    if (cells <= max_cells) break;
+    g.h *= 1.26;
+  }
+  g.nx = static_cast<int>(std::floor(ext.x() / g.h)) + 1;
+  g.ny = static_cast<int>(std::floor(ext.y() / g.h)) + 1;
+  g.nz = static_cast<int>(std::floor(ext.z() / g.h)) + 1;
+  return g;
+}
+
+}  // namespace
+
+bool NeighborList::needs_rebuild(const Particles& p) const {
+  const std::size_t n = p.size();
+  if (x_at_build.size() != n || start.size() != n + 1) return true;
+  double max2 = 0.0;
+#pragma omp parallel for reduction(max : max2) schedule(static) if (n > parallel_min)
+  for (std::size_t i = 0; i < n; ++i) max2 = std::max(max2, (p.x[i] - x_at_build[i]).squaredNorm());
+  return 4.0 * max2 > skin * skin;
+}
+
+void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) {
+  const std::size_t n = p.size();
+  ++list.builds;
+  // 1. Remember the histories of the contacts that are active now, by stable ids.
+  std::unordered_map<std::uint64_t, ContactHistory> old;
+  if (list.start.size() == n + 1) {
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::int32_t k = list.start[i]; k < list.start[i + 1]; ++k) {
+        if (is_active(list.history[k])) old.emplace(pair_key(p.id[i], p.id[list.second[k]]),
+                                                    list.history[k]);
+      }
+    }
+  }
+  list.start.assign(n + 1, 0);
+  list.second.clear();
+  list.history.clear();
+  list.in_start.assign(n + 1, 0);
+  list.in_pairs.clear();
+  list.x_at_build = p.x;
+  if (n == 0) return;
+
+  // 2. Bin particles into cells (counting sort); optionally reorder them by cell.
+  const Grid g = make_grid(p, list.skin);
+  const std::size_t ncell = static_cast<std::size_t>(g.nx) * g.ny * g.nz;
+  std::vector<std::int32_t> cell(n);
+  std::vector<std::int32_t> cell_start(ncell + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    int ix, iy, iz;
+    cell[i] = g.cell_of(p.x[i], &ix, &iy, &iz);
+    ++cell_start[cell[i] + 1];
+  }
+  for (std::size_t c = 0; c < ncell; ++c) cell_start[c + 1] += cell_start[c];
+  std::vector<std::size_t> order(n);
+  {
+    std::vector<std::int32_t> fill(cell_start.begin(), cell_start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) order[fill[cell[i]]++] = i;
+  }
+  if (sort_particles) {
+    p.permute(order);
+    list.x_at_build = p.x;
+    for (std::size_t k = 0; k < n; ++k) order[k] = k;
+  }
+  // order[k] = particle index of the k-th entry in cell order.
+
+  // 3. Each particle collects its partners: no larger than itself, within 2 r_i + skin.
+  const double skin = list.skin;
+  auto for_each_partner = [&](std::size_t i, auto&& emit) {
+    int ix, iy, iz;
+    g.cell_of(p.x[i], &ix, &iy, &iz);
+    const double ri = p.radius[i];
+    const int reach = static_cast<int>(std::ceil((2.0 * ri + skin) / g.h));
+    for (int z = std::max(0, iz - reach); z <= std::min(g.nz - 1, iz + reach); ++z) {
+      for (int y = std::max(0, iy - reach); y <= std::min(g.ny - 1, iy + reach); ++y) {
+        const int row = (z * g.ny + y) * g.nx;
+        const int c0 = row + std::max(0, ix - reach);
+        const int c1 = row + std::min(g.nx - 1, ix + reach);
+        for (std::int32_t k = cell_start[c0]; k < cell_start[c1 + 1]; ++k) {
+          const std::size_t j = order[k];
+          const double rj = p.radius[j];
+          if (j == i || rj > ri || (rj == ri && j < i)) continue;
+          const double cut = ri + rj + skin;
+          if ((p.x[i] - p.x[j]).squaredNorm() < cut * cut) emit(static_cast<std::int32_t>(j));
+        }
+      }
+    }
+  };
+  std::vector<std::int32_t> count(n, 0);
+#pragma omp parallel for schedule(dynamic, 256) if (n > list.parallel_min)
+  for (std::size_t i = 0; i < n; ++i) {
+    std::int32_t c = 0;
+    for_each_partner(i, [&](std::int32_t) { ++c; });
+    count[i] = c;
+  }
+  for (std::size_t i = 0; i < n; ++i) list.start[i + 1] = list.start[i] + count[i];
+  list.second.resize(list.start[n]);
+  list.history.assign(list.start[n], ContactHistory{});
+#pragma omp parallel for schedule(dynamic, 256) if (n > list.parallel_min)
+  for (std::size_t i = 0; i < n; ++i) {
+    std::int32_t k = list.start[i];
+    for_each_partner(i, [&](std::int32_t j) { list.second[k++] = j; });
+    std::sort(list.second.begin() + list.start[i], list.second.begin() + list.start[i + 1]);
+  }
+
+  // 4. Carry histories over (a pair seen the other way round has its springs negated).
+  if (!old.empty()) {
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::int32_t k = list.start[i]; k < list.start[i + 1]; ++k) {
+        const std::int64_t a = p.id[i], b = p.id[list.second[k]];
+        if (auto it = old.find(pair_key(a, b)); it != old.end()) {
+          list.history[k] = it->second;
+        } else if (auto jt = old.find(pair_key(b, a)); jt != old.end()) {
+          list.history[k].tangential = -jt->second.tangential;
+          list.history[k].rolling = -jt->second.rolling;
+        }
+      }
+    }
+  }
+
+  // 5. Incoming CSR: for each particle, the pairs where it is second, in pair order.
+  build_incoming(list, n);
+}
+
+namespace {
+
+void build_incoming(NeighborList& list, std::size_t n) {
+  list.in_start.assign(n + 1, 0);
+  for (std::int32_t j : list.second) ++list.in_start[j + 1];
+  for (std::size_t i = 0; i < n; ++i) list.in_start[i + 1] += list.in_start[i];
+  list.in_pairs.resize(list.second.size());
+  std::vector<std::int32_t> fill(list.in_start.begin(), list.in_start.end() - 1);
+  for (std::size_t k = 0; k < list.second.size(); ++k)
+    list.in_pairs[fill[list.second[k]]++] = static_cast<std::int32_t>(k);
+}
+
+}  // namespace
+
+void compact_neighbor_list(NeighborList& list, const std::vector<char>& keep) {
+  const std::size_t n_old = keep.size();
+  if (list.start.size() != n_old + 1) {  // no valid list: the next step rebuilds
+    list.x_at_build.clear();
+    return;
+  }
+  std::vector<std::int32_t> remap(n_old, -1);
+  std::int32_t n = 0;
+  for (std::size_t i = 0; i < n_old; ++i)
+    if (keep[i]) remap[i] = n++;
+  std::vector<std::int32_t> start(n + 1, 0), second;
+  std::vector<ContactHistory> history;
+  std::vector<Vec3> x_at_build;
+  for (std::size_t i = 0; i < n_old; ++i) {
+    if (!keep[i]) continue;
+    for (std::int32_t k = list.start[i]; k < list.start[i + 1]; ++k) {
+      const std::int32_t j = remap[list.second[k]];
+      if (j < 0) continue;
+      second.push_back(j);
+      history.push_back(list.history[k]);
+    }
+    start[remap[i] + 1] = static_cast<std::int32_t>(second.size());
+    x_at_build.push_back(list.x_at_build[i]);
+  }
+  list.start.swap(start);
+  list.second.swap(second);
+  list.history.swap(history);
+  list.x_at_build.swap(x_at_build);
+  build_incoming(list, static_cast<std::size_t>(n));
+}
+
+std::vector<std::pair<std::int32_t, std::int32_t>> brute_force_pairs(const Particles& p,
+                                                                     double cutoff_extra) {
+  std::vector<std::pair<std::int32_t, std::int32_t>> out;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (std::size_t j = i + 1; j < p.size(); ++j) {
+      const double cut = p.radius[i] + p.radius[j] + cutoff_extra;
+      if ((p.x[i] - p.x[j]).squaredNorm() < cut * cut)
+        out.emplace_back(static_cast<std::int32_t>(i), static_cast<std::int32_t>(j));
+    }
+  }
+  return out;
+}
+
+}  // namespace reposetwin::sim

@@ -1,0 +1,318 @@
+#include "sim/world.hpp"
+
+#include <omp.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+namespace reposetwin::sim {
+namespace {
+
+/// Adds the wall-clock time of its scope to a Profile field.
+class PhaseTimer {
+ public:
+  explicit PhaseTimer(double& acc) : acc_(acc), t0_(std::chrono::steady_clock::now()) {}
+  ~PhaseTimer() {
+    acc_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  }
+
+ private:
+  double& acc_;
+  std::chrono::steady_clock::time_point t0_;
+};
+
+}  // namespace
+
+const char* status_name(Status s) {
+  switch (s) {
+    case Status::kOk: return "ok";
+    case Status::kNan: return "nan";
+    case Status::kOverlap: return "overlap";
+    case Status::kEscaped: return "escaped";
+  }
+  return "?";
+}
+
+World::World(Model model) : model_(std::move(model)) {
+  if (model_.dt <= 0.0) throw std::logic_error("World: the model has not been finalised");
+  if (model_.settings.threads > 0) omp_set_num_threads(model_.settings.threads);
+  state_.walls.assign(model_.walls.size(), WallState{});
+  state_.neighbors.parallel_min = model_.settings.parallel_min_particles;
+  state_.neighbors.skin =
+      model_.settings.skin > 0.0 ? model_.settings.skin : 0.25 * 2.0 * model_.r_min;
+}
+
+std::size_t World::add_particle(const Vec3& x, double radius, int material) {
+  const double density = model_.materials.at(material).density;
+  const std::size_t i =
+      state_.particles.add(x, radius, density, material, state_.next_id++);
+  state_.forces_valid = false;
+  return i;
+}
+
+void World::set_wall_velocity(int wall, const Vec3& velocity) {
+  state_.walls.at(wall).velocity = velocity;
+}
+
+void World::set_wall_enabled(int wall, bool enabled) { state_.walls.at(wall).enabled = enabled; }
+
+void World::step() {
+  if (!state_.forces_valid) compute_forces();
+  kick_drift();
+  move_walls();
+  compute_forces();
+  kick();
+  state_.time += model_.dt;
+  ++state_.step;
+  ++profile_.steps;
+}
+
+void World::compute_forces() {
+  update_neighbors();
+  pair_forces();
+  gather_forces();
+  wall_forces();
+  state_.forces_valid = true;
+}
+
+void World::kick_drift() {
+  PhaseTimer t(profile_.kick_drift);
+  Particles& p = state_.particles;
+  const double dt = model_.dt, h = 0.5 * model_.dt;
+  const std::size_t n = p.size();
+  const std::size_t par_min = model_.settings.parallel_min_particles;
+#pragma omp parallel for schedule(static) if (n > par_min)
+  for (std::size_t i = 0; i < n; ++i) {
+    p.v[i] += (h / p.mass[i]) * p.force[i];
+    p.w[i] += (h / p.inertia[i]) * p.torque[i];
+    p.x[i] += dt * p.v[i];
+  }
+}
+
+void World::move_walls() {
+  PhaseTimer t(profile_.move_walls);
+  for (WallState& w : state_.walls) w.offset += model_.dt * w.velocity;
+}
+
+void World::update_neighbors() {
+  PhaseTimer t(profile_.neighbors);
+  if (!state_.neighbors.needs_rebuild(state_.particles)) return;
+  build_neighbor_list(state_.particles, state_.neighbors, /*sort_particles=*/true);
+  const std::size_t np = state_.neighbors.pairs();
+  state_.pair_force.resize(np);
+  state_.pair_torque_i.resize(np);
+  state_.pair_torque_j.resize(np);
+  state_.pair_overlap.resize(np);
+}
+
+void World::pair_forces() {
+  PhaseTimer t(profile_.pair_forces);
+  Particles& p = state_.particles;
+  NeighborList& nl = state_.neighbors;
+  const PairTable& table = model_.table;
+  const double dt = model_.dt;
+  const std::size_t n = p.size();
+  const std::size_t par_min = model_.settings.parallel_min_particles;
+#pragma omp parallel for schedule(dynamic, 512) if (n > par_min)
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::int32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
+      const std::int32_t j = nl.second[k];
+      const Vec3 d = p.x[i] - p.x[j];
+      const double ri = p.radius[i], rj = p.radius[j];
+      const double cut = ri + rj;
+      const double dist2 = d.squaredNorm();
+      if (dist2 >= cut * cut) {
+        nl.history[k] = ContactHistory{};
+        state_.pair_force[k].setZero();
+        state_.pair_torque_i[k].setZero();
+        state_.pair_torque_j[k].setZero();
+        state_.pair_overlap[k] = 0.0;
+        continue;
+      }
+      const double dist = std::sqrt(dist2);
+      ContactInput in;
+      in.n = d / dist;
+      in.delta = cut - dist;
+      in.r_eff = ri * rj / cut;
+      in.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
+      in.i_roll = 1.0 / (1.0 / (p.inertia[i] + p.mass[i] * ri * ri) +
+                         1.0 / (p.inertia[j] + p.mass[j] * rj * rj));
+      in.a_i = ri - 0.5 * in.delta;
+      in.a_j = rj - 0.5 * in.delta;
+      in.w_i = p.w[i];
+      in.w_j = p.w[j];
+      in.v_rel = p.v[i] - p.v[j] - in.a_i * p.w[i].cross(in.n) - in.a_j * p.w[j].cross(in.n);
+      const ContactOutput out =
+          hertz_mindlin(table.c(p.material[i], p.material[j]), in, dt, nl.history[k]);
+      state_.pair_force[k] = out.force;
+      state_.pair_torque_i[k] = out.torque_i;
+      state_.pair_torque_j[k] = out.torque_j;
+      state_.pair_overlap[k] = in.delta / std::min(ri, rj);
+    }
+  }
+}
+
+void World::gather_forces() {
+  PhaseTimer t(profile_.gather);
+  Particles& p = state_.particles;
+  const NeighborList& nl = state_.neighbors;
+  const Vec3 g = model_.settings.gravity;
+  const std::size_t n = p.size();
+  const std::size_t par_min = model_.settings.parallel_min_particles;
+#pragma omp parallel for schedule(static) if (n > par_min)
+  for (std::size_t i = 0; i < n; ++i) {
+    Vec3 f = p.mass[i] * g;
+    Vec3 tq = Vec3::Zero();
+    for (std::int32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
+      f += state_.pair_force[k];
+      tq += state_.pair_torque_i[k];
+    }
+    for (std::int32_t q = nl.in_start[i]; q < nl.in_start[i + 1]; ++q) {
+      const std::int32_t k = nl.in_pairs[q];
+      f -= state_.pair_force[k];
+      tq += state_.pair_torque_j[k];
+    }
+    p.force[i] = f;
+    p.torque[i] = tq;
+  }
+}
+
+void World::wall_forces() {
+  PhaseTimer t(profile_.wall_forces);
+  Particles& p = state_.particles;
+  const PairTable& table = model_.table;
+  const double dt = model_.dt;
+  const std::size_t n = p.size();
+  const std::size_t par_min = model_.settings.parallel_min_particles;
+  const int nw = static_cast<int>(model_.walls.size());
+#pragma omp parallel for schedule(static) if (n > par_min)
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int w = 0; w < nw; ++w) {
+      const WallSpec& spec = model_.walls[w];
+      const WallState& ws = state_.walls[w];
+      ContactHistory& h = p.wall_history[i][w];
+      Vec3 normal;
+      double delta;
+      if (!ws.enabled || !wall_contact(spec, ws.offset, p.x[i], p.radius[i], &normal, &delta)) {
+        h = ContactHistory{};
+        continue;
+      }
+      const double ri = p.radius[i];
+      ContactInput in;
+      in.n = normal;
+      in.delta = delta;
+      in.r_eff = ri;
+      in.m_eff = p.mass[i];
+      in.i_roll = p.inertia[i] + p.mass[i] * ri * ri;
+      in.a_i = ri - delta;
+      in.a_j = 0.0;
+      in.w_i = p.w[i];
+      in.w_j = Vec3::Zero();
+      in.v_rel = p.v[i] - in.a_i * p.w[i].cross(normal) - ws.velocity;
+      const ContactOutput out = hertz_mindlin(table.c(p.material[i], spec.material), in, dt, h);
+      p.force[i] += out.force;
+      p.torque[i] += out.torque_i;
+    }
+  }
+}
+
+void World::kick() {
+  PhaseTimer t(profile_.kick);
+  Particles& p = state_.particles;
+  const double h = 0.5 * model_.dt;
+  const std::size_t n = p.size();
+  const std::size_t par_min = model_.settings.parallel_min_particles;
+#pragma omp parallel for schedule(static) if (n > par_min)
+  for (std::size_t i = 0; i < n; ++i) {
+    p.v[i] += (h / p.mass[i]) * p.force[i];
+    p.w[i] += (h / p.inertia[i]) * p.torque[i];
+  }
+}
+
+Diagnostics World::diagnose() const {
+  Diagnostics d;
+  const Particles& p = state_.particles;
+  const double limit = model_.settings.escape_distance;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!p.x[i].allFinite() || !p.v[i].allFinite() || !p.w[i].allFinite()) {
+      if (d.status == Status::kOk) {
+        d.status = Status::kNan;
+        d.detail = "particle id " + std::to_string(p.id[i]) + " has a non-finite state";
+      }
+      continue;
+    }
+    d.kinetic_energy += 0.5 * p.mass[i] * p.v[i].squaredNorm() +
+                        0.5 * p.inertia[i] * p.w[i].squaredNorm();
+    d.max_speed = std::max(d.max_speed, p.v[i].norm());
+    if (p.x[i].norm() > limit && d.status == Status::kOk) {
+      d.status = Status::kEscaped;
+      std::ostringstream os;
+      os << "particle id " << p.id[i] << " at (" << p.x[i].transpose() << ") m is farther than "
+         << limit << " m from the origin";
+      d.detail = os.str();
+    }
+    for (std::size_t w = 0; w < model_.walls.size(); ++w) {
+      Vec3 n;
+      double delta;
+      if (state_.walls[w].enabled &&
+          wall_contact(model_.walls[w], state_.walls[w].offset, p.x[i], p.radius[i], &n, &delta)) {
+        d.max_overlap_ratio = std::max(d.max_overlap_ratio, delta / p.radius[i]);
+        ++d.contacts;
+      }
+    }
+  }
+  for (double o : state_.pair_overlap) {
+    d.max_overlap_ratio = std::max(d.max_overlap_ratio, o);
+    if (o > 0.0) ++d.contacts;
+  }
+  if (d.status == Status::kOk && d.max_overlap_ratio > model_.settings.max_overlap_ratio) {
+    d.status = Status::kOverlap;
+    std::ostringstream os;
+    os << "largest overlap " << d.max_overlap_ratio << " of the smaller radius exceeds "
+       << model_.settings.max_overlap_ratio;
+    d.detail = os.str();
+  }
+  return d;
+}
+
+std::size_t World::remove_particles(const std::vector<char>& remove) {
+  std::vector<char> keep(remove.size());
+  std::size_t removed = 0;
+  for (std::size_t i = 0; i < remove.size(); ++i) {
+    keep[i] = !remove[i];
+    removed += remove[i] ? 1 : 0;
+  }
+  if (removed == 0) return 0;
+  state_.particles.keep(keep);
+  compact_neighbor_list(state_.neighbors, keep);
+  const std::size_t np = state_.neighbors.pairs();
+  state_.pair_force.assign(np, Vec3::Zero());
+  state_.pair_torque_i.assign(np, Vec3::Zero());
+  state_.pair_torque_j.assign(np, Vec3::Zero());
+  state_.pair_overlap.assign(np, 0.0);
+  state_.forces_valid = false;
+  return removed;
+}
+
+std::uint64_t state_hash(const State& s) {
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](const void* data, std::size_t bytes) {
+    const unsigned char* c = static_cast<const unsigned char*>(data);
+    for (std::size_t k = 0; k < bytes; ++k) {
+      h ^= c[k];
+      h *= 1099511628211ull;
+    }
+  };
+  const Particles& p = s.particles;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    mix(p.x[i].data(), 3 * sizeof(double));
+    mix(p.v[i].data(), 3 * sizeof(double));
+    mix(p.w[i].data(), 3 * sizeof(double));
+    mix(&p.id[i], sizeof(std::int64_t));
+  }
+  return h;
+}
+
+}  // namespace reposetwin::sim

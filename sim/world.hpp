@@ -1,0 +1,117 @@
+// The DEM world: a fixed Model, a changing State, and step().
+//
+// Design note. step() reads as the table of contents of one velocity-Verlet step:
+//   1. kick_drift       v += dt/2 F/m, w += dt/2 T/I, x += dt v      (forces of the last step)
+//   2. move_walls       prescribed wall motion (the lift)
+//   3. update_neighbors rebuild the Verlet list if a particle moved more than skin/2
+//   4. pair_forces      Hertz-Mindlin + rolling kernel once per pair, result stored per pair
+//   5. gather_forces    each particle sums its pairs in a fixed order (deterministic)
+//   6. wall_forces      every particle against every enabled wall
+//   7. kick             v += dt/2 F/m, w += dt/2 T/I
+//   8. diagnostics      energy, overlap, NaN and escape checks (every few steps)
+// Each phase is timed into Profile, which the benchmark prints. No phase writes memory another
+// thread writes, and no floating-point sum depends on the thread count, so a run is
+// bit-identical for the same scene and seed on any number of threads.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sim/model.hpp"
+#include "sim/neighbor.hpp"
+#include "sim/particles.hpp"
+#include "sim/walls.hpp"
+
+namespace reposetwin::sim {
+
+/// Physics trouble, reported and never silently continued.
+enum class Status { kOk, kNan, kOverlap, kEscaped };
+const char* status_name(Status s);
+
+/// Seconds spent in each phase of step() since the start (or the last reset).
+struct Profile {
+  double kick_drift = 0, move_walls = 0, neighbors = 0, pair_forces = 0, gather = 0,
+         wall_forces = 0, kick = 0, diagnostics = 0;
+  std::int64_t steps = 0;
+  double total() const {
+    return kick_drift + move_walls + neighbors + pair_forces + gather + wall_forces + kick +
+           diagnostics;
+  }
+};
+
+/// Whole-system figures, computed by World::diagnose().
+struct Diagnostics {
+  double kinetic_energy = 0.0;      // translational + rotational [J]
+  double max_overlap_ratio = 0.0;   // largest overlap / smaller radius [-]
+  double max_speed = 0.0;           // [m/s]
+  std::size_t contacts = 0;         // touching pairs + wall contacts
+  Status status = Status::kOk;
+  std::string detail;               // which particle, what value
+};
+
+/// Everything that changes while the run steps.
+struct State {
+  Particles particles;
+  NeighborList neighbors;
+  std::vector<WallState> walls;     // one per Model::walls entry
+  double time = 0.0;                // [s]
+  std::int64_t step = 0;
+  std::int64_t next_id = 0;         // id given to the next inserted particle
+  bool forces_valid = false;        // particles.force holds the forces of the current positions
+  // Per-pair results of the last force phase (scratch, sized with the neighbor list).
+  std::vector<Vec3> pair_force, pair_torque_i, pair_torque_j;
+  std::vector<double> pair_overlap;  // overlap / smaller radius, 0 if not touching
+};
+
+class World {
+ public:
+  /// Takes a finalised model (Model::finalize has been called).
+  explicit World(Model model);
+
+  const Model& model() const { return model_; }
+  State& state() { return state_; }
+  const State& state() const { return state_; }
+  const Profile& profile() const { return profile_; }
+  void reset_profile() { profile_ = Profile{}; }
+
+  /// Inserts a particle at rest; returns its index (valid until the next rebuild).
+  std::size_t add_particle(const Vec3& x, double radius, int material);
+
+  /// Sets a wall's velocity (for example the funnel lift) [m/s].
+  void set_wall_velocity(int wall, const Vec3& velocity);
+  void set_wall_enabled(int wall, bool enabled);
+
+  /// Advances one time step.
+  void step();
+
+  /// Computes the forces of the current positions now (normally done inside step()). Note
+  /// that this advances the contact springs by one step's relative motion.
+  void refresh_forces() { compute_forces(); }
+
+  /// Computes energy, overlap, speed and checks for NaN or escaped particles.
+  Diagnostics diagnose() const;
+
+  /// Removes particles for which `remove` is true (e.g. fallen off the plate); returns the count.
+  std::size_t remove_particles(const std::vector<char>& remove);
+
+ private:
+  void kick_drift();
+  void move_walls();
+  void update_neighbors();
+  void pair_forces();
+  void gather_forces();
+  void wall_forces();
+  void kick();
+  void compute_forces();  // phases 3-6 (also used once before the first step)
+
+  Model model_;
+  State state_;
+  Profile profile_;
+};
+
+/// A SHA-256-free, portable 64-bit FNV-1a hash of the particle state (positions, velocities,
+/// angular velocities, ids), for determinism tests.
+std::uint64_t state_hash(const State& s);
+
+}  // namespace reposetwin::sim
