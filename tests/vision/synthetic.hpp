@@ -44,7 +44,7 @@ struct SideScene {
   double plate_thickness_mm = 15.0;      // plate band thickness [mm]
   double tilt_deg = 0.0;                 // whole-scene rotation about (axis_u, plate_v) [deg]
   bool scale_bar = true;                 // draw the band scale bar
-  double bar_offset_mm = -200.0;         // lateral offset of the bar from the axis [mm]
+  double bar_offset_mm = -140.0;         // lateral offset of the bar from the axis [mm]
   double band_mm = 10.0;                 // band height [mm]
   int bands = 10;                        // number of bands
   double bar_width_mm = 20.0;            // bar width [mm]

@@ -1,0 +1,572 @@
+#include "vision/measure.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <stdexcept>
+
+namespace reposetwin::vision {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kRadToDeg = 180.0 / kPi;
+
+std::string str(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+std::string fixed(double v, int digits) {
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(digits) << v;
+  return os.str();
+}
+
+Eigen::Vector2d ev(const cv::Point2d& p) { return {p.x, p.y}; }
+
+void check_camera_size(const camera::Camera& cam, const cv::Mat& image, const std::string& where) {
+  camera::validate(cam, where + ": camera");
+  if (cam.intrinsics.width_px != image.cols || cam.intrinsics.height_px != image.rows)
+    throw std::invalid_argument(where + ": camera intrinsics " + str(cam.intrinsics.width_px) +
+                                "x" + str(cam.intrinsics.height_px) + " do not match the image " +
+                                str(image.cols) + "x" + str(image.rows));
+}
+
+double theta_sigma_deg(double h, double d, double sh, double sd) {
+  const double den = d * d + 4.0 * h * h;
+  return std::hypot(2.0 * d / den * sh, 2.0 * h / den * sd) * kRadToDeg;
+}
+
+// Angle of a flank line in the camera case. A cone's generators lie in meridian planes, and the
+// silhouette generator of each flank ends at the toe's tangent point, so the flank line's pixels
+// are mapped onto the meridian plane through that tangent point (the vertical plane through the
+// base centre and the point of the toe ray nearest to it) and the angle is measured there.
+double flank_angle_on_meridian(const camera::Camera& cam, const FlankFit& f, const PlateLine& plate,
+                               const camera::Ray& toe_ray, const Eigen::Vector3d& base_center,
+                               const std::string& where) {
+  const double h0 = plate.height_above(f.point);
+  const double dh = plate.height_above(f.point + f.direction) - h0;
+  if (!(std::abs(dh) > 1e-9)) throw std::runtime_error(where + ": flank line parallel to plate");
+  const cv::Point2d lo = f.point + f.direction * ((f.low_px - h0) / dh);
+  const cv::Point2d hi = f.point + f.direction * ((f.high_px - h0) / dh);
+  const Eigen::Vector2d d = toe_ray.direction.head<2>();
+  const double t = (base_center.head<2>() - toe_ray.origin.head<2>()).dot(d) / d.squaredNorm();
+  const Eigen::Vector2d radial = toe_ray.origin.head<2>() + t * d - base_center.head<2>();
+  if (radial.norm() < 1e-9) throw std::runtime_error(where + ": toe ray passes through the axis");
+  const Eigen::Vector3d normal(-radial.y(), radial.x(), 0.0);
+  const auto wl = camera::pixel_on_plane(cam, ev(lo), base_center, normal.normalized());
+  const auto wh = camera::pixel_on_plane(cam, ev(hi), base_center, normal.normalized());
+  if (!wl || !wh) throw std::runtime_error(where + ": flank rays miss the meridian plane");
+  const Eigen::Vector3d e = *wh - *wl;
+  return std::atan2(std::abs(e.z()), e.head<2>().norm()) * kRadToDeg;
+}
+
+}  // namespace
+
+std::string to_string(ScaleSource source) {
+  switch (source) {
+    case ScaleSource::kCamera:
+      return "camera";
+    case ScaleSource::kMmPerPx:
+      return "mm_per_px";
+    case ScaleSource::kScaleBar:
+      return "scale_bar";
+    case ScaleSource::kCheckerCard:
+      return "checker_card";
+  }
+  return "unknown";
+}
+
+ScaleSpec scale_from_sidecar(const std::string& path) {
+  ScaleSpec s;
+  s.camera = camera::read_sidecar(path);
+  std::ifstream in(path);
+  const nlohmann::json j = nlohmann::json::parse(in);  // read_sidecar has checked it parses
+  if (j.contains("mm_per_px_at_axis") && !j["mm_per_px_at_axis"].is_null()) {
+    const auto& v = j["mm_per_px_at_axis"];
+    if (!v.is_number() || !(v.get<double>() > 0.0))
+      throw std::invalid_argument(path + ": mm_per_px_at_axis must be a positive number, got " +
+                                  v.dump());
+    s.mm_per_px = v.get<double>();
+  }
+  if (j.contains("scale_reference") && j["scale_reference"].is_object()) {
+    const auto& r = j["scale_reference"];
+    if (r.contains("band_mm")) {
+      if (!r["band_mm"].is_number() || !(r["band_mm"].get<double>() > 0.0))
+        throw std::invalid_argument(path +
+                                    ": scale_reference.band_mm must be a positive number, got " +
+                                    r["band_mm"].dump());
+      s.marker.band_mm = r["band_mm"].get<double>();
+      s.marker.square_mm = r["band_mm"].get<double>();
+    }
+  }
+  s.note = "sidecar " + path;
+  return s;
+}
+
+SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
+                             const SideSettings& settings, const std::string& where) {
+  if (image.empty()) throw std::invalid_argument(where + ": image is empty (0 x 0 pixels)");
+  if (scale.mm_per_px && !(*scale.mm_per_px > 0.0 && std::isfinite(*scale.mm_per_px)))
+    throw std::invalid_argument(where + ": mm_per_px must be a positive number, got " +
+                                str(*scale.mm_per_px));
+  if (scale.camera) check_camera_size(*scale.camera, image, where);
+  SideMeasurement m;
+  m.source = where;
+  m.note = scale.note;
+  SideSettings set = settings;
+  if (!scale.camera && !scale.mm_per_px) {
+    if (!scale.search_marker)
+      throw std::runtime_error(where +
+                               ": scale cannot be determined (no camera, no mm per pixel, and "
+                               "the scale-bar search is off)");
+    m.scale_bar = find_scale_bar(image, scale.marker, where);
+    if (!m.scale_bar)
+      throw std::runtime_error(where +
+                               ": scale cannot be determined: no camera sidecar, no mm "
+                               "per pixel given, and no band scale bar (at least " +
+                               str(scale.marker.min_black_bands) +
+                               " black bands stacked at a regular pitch) found in the image");
+    // Keep the bar (and its bottom band, merged with the plate) out of the pile search.
+    const int pad = static_cast<int>(std::ceil(m.scale_bar->band_px));
+    cv::Rect ex = m.scale_bar->box;
+    ex.x -= pad;
+    ex.width += 2 * pad;
+    ex.y -= pad;
+    ex.height += 4 * pad;
+    set.exclude.push_back(ex);
+  }
+  m.pixels = measure_side_pixels(image, set, where);
+  const SideProfile& p = m.pixels;
+
+  if (!scale.camera) {
+    double k;  // [m/px]
+    if (scale.mm_per_px) {
+      m.scale_source = ScaleSource::kMmPerPx;
+      m.mm_per_px = *scale.mm_per_px;
+      m.sigma_scale_rel = 0.0;
+    } else {
+      m.scale_source = ScaleSource::kScaleBar;
+      m.mm_per_px = m.scale_bar->mm_per_px;
+      m.sigma_scale_rel = m.scale_bar->sigma_rel;
+    }
+    k = m.mm_per_px / 1000.0;
+    m.perspective_corrected = false;
+    m.height_m = p.height_px * k;
+    m.diameter_m = p.diameter_px * k;
+    m.sigma_height_m = std::hypot(p.sigma_height_px * k, m.height_m * m.sigma_scale_rel);
+    m.sigma_diameter_m = std::hypot(p.sigma_diameter_px * k, m.diameter_m * m.sigma_scale_rel);
+    m.theta_deg = p.theta_deg;
+    m.sigma_theta_deg = p.sigma_theta_deg;
+    m.flank_left_deg = p.left.angle_deg;
+    m.flank_right_deg = p.right.angle_deg;
+    m.sigma_flank_left_deg = p.left.sigma_deg;
+    m.sigma_flank_right_deg = p.right.sigma_deg;
+    return m;
+  }
+
+  // Perspective correction with the known camera.
+  const camera::Camera& cam = *scale.camera;
+  m.scale_source = ScaleSource::kCamera;
+  m.perspective_corrected = true;
+  const camera::Ray rl = camera::unproject(cam, ev(p.toe_left));
+  const camera::Ray rr = camera::unproject(cam, ev(p.toe_right));
+  const Eigen::Vector2d axis = scale.axis_foot.head<2>();
+  Eigen::Vector2d dl = rl.direction.head<2>(), dr = rr.direction.head<2>();
+  if (dl.norm() < 1e-6 || dr.norm() < 1e-6)
+    throw std::runtime_error(where + ": the camera looks straight down; not a side view");
+  dl.normalize();
+  dr.normalize();
+  Eigen::Vector2d center;
+  Eigen::Vector2d toward_camera;
+  double radius;
+  if (cam.projection == camera::Projection::kPerspective) {
+    const Eigen::Vector2d c = cam.extrinsics.position.head<2>();
+    const double dist = (c - axis).norm();
+    if (dist < 1e-6)
+      throw std::runtime_error(where + ": the camera stands on the pile axis; not a side view");
+    const double half = 0.5 * std::acos(std::clamp(dl.dot(dr), -1.0, 1.0));
+    center = c + (dl + dr).normalized() * dist;
+    radius = dist * std::sin(half);
+    toward_camera = (c - center).normalized();
+  } else {
+    const Eigen::Vector2d n(-dl.y(), dl.x());
+    const double sl = n.dot(rl.origin.head<2>()), sr = n.dot(rr.origin.head<2>());
+    radius = 0.5 * std::abs(sr - sl);
+    center = axis + n * (0.5 * (sl + sr) - n.dot(axis));
+    toward_camera = -dl;
+  }
+  const Eigen::Vector3d plane_point(center.x(), center.y(), scale.axis_foot.z());
+  const Eigen::Vector3d plane_normal(toward_camera.x(), toward_camera.y(), 0.0);
+  const auto apex = camera::pixel_on_plane(cam, ev(p.apex), plane_point, plane_normal);
+  if (!apex) throw std::runtime_error(where + ": the apex ray misses the pile's axis plane");
+  const auto plate_at_axis = camera::pixel_on_plane(
+      cam, Eigen::Vector2d(p.apex.x, p.plate.v_at(p.apex.x)), plane_point, plane_normal);
+  m.base_center_m = plane_point;
+  m.plate_line_z_m = plate_at_axis ? plate_at_axis->z() : std::nan("");
+  m.height_m = apex->z() - scale.axis_foot.z();
+  m.diameter_m = 2.0 * radius;
+  if (!(m.height_m > 0.0))
+    throw std::runtime_error(where + ": the apex maps below the plate (H = " + str(m.height_m) +
+                             " m); the camera does not fit this image");
+  m.mm_per_px = camera::mm_per_px_at(cam, plane_point);
+  const double k = m.mm_per_px / 1000.0;
+  m.sigma_scale_rel = 0.0;
+  m.sigma_height_m = p.sigma_height_px * k;
+  m.sigma_diameter_m = p.sigma_diameter_px * k;
+  m.theta_deg = std::atan(2.0 * m.height_m / m.diameter_m) * kRadToDeg;
+  m.sigma_theta_deg =
+      theta_sigma_deg(m.height_m, m.diameter_m, m.sigma_height_m, m.sigma_diameter_m);
+  m.flank_left_deg =
+      flank_angle_on_meridian(cam, p.left, p.plate, rl, plane_point, where + ": left flank");
+  m.flank_right_deg =
+      flank_angle_on_meridian(cam, p.right, p.plate, rr, plane_point, where + ": right flank");
+  m.sigma_flank_left_deg = p.left.sigma_deg;
+  m.sigma_flank_right_deg = p.right.sigma_deg;
+  return m;
+}
+
+TopMeasurement measure_top(const cv::Mat& image, const ScaleSpec& scale,
+                           const TopSettings& settings, const std::string& where) {
+  if (image.empty()) throw std::invalid_argument(where + ": image is empty (0 x 0 pixels)");
+  if (scale.mm_per_px && !(*scale.mm_per_px > 0.0 && std::isfinite(*scale.mm_per_px)))
+    throw std::invalid_argument(where + ": mm_per_px must be a positive number, got " +
+                                str(*scale.mm_per_px));
+  TopMeasurement m;
+  m.source = where;
+  m.note = scale.note;
+  TopSettings set = settings;
+  if (scale.camera) {
+    check_camera_size(*scale.camera, image, where);
+    if (set.seed.x < 0 || set.seed.y < 0) {
+      const auto s = camera::project(*scale.camera, scale.axis_foot);
+      if (!s) throw std::runtime_error(where + ": the pile axis is behind the camera");
+      set.seed = cv::Point2d(s->x(), s->y());
+    }
+  } else if (!scale.mm_per_px) {
+    if (scale.search_marker) m.checker_card = find_checker_card(image, scale.marker, where);
+    if (!m.checker_card)
+      throw std::runtime_error(where +
+                               ": scale cannot be determined: no camera sidecar, no mm "
+                               "per pixel given, and no checker card found in the image");
+  }
+  m.pixels = measure_top_pixels(image, set, where);
+  const TopProfile& p = m.pixels;
+  if (!scale.camera) {
+    if (scale.mm_per_px) {
+      m.scale_source = ScaleSource::kMmPerPx;
+      m.mm_per_px = *scale.mm_per_px;
+    } else {
+      m.scale_source = ScaleSource::kCheckerCard;
+      m.mm_per_px = m.checker_card->mm_per_px;
+      m.sigma_scale_rel = m.checker_card->sigma_rel;
+    }
+    const double k = m.mm_per_px / 1000.0;
+    m.diameter_circle_m = p.diameter_circle_px * k;
+    m.diameter_area_m = p.diameter_area_px * k;
+    m.sigma_diameter_circle_m =
+        std::hypot(p.sigma_diameter_circle_px * k, m.diameter_circle_m * m.sigma_scale_rel);
+    m.circle_residual_m = p.circle_residual_px * k;
+    m.ellipticity = p.ellipticity;
+    return m;
+  }
+  // Known camera: the outline on the plate plane, in millimetres.
+  const camera::Camera& cam = *scale.camera;
+  m.scale_source = ScaleSource::kCamera;
+  m.perspective_corrected = true;
+  std::vector<cv::Point2d> mm;
+  for (const auto& q : p.outline) {
+    const auto w = camera::pixel_on_plane(cam, ev(q), scale.axis_foot, Eigen::Vector3d::UnitZ());
+    if (w) mm.emplace_back(1000.0 * w->x(), 1000.0 * w->y());
+  }
+  cv::Point2d c;
+  double r = 0.0, rms = 0.0;
+  if (mm.size() < 16 || !fit_circle(mm, c, r, rms))
+    throw std::runtime_error(where + ": the footprint outline does not map onto the plate");
+  double area = 0.0;
+  for (size_t i = 0; i < mm.size(); ++i) {
+    const cv::Point2d& a = mm[i];
+    const cv::Point2d& b = mm[(i + 1) % mm.size()];
+    area += a.x * b.y - b.x * a.y;
+  }
+  area = 0.5 * std::abs(area);
+  std::vector<cv::Point2f> f(mm.begin(), mm.end());
+  const cv::RotatedRect el = cv::fitEllipse(f);
+  m.mm_per_px = camera::mm_per_px_at(cam, scale.axis_foot);
+  m.diameter_circle_m = 2.0 * r / 1000.0;
+  m.diameter_area_m = 2.0 * std::sqrt(area / kPi) / 1000.0;
+  m.sigma_diameter_circle_m = p.sigma_diameter_circle_px * m.mm_per_px / 1000.0;
+  m.circle_residual_m = rms / 1000.0;
+  m.ellipticity =
+      1.0 - std::min(el.size.width, el.size.height) / std::max(el.size.width, el.size.height);
+  return m;
+}
+
+SideSummary combine_sides(const std::vector<SideMeasurement>& views) {
+  if (views.empty()) throw std::invalid_argument("combine_sides: no side views given");
+  SideSummary s;
+  s.views = static_cast<int>(views.size());
+  auto spread = [&](auto value, auto sigma) {
+    Spread out;
+    const double n = static_cast<double>(views.size());
+    double sum = 0.0, s2 = 0.0;
+    for (const auto& v : views) {
+      sum += value(v);
+      s2 += sigma(v) * sigma(v);
+    }
+    out.mean = sum / n;
+    double ss = 0.0;
+    for (const auto& v : views) ss += (value(v) - out.mean) * (value(v) - out.mean);
+    out.stddev = n > 1 ? std::sqrt(ss / (n - 1)) : 0.0;
+    out.sigma_mean = std::sqrt(out.stddev * out.stddev / n + s2 / (n * n));
+    return out;
+  };
+  s.height_m = spread([](const SideMeasurement& v) { return v.height_m; },
+                      [](const SideMeasurement& v) { return v.sigma_height_m; });
+  s.diameter_m = spread([](const SideMeasurement& v) { return v.diameter_m; },
+                        [](const SideMeasurement& v) { return v.sigma_diameter_m; });
+  s.theta_deg = spread([](const SideMeasurement& v) { return v.theta_deg; },
+                       [](const SideMeasurement& v) { return v.sigma_theta_deg; });
+  s.flank_left_deg = spread([](const SideMeasurement& v) { return v.flank_left_deg; },
+                            [](const SideMeasurement& v) { return v.sigma_flank_left_deg; });
+  s.flank_right_deg = spread([](const SideMeasurement& v) { return v.flank_right_deg; },
+                             [](const SideMeasurement& v) { return v.sigma_flank_right_deg; });
+  s.flank_deg =
+      spread([](const SideMeasurement& v) { return 0.5 * (v.flank_left_deg + v.flank_right_deg); },
+             [](const SideMeasurement& v) {
+               return 0.5 * std::hypot(v.sigma_flank_left_deg, v.sigma_flank_right_deg);
+             });
+  return s;
+}
+
+namespace {
+
+nlohmann::json pt(const cv::Point2d& p) { return nlohmann::json::array({p.x, p.y}); }
+
+nlohmann::json flank_json(const FlankFit& f) {
+  return {{"angle_deg", f.angle_deg},         {"sigma_deg", f.sigma_deg},
+          {"sigma_fit_deg", f.sigma_fit_deg}, {"sigma_pixel_deg", f.sigma_pixel_deg},
+          {"residual_px", f.residual_px},     {"points", f.points},
+          {"band_px", {f.low_px, f.high_px}}, {"point_px", pt(f.point)},
+          {"direction", pt(f.direction)}};
+}
+
+nlohmann::json spread_json(const Spread& s) {
+  return {{"mean", s.mean}, {"stddev", s.stddev}, {"sigma_mean", s.sigma_mean}};
+}
+
+}  // namespace
+
+nlohmann::json to_json(const SideMeasurement& m) {
+  const SideProfile& p = m.pixels;
+  nlohmann::json bar = nullptr;
+  if (m.scale_bar)
+    bar = {{"band_px", m.scale_bar->band_px},
+           {"band_mm", m.scale_bar->band_mm},
+           {"black_bands", m.scale_bar->black_bands},
+           {"edges", m.scale_bar->edges},
+           {"residual_px", m.scale_bar->residual_px},
+           {"box_px",
+            {m.scale_bar->box.x, m.scale_bar->box.y, m.scale_bar->box.width,
+             m.scale_bar->box.height}}};
+  nlohmann::json j = {
+      {"view", "side"},
+      {"image", m.source},
+      {"H_m", m.height_m},
+      {"D_m", m.diameter_m},
+      {"theta_deg", m.theta_deg},
+      {"sigma_H_m", m.sigma_height_m},
+      {"sigma_D_m", m.sigma_diameter_m},
+      {"sigma_theta_deg", m.sigma_theta_deg},
+      {"flank_left_deg", m.flank_left_deg},
+      {"flank_right_deg", m.flank_right_deg},
+      {"sigma_flank_left_deg", m.sigma_flank_left_deg},
+      {"sigma_flank_right_deg", m.sigma_flank_right_deg},
+      {"method",
+       "theta = atan(2H/D); H perpendicular to the detected plate line; D between the toe points "
+       "on it; flanks: cv::fitLine DIST_HUBER over a middle band of H"},
+      {"projection", m.perspective_corrected ? "perspective corrected" : "assumed orthographic"},
+      {"scale",
+       {{"source", to_string(m.scale_source)},
+        {"mm_per_px", m.mm_per_px},
+        {"sigma_rel", m.sigma_scale_rel},
+        {"note", m.note},
+        {"scale_bar", bar}}},
+      {"pixels",
+       {{"H_px", p.height_px},
+        {"D_px", p.diameter_px},
+        {"sigma_H_px", p.sigma_height_px},
+        {"sigma_D_px", p.sigma_diameter_px},
+        {"theta_deg", p.theta_deg},
+        {"apex", pt(p.apex)},
+        {"toe_left", pt(p.toe_left)},
+        {"toe_right", pt(p.toe_right)},
+        {"plate_line",
+         {{"v_at_u0", p.plate.a},
+          {"slope", p.plate.b},
+          {"tilt_deg", p.plate.tilt_deg()},
+          {"residual_px", p.plate.residual_px},
+          {"support_columns", p.plate.support}}},
+        {"flank_left", flank_json(p.left)},
+        {"flank_right", flank_json(p.right)},
+        {"pile_level", p.pile_level},
+        {"threshold", p.threshold}}}};
+  if (m.perspective_corrected) {
+    j["camera_correction"] = {
+        {"base_center_m", {m.base_center_m.x(), m.base_center_m.y(), m.base_center_m.z()}},
+        {"plate_line_z_m", m.plate_line_z_m}};
+  }
+  return j;
+}
+
+nlohmann::json to_json(const TopMeasurement& m) {
+  const TopProfile& p = m.pixels;
+  nlohmann::json card = nullptr;
+  if (m.checker_card)
+    card = {{"square_px", m.checker_card->square_px},
+            {"square_mm", m.checker_card->square_mm},
+            {"squares", m.checker_card->squares}};
+  return {
+      {"view", "top"},
+      {"image", m.source},
+      {"D_circle_m", m.diameter_circle_m},
+      {"D_equal_area_m", m.diameter_area_m},
+      {"sigma_D_circle_m", m.sigma_diameter_circle_m},
+      {"circle_residual_m", m.circle_residual_m},
+      {"ellipticity", m.ellipticity},
+      {"projection", m.perspective_corrected ? "perspective corrected" : "assumed orthographic"},
+      {"scale",
+       {{"source", to_string(m.scale_source)},
+        {"mm_per_px", m.mm_per_px},
+        {"sigma_rel", m.sigma_scale_rel},
+        {"note", m.note},
+        {"checker_card", card}}},
+      {"pixels",
+       {{"center", pt(p.center)},
+        {"D_circle_px", p.diameter_circle_px},
+        {"D_equal_area_px", p.diameter_area_px},
+        {"circle_residual_px", p.circle_residual_px},
+        {"ellipse_axes_px", {p.ellipse_major_px, p.ellipse_minor_px}},
+        {"ellipse_angle_deg", p.ellipse_angle_deg},
+        {"outline_points", p.outline.size()}}}};
+}
+
+nlohmann::json to_json(const SideSummary& s) {
+  return {{"views", s.views},
+          {"H_m", spread_json(s.height_m)},
+          {"D_m", spread_json(s.diameter_m)},
+          {"theta_deg", spread_json(s.theta_deg)},
+          {"flank_left_deg", spread_json(s.flank_left_deg)},
+          {"flank_right_deg", spread_json(s.flank_right_deg)},
+          {"flank_deg", spread_json(s.flank_deg)}};
+}
+
+namespace {
+
+cv::Mat to_bgr8(const cv::Mat& image) {
+  cv::Mat img = image;
+  if (img.depth() == CV_16U) img.convertTo(img, CV_8U, 255.0 / 65535.0);
+  cv::Mat out;
+  if (img.channels() == 1)
+    cv::cvtColor(img, out, cv::COLOR_GRAY2BGR);
+  else if (img.channels() == 4)
+    cv::cvtColor(img, out, cv::COLOR_BGRA2BGR);
+  else
+    out = img.clone();
+  return out;
+}
+
+void text_block(cv::Mat& img, const std::vector<std::string>& lines) {
+  const double scale = std::max(0.4, img.cols / 1800.0);
+  const int thick = std::max(1, static_cast<int>(std::lround(scale * 1.5)));
+  int base = 0;
+  const cv::Size sz = cv::getTextSize("Hg", cv::FONT_HERSHEY_SIMPLEX, scale, thick, &base);
+  const int line_h = static_cast<int>(sz.height * 1.8);
+  int width = 0;
+  for (const auto& l : lines)
+    width =
+        std::max(width, cv::getTextSize(l, cv::FONT_HERSHEY_SIMPLEX, scale, thick, &base).width);
+  const int pad = line_h / 3;
+  cv::rectangle(img, cv::Rect(0, 0, width + 2 * pad, line_h * static_cast<int>(lines.size()) + pad),
+                cv::Scalar(255, 255, 255), cv::FILLED);
+  for (size_t i = 0; i < lines.size(); ++i)
+    cv::putText(img, lines[i], cv::Point(pad, static_cast<int>((i + 1) * line_h)),
+                cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0), thick, cv::LINE_AA);
+}
+
+cv::Point ip(const cv::Point2d& p) {
+  return {static_cast<int>(std::lround(p.x)), static_cast<int>(std::lround(p.y))};
+}
+
+}  // namespace
+
+cv::Mat draw_side_overlay(const cv::Mat& image, const SideMeasurement& m) {
+  cv::Mat img = to_bgr8(image);
+  const SideProfile& p = m.pixels;
+  const int t = std::max(1, img.cols / 900);
+  const int r = std::max(4, img.cols / 250);
+  // Plate (toe) line.
+  cv::line(img, ip({0.0, p.plate.v_at(0.0)}), ip({img.cols - 1.0, p.plate.v_at(img.cols - 1.0)}),
+           cv::Scalar(255, 200, 0), t, cv::LINE_AA);
+  // Fitted flank lines, from the plate line to the apex height, fit band marked thicker.
+  auto flank = [&](const FlankFit& f, const cv::Scalar& colour) {
+    const double h0 = p.plate.height_above(f.point);
+    const double dh = p.plate.height_above(f.point + f.direction) - h0;
+    if (std::abs(dh) < 1e-9) return;
+    auto at = [&](double h) { return f.point + f.direction * ((h - h0) / dh); };
+    cv::line(img, ip(at(0.0)), ip(at(p.height_px)), colour, t, cv::LINE_AA);
+    cv::line(img, ip(at(f.low_px)), ip(at(f.high_px)), colour, 3 * t, cv::LINE_AA);
+  };
+  flank(p.left, cv::Scalar(0, 0, 230));
+  flank(p.right, cv::Scalar(0, 170, 0));
+  // H: from the apex perpendicular down to the plate line; D: between the toes.
+  const cv::Point2d dir = p.plate.direction();
+  const cv::Point2d down(-dir.y, dir.x);
+  cv::line(img, ip(p.apex), ip(p.apex + down * p.height_px), cv::Scalar(0, 140, 255), t,
+           cv::LINE_AA);
+  cv::line(img, ip(p.toe_left), ip(p.toe_right), cv::Scalar(255, 0, 255), 2 * t, cv::LINE_AA);
+  cv::circle(img, ip(p.apex), r, cv::Scalar(0, 220, 255), t, cv::LINE_AA);
+  cv::circle(img, ip(p.toe_left), r, cv::Scalar(255, 0, 255), t, cv::LINE_AA);
+  cv::circle(img, ip(p.toe_right), r, cv::Scalar(255, 0, 255), t, cv::LINE_AA);
+  if (m.scale_bar) cv::rectangle(img, m.scale_bar->box, cv::Scalar(255, 0, 0), t);
+  text_block(
+      img, {"H = " + fixed(1000.0 * m.height_m, 1) + " +- " + fixed(1000.0 * m.sigma_height_m, 1) +
+                " mm   D = " + fixed(1000.0 * m.diameter_m, 1) + " +- " +
+                fixed(1000.0 * m.sigma_diameter_m, 1) + " mm",
+            "theta = atan(2H/D) = " + fixed(m.theta_deg, 2) + " +- " + fixed(m.sigma_theta_deg, 2) +
+                " deg",
+            "flanks: left " + fixed(m.flank_left_deg, 2) + " +- " +
+                fixed(m.sigma_flank_left_deg, 2) + ", right " + fixed(m.flank_right_deg, 2) +
+                " +- " + fixed(m.sigma_flank_right_deg, 2) + " deg",
+            "scale: " + to_string(m.scale_source) + ", " + fixed(m.mm_per_px, 4) +
+                " mm/px at the axis; " +
+                (m.perspective_corrected ? "perspective corrected" : "assumed orthographic")});
+  return img;
+}
+
+cv::Mat draw_top_overlay(const cv::Mat& image, const TopMeasurement& m) {
+  cv::Mat img = to_bgr8(image);
+  const TopProfile& p = m.pixels;
+  const int t = std::max(1, img.cols / 900);
+  for (size_t i = 0; i < p.outline.size(); ++i)
+    cv::line(img, ip(p.outline[i]), ip(p.outline[(i + 1) % p.outline.size()]),
+             cv::Scalar(0, 170, 0), t, cv::LINE_AA);
+  cv::circle(img, ip(p.center), static_cast<int>(std::lround(0.5 * p.diameter_circle_px)),
+             cv::Scalar(0, 0, 230), t, cv::LINE_AA);
+  cv::drawMarker(img, ip(p.center), cv::Scalar(0, 0, 230), cv::MARKER_CROSS, 4 * t + 10, t);
+  if (m.checker_card) cv::rectangle(img, m.checker_card->box, cv::Scalar(255, 0, 0), t);
+  text_block(img,
+             {"D (circle fit) = " + fixed(1000.0 * m.diameter_circle_m, 1) + " +- " +
+                  fixed(1000.0 * m.sigma_diameter_circle_m, 1) + " mm",
+              "D (equal area) = " + fixed(1000.0 * m.diameter_area_m, 1) +
+                  " mm   ellipticity = " + fixed(m.ellipticity, 3),
+              "scale: " + to_string(m.scale_source) + ", " + fixed(m.mm_per_px, 4) + " mm/px; " +
+                  (m.perspective_corrected ? "perspective corrected" : "assumed orthographic")});
+  return img;
+}
+
+}  // namespace reposetwin::vision

@@ -1,0 +1,136 @@
+// vision/measure: a pile measured in metres and degrees from side and top images.
+//
+// Design note. The pixel measurements (side_view, top_view) know nothing of scale. This layer
+// turns them into lengths in one of three ways, in this order of preference, and always says
+// which one it used:
+//  1. A known camera (camera::Camera, e.g. from a render's sidecar): perspective corrected. The
+//     apex pixel's ray is intersected with the vertical plane through the pile axis that faces
+//     the camera, giving H. The toe pixels' rays graze the base circle (they are the silhouette's
+//     tangents), so in the horizontal plane the two rays are tangents from the camera to that
+//     circle: with the centre at the axis' distance from the camera along their bisector, the
+//     radius is that distance times the sine of their half angle. The flank angles are measured
+//     on the meridian plane through each toe's tangent point (where a cone's silhouette generator
+//     lies). For a top view, the outline is mapped onto the plate plane z = 0. This is exact
+//     for a camera level with the plate (the lab's and the renders' side view); a camera above
+//     the plate sees the plate's far edge as its "plate line", which this does not model.
+//  2. A given mm per pixel at the pile axis: an orthographic view is assumed (reported so).
+//  3. The scale marker of the render convention found in the image (band bar in a side view,
+//     checker card in a top view): orthographic view assumed, scale from the marker's pitch.
+// If none applies, the measurement throws: no number is better than an unscaled one.
+// The angle theta = atan(2H/D) does not depend on the scale in the orthographic case, but H and
+// D do, so a failed scale is an error rather than a partial result.
+#pragma once
+
+#include <Eigen/Core>
+#include <nlohmann/json_fwd.hpp>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "camera/camera.hpp"
+#include "vision/scale_marker.hpp"
+#include "vision/side_view.hpp"
+#include "vision/top_view.hpp"
+
+namespace reposetwin::vision {
+
+/// Where the scale of a measurement came from.
+enum class ScaleSource { kCamera, kMmPerPx, kScaleBar, kCheckerCard };
+
+/// "camera", "mm_per_px", "scale_bar" or "checker_card".
+std::string to_string(ScaleSource source);
+
+/// How pixels become metres. With nothing set and `search_marker` false, measuring throws.
+struct ScaleSpec {
+  std::optional<camera::Camera> camera;      // known camera: perspective corrected
+  std::optional<double> mm_per_px;           // given scale at the pile axis [mm/px]
+  bool search_marker = true;                 // else look for the scale marker in the image
+  MarkerSettings marker;                     // the marker's dimensions
+  Eigen::Vector3d axis_foot{0.0, 0.0, 0.0};  // the pile axis meets the plate here [m]
+  std::string note;                          // recorded with the result (e.g. the sidecar's path)
+};
+
+/// Reads a render's sidecar JSON: its "camera" (camera::read_sidecar) and, when present,
+/// "mm_per_px_at_axis". Throws std::invalid_argument naming the path and field.
+ScaleSpec scale_from_sidecar(const std::string& path);
+
+/// A side view measured in metres and degrees.
+struct SideMeasurement {
+  std::string source;                  // file name or label of the image
+  SideProfile pixels;                  // the pixel measurement
+  double height_m = 0.0;               // pile height H [m]
+  double diameter_m = 0.0;             // base diameter D at the toe line [m]
+  double theta_deg = 0.0;              // atan(2H/D) [deg]
+  double sigma_height_m = 0.0;         // uncertainty of H (pixels and scale) [m]
+  double sigma_diameter_m = 0.0;       // uncertainty of D (pixels and scale) [m]
+  double sigma_theta_deg = 0.0;        // uncertainty of theta (pixel quantisation, fits) [deg]
+  double flank_left_deg = 0.0;         // left flank angle [deg]
+  double flank_right_deg = 0.0;        // right flank angle [deg]
+  double sigma_flank_left_deg = 0.0;   // its uncertainty [deg]
+  double sigma_flank_right_deg = 0.0;  // its uncertainty [deg]
+  ScaleSource scale_source = ScaleSource::kMmPerPx;
+  double mm_per_px = 0.0;                        // scale at the pile axis [mm/px]
+  double sigma_scale_rel = 0.0;                  // relative uncertainty of the scale [-]
+  bool perspective_corrected = false;            // false: an orthographic view was assumed
+  std::optional<ScaleBar> scale_bar;             // the marker, when it gave the scale
+  Eigen::Vector3d base_center_m{0.0, 0.0, 0.0};  // base circle centre (camera case) [m]
+  double plate_line_z_m = 0.0;  // the detected plate line at the axis (camera case) [m]
+  std::string note;             // ScaleSpec::note
+};
+
+/// Measures a side view (`image`: any image vision::gray_levels accepts). `where` names the
+/// image in error messages. Throws std::invalid_argument / std::runtime_error as the pixel
+/// measurement does, and std::runtime_error when the scale cannot be determined.
+SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale = {},
+                             const SideSettings& settings = {}, const std::string& where = "image");
+
+/// A top view measured in metres.
+struct TopMeasurement {
+  std::string source;
+  TopProfile pixels;
+  double diameter_circle_m = 0.0;        // circle-fit footprint diameter [m]
+  double diameter_area_m = 0.0;          // equal-area footprint diameter [m]
+  double sigma_diameter_circle_m = 0.0;  // its uncertainty [m]
+  double ellipticity = 0.0;              // 1 - minor / major of the fitted ellipse [-]
+  double circle_residual_m = 0.0;        // RMS radial residual of the outline [m]
+  ScaleSource scale_source = ScaleSource::kMmPerPx;
+  double mm_per_px = 0.0;              // scale on the plate [mm/px]
+  double sigma_scale_rel = 0.0;        // relative uncertainty of the scale [-]
+  bool perspective_corrected = false;  // false: an orthographic view was assumed
+  std::optional<CheckerCard> checker_card;
+  std::string note;
+};
+
+/// Measures a top view; scale as for measure_side (the marker is the checker card). When the
+/// camera is known and `settings.seed` is unset, the seed is the projected axis foot.
+TopMeasurement measure_top(const cv::Mat& image, const ScaleSpec& scale = {},
+                           const TopSettings& settings = {}, const std::string& where = "image");
+
+/// Mean and spread of one quantity over several views.
+struct Spread {
+  double mean = 0.0;
+  double stddev = 0.0;      // sample standard deviation over the views (0 for one view)
+  double sigma_mean = 0.0;  // uncertainty of the mean: spread / sqrt(n) and the views' own
+};
+
+/// Several side views of one pile (different azimuths) combined.
+struct SideSummary {
+  int views = 0;
+  Spread height_m, diameter_m, theta_deg, flank_left_deg, flank_right_deg, flank_deg;
+};
+
+/// Averages side measurements. Throws std::invalid_argument for an empty list.
+SideSummary combine_sides(const std::vector<SideMeasurement>& views);
+
+nlohmann::json to_json(const SideMeasurement& m);
+nlohmann::json to_json(const TopMeasurement& m);
+nlohmann::json to_json(const SideSummary& s);
+
+/// The image annotated like a lab photo: plate line, apex, toe points, fitted flank lines, the
+/// scale bar if used, and the numbers.
+cv::Mat draw_side_overlay(const cv::Mat& image, const SideMeasurement& m);
+/// The image annotated with the footprint outline, fitted circle and ellipse and the numbers.
+cv::Mat draw_top_overlay(const cv::Mat& image, const TopMeasurement& m);
+
+}  // namespace reposetwin::vision
