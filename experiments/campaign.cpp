@@ -1,0 +1,842 @@
+#include "experiments/campaign.hpp"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cctype>
+#include <charconv>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <deque>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include "experiments/overrides.hpp"
+#include "experiments/provenance.hpp"
+
+namespace reposetwin::experiments {
+namespace fs = std::filesystem;
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Parsing helpers. Every error names the campaign file, the key and the value.
+
+std::invalid_argument bad(const std::string& file, const std::string& key, const std::string& value,
+                          const std::string& why) {
+  return std::invalid_argument(file + ": key '" + key + "'" +
+                               (value.empty() ? std::string() : " = " + value) + ": " + why);
+}
+
+std::string value_text(const toml::node& n) { return toml_value_text(n); }
+
+void check_keys(const toml::table& t, const std::set<std::string>& allowed, const std::string& file,
+                const std::string& prefix) {
+  for (const auto& [k, v] : t) {
+    if (!allowed.count(std::string(k.str()))) {
+      std::string list;
+      for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+      throw bad(file, prefix + std::string(k.str()), value_text(v),
+                "unknown key (allowed: " + list + ")");
+    }
+  }
+}
+
+std::string get_string(const toml::table& t, const std::string& key, const std::string& file,
+                       const std::string& prefix, bool required, const std::string& fallback = {}) {
+  const toml::node* n = t.get(key);
+  if (n == nullptr) {
+    if (required) throw bad(file, prefix + key, "", "missing (a string is required)");
+    return fallback;
+  }
+  if (!n->is_string()) throw bad(file, prefix + key, value_text(*n), "must be a string");
+  return n->as_string()->get();
+}
+
+std::optional<double> get_number(const toml::table& t, const std::string& key,
+                                 const std::string& file, const std::string& prefix) {
+  const toml::node* n = t.get(key);
+  if (n == nullptr) return std::nullopt;
+  if (n->is_integer()) return static_cast<double>(n->as_integer()->get());
+  if (n->is_floating_point()) return n->as_floating_point()->get();
+  throw bad(file, prefix + key, value_text(*n), "must be a number");
+}
+
+std::optional<std::int64_t> get_int(const toml::table& t, const std::string& key,
+                                    const std::string& file, const std::string& prefix) {
+  const toml::node* n = t.get(key);
+  if (n == nullptr) return std::nullopt;
+  if (!n->is_integer()) throw bad(file, prefix + key, value_text(*n), "must be an integer");
+  return n->as_integer()->get();
+}
+
+std::string resolve_scene(const std::string& file, const std::string& key,
+                          const std::string& scene) {
+  if (scene.empty()) throw bad(file, key, "\"\"", "empty scene path");
+  fs::path p(scene);
+  if (p.is_relative()) p = fs::path(file).parent_path() / p;
+  p = p.lexically_normal();
+  std::error_code ec;
+  if (!fs::is_regular_file(p, ec))
+    throw bad(file, key, "\"" + scene + "\"",
+              "scene file not found (looked for " + p.string() + ")");
+  return fs::absolute(p).lexically_normal().string();
+}
+
+// Flattens an overrides table into dotted keys: { "a.b" = 1 } and { a.b = 1 } (a nested table in
+// TOML) both give "a.b" = 1. Arrays are leaves.
+void flatten(const toml::table& t, const std::string& prefix, toml::table& out) {
+  for (const auto& [k, v] : t) {
+    const std::string key =
+        prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
+    if (const auto* sub = v.as_table()) {
+      flatten(*sub, key, out);
+    } else {
+      v.visit([&](const auto& x) { out.insert_or_assign(key, x); });
+    }
+  }
+}
+
+toml::table get_overrides(const toml::table& t, const std::string& file,
+                          const std::string& prefix) {
+  toml::table out;
+  const toml::node* n = t.get("overrides");
+  if (n == nullptr) return out;
+  if (!n->is_table())
+    throw bad(file, prefix + "overrides", value_text(*n),
+              "must be a table of dotted keys, e.g. { \"rolling.mu_r\" = 0.1 }");
+  flatten(*n->as_table(), "", out);
+  for (const auto& [k, v] : out)
+    split_dotted_key(k.str(), file + ": key '" + prefix + "overrides'");
+  return out;
+}
+
+std::string fnv1a_hex(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+// Text of a sweep value for a case name: shortest round-trip form for floats.
+std::string name_text(const toml::node& v) {
+  if (v.is_floating_point()) {
+    char buf[64];
+    auto r = std::to_chars(buf, buf + sizeof buf, v.as_floating_point()->get());
+    return std::string(buf, r.ptr);
+  }
+  if (v.is_integer()) return std::to_string(v.as_integer()->get());
+  if (v.is_string()) return v.as_string()->get();
+  if (v.is_boolean()) return v.as_boolean()->get() ? "true" : "false";
+  return value_text(v);
+}
+
+std::string sanitize(const std::string& s) {
+  std::string out;
+  for (char c : s)
+    out.push_back(
+        std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-' ? c : '_');
+  return out;
+}
+
+nlohmann::json toml_to_json(const toml::node& n) {
+  if (const auto* t = n.as_table()) {
+    nlohmann::json j = nlohmann::json::object();
+    for (const auto& [k, v] : *t) j[std::string(k.str())] = toml_to_json(v);
+    return j;
+  }
+  if (const auto* a = n.as_array()) {
+    nlohmann::json j = nlohmann::json::array();
+    for (const auto& v : *a) j.push_back(toml_to_json(v));
+    return j;
+  }
+  if (n.is_integer()) return n.as_integer()->get();
+  if (n.is_floating_point()) return n.as_floating_point()->get();
+  if (n.is_boolean()) return n.as_boolean()->get();
+  if (n.is_string()) return n.as_string()->get();
+  return value_text(n);  // dates and times
+}
+
+toml::table parse_toml_file(const std::string& path) {
+  const std::string text = read_file(path);
+  try {
+    return toml::parse(text, path);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << path << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
+       << e.description();
+    throw std::invalid_argument(os.str());
+  }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Campaign file.
+
+std::string CaseSpec::relative_dir() const {
+  return "cases/" + case_name + "/seed_" + std::to_string(seed);
+}
+
+std::string CaseSpec::id() const { return case_name + "/seed_" + std::to_string(seed); }
+
+bool is_safe_name(std::string_view name) {
+  if (name.empty() || name.size() > 100) return false;
+  if (!std::isalnum(static_cast<unsigned char>(name[0]))) return false;
+  for (char c : name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-'))
+      return false;
+  return true;
+}
+
+Campaign load_campaign(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw std::runtime_error(path + ": campaign file not found");
+  return parse_campaign(read_file(path), path);
+}
+
+Campaign parse_campaign(std::string_view text, const std::string& path) {
+  const std::string file = fs::absolute(fs::path(path)).lexically_normal().string();
+  toml::table root;
+  try {
+    root = toml::parse(text, file);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << file << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
+       << e.description();
+    throw std::invalid_argument(os.str());
+  }
+  check_keys(root,
+             {"name", "description", "paper", "scene", "seeds", "overrides", "case", "sweep",
+              "calibration"},
+             file, "");
+
+  Campaign c;
+  c.file = file;
+  c.name = get_string(root, "name", file, "", true);
+  if (!is_safe_name(c.name))
+    throw bad(file, "name", "\"" + c.name + "\"",
+              "not filesystem-safe (use letters, digits, '.', '_', '-'; start with a letter or "
+              "digit; at most 100 characters)");
+  c.description = get_string(root, "description", file, "", false);
+  c.paper = get_string(root, "paper", file, "", false);
+  c.scene_path = resolve_scene(file, "scene", get_string(root, "scene", file, "", true));
+
+  // Seeds: a list of distinct non-negative integers, or a count n meaning 1..n.
+  if (const toml::node* s = root.get("seeds")) {
+    if (s->is_integer()) {
+      const auto n = s->as_integer()->get();
+      if (n < 1 || n > 100000)
+        throw bad(file, "seeds", value_text(*s), "a count must be 1..100000");
+      for (std::int64_t i = 1; i <= n; ++i) c.seeds.push_back(static_cast<std::uint64_t>(i));
+    } else if (const auto* a = s->as_array()) {
+      std::set<std::int64_t> seen;
+      for (const auto& e : *a) {
+        if (!e.is_integer() || e.as_integer()->get() < 0)
+          throw bad(file, "seeds", value_text(*s), "every seed must be an integer >= 0");
+        if (!seen.insert(e.as_integer()->get()).second)
+          throw bad(file, "seeds", value_text(*s), "seed " + value_text(e) + " is repeated");
+        c.seeds.push_back(static_cast<std::uint64_t>(e.as_integer()->get()));
+      }
+      if (c.seeds.empty()) throw bad(file, "seeds", "[]", "needs at least one seed");
+    } else {
+      throw bad(file, "seeds", value_text(*s), "must be a list of integers or a count");
+    }
+  }
+
+  const toml::table common = get_overrides(root, file, "");
+
+  // The cases: [[case]] or [sweep].
+  struct CaseDef {
+    std::string name, scene, key_prefix;
+    toml::table overrides;
+  };
+  std::vector<CaseDef> cases;
+  const toml::node* case_node = root.get("case");
+  const toml::node* sweep_node = root.get("sweep");
+  if (case_node && sweep_node)
+    throw bad(file, "sweep", "", "a campaign has either [[case]] tables or one [sweep], not both");
+  if (case_node) {
+    const auto* arr = case_node->as_array();
+    if (arr == nullptr || !arr->is_array_of_tables() || arr->empty())
+      throw bad(file, "case", value_text(*case_node), "must be one or more [[case]] tables");
+    std::size_t i = 0;
+    for (const auto& e : *arr) {
+      const auto& t = *e.as_table();
+      const std::string prefix = "case[" + std::to_string(i++) + "].";
+      check_keys(t, {"name", "scene", "overrides", "description"}, file, prefix);
+      CaseDef d;
+      d.key_prefix = prefix;
+      d.name = get_string(t, "name", file, prefix, true);
+      if (!is_safe_name(d.name))
+        throw bad(file, prefix + "name", "\"" + d.name + "\"",
+                  "not filesystem-safe (use letters, digits, '.', '_', '-'; start with a letter or "
+                  "digit; at most 100 characters)");
+      get_string(t, "description", file, prefix, false);
+      d.scene = t.get("scene") ? resolve_scene(file, prefix + "scene",
+                                               get_string(t, "scene", file, prefix, true))
+                               : c.scene_path;
+      d.overrides = common;
+      const toml::table own = get_overrides(t, file, prefix);
+      for (const auto& [k, v] : own)
+        v.visit([&](const auto& x) { d.overrides.insert_or_assign(k, x); });
+      cases.push_back(std::move(d));
+    }
+  } else if (sweep_node) {
+    const auto* t = sweep_node->as_table();
+    if (t == nullptr) throw bad(file, "sweep", value_text(*sweep_node), "must be a table");
+    check_keys(*t, {"key", "values", "name"}, file, "sweep.");
+    const std::string key = get_string(*t, "key", file, "sweep.", true);
+    const auto parts = split_dotted_key(key, file + ": key 'sweep.key'");
+    const std::string prefix = get_string(*t, "name", file, "sweep.", false, parts.back());
+    const toml::node* values = t->get("values");
+    if (values == nullptr) throw bad(file, "sweep.values", "", "missing (a list is required)");
+    const auto* va = values->as_array();
+    if (va == nullptr || va->empty())
+      throw bad(file, "sweep.values", value_text(*values), "must be a non-empty list");
+    for (const auto& v : *va) {
+      CaseDef d;
+      d.key_prefix = "sweep.values";
+      d.name = sanitize(prefix + "_" + name_text(v));
+      if (!is_safe_name(d.name))
+        throw bad(file, "sweep.values", value_text(v),
+                  "gives case name \"" + d.name + "\", which is not filesystem-safe");
+      d.scene = c.scene_path;
+      d.overrides = common;
+      v.visit([&](const auto& x) { d.overrides.insert_or_assign(key, x); });
+      cases.push_back(std::move(d));
+    }
+  }
+
+  // Unique names (case-insensitively, for case-insensitive file systems).
+  std::map<std::string, std::string> seen_names;
+  for (const auto& d : cases) {
+    std::string lower;
+    for (char ch : d.name)
+      lower.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(ch))));
+    if (!seen_names.emplace(lower, d.name).second)
+      throw bad(file, d.key_prefix == "sweep.values" ? "sweep.values" : d.key_prefix + "name",
+                "\"" + d.name + "\"", "case name is not unique");
+  }
+  if (!cases.empty() && c.seeds.empty())
+    throw bad(file, "seeds", "", "missing (cases run once per seed: give a list or a count)");
+
+  // Every override must apply to its scene now, not hours into the campaign.
+  std::map<std::string, toml::table> scenes;
+  auto scene_of = [&](const std::string& p) -> const toml::table& {
+    auto it = scenes.find(p);
+    if (it == scenes.end()) it = scenes.emplace(p, parse_toml_file(p)).first;
+    return it->second;
+  };
+  std::map<std::string, std::string> hashes;
+  for (const auto& d : cases) {
+    toml::table copy = scene_of(d.scene);
+    apply_overrides(copy, d.overrides, file + ", case " + d.name + " (scene " + d.scene + ")");
+    if (!hashes.count(d.scene)) hashes[d.scene] = fnv1a_hex(read_file(d.scene));
+  }
+
+  std::size_t index = 0;
+  for (const auto& d : cases) {
+    for (auto seed : c.seeds) {
+      CaseSpec s;
+      s.index = index++;
+      s.case_name = d.name;
+      s.seed = seed;
+      s.scene_path = d.scene;
+      s.scene_hash = hashes[d.scene];
+      s.overrides = d.overrides;
+      c.runs.push_back(std::move(s));
+    }
+  }
+
+  if (const toml::node* cal = root.get("calibration")) {
+    const auto* t = cal->as_table();
+    if (t == nullptr) throw bad(file, "calibration", value_text(*cal), "must be a table");
+    const std::string p = "calibration.";
+    check_keys(*t,
+               {"key", "target_deg", "target_sd_deg", "mu_r_range", "seeds_per_point", "first_seed",
+                "tolerance_deg", "max_simulations", "bootstrap_replicates"},
+               file, p);
+    CampaignCalibration cc;
+    cc.key = get_string(*t, "key", file, p, false, cc.key);
+    split_dotted_key(cc.key, file + ": key 'calibration.key'");
+    const auto target = get_number(*t, "target_deg", file, p);
+    if (!target) throw bad(file, p + "target_deg", "", "missing (the measured angle in degrees)");
+    cc.target.angle_deg = *target;
+    cc.target.sd_deg = get_number(*t, "target_sd_deg", file, p).value_or(0.0);
+    try {
+      validate_target(cc.target);
+    } catch (const std::invalid_argument& e) {
+      throw bad(file, p + "target_deg", value_text(*t->get("target_deg")), e.what());
+    }
+    const toml::node* range = t->get("mu_r_range");
+    const toml::array* ra = range ? range->as_array() : nullptr;
+    if (ra == nullptr || ra->size() != 2 || !(*ra)[0].is_number() || !(*ra)[1].is_number())
+      throw bad(file, p + "mu_r_range", range ? value_text(*range) : "",
+                "must be a list of two numbers [lo, hi]");
+    auto as_double = [](const toml::node& n) {
+      return n.is_integer() ? static_cast<double>(n.as_integer()->get())
+                            : n.as_floating_point()->get();
+    };
+    cc.settings.mu_r_lo = as_double((*ra)[0]);
+    cc.settings.mu_r_hi = as_double((*ra)[1]);
+    if (!(cc.settings.mu_r_lo >= 0.0 && cc.settings.mu_r_hi > cc.settings.mu_r_lo))
+      throw bad(file, p + "mu_r_range", value_text(*range), "need 0 <= lo < hi");
+    if (auto v = get_int(*t, "seeds_per_point", file, p)) {
+      if (*v < 1 || *v > 1000)
+        throw bad(file, p + "seeds_per_point", std::to_string(*v), "must be 1..1000");
+      cc.settings.seeds_per_point = static_cast<int>(*v);
+    }
+    if (auto v = get_int(*t, "first_seed", file, p)) {
+      if (*v < 0) throw bad(file, p + "first_seed", std::to_string(*v), "must be >= 0");
+      cc.settings.first_seed = static_cast<std::uint64_t>(*v);
+    }
+    if (auto v = get_number(*t, "tolerance_deg", file, p)) {
+      if (!(*v > 0.0))
+        throw bad(file, p + "tolerance_deg", value_text(*t->get("tolerance_deg")), "must be > 0");
+      cc.settings.tolerance_deg = *v;
+    }
+    if (auto v = get_int(*t, "max_simulations", file, p)) {
+      if (*v < 2 * cc.settings.seeds_per_point || *v > 1000000)
+        throw bad(file, p + "max_simulations", std::to_string(*v),
+                  "must be at least 2 x seeds_per_point (both range ends)");
+      cc.settings.max_simulations = static_cast<int>(*v);
+    }
+    if (auto v = get_int(*t, "bootstrap_replicates", file, p)) {
+      if (*v < 100 || *v > 1000000)
+        throw bad(file, p + "bootstrap_replicates", std::to_string(*v), "must be 100..1000000");
+      cc.settings.bootstrap.replicates = static_cast<int>(*v);
+    }
+    // The key must apply to the base scene.
+    toml::table copy = scene_of(c.scene_path);
+    apply_override(copy, cc.key, toml::value<double>(cc.settings.mu_r_lo),
+                   file + ", key 'calibration.key' (scene " + c.scene_path + ")");
+    c.calibration = cc;
+  }
+
+  if (c.runs.empty() && !c.calibration)
+    throw bad(file, "case", "", "the campaign has no [[case]], no [sweep] and no [calibration]");
+  return c;
+}
+
+toml::table build_case_scene(const CaseSpec& spec) {
+  toml::table doc = parse_toml_file(spec.scene_path);
+  apply_overrides(doc, spec.overrides,
+                  "case " + spec.case_name + " (scene " + spec.scene_path + ")");
+  return doc;
+}
+
+nlohmann::json to_json(const CaseSpec& spec) {
+  return {{"case", spec.case_name},
+          {"seed", spec.seed},
+          {"scene", spec.scene_path},
+          {"scene_fnv1a", spec.scene_hash},
+          {"overrides", toml_to_json(spec.overrides)}};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Runner.
+
+std::optional<RankInfo> detect_mpi_rank() {
+  auto env_int = [](const char* name) -> std::optional<int> {
+    const char* v = std::getenv(name);
+    if (v == nullptr || *v == '\0') return std::nullopt;
+    int out = 0;
+    const auto r = std::from_chars(v, v + std::char_traits<char>::length(v), out);
+    if (r.ec != std::errc()) return std::nullopt;
+    return out;
+  };
+  auto rank = env_int("OMPI_COMM_WORLD_RANK");
+  if (!rank) rank = env_int("PMIX_RANK");
+  const auto size = env_int("OMPI_COMM_WORLD_SIZE");
+  if (!rank || !size || *size < 1 || *rank < 0 || *rank >= *size) return std::nullopt;
+  RankInfo info;
+  info.rank = *rank;
+  info.size = *size;
+  for (const char* name :
+       {"PMIX_NAMESPACE", "OMPI_MCA_orte_ess_jobid", "OMPI_MCA_ess_base_jobid"}) {
+    if (const char* v = std::getenv(name); v && *v) {
+      info.job = v;
+      break;
+    }
+  }
+  return info;
+}
+
+namespace {
+
+constexpr const char* kResultFile = "result.json";
+constexpr const char* kErrorFile = "error.json";
+constexpr const char* kStartedFile = "started.json";
+constexpr const char* kManifestFile = "campaign.json";
+
+std::string hostname() {
+  char buf[256] = {};
+  if (gethostname(buf, sizeof buf - 1) != 0) return "unknown";
+  return buf;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::optional<nlohmann::json> read_json(const fs::path& p) {
+  std::error_code ec;
+  if (!fs::is_regular_file(p, ec)) return std::nullopt;
+  try {
+    return nlohmann::json::parse(read_file(p.string()));
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+// Whether a stored spec describes the same inputs as `spec` (the scene's path may have moved).
+bool same_inputs(const nlohmann::json& stored, const CaseSpec& spec) {
+  const auto now = to_json(spec);
+  for (const char* k : {"case", "seed", "scene_fnv1a", "overrides"})
+    if (!stored.contains(k) || stored[k] != now[k]) return false;
+  return true;
+}
+
+// Runs one run in its folder and records result.json or error.json. Never throws.
+bool execute_run(const CaseSpec& spec, const fs::path& out_dir, const CaseFn& case_fn,
+                 const std::string& job) {
+  const fs::path dir = out_dir / spec.relative_dir();
+  const std::string started = utc_now();
+  const auto t0 = std::chrono::steady_clock::now();
+  nlohmann::json meta = {{"spec", to_json(spec)}, {"job", job},
+                         {"host", hostname()},    {"pid", ::getpid()},
+                         {"started", started},    {"code_version", code_version()}};
+  try {
+    std::error_code ec;
+    fs::remove_all(dir, ec);  // a started but unfinished run restarts clean
+    if (ec)
+      throw std::runtime_error(dir.string() + ": cannot clean the run folder: " + ec.message());
+    fs::create_directories(dir);
+    write_json_atomic((dir / kStartedFile).string(), meta);
+    nlohmann::json result = case_fn(spec, dir.string());
+    meta["finished"] = utc_now();
+    meta["wall_time_s"] = seconds_since(t0);
+    meta["result"] = std::move(result);
+    write_json_atomic((dir / kResultFile).string(), meta);
+    return true;
+  } catch (const std::exception& e) {
+    meta["error"] = e.what();
+  } catch (...) {
+    meta["error"] = "unknown exception";
+  }
+  meta["finished"] = utc_now();
+  meta["wall_time_s"] = seconds_since(t0);
+  try {
+    write_json_atomic((dir / kErrorFile).string(), meta);
+  } catch (...) {
+  }
+  return false;
+}
+
+// Status of one run as the manifest records it. Under MPI, rank 0 accepts only files of this job
+// (or finished results of earlier jobs when not forcing).
+struct RunStatus {
+  std::string status;  // "finished", "failed", "pending"
+  std::string error;
+  double wall_time_s = 0.0;
+};
+
+RunStatus run_status(const fs::path& out_dir, const CaseSpec& spec, const std::string& job,
+                     bool require_job_result, bool require_job_error) {
+  const fs::path dir = out_dir / spec.relative_dir();
+  std::error_code ec;
+  if (fs::is_regular_file(dir / kResultFile, ec)) {
+    auto j = read_json(dir / kResultFile);
+    if (j && (!require_job_result || j->value("job", std::string()) == job))
+      return {"finished", "", j->value("wall_time_s", 0.0)};
+  }
+  if (fs::is_regular_file(dir / kErrorFile, ec)) {
+    auto j = read_json(dir / kErrorFile);
+    if (j && (!require_job_error || j->value("job", std::string()) == job))
+      return {"failed", j->value("error", std::string("unknown error")),
+              j->value("wall_time_s", 0.0)};
+  }
+  return {"pending", "", 0.0};
+}
+
+nlohmann::json build_manifest(const Campaign& c, const fs::path& out_dir,
+                              const std::vector<RunStatus>& st) {
+  nlohmann::json runs = nlohmann::json::array();
+  int finished = 0, failed = 0, pending = 0;
+  for (std::size_t i = 0; i < c.runs.size(); ++i) {
+    const auto& s = c.runs[i];
+    nlohmann::json r = {{"case", s.case_name},
+                        {"seed", s.seed},
+                        {"dir", s.relative_dir()},
+                        {"status", st[i].status}};
+    if (st[i].status == "finished") {
+      ++finished;
+      r["wall_time_s"] = st[i].wall_time_s;
+    } else if (st[i].status == "failed") {
+      ++failed;
+      r["error"] = st[i].error;
+    } else {
+      ++pending;
+    }
+    runs.push_back(r);
+  }
+  return {{"campaign", c.name},
+          {"file", c.file},
+          {"scene", c.scene_path},
+          {"description", c.description},
+          {"paper", c.paper},
+          {"out_dir", fs::absolute(out_dir).string()},
+          {"code_version", code_version()},
+          {"updated", utc_now()},
+          {"counts",
+           {{"total", c.runs.size()},
+            {"finished", finished},
+            {"failed", failed},
+            {"pending", pending}}},
+          {"runs", runs}};
+}
+
+std::vector<RunStatus> scan(const Campaign& c, const fs::path& out_dir) {
+  std::vector<RunStatus> st;
+  for (const auto& s : c.runs) st.push_back(run_status(out_dir, s, "", false, false));
+  return st;
+}
+
+// Runs the listed runs on a local pool; calls on_done(index, ok) in the calling thread for
+// processes and under a lock for threads.
+void run_pool(const Campaign& c, const fs::path& out_dir, const CaseFn& case_fn,
+              const std::vector<std::size_t>& todo, int workers, WorkerMode mode,
+              const std::string& job, const std::function<void(std::size_t, bool)>& on_done) {
+  workers = std::max(1, workers);
+  if (mode == WorkerMode::kThreads) {
+    std::atomic<std::size_t> next{0};
+    std::mutex m;
+    std::vector<std::thread> pool;
+    for (int w = 0; w < std::min<int>(workers, static_cast<int>(todo.size())); ++w) {
+      pool.emplace_back([&] {
+        for (std::size_t k = next++; k < todo.size(); k = next++) {
+          const bool ok = execute_run(c.runs[todo[k]], out_dir, case_fn, job);
+          std::lock_guard<std::mutex> lock(m);
+          on_done(todo[k], ok);
+        }
+      });
+    }
+    for (auto& t : pool) t.join();
+    return;
+  }
+
+  std::fflush(nullptr);  // nothing buffered may be written twice by the children
+  const pid_t parent = ::getpid();
+  std::deque<std::size_t> queue(todo.begin(), todo.end());
+  std::map<pid_t, std::size_t> active;
+  while (!queue.empty() || !active.empty()) {
+    while (!queue.empty() && static_cast<int>(active.size()) < workers) {
+      const std::size_t i = queue.front();
+      queue.pop_front();
+      const pid_t pid = ::fork();
+      if (pid == 0) {
+        ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (::getppid() != parent) ::_exit(3);  // the parent died before prctl took effect
+        const bool ok = execute_run(c.runs[i], out_dir, case_fn, job);
+        ::_exit(ok ? 0 : 1);
+      }
+      if (pid < 0) {
+        const fs::path dir = out_dir / c.runs[i].relative_dir();
+        std::error_code ec;
+        fs::create_directories(dir, ec);
+        write_json_atomic((dir / kErrorFile).string(),
+                          {{"spec", to_json(c.runs[i])}, {"job", job}, {"error", "fork failed"}});
+        on_done(i, false);
+        continue;
+      }
+      active[pid] = i;
+    }
+    bool reaped = false;
+    for (auto it = active.begin(); it != active.end();) {
+      int st = 0;
+      const pid_t r = ::waitpid(it->first, &st, WNOHANG);
+      if (r == 0) {
+        ++it;
+        continue;
+      }
+      const std::size_t i = it->second;
+      it = active.erase(it);
+      reaped = true;
+      const fs::path dir = out_dir / c.runs[i].relative_dir();
+      std::error_code ec;
+      const bool has_result = fs::is_regular_file(dir / kResultFile, ec);
+      if (!has_result && !fs::is_regular_file(dir / kErrorFile, ec)) {
+        std::string why = "worker ended without a result";
+        if (r > 0 && WIFSIGNALED(st))
+          why += " (killed by signal " + std::to_string(WTERMSIG(st)) + ")";
+        if (r > 0 && WIFEXITED(st)) why += " (exit code " + std::to_string(WEXITSTATUS(st)) + ")";
+        fs::create_directories(dir, ec);
+        write_json_atomic((dir / kErrorFile).string(),
+                          {{"spec", to_json(c.runs[i])}, {"job", job}, {"error", why}});
+      }
+      on_done(i, has_result);
+    }
+    if (!reaped) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+// An exclusive lock on the output folder for local runs, so two campaign processes cannot run
+// into the same folder. Released by the kernel when the process ends, even by SIGKILL.
+class FolderLock {
+ public:
+  explicit FolderLock(const fs::path& out_dir) {
+    const std::string p = (out_dir / ".campaign.lock").string();
+    fd_ = ::open(p.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw std::runtime_error(p + ": cannot open the campaign lock file");
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd_);
+      throw std::runtime_error(out_dir.string() +
+                               ": another campaign process is running in this folder");
+    }
+  }
+  ~FolderLock() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+}  // namespace
+
+nlohmann::json campaign_manifest(const Campaign& campaign, const std::string& out_dir) {
+  return build_manifest(campaign, out_dir, scan(campaign, out_dir));
+}
+
+CampaignSummary run_campaign(const Campaign& campaign, const std::string& out_dir_str,
+                             const CaseFn& case_fn, const RunnerSettings& settings) {
+  if (!case_fn) throw std::invalid_argument("run_campaign: no case function");
+  const fs::path out_dir = fs::absolute(fs::path(out_dir_str)).lexically_normal();
+  fs::create_directories(out_dir);
+  const fs::path manifest_path = out_dir / kManifestFile;
+  if (auto m = read_json(manifest_path)) {
+    const std::string other = m->value("campaign", std::string());
+    if (other != campaign.name)
+      throw std::runtime_error(out_dir.string() + " holds campaign '" + other + "', not '" +
+                               campaign.name + "': use another output folder");
+  }
+  const bool mpi = settings.rank.has_value() && settings.rank->size > 1;
+  const RankInfo rank = settings.rank.value_or(RankInfo{});
+  std::optional<FolderLock> lock;
+  if (!mpi) lock.emplace(out_dir);
+  const std::string tag =
+      "[campaign " + campaign.name +
+      (mpi ? " rank " + std::to_string(rank.rank) + "/" + std::to_string(rank.size)
+           : std::string()) +
+      "] ";
+  auto say = [&](const std::string& line) {
+    if (settings.progress) std::cerr << tag << line << std::endl;
+  };
+
+  // Which runs this process does; refuse to mix finished results made from other inputs.
+  CampaignSummary summary;
+  summary.total = static_cast<int>(campaign.runs.size());
+  std::vector<std::size_t> todo;
+  for (const auto& s : campaign.runs) {
+    if (mpi && static_cast<int>(s.index % static_cast<std::size_t>(rank.size)) != rank.rank)
+      continue;
+    const fs::path dir = out_dir / s.relative_dir();
+    if (auto r = read_json(dir / kResultFile)) {
+      if (!settings.force) {
+        if (!same_inputs(r->value("spec", nlohmann::json::object()), s))
+          throw std::runtime_error((dir / kResultFile).string() + ": finished result of " + s.id() +
+                                   " was made from different inputs than " + campaign.file +
+                                   " now gives; use --force to redo it or another output folder");
+        ++summary.skipped;
+        continue;
+      }
+    }
+    todo.push_back(s.index);
+  }
+  say(std::to_string(todo.size()) + " run(s) to do, " + std::to_string(summary.skipped) +
+      " already finished, " + std::to_string(summary.total) + " in the campaign");
+
+  std::vector<RunStatus> status = scan(campaign, out_dir);
+  auto write_manifest = [&] {
+    summary.manifest = build_manifest(campaign, out_dir, status);
+    if (!mpi || rank.rank == 0) write_json_atomic(manifest_path.string(), summary.manifest);
+  };
+  if (!mpi) write_manifest();
+
+  const auto t0 = std::chrono::steady_clock::now();
+  int done_now = 0;
+  auto on_done = [&](std::size_t i, bool ok) {
+    ++done_now;
+    ++summary.ran;
+    status[i] = run_status(out_dir, campaign.runs[i], "", false, false);
+    std::ostringstream os;
+    os << campaign.runs[i].id() << (ok ? " finished" : " FAILED: " + status[i].error) << " ("
+       << done_now << "/" << todo.size() << " done, " << static_cast<int>(seconds_since(t0))
+       << " s)";
+    say(os.str());
+    if (!mpi) write_manifest();
+  };
+  run_pool(campaign, out_dir, case_fn, todo, mpi ? 1 : settings.workers, settings.mode, rank.job,
+           on_done);
+
+  if (mpi && rank.rank == 0) {
+    // Wait for every other rank's runs: a result of this job (or an earlier finished one when not
+    // forcing), or an error of this job. Without a job id, files newer than this rank's start.
+    const auto wait_start = std::chrono::steady_clock::now();
+    const auto file_start = fs::file_time_type::clock::now() - std::chrono::seconds(2);
+    const bool have_job = !rank.job.empty();
+    for (;;) {
+      int pending = 0;
+      for (const auto& s : campaign.runs) {
+        const fs::path dir = out_dir / s.relative_dir();
+        RunStatus st = run_status(out_dir, s, rank.job, settings.force && have_job, have_job);
+        if (!have_job && st.status != "pending") {
+          std::error_code ec;
+          const fs::path f = dir / (st.status == "finished" ? kResultFile : kErrorFile);
+          const bool fresh = fs::last_write_time(f, ec) >= file_start;
+          if (!fresh && (st.status == "failed" || settings.force)) st = {"pending", "", 0.0};
+        }
+        status[s.index] = st;
+        if (st.status == "pending") ++pending;
+      }
+      if (pending == 0) break;
+      if (settings.wait_timeout_s > 0.0 && seconds_since(wait_start) > settings.wait_timeout_s) {
+        say("gave up waiting for " + std::to_string(pending) + " run(s) of other ranks");
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::duration<double>(settings.poll_interval_s));
+    }
+  }
+  if (!mpi || rank.rank == 0) {
+    write_manifest();
+  } else {
+    summary.manifest = build_manifest(campaign, out_dir, scan(campaign, out_dir));
+  }
+  const auto& counts = summary.manifest["counts"];
+  summary.finished = counts["finished"].get<int>();
+  summary.failed = counts["failed"].get<int>();
+  say(std::to_string(summary.finished) + " finished, " + std::to_string(summary.failed) +
+      " failed, " + std::to_string(counts["pending"].get<int>()) + " pending of " +
+      std::to_string(summary.total));
+  return summary;
+}
+
+}  // namespace reposetwin::experiments

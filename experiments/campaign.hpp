@@ -1,0 +1,137 @@
+// Campaigns: many runs of one scene with overrides and seeds, resumable, on a local worker pool or
+// spread over MPI ranks.
+//
+// Design.
+//  * A campaign file (TOML, strict: unknown keys are errors) names a base scene, seeds, and either
+//    a list of [[case]] tables (each with dotted-key overrides) or one [sweep] over a key; every
+//    case runs once per seed. Loading checks everything a run would trip on later (missing scene
+//    files, overrides that do not apply to the scene) so a campaign fails at once, not after hours.
+//  * One folder per run (case x seed): out/cases/<case>/seed_<n>/. A run is finished exactly when
+//    its result.json exists; that file is written atomically (temporary name + rename) as the last
+//    step, so a killed run leaves either no result or a whole one. A run without result.json is
+//    started again from a clean folder; a finished run is never redone (unless forced) and never
+//    overwritten. A finished result made from different inputs (the campaign file was edited) is an
+//    error, not a silent mix. A failing run writes error.json; the campaign goes on.
+//  * campaign.json (atomic) summarises every run's status for reports.
+//  * Local pool: processes (fork per run; the parent waits; the child writes its result and calls
+//    _exit) or threads. Processes isolate a crashing or leaking run and give each run a clean
+//    address space; forking must happen before the parent has started OpenMP threads (libgomp's
+//    pool does not survive fork). Children die with the parent (PR_SET_PDEATHSIG), so a killed
+//    campaign leaves no orphan writing into a folder that the resumed campaign restarts.
+//  * MPI without linking MPI: under mpirun the rank and size come from OMPI_COMM_WORLD_RANK/SIZE
+//    (or PMIX_RANK and OMPI_COMM_WORLD_SIZE); rank r runs runs i with i % size == r, one at a time
+//    (the launcher decides the parallelism), and rank 0 waits for every result or error file and
+//    writes the manifest. A cluster runs the same campaign file unchanged.
+#pragma once
+
+#include <toml++/toml.h>
+
+#include <cstdint>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "experiments/calibration.hpp"
+
+namespace reposetwin::experiments {
+
+/// One run of a campaign: a case (scene + overrides) with one seed.
+struct CaseSpec {
+  std::size_t index = 0;   // position in the campaign's run list (used for MPI distribution)
+  std::string case_name;   // unique, filesystem-safe
+  std::uint64_t seed = 0;  // run seed
+  std::string scene_path;  // absolute path of the scene file
+  std::string scene_hash;  // FNV-1a 64 of the scene file's text (hex), to detect edited inputs
+  toml::table overrides;   // dotted key -> value, applied to the scene before parsing
+  /// The run's folder relative to the campaign output folder ("cases/<case>/seed_<n>").
+  std::string relative_dir() const;
+  /// A short id for messages ("<case>/seed_<n>").
+  std::string id() const;
+};
+
+/// The [calibration] table of a campaign file, for the calibrate command.
+struct CampaignCalibration {
+  std::string key = "rolling.mu_r";  // dotted scene key that is varied
+  Target target;                     // measured angle to match
+  CalibrationSettings settings;      // mu_r range, seeds per point, tolerance, budget
+};
+
+/// A parsed campaign file.
+struct Campaign {
+  std::string name;         // filesystem-safe
+  std::string description;  // free text (optional)
+  std::string paper;        // the paper item it reproduces, e.g. "Fig. 8" (optional)
+  std::string file;         // absolute path of the campaign file
+  std::string scene_path;   // absolute path of the base scene
+  std::vector<std::uint64_t> seeds;
+  std::vector<CaseSpec> runs;  // cases x seeds, in file order then seed order
+  std::optional<CampaignCalibration> calibration;
+};
+
+/// Reads a campaign file. Throws std::invalid_argument (or std::runtime_error for unreadable files)
+/// whose message names the file, the key and the value: unknown keys, wrong types, missing or
+/// unreadable scenes, duplicate or unsafe case names, overrides that do not apply to the scene.
+Campaign load_campaign(const std::string& path);
+
+/// Parses campaign text; `path` names it in messages and anchors relative scene paths.
+Campaign parse_campaign(std::string_view text, const std::string& path);
+
+/// Whether a name is safe as a folder name: [A-Za-z0-9][A-Za-z0-9._-]*, at most 100 characters.
+bool is_safe_name(std::string_view name);
+
+/// The run's scene: the scene file parsed as TOML with the run's overrides applied. The caller's
+/// scene parser reads it (the seed is given separately in CaseSpec).
+toml::table build_case_scene(const CaseSpec& spec);
+
+/// The inputs of a run as JSON (stored in its result.json and checked when resuming).
+nlohmann::json to_json(const CaseSpec& spec);
+
+/// Runs one case in `case_dir` (an existing, empty folder) and returns its result.
+using CaseFn = std::function<nlohmann::json(const CaseSpec&, const std::string& case_dir)>;
+
+/// How runs are spread over local workers.
+enum class WorkerMode { kProcesses, kThreads };
+
+/// Position of this process in an MPI job.
+struct RankInfo {
+  int rank = 0;
+  int size = 1;
+  std::string job;  // id shared by the ranks of one job ("" = compare file times instead)
+};
+
+/// The MPI rank from the environment (OpenMPI / PMIx variables), or nothing outside mpirun.
+std::optional<RankInfo> detect_mpi_rank();
+
+/// Settings of the campaign runner.
+struct RunnerSettings {
+  int workers = 2;                                   // concurrent runs on this machine (local pool)
+  WorkerMode mode = WorkerMode::kProcesses;          // fork per run, or threads
+  bool force = false;                                // redo finished runs too
+  bool progress = true;                              // progress lines on stderr
+  std::optional<RankInfo> rank = detect_mpi_rank();  // MPI position; nothing = local pool
+  double poll_interval_s = 0.5;  // rank 0: pause between checks for other ranks [s]
+  double wait_timeout_s = 0.0;   // rank 0: give up waiting after this long [s]; 0 = never
+};
+
+/// What run_campaign did.
+struct CampaignSummary {
+  int total = 0;            // runs in the campaign
+  int finished = 0;         // runs with a result (before or now)
+  int failed = 0;           // runs with an error
+  int skipped = 0;          // finished runs found and not redone
+  int ran = 0;              // runs started by this call (this rank)
+  nlohmann::json manifest;  // the manifest written (rank 0) or this rank's view
+};
+
+/// Runs every unfinished run of `campaign` into `out_dir` through `case_fn` (see the design note).
+/// Throws std::runtime_error if out_dir holds another campaign or a finished result whose inputs
+/// differ from the campaign's.
+CampaignSummary run_campaign(const Campaign& campaign, const std::string& out_dir,
+                             const CaseFn& case_fn, const RunnerSettings& settings = {});
+
+/// Scans out_dir and builds the manifest of `campaign` (status of every run) without running.
+nlohmann::json campaign_manifest(const Campaign& campaign, const std::string& out_dir);
+
+}  // namespace reposetwin::experiments

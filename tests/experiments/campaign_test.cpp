@@ -1,0 +1,476 @@
+#include "experiments/campaign.hpp"
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sys/file.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+#include <thread>
+
+#include "experiments/provenance.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+namespace fs = std::filesystem;
+
+constexpr const char* kScene = R"(
+seed = 1
+[rolling]
+model = "epsd"
+mu_r = 0.1
+[sample]
+mass = 0.2
+)";
+
+// A fresh folder holding scene.toml.
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() /
+                     ("reposetwin_campaign_test_" + std::to_string(::getpid()) + "_" + name);
+  fs::remove_all(d);
+  fs::create_directories(d);
+  write_file_atomic((d / "scene.toml").string(), kScene);
+  return d;
+}
+
+fs::path write_campaign(const fs::path& dir, const std::string& text,
+                        const std::string& file = "campaign.toml") {
+  write_file_atomic((dir / file).string(), text);
+  return dir / file;
+}
+
+std::string load_error(const fs::path& file) {
+  try {
+    load_campaign(file.string());
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Counts starts of each run in a log file (one line per start; O_APPEND keeps lines whole across
+// processes).
+void log_start(const fs::path& log, const CaseSpec& s) {
+  std::ofstream(log, std::ios::app) << s.id() << "\n";
+}
+std::map<std::string, int> read_log(const fs::path& log) {
+  std::map<std::string, int> n;
+  std::ifstream in(log);
+  for (std::string line; std::getline(in, line);) ++n[line];
+  return n;
+}
+
+// A cheap deterministic case: reads the run's scene (overrides applied), sleeps, and returns a
+// value computed from mu_r, mass and the seed. It fails if its folder is not clean.
+CaseFn fake_case(const fs::path& log, int sleep_ms) {
+  return [log, sleep_ms](const CaseSpec& s, const std::string& dir) {
+    log_start(log, s);
+    if (!fs::is_empty(dir) && !(fs::exists(fs::path(dir) / "started.json") &&
+                                std::distance(fs::directory_iterator(dir), {}) == 1))
+      throw std::runtime_error("run folder not clean: " + dir);
+    std::ofstream(fs::path(dir) / "partial.out") << "partial output\n";
+    std::this_thread::sleep_for(std::chrono::milliseconds(sleep_ms));
+    const toml::table scene = build_case_scene(s);
+    const double mu = scene["rolling"]["mu_r"].value<double>().value();
+    const double mass = scene["sample"]["mass"].value<double>().value();
+    if (mu < 0.0) throw std::runtime_error("negative mu_r");
+    return nlohmann::json{{"mu_r", mu}, {"mass", mass}, {"value", 1000.0 * mu + mass + s.seed}};
+  };
+}
+
+nlohmann::json result_of(const fs::path& out, const CaseSpec& s) {
+  return nlohmann::json::parse(read_file((out / s.relative_dir() / "result.json").string()));
+}
+
+// Waits until no process holds the campaign folder's lock (the killed campaign's workers die
+// with it, asynchronously).
+void wait_unlocked(const fs::path& out) {
+  const std::string p = (out / ".campaign.lock").string();
+  for (int i = 0; i < 500; ++i) {
+    const int fd = ::open(p.c_str(), O_RDWR | O_CREAT, 0644);
+    const bool free = fd >= 0 && ::flock(fd, LOCK_EX | LOCK_NB) == 0;
+    if (fd >= 0) ::close(fd);
+    if (free) return;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  FAIL() << "campaign lock still held";
+}
+
+RunnerSettings quiet(WorkerMode mode = WorkerMode::kProcesses) {
+  RunnerSettings r;
+  r.mode = mode;
+  r.progress = false;
+  r.rank.reset();
+  return r;
+}
+
+const char* kCasesCampaign = R"(
+name = "cases_demo"
+description = "two cases"
+paper = "Fig. 8"
+scene = "scene.toml"
+seeds = [1, 2]
+overrides = { "sample.mass" = 0.9 }
+[[case]]
+name = "low"
+overrides = { "rolling.mu_r" = 0.05 }
+[[case]]
+name = "high"
+overrides = { rolling.mu_r = 0.2, "sample.mass" = 1 }
+)";
+
+TEST(Campaign, ParsesCasesCrossedWithSeeds) {
+  const auto dir = fresh_dir("parse_cases");
+  const auto c = load_campaign(write_campaign(dir, kCasesCampaign).string());
+  EXPECT_EQ(c.name, "cases_demo");
+  EXPECT_EQ(c.paper, "Fig. 8");
+  EXPECT_EQ(c.scene_path, fs::absolute(dir / "scene.toml").lexically_normal().string());
+  ASSERT_EQ(c.runs.size(), 4u);
+  EXPECT_EQ(c.runs[0].id(), "low/seed_1");
+  EXPECT_EQ(c.runs[3].id(), "high/seed_2");
+  EXPECT_EQ(c.runs[3].index, 3u);
+  // Common overrides apply to every case; a case's own override wins; unquoted dotted keys work.
+  const auto low = build_case_scene(c.runs[0]);
+  EXPECT_DOUBLE_EQ(low["rolling"]["mu_r"].value<double>().value(), 0.05);
+  EXPECT_DOUBLE_EQ(low["sample"]["mass"].value<double>().value(), 0.9);
+  const auto high = build_case_scene(c.runs[2]);
+  EXPECT_DOUBLE_EQ(high["rolling"]["mu_r"].value<double>().value(), 0.2);
+  EXPECT_DOUBLE_EQ(high["sample"]["mass"].value<double>().value(), 1.0);
+  EXPECT_FALSE(c.calibration.has_value());
+}
+
+TEST(Campaign, ParsesSweepAndCalibration) {
+  const auto dir = fresh_dir("parse_sweep");
+  fs::create_directories(dir / "campaigns");
+  const auto file = write_campaign(dir / "campaigns", R"(
+name = "mu_sweep"
+scene = "../scene.toml"
+seeds = 3
+[sweep]
+key = "rolling.mu_r"
+values = [0.05, 0.1, 0.15]
+[calibration]
+target_deg = 33.47
+target_sd_deg = 0.3
+mu_r_range = [0.02, 0.4]
+seeds_per_point = 2
+max_simulations = 20
+)");
+  const auto c = load_campaign(file.string());
+  ASSERT_EQ(c.runs.size(), 9u);
+  EXPECT_EQ(c.runs[0].case_name, "mu_r_0.05");
+  EXPECT_EQ(c.runs[8].id(), "mu_r_0.15/seed_3");
+  EXPECT_DOUBLE_EQ(build_case_scene(c.runs[4])["rolling"]["mu_r"].value<double>().value(), 0.1);
+  ASSERT_TRUE(c.calibration.has_value());
+  EXPECT_EQ(c.calibration->key, "rolling.mu_r");
+  EXPECT_DOUBLE_EQ(c.calibration->target.angle_deg, 33.47);
+  EXPECT_DOUBLE_EQ(c.calibration->target.sd_deg, 0.3);
+  EXPECT_DOUBLE_EQ(c.calibration->settings.mu_r_lo, 0.02);
+  EXPECT_DOUBLE_EQ(c.calibration->settings.mu_r_hi, 0.4);
+  EXPECT_EQ(c.calibration->settings.seeds_per_point, 2);
+  EXPECT_EQ(c.calibration->settings.max_simulations, 20);
+}
+
+TEST(Campaign, MissingSceneIsAClearError) {
+  const auto dir = fresh_dir("missing_scene");
+  const auto e = load_error(write_campaign(dir, R"(
+name = "x"
+scene = "no_such_scene.toml"
+seeds = [1]
+[[case]]
+name = "a"
+)"));
+  EXPECT_NE(e.find("campaign.toml"), std::string::npos) << e;
+  EXPECT_NE(e.find("'scene'"), std::string::npos) << e;
+  EXPECT_NE(e.find("no_such_scene.toml"), std::string::npos) << e;
+  const auto e2 = load_error(write_campaign(dir, R"(
+name = "x"
+scene = "scene.toml"
+seeds = [1]
+[[case]]
+name = "a"
+scene = "other.toml"
+)"));
+  EXPECT_NE(e2.find("case[0].scene"), std::string::npos) << e2;
+  EXPECT_NE(e2.find("other.toml"), std::string::npos) << e2;
+  EXPECT_NE(load_error(dir / "nothing.toml").find("nothing.toml"), std::string::npos);
+}
+
+TEST(Campaign, BadKeysAndValuesAreRejected) {
+  const auto dir = fresh_dir("bad_keys");
+  const std::string head = "name = \"x\"\nscene = \"scene.toml\"\nseeds = [1, 2]\n";
+  struct Bad {
+    std::string text, must_contain;
+  };
+  const std::vector<Bad> cases = {
+      {head + "colour = 3\n[[case]]\nname = \"a\"\n", "colour"},
+      {head + "[[case]]\nname = \"a\"\nmu = 0.1\n", "case[0].mu"},
+      {head + "[[case]]\nname = \"a/b\"\n", "a/b"},
+      {head + "[[case]]\nname = \"a\"\n[[case]]\nname = \"a\"\n", "not unique"},
+      {head + "[[case]]\nname = \"a\"\noverrides = { \"rolling.spring.k\" = 1.0 }\n",
+       "rolling.spring.k"},
+      {head + "[[case]]\nname = \"a\"\noverrides = { \"rolling.mu_r\" = \"0.1\" }\n",
+       "rolling.mu_r"},
+      {head + "[[case]]\nname = \"a\"\n[sweep]\nkey = \"rolling.mu_r\"\nvalues = [0.1]\n",
+       "not both"},
+      {head + "[sweep]\nkey = \"rolling.mu_r\"\nvalues = [0.1, 0.10]\n", "not unique"},
+      {head + "[sweep]\nkey = \"rolling.mu_r\"\nvalues = []\n", "sweep.values"},
+      {head + "[sweep]\nkey = \"rolling.mu_r\"\nvalues = [0.1]\nstep = 2\n", "sweep.step"},
+      {"name = \"x\"\nscene = \"scene.toml\"\n[[case]]\nname = \"a\"\n", "seeds"},
+      {"name = \"x\"\nscene = \"scene.toml\"\nseeds = [1, 1]\n[[case]]\nname = \"a\"\n",
+       "repeated"},
+      {"name = \"x y\"\nscene = \"scene.toml\"\nseeds = [1]\n[[case]]\nname = \"a\"\n", "x y"},
+      {"scene = \"scene.toml\"\nseeds = [1]\n[[case]]\nname = \"a\"\n", "'name'"},
+      {head, "no [[case]]"},
+      {head + "[calibration]\ntarget_deg = 95\nmu_r_range = [0.0, 0.3]\n", "95"},
+      {head + "[calibration]\ntarget_deg = 30\nmu_r_range = [0.3, 0.1]\n", "mu_r_range"},
+      {head + "[calibration]\ntarget_deg = 30\nmu_r_range = [0.0, 0.3]\nkey = \"nope.mu\"\n",
+       "nope.mu"},
+      {head + "[calibration]\ntarget_deg = 30\nmu_r_range = [0.0, 0.3]\nspeed = 1\n",
+       "calibration.speed"},
+      {head + "[[case]\nname = \"a\"\n", "campaign.toml:"},
+  };
+  for (const auto& b : cases) {
+    const auto e = load_error(write_campaign(dir, b.text));
+    EXPECT_NE(e.find(b.must_contain), std::string::npos) << "text:\n" << b.text << "\nerror: " << e;
+    EXPECT_NE(e.find("campaign.toml"), std::string::npos) << e;
+  }
+}
+
+TEST(Campaign, SafeNames) {
+  EXPECT_TRUE(is_safe_name("mu_r_0.15"));
+  EXPECT_TRUE(is_safe_name("W-40mm"));
+  for (const char* n : {"", ".", "..", ".hidden", "a/b", "a b", "a\\b", "-x"})
+    EXPECT_FALSE(is_safe_name(n)) << n;
+  EXPECT_FALSE(is_safe_name(std::string(101, 'a')));
+}
+
+const char* kRunCampaign = R"(
+name = "resume_demo"
+scene = "scene.toml"
+seeds = [1, 2, 3]
+[sweep]
+key = "rolling.mu_r"
+values = [0.05, 0.1, 0.15, 0.2]
+)";
+
+TEST(Campaign, KilledCampaignResumesToTheSameResults) {
+  const auto dir = fresh_dir("resume");
+  const auto c = load_campaign(write_campaign(dir, kRunCampaign).string());
+  ASSERT_EQ(c.runs.size(), 12u);
+
+  // Reference: an uninterrupted run.
+  const fs::path ref = dir / "ref";
+  const auto s_ref = run_campaign(c, ref.string(), fake_case(dir / "ref.log", 5), quiet());
+  EXPECT_EQ(s_ref.finished, 12);
+  EXPECT_EQ(s_ref.ran, 12);
+
+  // Interrupted: a child runs the campaign; SIGKILL once two results exist.
+  const fs::path out = dir / "out";
+  const fs::path log = dir / "out.log";
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    try {
+      run_campaign(c, out.string(), fake_case(log, 60), quiet());
+    } catch (...) {
+    }
+    ::_exit(0);
+  }
+  auto count_results = [&] {
+    int n = 0;
+    for (const auto& s : c.runs) n += fs::exists(out / s.relative_dir() / "result.json");
+    return n;
+  };
+  for (int i = 0; i < 1000 && count_results() < 2; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  std::this_thread::sleep_for(std::chrono::milliseconds(25));  // the next runs are mid-way
+  ::kill(child, SIGKILL);
+  int st = 0;
+  ::waitpid(child, &st, 0);
+  ASSERT_TRUE(WIFSIGNALED(st));
+  wait_unlocked(out);
+
+  std::map<std::string, fs::file_time_type> mtime_before;
+  std::map<std::string, std::string> text_before;
+  for (const auto& s : c.runs) {
+    const fs::path f = out / s.relative_dir() / "result.json";
+    if (fs::exists(f)) {
+      mtime_before[s.id()] = fs::last_write_time(f);
+      text_before[s.id()] = read_file(f.string());
+    }
+  }
+  ASSERT_GE(mtime_before.size(), 2u);
+  ASSERT_LT(mtime_before.size(), 12u) << "the kill came too late to test resuming";
+  int partial = 0;  // started but unfinished runs, with partial output in their folders
+  for (const auto& s : c.runs)
+    partial += fs::exists(out / s.relative_dir() / "partial.out") &&
+               !fs::exists(out / s.relative_dir() / "result.json");
+  ASSERT_GE(partial, 1) << "the kill did not interrupt a run";
+  const auto starts_before = read_log(log);
+
+  // Resume.
+  const auto s2 = run_campaign(c, out.string(), fake_case(log, 5), quiet());
+  EXPECT_EQ(s2.finished, 12);
+  EXPECT_EQ(s2.failed, 0);
+  EXPECT_EQ(s2.skipped, static_cast<int>(mtime_before.size()));
+  EXPECT_EQ(s2.ran, 12 - static_cast<int>(mtime_before.size()));
+  const auto starts_after = read_log(log);
+  for (const auto& s : c.runs) {
+    EXPECT_EQ(result_of(out, s)["result"], result_of(ref, s)["result"]) << s.id();
+    if (mtime_before.count(s.id())) {
+      // Finished before the kill: not redone, not rewritten.
+      EXPECT_EQ(starts_after.at(s.id()), 1) << s.id();
+      EXPECT_EQ(fs::last_write_time(out / s.relative_dir() / "result.json"), mtime_before[s.id()]);
+      EXPECT_EQ(read_file((out / s.relative_dir() / "result.json").string()), text_before[s.id()]);
+    } else {
+      const int before = starts_before.count(s.id()) ? starts_before.at(s.id()) : 0;
+      EXPECT_EQ(starts_after.at(s.id()), before + 1) << s.id();
+    }
+  }
+  const auto manifest = nlohmann::json::parse(read_file((out / "campaign.json").string()));
+  EXPECT_EQ(manifest["campaign"], "resume_demo");
+  EXPECT_EQ(manifest["counts"]["finished"], 12);
+  EXPECT_EQ(manifest["runs"].size(), 12u);
+
+  // A third call does nothing; --force redoes everything.
+  const auto s3 = run_campaign(c, out.string(), fake_case(log, 1), quiet());
+  EXPECT_EQ(s3.ran, 0);
+  EXPECT_EQ(s3.skipped, 12);
+  auto forced = quiet(WorkerMode::kThreads);
+  forced.force = true;
+  const auto s4 = run_campaign(c, out.string(), fake_case(log, 1), forced);
+  EXPECT_EQ(s4.ran, 12);
+  EXPECT_EQ(s4.finished, 12);
+}
+
+TEST(Campaign, FailingAndCrashingCasesAreRecordedAndOthersFinish) {
+  const auto dir = fresh_dir("failing");
+  const auto c = load_campaign(write_campaign(dir, R"(
+name = "failing"
+scene = "scene.toml"
+seeds = [1, 2]
+[[case]]
+name = "good"
+[[case]]
+name = "bad"
+overrides = { "rolling.mu_r" = -1.0 }
+[[case]]
+name = "crash"
+overrides = { "rolling.mu_r" = 0.3 }
+)")
+                                   .string());
+  auto base = fake_case(dir / "log", 1);
+  CaseFn fn = [&](const CaseSpec& s, const std::string& d) {
+    if (s.case_name == "crash") std::raise(SIGKILL);  // a worker that dies outright
+    return base(s, d);
+  };
+  const auto s = run_campaign(c, (dir / "out").string(), fn, quiet());
+  EXPECT_EQ(s.finished, 2);
+  EXPECT_EQ(s.failed, 4);
+  const auto m = nlohmann::json::parse(read_file((dir / "out/campaign.json").string()));
+  for (const auto& r : m["runs"]) {
+    if (r["case"] == "good") {
+      EXPECT_EQ(r["status"], "finished");
+    } else {
+      EXPECT_EQ(r["status"], "failed");
+      const std::string err = r["error"];
+      if (r["case"] == "bad") {
+        EXPECT_NE(err.find("negative mu_r"), std::string::npos) << err;
+      }
+      if (r["case"] == "crash") {
+        EXPECT_NE(err.find("signal 9"), std::string::npos) << err;
+      }
+    }
+  }
+  // Threads: an exception is recorded the same way.
+  CaseFn no_crash = [&](const CaseSpec& sp, const std::string& d) {
+    if (sp.case_name == "crash") throw std::runtime_error("crash case skipped in threads");
+    return base(sp, d);
+  };
+  const auto t =
+      run_campaign(c, (dir / "out_threads").string(), no_crash, quiet(WorkerMode::kThreads));
+  EXPECT_EQ(t.finished, 2);
+  EXPECT_EQ(t.failed, 4);
+}
+
+TEST(Campaign, ResumeRefusesChangedInputsAndAnotherCampaign) {
+  const auto dir = fresh_dir("changed");
+  auto c = load_campaign(write_campaign(dir, kCasesCampaign).string());
+  const fs::path out = dir / "out";
+  run_campaign(c, out.string(), fake_case(dir / "log", 1), quiet(WorkerMode::kThreads));
+  auto edited = c;
+  edited.runs[1].overrides.insert_or_assign("rolling.mu_r", 0.07);
+  try {
+    run_campaign(edited, out.string(), fake_case(dir / "log", 1), quiet());
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("low/seed_2"), std::string::npos) << e.what();
+  }
+  auto other = c;
+  other.name = "another";
+  EXPECT_THROW(run_campaign(other, out.string(), fake_case(dir / "log", 1), quiet()),
+               std::runtime_error);
+}
+
+TEST(Campaign, MpiRanksSplitTheRunsAndRankZeroWritesTheManifest) {
+  const auto dir = fresh_dir("mpi");
+  const auto c = load_campaign(write_campaign(dir, kRunCampaign).string());
+  const fs::path out = dir / "out";
+  const fs::path log = dir / "log";
+  std::vector<pid_t> ranks;
+  for (int r = 0; r < 2; ++r) {
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      auto s = quiet();
+      s.rank = RankInfo{r, 2, "job-1"};
+      s.poll_interval_s = 0.01;
+      s.wait_timeout_s = 20.0;
+      int code = 1;
+      try {
+        const auto sum = run_campaign(c, out.string(), fake_case(log, 2), s);
+        code = (r == 0 && sum.finished != 12) ? 2 : 0;
+      } catch (...) {
+      }
+      ::_exit(code);
+    }
+    ranks.push_back(pid);
+  }
+  for (pid_t p : ranks) {
+    int st = 0;
+    ::waitpid(p, &st, 0);
+    EXPECT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+  }
+  const auto starts = read_log(log);
+  for (const auto& s : c.runs) {
+    EXPECT_EQ(starts.at(s.id()), 1) << s.id();
+    EXPECT_EQ(result_of(out, s)["job"], "job-1");
+  }
+  const auto m = nlohmann::json::parse(read_file((out / "campaign.json").string()));
+  EXPECT_EQ(m["counts"]["finished"], 12);
+}
+
+TEST(Campaign, DetectsOpenMpiEnvironment) {
+  ::setenv("OMPI_COMM_WORLD_RANK", "1", 1);
+  ::setenv("OMPI_COMM_WORLD_SIZE", "4", 1);
+  ::setenv("PMIX_NAMESPACE", "prterun-x-1@1", 1);
+  const auto r = detect_mpi_rank();
+  ::unsetenv("OMPI_COMM_WORLD_RANK");
+  ::unsetenv("OMPI_COMM_WORLD_SIZE");
+  ::unsetenv("PMIX_NAMESPACE");
+  ASSERT_TRUE(r.has_value());
+  EXPECT_EQ(r->rank, 1);
+  EXPECT_EQ(r->size, 4);
+  EXPECT_EQ(r->job, "prterun-x-1@1");
+  EXPECT_FALSE(detect_mpi_rank().has_value());
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
