@@ -1,0 +1,211 @@
+// Tests of vision/measure: scale from the marker, a given mm/px or a known camera (perspective
+// correction), several views combined, JSON and overlay, and clear errors for bad input.
+#include "vision/measure.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "tests/vision/synthetic.hpp"
+#include "vision/image.hpp"
+
+namespace reposetwin::vision {
+namespace {
+
+double theta_of(double h, double d) { return std::atan(2.0 * h / d) * 180.0 / synthetic::kPi; }
+
+std::string temp_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / ("reposetwin_vision_" + name)).string();
+}
+
+TEST(MeasureSide, ScaleFromTheBandBar) {
+  synthetic::SideScene s;
+  s.height_mm = 55.0;
+  s.diameter_mm = 190.0;
+  const SideMeasurement m = measure_side(synthetic::draw_side(s), {}, {}, "bar.png");
+  EXPECT_EQ(m.scale_source, ScaleSource::kScaleBar);
+  EXPECT_FALSE(m.perspective_corrected);
+  ASSERT_TRUE(m.scale_bar.has_value());
+  EXPECT_NEAR(m.mm_per_px, s.mm_per_px, 0.002 * s.mm_per_px);
+  EXPECT_NEAR(m.height_m, 0.055, 0.0005);
+  EXPECT_NEAR(m.diameter_m, 0.190, 0.0008);
+  EXPECT_NEAR(m.theta_deg, theta_of(55.0, 190.0), 0.3);
+  EXPECT_GT(m.sigma_height_m, 0.0);
+}
+
+TEST(MeasureSide, GivenMillimetresPerPixel) {
+  synthetic::SideScene s;
+  s.scale_bar = false;
+  ScaleSpec spec;
+  spec.mm_per_px = s.mm_per_px;
+  const SideMeasurement m = measure_side(synthetic::draw_side(s), spec);
+  EXPECT_EQ(m.scale_source, ScaleSource::kMmPerPx);
+  EXPECT_NEAR(m.height_m, 0.060, 0.0004);
+  EXPECT_NEAR(m.diameter_m, 0.200, 0.0005);
+  EXPECT_NEAR(m.flank_left_deg, theta_of(60.0, 200.0), 0.5);
+  EXPECT_NEAR(m.flank_right_deg, theta_of(60.0, 200.0), 0.5);
+}
+
+TEST(MeasureSide, PerspectiveCorrectionRecoversHandD) {
+  // A close camera (0.6 m) on a 200 mm pile: the toe rays graze the base circle well in front of
+  // the axis, so the orthographic reading overstates D by about 1.5%.
+  const camera::Camera cam = camera::side_view(0.6, 0.4, 0.0, 20.0, 1280, 720);
+  synthetic::SideScene s;
+  s.camera = cam;
+  s.height_mm = 60.0;
+  s.diameter_mm = 200.0;
+  const cv::Mat img = synthetic::draw_side(s);
+  ScaleSpec spec;
+  spec.camera = cam;
+  const SideMeasurement m = measure_side(img, spec, {}, "persp.png");
+  EXPECT_TRUE(m.perspective_corrected);
+  EXPECT_EQ(m.scale_source, ScaleSource::kCamera);
+  EXPECT_NEAR(m.height_m, 0.060, 0.0003);
+  EXPECT_NEAR(m.diameter_m, 0.200, 0.0004);
+  EXPECT_NEAR(m.theta_deg, theta_of(60.0, 200.0), 0.2);
+  EXPECT_NEAR(m.flank_left_deg, theta_of(60.0, 200.0), 0.3);
+  EXPECT_NEAR(m.flank_right_deg, theta_of(60.0, 200.0), 0.3);
+  EXPECT_NEAR(m.base_center_m.norm(), 0.0, 0.001);
+  // The same image read orthographically at the axis scale is visibly off: the correction matters.
+  ScaleSpec ortho;
+  ortho.mm_per_px = camera::mm_per_px_at(cam, Eigen::Vector3d::Zero());
+  const SideMeasurement o = measure_side(img, ortho);
+  EXPECT_GT(o.diameter_m - 0.200, 0.002);
+  EXPECT_GT(std::abs(o.theta_deg - theta_of(60.0, 200.0)), 0.3);
+}
+
+TEST(MeasureSide, SidecarGivesCameraAndScale) {
+  const camera::Camera cam = camera::side_view(2.0, 0.4, 0.0, 0.0, 1280, 720);
+  const std::string path = temp_path("sidecar.json");
+  {
+    std::ofstream out(path);
+    out << nlohmann::json{{"camera", camera::to_json(cam)},
+                          {"mm_per_px_at_axis", 0.3125},
+                          {"scale_reference", {{"kind", "band_bar"}, {"band_mm", 12.0}}},
+                          {"view", "side"}}
+               .dump();
+  }
+  const ScaleSpec spec = scale_from_sidecar(path);
+  ASSERT_TRUE(spec.camera.has_value());
+  EXPECT_EQ(spec.camera->intrinsics.width_px, 1280);
+  ASSERT_TRUE(spec.mm_per_px.has_value());
+  EXPECT_DOUBLE_EQ(*spec.mm_per_px, 0.3125);
+  EXPECT_DOUBLE_EQ(spec.marker.band_mm, 12.0);
+  {
+    std::ofstream out(path);
+    out << R"({"camera": {"projection": "perspective"}, "mm_per_px_at_axis": -1})";
+  }
+  try {
+    scale_from_sidecar(path);
+    FAIL() << "expected an exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("mm_per_px_at_axis"), std::string::npos) << e.what();
+  }
+  {
+    std::ofstream out(path);
+    out << R"({"view": "side"})";
+  }
+  EXPECT_THROW(scale_from_sidecar(path), std::invalid_argument);
+  std::filesystem::remove(path);
+}
+
+TEST(MeasureSide, UnknownScaleIsAnError) {
+  synthetic::SideScene s;
+  s.scale_bar = false;
+  try {
+    measure_side(synthetic::draw_side(s), {}, {}, "noscale.png");
+    FAIL() << "expected an exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("noscale.png"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("scale cannot be determined"), std::string::npos);
+  }
+  ScaleSpec wrong;
+  wrong.camera = camera::side_view(2.0, 0.4, 0.0, 0.0, 1920, 1080);  // not this image's size
+  EXPECT_THROW(measure_side(synthetic::draw_side(s), wrong), std::invalid_argument);
+  ScaleSpec negative;
+  negative.mm_per_px = -0.2;
+  EXPECT_THROW(measure_side(synthetic::draw_side(s), negative), std::invalid_argument);
+}
+
+TEST(MeasureSide, SeveralViewsAreAveragedWithSpread) {
+  std::vector<SideMeasurement> views;
+  const double heights[] = {55.0, 60.0, 65.0};
+  for (int i = 0; i < 3; ++i) {
+    synthetic::SideScene s;
+    s.height_mm = heights[i];
+    s.look.noise_sigma = 4.0;
+    s.look.seed = 10 + i;
+    views.push_back(measure_side(synthetic::draw_side(s)));
+  }
+  const SideSummary sum = combine_sides(views);
+  EXPECT_EQ(sum.views, 3);
+  const double mean_theta =
+      (theta_of(55.0, 200.0) + theta_of(60.0, 200.0) + theta_of(65.0, 200.0)) / 3.0;
+  EXPECT_NEAR(sum.theta_deg.mean, mean_theta, 0.3);
+  EXPECT_NEAR(sum.height_m.mean, 0.060, 0.0006);
+  // The spread of 55/60/65 mm is 5 mm; of the angles about 1.3 degrees.
+  EXPECT_NEAR(sum.height_m.stddev, 0.005, 0.0006);
+  EXPECT_GT(sum.theta_deg.stddev, 1.0);
+  EXPECT_GT(sum.theta_deg.sigma_mean, sum.theta_deg.stddev / std::sqrt(3.0) - 1e-12);
+  EXPECT_EQ(combine_sides({views[0]}).theta_deg.stddev, 0.0);
+  EXPECT_THROW(combine_sides({}), std::invalid_argument);
+}
+
+TEST(MeasureSide, JsonAndOverlay) {
+  synthetic::SideScene s;
+  const cv::Mat img = synthetic::draw_side(s);
+  const SideMeasurement m = measure_side(img, {}, {}, "pile.png");
+  const nlohmann::json j = to_json(m);
+  for (const char* key : {"H_m", "D_m", "theta_deg", "sigma_theta_deg", "flank_left_deg",
+                          "flank_right_deg", "projection", "scale", "pixels"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["projection"], "assumed orthographic");
+  EXPECT_EQ(j["scale"]["source"], "scale_bar");
+  EXPECT_DOUBLE_EQ(j["theta_deg"].get<double>(), m.theta_deg);
+  const cv::Mat ov = draw_side_overlay(img, m);
+  EXPECT_EQ(ov.size(), img.size());
+  EXPECT_EQ(ov.type(), CV_8UC3);
+  // The annotation changes pixels on the plate line and at the apex.
+  cv::Mat diff;
+  cv::absdiff(ov, img, diff);
+  EXPECT_GT(cv::countNonZero(diff.reshape(1)), 1000);
+  const cv::Point apex(static_cast<int>(std::lround(m.pixels.apex.x)),
+                       static_cast<int>(std::lround(m.pixels.apex.y)));
+  EXPECT_GT(cv::norm(diff(cv::Rect(apex.x - 8, apex.y - 8, 17, 17))), 0.0);
+}
+
+TEST(LoadImage, RejectsFilesThatAreNotImages) {
+  const std::string path = temp_path("not_an_image.png");
+  {
+    std::ofstream out(path);
+    out << "this is text, not a PNG";
+  }
+  try {
+    load_image(path);
+    FAIL() << "expected an exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
+  EXPECT_THROW(load_image(temp_path("does_not_exist.png")), std::invalid_argument);
+}
+
+TEST(MeasureSide, EmptyAndBlackImagesAreRejected) {
+  EXPECT_THROW(measure_side(cv::Mat(), {}, {}, "empty.png"), std::invalid_argument);
+  ScaleSpec spec;
+  spec.mm_per_px = 0.25;
+  try {
+    measure_side(cv::Mat(720, 1280, CV_8UC3, cv::Scalar::all(0)), spec, {}, "black.png");
+    FAIL() << "expected an exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("black.png"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("all black"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace reposetwin::vision
