@@ -383,7 +383,17 @@ CalibrationResult calibrate_batch(const SimulateBatchFn& simulate, const Target&
                    " deg was met";
       return r;
     }
-    if (span > 2.0 * s.tolerance_deg) {
+    // Splitting the bracket only helps while its expected angle span (wide-baseline slope of the
+    // fit, from one point beyond each side, times its width) exceeds the noise of a point mean;
+    // below that, new points crowd together and their noisy means make the interpolant steep.
+    const std::size_t wa = ia > 0 ? ia - 1 : ia, wb = ib + 1 < pts.size() ? ib + 1 : ib;
+    const double wide_slope =
+        pts[wb].mu_r > pts[wa].mu_r
+            ? (pts[wb].fitted_deg - pts[wa].fitted_deg) / (pts[wb].mu_r - pts[wa].mu_r)
+            : 0.0;
+    const double point_se = r.fit.noise_sd_deg / std::sqrt(static_cast<double>(k));
+    const bool resolvable = wide_slope * (pts[ib].mu_r - pts[ia].mu_r) > 2.0 * point_se;
+    if (span > 2.0 * s.tolerance_deg && resolvable) {
       const double a = pts[ia].mu_r, b = pts[ib].mu_r, w = b - a;
       run({std::clamp(mu, a + 0.25 * w, b - 0.25 * w)});
     } else {

@@ -123,7 +123,7 @@ struct CalibrationSettings {
   double mu_r_hi = 0.5;          // high end of the mu_r range [-], > mu_r_lo
   int seeds_per_point = 3;       // runs per mu_r point (seeds first_seed, first_seed + 1, ...)
   std::uint64_t first_seed = 1;  // first run seed at every point
-  double tolerance_deg = 0.25;   // angle tolerance of the calibration [deg], > 0
+  double tolerance_deg = 0.5;    // angle tolerance of the calibration [deg], > 0 (95% level)
   int max_simulations = 40;      // budget of simulate() calls, >= 2 x seeds_per_point
   BootstrapSettings bootstrap;
 };

@@ -833,9 +833,13 @@ CampaignSummary run_campaign(const Campaign& campaign, const std::string& out_di
   const auto& counts = summary.manifest["counts"];
   summary.finished = counts["finished"].get<int>();
   summary.failed = counts["failed"].get<int>();
-  say(std::to_string(summary.finished) + " finished, " + std::to_string(summary.failed) +
-      " failed, " + std::to_string(counts["pending"].get<int>()) + " pending of " +
-      std::to_string(summary.total));
+  if (mpi && rank.rank != 0) {
+    say("this rank's " + std::to_string(summary.ran) + " run(s) done; rank 0 writes the manifest");
+  } else {
+    say(std::to_string(summary.finished) + " finished, " + std::to_string(summary.failed) +
+        " failed, " + std::to_string(counts["pending"].get<int>()) + " pending of " +
+        std::to_string(summary.total));
+  }
   return summary;
 }
 
