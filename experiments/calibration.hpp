@@ -23,9 +23,17 @@
 //  * Driver: evaluate both ends of the mu_r range, then refine with a safeguarded secant on the
 //    fitted curve (the inverse, kept inside the middle half of the current bracket so the bracket
 //    shrinks by at least a quarter per step), and add seeds at the nearest point when the bracket
-//    is narrow but the noise is not. It stops when the bracket's angle span is within 2 x tolerance
-//    and the 95% half-width of the fitted angle at the calibrated mu_r is within tolerance, or when
-//    the simulation budget is spent.
+//    is narrow but the noise is not, or when the bracket is so narrow that its expected angle span
+//    (wide-baseline slope x width) is below twice the noise of a point mean (crowded noisy points
+//    would make the interpolant steep and pin the interval). It stops when the bracket's angle
+//    span is within 2 x tolerance and the 95% half-width of the fitted angle at the calibrated
+//    mu_r is within tolerance, or when the simulation budget is spent.
+//  * Measured coverage (synthetic curve 20 + 25 (1 - exp(-mu_r / 0.12)), truth 0.15, noise sd
+//    0.3 / 0.5 / 1.0 deg, 100 trials each): the 95% interval holds the truth in 86 / 88 / 87% of
+//    the sequential calibrations (the adaptive design and stopping select slightly optimistic
+//    data) and in 95% of fixed-design calibrations (calibrate_observations on a grid, 400 trials).
+//    For a publication-grade interval, run a fixed sweep around the sequential answer and
+//    calibrate on it.
 // Random numbers: std::mt19937_64 (fully specified) and our own normal and chi-square draws, so a
 // bootstrap seed gives the same interval on every platform.
 #pragma once
