@@ -260,6 +260,7 @@ Campaign parse_campaign(std::string_view text, const std::string& path) {
   }
 
   const toml::table common = get_overrides(root, file, "");
+  c.overrides = common;
 
   // The cases: [[case]] or [sweep].
   struct CaseDef {
@@ -484,6 +485,7 @@ constexpr const char* kResultFile = "result.json";
 constexpr const char* kErrorFile = "error.json";
 constexpr const char* kStartedFile = "started.json";
 constexpr const char* kManifestFile = "campaign.json";
+constexpr const char* kBatchFile = "batch.json";
 
 std::string hostname() {
   char buf[256] = {};
@@ -726,17 +728,30 @@ nlohmann::json campaign_manifest(const Campaign& campaign, const std::string& ou
   return build_manifest(campaign, out_dir, scan(campaign, out_dir));
 }
 
-CampaignSummary run_campaign(const Campaign& campaign, const std::string& out_dir_str,
-                             const CaseFn& case_fn, const RunnerSettings& settings) {
+namespace {
+
+// The runner behind run_campaign and run_batch. `manifest_name` is the summary file rank 0 writes;
+// with `every_rank_waits` all MPI ranks (not only rank 0) wait for every run to end, so each can
+// continue with the results (the calibration driver runs the same steps on every rank).
+CampaignSummary run_impl(const Campaign& campaign, const std::string& out_dir_str,
+                         const CaseFn& case_fn, const RunnerSettings& settings,
+                         const std::string& manifest_name, bool every_rank_waits) {
   if (!case_fn) throw std::invalid_argument("run_campaign: no case function");
+  for (std::size_t k = 0; k < campaign.runs.size(); ++k)
+    if (campaign.runs[k].index != k)
+      throw std::invalid_argument("run_campaign: run " + campaign.runs[k].id() + " has index " +
+                                  std::to_string(campaign.runs[k].index) + ", expected " +
+                                  std::to_string(k));
   const fs::path out_dir = fs::absolute(fs::path(out_dir_str)).lexically_normal();
   fs::create_directories(out_dir);
-  const fs::path manifest_path = out_dir / kManifestFile;
-  if (auto m = read_json(manifest_path)) {
-    const std::string other = m->value("campaign", std::string());
-    if (other != campaign.name)
-      throw std::runtime_error(out_dir.string() + " holds campaign '" + other + "', not '" +
-                               campaign.name + "': use another output folder");
+  const fs::path manifest_path = out_dir / manifest_name;
+  for (const char* name : {kManifestFile, kBatchFile}) {
+    if (auto m = read_json(out_dir / name)) {
+      const std::string other = m->value("campaign", std::string());
+      if (other != campaign.name)
+        throw std::runtime_error(out_dir.string() + " holds campaign '" + other + "', not '" +
+                                 campaign.name + "': use another output folder");
+    }
   }
   const bool mpi = settings.rank.has_value() && settings.rank->size > 1;
   const RankInfo rank = settings.rank.value_or(RankInfo{});
@@ -797,7 +812,7 @@ CampaignSummary run_campaign(const Campaign& campaign, const std::string& out_di
   run_pool(campaign, out_dir, case_fn, todo, mpi ? 1 : settings.workers, settings.mode, rank.job,
            on_done);
 
-  if (mpi && rank.rank == 0) {
+  if (mpi && (rank.rank == 0 || every_rank_waits)) {
     // Wait for every other rank's runs: a result of this job (or an earlier finished one when not
     // forcing), or an error of this job. Without a job id, files newer than this rank's start.
     const auto wait_start = std::chrono::steady_clock::now();
@@ -841,6 +856,72 @@ CampaignSummary run_campaign(const Campaign& campaign, const std::string& out_di
         std::to_string(summary.total));
   }
   return summary;
+}
+
+}  // namespace
+
+CampaignSummary run_campaign(const Campaign& campaign, const std::string& out_dir,
+                             const CaseFn& case_fn, const RunnerSettings& settings) {
+  return run_impl(campaign, out_dir, case_fn, settings, kManifestFile, false);
+}
+
+CaseSpec make_run(const Campaign& campaign, const std::string& case_name,
+                  const toml::table& overrides, std::uint64_t seed) {
+  if (!is_safe_name(case_name))
+    throw std::invalid_argument(campaign.file + ": run name \"" + case_name +
+                                "\" is not filesystem-safe");
+  CaseSpec s;
+  s.case_name = case_name;
+  s.seed = seed;
+  s.scene_path = campaign.scene_path;
+  s.scene_hash = fnv1a_hex(read_file(campaign.scene_path));
+  s.overrides = campaign.overrides;
+  for (const auto& [k, v] : overrides)
+    v.visit([&](const auto& x) { s.overrides.insert_or_assign(k, x); });
+  toml::table check = parse_toml_file(campaign.scene_path);
+  apply_overrides(check, s.overrides, campaign.file + ", run " + case_name);
+  return s;
+}
+
+CaseSpec calibration_run(const Campaign& campaign, double mu_r, std::uint64_t seed) {
+  if (!campaign.calibration)
+    throw std::invalid_argument(campaign.file + ": no [calibration] table");
+  const auto& key = campaign.calibration->key;
+  const auto parts = split_dotted_key(key, campaign.file + ": key 'calibration.key'");
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, mu_r);
+  toml::table ov;
+  ov.insert_or_assign(key, mu_r);
+  return make_run(campaign, sanitize("calib_" + parts.back() + "_" + std::string(buf, r.ptr)), ov,
+                  seed);
+}
+
+std::vector<nlohmann::json> run_batch(const Campaign& campaign, const std::vector<CaseSpec>& runs,
+                                      const std::string& out_dir, const CaseFn& case_fn,
+                                      const RunnerSettings& settings) {
+  Campaign batch = campaign;
+  batch.runs = runs;
+  std::set<std::string> ids;
+  for (std::size_t k = 0; k < batch.runs.size(); ++k) {
+    batch.runs[k].index = k;
+    if (!ids.insert(batch.runs[k].id()).second)
+      throw std::invalid_argument("run_batch: run " + batch.runs[k].id() + " appears twice");
+  }
+  run_impl(batch, out_dir, case_fn, settings, kBatchFile, true);
+  std::vector<nlohmann::json> results;
+  std::string failures;
+  for (const auto& s : batch.runs) {
+    const fs::path dir = fs::path(out_dir) / s.relative_dir();
+    if (auto j = read_json(dir / kResultFile)) {
+      results.push_back((*j)["result"]);
+      continue;
+    }
+    const auto e = read_json(dir / kErrorFile);
+    failures += (failures.empty() ? "" : "; ") + s.id() + ": " +
+                (e ? e->value("error", std::string("unknown error")) : std::string("no result"));
+  }
+  if (!failures.empty()) throw std::runtime_error("run_batch: run(s) failed: " + failures);
+  return results;
 }
 
 }  // namespace reposetwin::experiments

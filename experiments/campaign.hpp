@@ -66,6 +66,7 @@ struct Campaign {
   std::string file;         // absolute path of the campaign file
   std::string scene_path;   // absolute path of the base scene
   std::vector<std::uint64_t> seeds;
+  toml::table overrides;       // the file's top-level overrides, common to every run
   std::vector<CaseSpec> runs;  // cases x seeds, in file order then seed order
   std::optional<CampaignCalibration> calibration;
 };
@@ -130,6 +131,25 @@ struct CampaignSummary {
 /// differ from the campaign's.
 CampaignSummary run_campaign(const Campaign& campaign, const std::string& out_dir,
                              const CaseFn& case_fn, const RunnerSettings& settings = {});
+
+/// A run outside the campaign's list (e.g. one the calibration driver asks for): the base scene
+/// with the campaign's common overrides plus `overrides`. Throws std::invalid_argument naming the
+/// campaign file and the run if the name is unsafe or an override does not apply.
+CaseSpec make_run(const Campaign& campaign, const std::string& case_name,
+                  const toml::table& overrides, std::uint64_t seed);
+
+/// The run of the campaign's [calibration] at one mu_r and seed: named "calib_<leaf>_<mu_r>",
+/// with the calibration key set to mu_r. Throws if the campaign has no [calibration].
+CaseSpec calibration_run(const Campaign& campaign, double mu_r, std::uint64_t seed);
+
+/// Runs an explicit list of runs with the same folder, resume and failure rules as run_campaign
+/// (finished runs are reused, so a killed calibration resumes without redoing simulations) and
+/// returns each run's result (the case function's JSON) in order. Under MPI every rank runs its
+/// share and waits for all, so every rank gets the results. Writes batch.json (status of this
+/// batch). Throws std::runtime_error naming every failed run.
+std::vector<nlohmann::json> run_batch(const Campaign& campaign, const std::vector<CaseSpec>& runs,
+                                      const std::string& out_dir, const CaseFn& case_fn,
+                                      const RunnerSettings& settings = {});
 
 /// Scans out_dir and builds the manifest of `campaign` (status of every run) without running.
 nlohmann::json campaign_manifest(const Campaign& campaign, const std::string& out_dir);

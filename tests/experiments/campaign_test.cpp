@@ -472,5 +472,82 @@ TEST(Campaign, DetectsOpenMpiEnvironment) {
   EXPECT_FALSE(detect_mpi_rank().has_value());
 }
 
+TEST(Campaign, CalibrationRunsThroughBatchesAndResumesWithoutRedoing) {
+  const auto dir = fresh_dir("calib");
+  const auto c = load_campaign(write_campaign(dir, R"(
+name = "calib_demo"
+scene = "scene.toml"
+overrides = { "sample.mass" = 0.9 }
+[calibration]
+target_deg = 35.0
+mu_r_range = [0.0, 0.3]
+seeds_per_point = 2
+tolerance_deg = 0.3
+max_simulations = 20
+)")
+                                   .string());
+  ASSERT_TRUE(c.runs.empty());
+  ASSERT_TRUE(c.calibration.has_value());
+  const fs::path out = dir / "out";
+  const fs::path log = dir / "log";
+  // The "simulation": angle = 20 + 100 mu_r plus a small deterministic seed effect.
+  CaseFn sim = [log](const CaseSpec& s, const std::string&) {
+    log_start(log, s);
+    const toml::table scene = build_case_scene(s);
+    const double mu = scene["rolling"]["mu_r"].value<double>().value();
+    EXPECT_DOUBLE_EQ(scene["sample"]["mass"].value<double>().value(), 0.9);  // common override
+    return nlohmann::json{{"angle_deg", 20.0 + 100.0 * mu + (s.seed % 2 ? 0.1 : -0.1)}};
+  };
+  auto calibrate_in = [&](const fs::path& where) {
+    SimulateBatchFn batch = [&](const std::vector<std::pair<double, std::uint64_t>>& points) {
+      std::vector<CaseSpec> runs;
+      for (const auto& [mu, seed] : points) runs.push_back(calibration_run(c, mu, seed));
+      std::vector<double> angles;
+      for (const auto& r : run_batch(c, runs, where.string(), sim, quiet()))
+        angles.push_back(r["angle_deg"].get<double>());
+      return angles;
+    };
+    return calibrate_batch(batch, c.calibration->target, c.calibration->settings);
+  };
+  const auto first = calibrate_in(out);
+  ASSERT_TRUE(first.mu_r.has_value()) << first.message;
+  EXPECT_NEAR(*first.mu_r, 0.15, 1e-9);  // seed effects cancel in each point's mean
+  const auto runs_first = read_log(log);
+  int total = 0;
+  for (const auto& [id, n] : runs_first) {
+    EXPECT_EQ(n, 1) << id;
+    EXPECT_EQ(id.rfind("calib_mu_r_", 0), 0u) << id;
+    total += n;
+  }
+  EXPECT_EQ(total, first.simulations);
+  // Again in the same folder: every simulation is reused, none is run again.
+  const auto second = calibrate_in(out);
+  EXPECT_EQ(read_log(log), runs_first);
+  EXPECT_EQ(*second.mu_r, *first.mu_r);
+  EXPECT_EQ(second.simulations, first.simulations);
+
+  // A bad override in an extra run names the campaign and the run.
+  toml::table bad;
+  bad.insert("rolling.spring.k", 1.0);
+  try {
+    make_run(c, "extra", bad, 1);
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("extra"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("rolling.spring.k"), std::string::npos) << e.what();
+  }
+  // A failing run in a batch is an error naming it.
+  CaseFn failing = [](const CaseSpec&, const std::string&) -> nlohmann::json {
+    throw std::runtime_error("engine blew up");
+  };
+  try {
+    run_batch(c, {calibration_run(c, 0.2, 1)}, (dir / "out2").string(), failing, quiet());
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("calib_mu_r_0.2/seed_1"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("engine blew up"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace reposetwin::experiments
