@@ -10,5 +10,6 @@ int exit_code();
 void set_exit_code(int code);
 
 void add_run_command(CLI::App& app);
+void add_measure_command(CLI::App& app);
 
 }  // namespace reposetwin::cli

@@ -1,0 +1,215 @@
+// `reposetwin measure`: the lab's photo measurement (theta = atan(2H/D)) on one or more side
+// images and an optional top image, printed as JSON, with an annotated overlay per image.
+// Thin: all measuring is vision/; this file only resolves files, scales and outputs.
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "apps/reposetwin/commands.hpp"
+#include "experiments/provenance.hpp"
+#include "vision/image.hpp"
+#include "vision/measure.hpp"
+
+namespace reposetwin::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct MeasureOptions {
+  std::string side;
+  std::vector<std::string> more_sides;
+  std::string top;
+  std::optional<double> mm_per_px;
+  std::vector<std::string> cameras;
+  bool marker = false;
+  std::optional<double> top_mm_per_px;
+  std::string top_camera;
+  std::string overlay;
+  std::string top_overlay;
+  bool no_overlay = false;
+  std::vector<int> roi;
+  std::vector<double> flank_band;
+};
+
+std::string sidecar_next_to(const std::string& image) {
+  return fs::path(image).replace_extension(".json").string();
+}
+
+std::string overlay_next_to(const std::string& image) {
+  fs::path p(image);
+  return (p.parent_path() / (p.stem().string() + ".measured.png")).string();
+}
+
+// The scale of one image: explicit option, else its sidecar, else the marker in the image.
+vision::ScaleSpec resolve_scale(const std::string& image, const std::optional<double>& mm_per_px,
+                                const std::string& camera_sidecar, bool marker_only) {
+  if (marker_only) return vision::ScaleSpec{};
+  if (mm_per_px) {
+    vision::ScaleSpec s;
+    s.mm_per_px = mm_per_px;
+    s.search_marker = false;
+    s.note = "--mm-per-px";
+    return s;
+  }
+  if (!camera_sidecar.empty()) return vision::scale_from_sidecar(camera_sidecar);
+  const std::string auto_sidecar = sidecar_next_to(image);
+  std::error_code ec;
+  if (fs::is_regular_file(auto_sidecar, ec)) return vision::scale_from_sidecar(auto_sidecar);
+  vision::ScaleSpec s;
+  s.note = "no sidecar (" + auto_sidecar + " not found); scale marker searched in the image";
+  return s;
+}
+
+void write_overlay(const std::string& path, const cv::Mat& img) {
+  bool ok = false;
+  try {
+    ok = cv::imwrite(path, img);
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error(path + ": cannot write the overlay image (" + e.what() + ")");
+  }
+  if (!ok) throw std::runtime_error(path + ": cannot write the overlay image");
+}
+
+void run_measure(const MeasureOptions& o) {
+  if (o.cameras.size() > 1 + o.more_sides.size())
+    throw std::invalid_argument("--camera: " + std::to_string(o.cameras.size()) +
+                                " sidecars given for " + std::to_string(1 + o.more_sides.size()) +
+                                " side images");
+  vision::SideSettings settings;
+  if (!o.roi.empty()) {
+    if (o.roi.size() != 4 || o.roi[2] <= 0 || o.roi[3] <= 0)
+      throw std::invalid_argument("--roi must be x,y,width,height with positive width and height");
+    settings.roi = cv::Rect(o.roi[0], o.roi[1], o.roi[2], o.roi[3]);
+  }
+  if (!o.flank_band.empty()) {
+    if (o.flank_band.size() != 2)
+      throw std::invalid_argument("--flank-band must be two fractions of H, e.g. 0.2,0.8");
+    settings.flank_band_low = o.flank_band[0];
+    settings.flank_band_high = o.flank_band[1];
+  }
+
+  // Measure everything first: nothing is printed or written unless every image succeeds.
+  std::vector<std::string> sides{o.side};
+  sides.insert(sides.end(), o.more_sides.begin(), o.more_sides.end());
+  std::vector<vision::SideMeasurement> views;
+  std::vector<cv::Mat> overlays;
+  for (size_t i = 0; i < sides.size(); ++i) {
+    const cv::Mat img = vision::load_image(sides[i]);
+    const vision::ScaleSpec scale =
+        resolve_scale(sides[i], o.mm_per_px, i < o.cameras.size() ? o.cameras[i] : "", o.marker);
+    views.push_back(vision::measure_side(img, scale, settings, sides[i]));
+    if (!o.no_overlay) overlays.push_back(vision::draw_side_overlay(img, views.back()));
+  }
+  std::optional<vision::TopMeasurement> top;
+  cv::Mat top_overlay;
+  if (!o.top.empty()) {
+    const cv::Mat img = vision::load_image(o.top);
+    const vision::ScaleSpec scale = resolve_scale(o.top, o.top_mm_per_px, o.top_camera, o.marker);
+    top = vision::measure_top(img, scale, {}, o.top);
+    if (!o.no_overlay) top_overlay = vision::draw_top_overlay(img, *top);
+  }
+
+  std::vector<std::string> overlay_paths;
+  if (!o.no_overlay) {
+    for (size_t i = 0; i < sides.size(); ++i) {
+      const std::string path =
+          (i == 0 && !o.overlay.empty()) ? o.overlay : overlay_next_to(sides[i]);
+      write_overlay(path, overlays[i]);
+      overlay_paths.push_back(path);
+    }
+    if (top) {
+      const std::string path = o.top_overlay.empty() ? overlay_next_to(o.top) : o.top_overlay;
+      write_overlay(path, top_overlay);
+      overlay_paths.push_back(path);
+    }
+  }
+
+  const vision::SideSummary summary = vision::combine_sides(views);
+  nlohmann::json j;
+  j["tool"] = "reposetwin measure";
+  j["code_version"] = experiments::code_version();
+  j["views"] = static_cast<int>(views.size());
+  j["H_m"] = summary.height_m.mean;
+  j["D_m"] = summary.diameter_m.mean;
+  j["theta_deg"] = summary.theta_deg.mean;
+  j["sigma_theta_deg"] = summary.theta_deg.sigma_mean;
+  j["flank_left_deg"] = summary.flank_left_deg.mean;
+  j["flank_right_deg"] = summary.flank_right_deg.mean;
+  j["flank_deg"] = summary.flank_deg.mean;
+  j["sigma_flank_deg"] = summary.flank_deg.sigma_mean;
+  bool all_corrected = true, any_corrected = false;
+  std::vector<std::string> sources;
+  for (const auto& v : views) {
+    all_corrected = all_corrected && v.perspective_corrected;
+    any_corrected = any_corrected || v.perspective_corrected;
+    sources.push_back(vision::to_string(v.scale_source));
+  }
+  j["projection"] = all_corrected   ? "perspective corrected"
+                    : any_corrected ? "mixed (see side)"
+                                    : "assumed orthographic";
+  j["scale_sources"] = sources;
+  j["summary"] = vision::to_json(summary);
+  j["side"] = nlohmann::json::array();
+  for (const auto& v : views) j["side"].push_back(vision::to_json(v));
+  j["top"] = top ? vision::to_json(*top) : nlohmann::json(nullptr);
+  j["overlays"] = overlay_paths;
+  std::cout << j.dump(2) << "\n";
+  set_exit_code(0);
+}
+
+}  // namespace
+
+void add_measure_command(CLI::App& app) {
+  auto opts = std::make_shared<MeasureOptions>();
+  auto* cmd = app.add_subcommand(
+      "measure",
+      "Measure a pile from images like the lab does: H, D, theta = atan(2H/D), flank angles. "
+      "Prints JSON on stdout and writes an annotated overlay per image. Scale: --mm-per-px, "
+      "--camera SIDECAR.json, or --marker; by default NAME.json next to the image if present, "
+      "else the scale bar found in the image.");
+  cmd->add_option("side", opts->side, "Side-view image of the pile (PNG, JPEG, ...)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--side", opts->more_sides,
+                  "More side views of the same pile (other azimuths); results are averaged")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--top", opts->top, "Top-view image: footprint diameter and ellipticity")
+      ->check(CLI::ExistingFile);
+  auto* mm = cmd->add_option("--mm-per-px", opts->mm_per_px,
+                             "Scale at the pile axis [mm/px] for the side views; assumes an "
+                             "orthographic view")
+                 ->check(CLI::PositiveNumber);
+  auto* cam = cmd->add_option("--camera", opts->cameras,
+                              "Render sidecar JSON with the camera (perspective corrected); "
+                              "repeat for each side image in order")
+                  ->check(CLI::ExistingFile);
+  auto* marker = cmd->add_flag("--marker", opts->marker,
+                               "Use only the scale marker found in the image (ignore sidecars)");
+  mm->excludes(cam)->excludes(marker);
+  cam->excludes(marker);
+  cmd->add_option("--top-mm-per-px", opts->top_mm_per_px, "Scale on the plate in the top view")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--top-camera", opts->top_camera, "Sidecar JSON of the top view")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--overlay", opts->overlay,
+                  "Overlay PNG for the first side image (default NAME.measured.png)");
+  cmd->add_option("--top-overlay", opts->top_overlay,
+                  "Overlay PNG for the top image (default NAME.measured.png)");
+  cmd->add_flag("--no-overlay", opts->no_overlay, "Do not write overlay images");
+  cmd->add_option("--roi", opts->roi, "Region of interest in the side images: x,y,width,height")
+      ->delimiter(',')
+      ->expected(4);
+  cmd->add_option("--flank-band", opts->flank_band,
+                  "Flank fit band as fractions of H (default 0.2,0.8)")
+      ->delimiter(',')
+      ->expected(2);
+  cmd->callback([opts]() { run_measure(*opts); });
+}
+
+}  // namespace reposetwin::cli
