@@ -656,6 +656,9 @@ void run_pool(const Campaign& c, const fs::path& out_dir, const CaseFn& case_fn,
         ::prctl(PR_SET_PDEATHSIG, SIGKILL);
         if (::getppid() != parent) ::_exit(3);  // the parent died before prctl took effect
         const bool ok = execute_run(c.runs[i], out_dir, case_fn, job);
+        std::cout.flush();  // _exit skips the buffers the case's output may sit in
+        std::cerr.flush();
+        std::fflush(nullptr);
         ::_exit(ok ? 0 : 1);
       }
       if (pid < 0) {
@@ -863,6 +866,10 @@ CampaignSummary run_impl(const Campaign& campaign, const std::string& out_dir_st
 CampaignSummary run_campaign(const Campaign& campaign, const std::string& out_dir,
                              const CaseFn& case_fn, const RunnerSettings& settings) {
   return run_impl(campaign, out_dir, case_fn, settings, kManifestFile, false);
+}
+
+std::optional<nlohmann::json> read_run_result(const std::string& out_dir, const CaseSpec& spec) {
+  return read_json(fs::path(out_dir) / spec.relative_dir() / kResultFile);
 }
 
 CaseSpec make_run(const Campaign& campaign, const std::string& case_name,

@@ -151,6 +151,10 @@ std::vector<nlohmann::json> run_batch(const Campaign& campaign, const std::vecto
                                       const std::string& out_dir, const CaseFn& case_fn,
                                       const RunnerSettings& settings = {});
 
+/// The result.json of a finished run (spec, timing, provenance and the case's "result"), or
+/// nothing if the run has not finished.
+std::optional<nlohmann::json> read_run_result(const std::string& out_dir, const CaseSpec& spec);
+
 /// Scans out_dir and builds the manifest of `campaign` (status of every run) without running.
 nlohmann::json campaign_manifest(const Campaign& campaign, const std::string& out_dir);
 

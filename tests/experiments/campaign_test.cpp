@@ -324,6 +324,11 @@ TEST(Campaign, KilledCampaignResumesToTheSameResults) {
   const auto starts_after = read_log(log);
   for (const auto& s : c.runs) {
     EXPECT_EQ(result_of(out, s)["result"], result_of(ref, s)["result"]) << s.id();
+    const auto stored = read_run_result(out.string(), s);
+    ASSERT_TRUE(stored.has_value());
+    // The value is computed from the run's inputs, independently of the runner.
+    const double mu = 0.05 * static_cast<double>(s.index / 3 + 1);
+    EXPECT_NEAR((*stored)["result"]["value"].get<double>(), 1000.0 * mu + 0.2 + s.seed, 1e-9);
     if (mtime_before.count(s.id())) {
       // Finished before the kill: not redone, not rewritten.
       EXPECT_EQ(starts_after.at(s.id()), 1) << s.id();
