@@ -278,7 +278,7 @@ TEST(Campaign, KilledCampaignResumesToTheSameResults) {
   ASSERT_GE(child, 0);
   if (child == 0) {
     try {
-      run_campaign(c, out.string(), fake_case(log, 60), quiet());
+      run_campaign(c, out.string(), fake_case(log, 100), quiet());
     } catch (...) {
     }
     ::_exit(0);
@@ -290,7 +290,7 @@ TEST(Campaign, KilledCampaignResumesToTheSameResults) {
   };
   for (int i = 0; i < 1000 && count_results() < 2; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  std::this_thread::sleep_for(std::chrono::milliseconds(25));  // the next runs are mid-way
+  std::this_thread::sleep_for(std::chrono::milliseconds(40));  // the next runs are mid-way
   ::kill(child, SIGKILL);
   int st = 0;
   ::waitpid(child, &st, 0);
