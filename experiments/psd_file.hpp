@@ -1,0 +1,51 @@
+// Sieve-table files: a PSD as a user copies it from a lab sheet, in TOML.
+//
+// Design note. The engine never sees TOML (sim::PsdSpec is plain), so this is the one place that
+// turns a [psd] table into a spec, whether it is a file of its own (data/psd/*.toml) or a table
+// embedded in a scene file. The reader is strict: an unknown key (a typo such as "dmax_mm") is an
+// error rather than a silently ignored setting, and every error names the file, the field and the
+// offending value. The table itself is checked by sim::resolve_psd, whose message is passed on
+// with the file and the keys it concerns. Sizes in the file are in millimetres, as on lab sheets;
+// the spec is in metres.
+//
+//   [psd]
+//   name = "..."                  # optional
+//   provenance = "..."            # optional: where the numbers come from
+//   assumption = "..."            # optional: what is assumed rather than measured
+//   sieve_mm = [0.5, 1.0, 2.0]    # sieve openings [mm], strictly increasing
+//   passing_percent = [10, 40, 100]  # cumulative percent passing by mass, reaching 100
+//   d_max_mm = 2.0                # optional scalping size [mm]; default the largest sieve
+//   d_min_mm = 1.0                # optional lower cut-off [mm]; default the smallest sieve
+//   fines = "renormalise"         # optional: "renormalise" (default) or "drop"
+//   interval_sd_fraction = 0.1667 # optional: sd of the clipped normal / interval width
+#pragma once
+
+#include <toml++/toml.h>
+
+#include <string>
+
+#include "sim/psd.hpp"
+
+namespace reposetwin::experiments {
+
+/// A sieve table read from a file, with its description.
+struct PsdFile {
+  std::string source;      // file the table came from (for messages and result files)
+  std::string name;        // [psd].name, or empty
+  std::string provenance;  // [psd].provenance, or empty
+  std::string assumption;  // [psd].assumption, or empty
+  sim::PsdSpec spec;       // sizes in metres
+};
+
+/// Reads a file whose only top-level table is [psd]. Throws std::runtime_error naming the file
+/// (and line) for a missing file or a TOML syntax error, and std::invalid_argument naming the
+/// file, the field and the value for bad content.
+PsdFile read_psd_file(const std::string& path);
+
+/// Parses a [psd] table, for instance one embedded in a scene file; `source` names that file in
+/// messages and `where` the table's path in it (e.g. "psd"). Throws std::invalid_argument naming
+/// the source, the field and the value for bad content.
+PsdFile parse_psd_table(const toml::table& table, const std::string& source,
+                        const std::string& where = "psd");
+
+}  // namespace reposetwin::experiments
