@@ -141,7 +141,7 @@ PsdFile parse_psd_table(const toml::table& t, const std::string& source, const s
   try {
     sim::validate_sieve_table(f.spec.table);
   } catch (const std::invalid_argument& e) {
-    bad(locate(source, where, "sieve_mm / passing_percent", t.get("passing_percent")), e.what());
+    bad(locate(source, where, "sieve_mm / passing_percent", nullptr), e.what());
   }
   try {
     sim::resolve_psd(f.spec);
@@ -156,10 +156,12 @@ PsdFile read_psd_file(const std::string& path) {
   try {
     root = toml::parse_file(path);
   } catch (const toml::parse_error& e) {
-    const auto& where = e.source().begin;
-    throw std::runtime_error(path + ":" + std::to_string(where.line) + ":" +
-                             std::to_string(where.column) +
-                             ": cannot read the sieve-table file: " + std::string(e.description()));
+    const auto& at = e.source().begin;
+    std::ostringstream m;
+    m << path;
+    if (at.line > 0) m << ':' << at.line << ':' << at.column;
+    m << ": cannot read the sieve-table file: " << e.description();
+    throw std::runtime_error(m.str());
   }
   for (const auto& [key, node] : root) {
     if (key.str() != "psd") {
