@@ -1,12 +1,38 @@
-#include <stdexcept>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include "apps/reposetwin/commands.hpp"
+#include "experiments/pile_test.hpp"
+#include "experiments/scene_overrides.hpp"
 
 namespace reposetwin::cli {
 
 void add_run_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("run", "Run a scene file (the embedded quick scene by default)");
-  cmd->callback([]() { throw std::runtime_error("run: the engine is not wired yet"); });
+  struct Args {
+    std::string scene;
+    std::vector<std::string> sets;
+    experiments::RunOptions run;
+    bool quiet = false;
+  };
+  auto args = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "run", "Run a pile test scene (the embedded quick scene when no SCENE is given)");
+  cmd->add_option("scene", args->scene, "Scene file (TOML); default: the embedded quick scene");
+  cmd->add_option("--out,-o", args->run.out_dir, "Run folder for results, snapshots, checkpoint")
+      ->capture_default_str();
+  cmd->add_option("--set", args->sets, "Override a scene key: dotted.key=value (repeatable)");
+  cmd->add_option("--threads", args->run.threads, "OpenMP threads (0: the scene's setting)");
+  cmd->add_flag("--force", args->run.force, "Overwrite a finished result in the run folder");
+  cmd->add_flag("--resume", args->run.resume, "Continue from the run folder's checkpoint");
+  cmd->add_flag("--quiet,-q", args->quiet, "No progress lines");
+  cmd->callback([args]() {
+    const experiments::SceneConfig scene = experiments::load_scene(args->scene, args->sets);
+    args->run.progress = !args->quiet;
+    const nlohmann::json result = experiments::run_pile_test(scene, args->run);
+    std::cout << result["pile"].dump(2) << "\n";
+    set_exit_code(result["stop"]["reason"].get<std::string>().rfind("physics", 0) == 0 ? 3 : 0);
+  });
 }
 
 }  // namespace reposetwin::cli

@@ -1,0 +1,42 @@
+// The repose-angle pile test as a run of the engine: fill, settle, lift, settle, measure.
+//
+// Design note. The lab procedure is a sequence of phases; the controller below is a small state
+// machine over them, checked every few milliseconds of simulated time:
+//   fill    the PSD sample is placed on a loose lattice inside the container (standing on the
+//           plate, which closes the outlet as in the lab) and settles until its kinetic energy
+//           per particle falls below the threshold;
+//   lift    the container rises at the set speed until no particle is left inside it; if the
+//           count inside stops changing for clog_window seconds, particles have arched in the
+//           outlet and the run ends with "no pile: N particles lodged" and an angle of 0;
+//   settle  the container is gone; the pile settles until the energy threshold again;
+//   done    the pile is measured from the particle positions (sim/pile_geometry).
+// The run stops by itself and records why. Everything needed to resume (the engine checkpoint
+// and this controller's state) is written together, atomically, every few minutes of wall time.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "experiments/scene.hpp"
+
+namespace reposetwin::experiments {
+
+struct RunOptions {
+  std::string out_dir = "runs/quick";  // the run folder
+  bool force = false;       // overwrite a finished result in out_dir
+  bool resume = false;      // continue from out_dir's checkpoint
+  bool progress = true;     // progress lines on stderr
+  int threads = 0;          // OpenMP threads; 0 = the scene's setting
+  double stop_after_wall_s = 0.0;  // testing aid: stop (with a checkpoint) after this [s]; 0 = never
+  nlohmann::json extra_provenance = nlohmann::json::object();  // e.g. the campaign case
+};
+
+/// Runs the scene's pile test into opt.out_dir and returns the result JSON (also written to
+/// out_dir/result.json). Throws InputError for bad input (including a finished result that
+/// would be overwritten without force).
+nlohmann::json run_pile_test(const SceneConfig& scene, const RunOptions& opt);
+
+/// The pile measurement as JSON, angles in degrees (shared with reports).
+nlohmann::json pile_json(const sim::PileGeometry& g);
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,46 @@
+#include "experiments/scene_overrides.hpp"
+
+#include <filesystem>
+#include <sstream>
+
+#include "experiments/overrides.hpp"
+#include "experiments/provenance.hpp"
+#include "experiments/toml_reader.hpp"
+
+namespace reposetwin::experiments {
+
+SceneConfig load_scene(const std::string& path, const std::vector<std::string>& sets) {
+  const std::string file = path.empty() ? "<embedded>" : path;
+  if (!path.empty() && !std::filesystem::exists(path))
+    throw InputError(path + ": scene file does not exist");
+  const std::string text = path.empty() ? embedded_quick_scene() : read_file(path);
+  toml::table doc;
+  try {
+    doc = toml::parse(text, file);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << file << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
+       << e.description();
+    throw InputError(os.str());
+  }
+  for (const std::string& s : sets) {
+    const auto eq = s.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw InputError("--set \"" + s + "\": expected dotted.key=value");
+    toml::table value_doc;
+    try {
+      value_doc = toml::parse("v = " + s.substr(eq + 1));
+    } catch (const toml::parse_error& e) {
+      throw InputError("--set \"" + s + "\": the value is not a TOML value (" +
+                       std::string(e.description()) + ")");
+    }
+    try {
+      apply_override(doc, s.substr(0, eq), *value_doc.get("v"), "--set");
+    } catch (const std::invalid_argument& e) {
+      throw InputError(file + ": " + e.what());
+    }
+  }
+  return parse_scene_table(doc, file);
+}
+
+}  // namespace reposetwin::experiments
