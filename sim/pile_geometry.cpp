@@ -103,19 +103,40 @@ std::vector<std::size_t> cluster_roots(const std::vector<Vec3>& x, const std::ve
   std::vector<std::pair<Cell, std::size_t>> sorted(n);
   for (std::size_t i = 0; i < n; ++i) sorted[i] = {cell_of(x[i]), i};
   std::sort(sorted.begin(), sorted.end());
-  auto less_cell = [](const std::pair<Cell, std::size_t>& a, const Cell& c) { return a.first < c; };
-  for (std::size_t i = 0; i < n; ++i) {
-    const Cell c = cell_of(x[i]);
+  // Occupied cells, each with its range in `sorted`.
+  struct Range {
+    Cell cell;
+    std::size_t begin, end;
+  };
+  std::vector<Range> cells;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (cells.empty() || cells.back().cell != sorted[k].first)
+      cells.push_back({sorted[k].first, k, k});
+    cells.back().end = k + 1;
+  }
+  auto connect = [&](std::size_t i, std::size_t j) {
+    const double reach = (1.0 + tolerance) * (r[i] + r[j]);
+    if ((x[i] - x[j]).squaredNorm() <= reach * reach) sets.unite(i, j);
+  };
+  // Each cell against itself and its 13 neighbours that sort after it: every pair once.
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    const Range& a = cells[c];
+    for (std::size_t p = a.begin; p < a.end; ++p) {
+      for (std::size_t q = p + 1; q < a.end; ++q) connect(sorted[p].second, sorted[q].second);
+    }
     for (int dx = -1; dx <= 1; ++dx) {
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dz = -1; dz <= 1; ++dz) {
-          const Cell nc{c[0] + dx, c[1] + dy, c[2] + dz};
-          auto it = std::lower_bound(sorted.begin(), sorted.end(), nc, less_cell);
-          for (; it != sorted.end() && it->first == nc; ++it) {
-            const std::size_t j = it->second;
-            if (j <= i) continue;
-            const double reach = (1.0 + tolerance) * (r[i] + r[j]);
-            if ((x[i] - x[j]).squaredNorm() <= reach * reach) sets.unite(i, j);
+          const Cell nc{a.cell[0] + dx, a.cell[1] + dy, a.cell[2] + dz};
+          if (!(a.cell < nc)) continue;
+          const auto it = std::lower_bound(
+              cells.begin() + c + 1, cells.end(), nc,
+              [](const Range& range, const Cell& key) { return range.cell < key; });
+          if (it == cells.end() || it->cell != nc) continue;
+          for (std::size_t p = a.begin; p < a.end; ++p) {
+            for (std::size_t q = it->begin; q < it->end; ++q) {
+              connect(sorted[p].second, sorted[q].second);
+            }
           }
         }
       }

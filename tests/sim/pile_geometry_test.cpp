@@ -167,6 +167,60 @@ TEST(PileGeometry, StraysDoNotMoveTheMeasurement) {
   EXPECT_NEAR(gt.slice_angle_mean, std::atan(h / big_r), 0.3 * kDeg);
 }
 
+TEST(PileGeometry, PileClusterMatchesABruteForceSearch) {
+  // Random polydisperse spheres in a box: the pile must be the plate-touching cluster of largest
+  // volume found by an O(n^2) flood fill here, with the same count and the same H.
+  Rng rng(17);
+  for (int trial = 0; trial < 5; ++trial) {
+    Spheres s;
+    for (int i = 0; i < 150; ++i) {
+      const double a = rng.uniform(0.5e-3, 1.5e-3);
+      s.add(rng.uniform(0.0, 0.02), rng.uniform(0.0, 0.02), rng.uniform(a, 0.01), a);
+    }
+    const std::size_t n = s.x.size();
+    std::vector<int> label(n, -1);
+    int labels = 0;
+    for (std::size_t seed = 0; seed < n; ++seed) {
+      if (label[seed] >= 0) continue;
+      std::vector<std::size_t> stack{seed};
+      label[seed] = labels;
+      while (!stack.empty()) {
+        const std::size_t i = stack.back();
+        stack.pop_back();
+        for (std::size_t j = 0; j < n; ++j) {
+          if (label[j] < 0 && (s.x[i] - s.x[j]).norm() <= 1.1 * (s.r[i] + s.r[j])) {
+            label[j] = labels;
+            stack.push_back(j);
+          }
+        }
+      }
+      ++labels;
+    }
+    std::vector<double> volume(labels, 0.0);
+    std::vector<bool> on_plate(labels, false);
+    for (std::size_t i = 0; i < n; ++i) {
+      volume[label[i]] += std::pow(s.r[i], 3);
+      if (s.x[i].z() <= 1.5 * s.r[i]) on_plate[label[i]] = true;
+    }
+    int best = -1;
+    for (int l = 0; l < labels; ++l) {
+      if (on_plate[l] && (best < 0 || volume[l] > volume[best])) best = l;
+    }
+    ASSERT_GE(best, 0);
+    std::size_t count = 0;
+    double top = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (label[i] != best) continue;
+      ++count;
+      top = std::max(top, s.x[i].z() + s.r[i]);
+    }
+    const PileGeometry g = measure_pile(s.x, s.r);
+    EXPECT_EQ(g.pile_count, count) << "trial " << trial;
+    EXPECT_EQ(g.stray_count, n - count);
+    EXPECT_DOUBLE_EQ(g.height, top);
+  }
+}
+
 TEST(PileGeometry, MonolayerHasNoFlanksAndKnownHeightDiameterAndCentreOfMass) {
   // One layer of spheres on the plate: H = 2a, D = 2R, z_com = a.
   const double a = 0.5e-3, big_r = 0.01;
