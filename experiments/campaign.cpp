@@ -114,8 +114,9 @@ toml::table get_overrides(const toml::table& t, const std::string& file,
   const toml::node* n = t.get("overrides");
   if (n == nullptr) return out;
   if (!n->is_table())
-    throw bad(file, prefix + "overrides", value_text(*n),
-              "must be a table of dotted keys, e.g. { \"rolling.mu_r\" = 0.1 }");
+    throw bad(
+        file, prefix + "overrides", value_text(*n),
+        "must be a table of dotted keys, e.g. { \"contacts.rock-rock.rolling_friction\" = 0.1 }");
   flatten(*n->as_table(), "", out);
   for (const auto& [k, v] : out)
     split_dotted_key(k.str(), file + ": key '" + prefix + "overrides'");

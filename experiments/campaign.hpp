@@ -53,9 +53,9 @@ struct CaseSpec {
 
 /// The [calibration] table of a campaign file, for the calibrate command.
 struct CampaignCalibration {
-  std::string key = "rolling.mu_r";  // dotted scene key that is varied
-  Target target;                     // measured angle to match
-  CalibrationSettings settings;      // mu_r range, seeds per point, tolerance, budget
+  std::string key = "contacts.rock-rock.rolling_friction";  // dotted scene key that is varied
+  Target target;                                            // measured angle to match
+  CalibrationSettings settings;  // mu_r range, seeds per point, tolerance, budget
 };
 
 /// A parsed campaign file.

@@ -1,13 +1,14 @@
 // Dotted-key overrides of a scene file, applied to the parsed TOML before the scene is read.
 //
 // Why here and not in the engine: a campaign varies one or a few scene values per case
-// ("rolling.mu_r" = 0.12, "sample.mass" = 0.9). Applying them to the TOML table keeps one scene
-// parser (strict, typed) as the only reader of scene files, so the engine only ever sees typed
-// structs, never strings or key paths. The rules are deliberately strict so a typo cannot silently
-// produce a different experiment: every parent on the path must already exist, and a value keeps
-// its type (an integer may stand for a float, nothing else converts). A new leaf under an existing
-// table is allowed; the strict scene parser then rejects it if the scene format does not know it.
-// A numeric segment indexes an array ("walls.0.friction").
+// ("contacts.rock-rock.rolling_friction" = 0.12, "sample.mass_kg" = 0.9). Applying them to the
+// TOML table keeps one scene parser (strict, typed) as the only reader of scene files, so the
+// engine only ever sees typed structs, never strings or key paths. The rules are deliberately
+// strict so a typo cannot silently produce a different experiment: every parent on the path must
+// already exist, and a value keeps its type (an integer may stand for a float, nothing else
+// converts). A new leaf under an existing table is allowed; the strict scene parser then rejects
+// it if the scene format does not know it. A numeric segment indexes an array
+// ("walls.0.friction").
 #pragma once
 
 #include <toml++/toml.h>
@@ -30,8 +31,9 @@ std::vector<std::string> split_dotted_key(std::string_view dotted_key,
 void apply_override(toml::table& doc, std::string_view dotted_key, const toml::node& value,
                     std::string_view origin = {});
 
-/// Applies every entry of `overrides` (keys are dotted paths, e.g. { "rolling.mu_r" = 0.1 }) to
-/// `doc` in key order, so a whole-table override ("rolling") precedes its members ("rolling.mu_r").
+/// Applies every entry of `overrides` (keys are dotted paths, e.g. { "sample.mass_kg" = 0.9 }) to
+/// `doc` in key order, so a whole-table override ("sample") precedes its members
+/// ("sample.mass_kg").
 void apply_overrides(toml::table& doc, const toml::table& overrides, std::string_view origin = {});
 
 /// Renders a TOML value in TOML syntax for error messages and case names ("0.1", "\"x\"", "[1,

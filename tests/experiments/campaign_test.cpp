@@ -27,6 +27,8 @@ model = "epsd"
 mu_r = 0.1
 [sample]
 mass = 0.2
+[contacts.rock-rock]
+rolling_friction = 0.15
 )";
 
 // A fresh folder holding scene.toml.
@@ -168,7 +170,7 @@ max_simulations = 20
   EXPECT_EQ(c.runs[8].id(), "mu_r_0.15/seed_3");
   EXPECT_DOUBLE_EQ(build_case_scene(c.runs[4])["rolling"]["mu_r"].value<double>().value(), 0.1);
   ASSERT_TRUE(c.calibration.has_value());
-  EXPECT_EQ(c.calibration->key, "rolling.mu_r");
+  EXPECT_EQ(c.calibration->key, "contacts.rock-rock.rolling_friction");  // the scene format's
   EXPECT_DOUBLE_EQ(c.calibration->target.angle_deg, 33.47);
   EXPECT_DOUBLE_EQ(c.calibration->target.sd_deg, 0.3);
   EXPECT_DOUBLE_EQ(c.calibration->settings.mu_r_lo, 0.02);
@@ -484,6 +486,7 @@ name = "calib_demo"
 scene = "scene.toml"
 overrides = { "sample.mass" = 0.9 }
 [calibration]
+key = "rolling.mu_r"
 target_deg = 35.0
 mu_r_range = [0.0, 0.3]
 seeds_per_point = 2
