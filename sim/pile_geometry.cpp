@@ -44,6 +44,7 @@ void check_inputs(const std::vector<Vec3>& x, const std::vector<double>& r,
   auto require = [](bool ok, const char* field, double value, const char* rule) {
     if (!ok) fail(std::string("setting ") + field + " = " + number(value) + " " + rule);
   };
+  require(std::isfinite(s.plate_z), "plate_z", s.plate_z, "must be finite");
   require(std::isfinite(s.contact_tolerance) && s.contact_tolerance >= 0.0, "contact_tolerance",
           s.contact_tolerance, "must be >= 0");
   require(std::isfinite(s.footprint_tolerance) && s.footprint_tolerance >= 0.0,
@@ -354,7 +355,13 @@ std::string to_string(PileStatus status) {
 PileGeometry measure_pile(const std::vector<Vec3>& positions, const std::vector<double>& radii,
                           const PileGeometrySettings& settings) {
   check_inputs(positions, radii, settings);
-  const auto& x = positions;
+  // Heights are measured from the plate: work on a shifted copy if it is not at z = 0.
+  std::vector<Vec3> shifted;
+  if (settings.plate_z != 0.0) {
+    shifted = positions;
+    for (Vec3& p : shifted) p.z() -= settings.plate_z;
+  }
+  const auto& x = settings.plate_z != 0.0 ? shifted : positions;
   const auto& r = radii;
   PileGeometry g;
   g.particle_count = x.size();

@@ -9,7 +9,7 @@
 //    pile is the one with the largest solid volume. Lone strays (rolled away, bounced, still
 //    falling) form their own clusters and are ignored; `stray_count` says how many there were.
 // 2. The footprint is the set of pile particles on the plate: bottom z - r <= footprint_tolerance
-//    * r. Plate at z = 0, gravity along -z.
+//    * r. Plate at z = plate_z (default 0), gravity along -z; heights are above the plate.
 // 3. The centre is found from the footprint, not assumed: start at the mean footprint position;
 //    split the azimuth around it into `sectors`; in each sector take the footprint particle
 //    reaching furthest out (radial distance + radius) and its outer point; fit a circle to these
@@ -49,6 +49,7 @@ namespace reposetwin::sim {
 
 /// Settings of the pile measurement; every field has a default.
 struct PileGeometrySettings {
+  double plate_z = 0.0;              // height of the plate; all heights are measured from it [m]
   double contact_tolerance = 0.1;    // particles connect within (1 + this)(r_i + r_j) [-]
   double footprint_tolerance = 0.5;  // on the plate when bottom z - r <= this * r [-]
   int sectors = 36;                  // azimuth sectors for the footprint (>= 4) [-]
@@ -116,9 +117,9 @@ struct PileGeometry {
 };
 
 /// Measures the pile formed by spheres at `positions` (n) [m] with `radii` (n) [m] on a plate at
-/// z = 0. Throws std::invalid_argument if the sizes differ, a position is not finite, a radius
-/// is not positive, or a setting is out of range. An empty input or no particle on the plate
-/// gives status kNoPile, not an exception.
+/// z = settings.plate_z. Throws std::invalid_argument if the sizes differ, a position is not
+/// finite, a radius is not positive, or a setting is out of range. An empty input or no particle on
+/// the plate gives status kNoPile, not an exception.
 PileGeometry measure_pile(const std::vector<Vec3>& positions, const std::vector<double>& radii,
                           const PileGeometrySettings& settings = {});
 

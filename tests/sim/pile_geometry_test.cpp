@@ -142,6 +142,16 @@ TEST(PileGeometry, OffCentreConeFindsItsCentre) {
   expect_cone(measure_pile(s.x, s.r), h, big_r, 0.013, -0.021, s.x.size());
 }
 
+TEST(PileGeometry, PlateAboveZeroIsTheReference) {
+  const double big_r = 0.02, h = 0.012;
+  Spheres s = make_cone(h, big_r, 0.0, 0.0, 0.4e-3, 8);
+  for (Vec3& p : s.x) p.z() += 0.05;
+  PileGeometrySettings settings;
+  settings.plate_z = 0.05;
+  expect_cone(measure_pile(s.x, s.r, settings), h, big_r, 0.0, 0.0, s.x.size());
+  EXPECT_EQ(measure_pile(s.x, s.r).status, PileStatus::kNoPile);  // nothing on a plate at z = 0
+}
+
 TEST(PileGeometry, StraysDoNotMoveTheMeasurement) {
   const double big_r = 0.03, h = 0.02, a = 0.4e-3;
   Spheres s = make_cone(h, big_r, 0.004, 0.002, a, 9);
