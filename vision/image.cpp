@@ -18,13 +18,15 @@ std::string str(double v) {
   return os.str();
 }
 
-// Monomials u^i v^j with i + j <= degree at normalised coordinates in [-1, 1].
+// Monomials x^i y^j with i + j <= degree, ordered by degree, at normalised coordinates.
 void monomials(double x, double y, int degree, float* out) {
   int k = 0;
   for (int d = 0; d <= degree; ++d) {
     for (int i = d; i >= 0; --i) {
-      const int j = d - i;
-      out[k++] = static_cast<float>(std::pow(x, i) * std::pow(y, j));
+      double v = 1.0;
+      for (int e = 0; e < i; ++e) v *= x;
+      for (int e = 0; e < d - i; ++e) v *= y;
+      out[k++] = static_cast<float>(v);
     }
   }
 }
@@ -76,8 +78,12 @@ cv::Mat gray_levels(const cv::Mat& image, const std::string& where) {
 
 void check_contrast(const cv::Mat& gray, const std::string& where, double min_contrast) {
   if (gray.empty()) throw std::invalid_argument(where + ": image is empty (0 x 0 pixels)");
+  // Percentiles from a subsample of at most about 500 px across are plenty.
+  cv::Mat sub = gray;
+  const int step = std::max(1, std::max(gray.cols, gray.rows) / 500);
+  if (step > 1) cv::resize(gray, sub, cv::Size(), 1.0 / step, 1.0 / step, cv::INTER_NEAREST);
   cv::Mat g8;
-  gray.convertTo(g8, CV_8U);
+  sub.convertTo(g8, CV_8U);
   const int channels[] = {0};
   const int bins[] = {256};
   const float range[] = {0.f, 256.f};
@@ -108,16 +114,24 @@ void check_contrast(const cv::Mat& gray, const std::string& where, double min_co
 
 double otsu_threshold(const cv::Mat& values, double lo, double hi, const cv::Mat& mask) {
   CV_Assert(values.type() == CV_32F && hi > lo);
+  // A regular subsample of about 250k values gives the same histogram shape, faster.
+  const int step = std::max(1, static_cast<int>(std::sqrt(values.total() / 250000.0)));
+  cv::Mat sub = values, sub_mask = mask;
+  if (step > 1) {
+    cv::resize(values, sub, cv::Size(), 1.0 / step, 1.0 / step, cv::INTER_NEAREST);
+    if (!mask.empty())
+      cv::resize(mask, sub_mask, cv::Size(), 1.0 / step, 1.0 / step, cv::INTER_NEAREST);
+  }
   cv::Mat v8;
-  values.convertTo(v8, CV_8U, 255.0 / (hi - lo), -lo * 255.0 / (hi - lo));
+  sub.convertTo(v8, CV_8U, 255.0 / (hi - lo), -lo * 255.0 / (hi - lo));
   cv::Mat samples;
-  if (mask.empty()) {
+  if (sub_mask.empty()) {
     samples = v8.isContinuous() ? v8.reshape(1, 1) : v8.clone().reshape(1, 1);
   } else {
     std::vector<uchar> kept;
-    kept.reserve(static_cast<size_t>(cv::countNonZero(mask)));
+    kept.reserve(static_cast<size_t>(cv::countNonZero(sub_mask)));
     for (int r = 0; r < v8.rows; ++r) {
-      const uchar* m = mask.ptr<uchar>(r);
+      const uchar* m = sub_mask.ptr<uchar>(r);
       const uchar* p = v8.ptr<uchar>(r);
       for (int c = 0; c < v8.cols; ++c)
         if (m[c]) kept.push_back(p[c]);
@@ -146,9 +160,7 @@ cv::Mat estimate_backdrop(const cv::Mat& gray, const FlatFieldSettings& s,
   const double t = otsu_threshold(small, 0.0, 256.0);
   cv::Mat is_backdrop = small > t;
   const int nk = monomial_count(s.degree);
-  cv::Mat coef = cv::Mat::zeros(nk, 1, CV_32F);
-  cv::Mat fit;
-  // Design matrix for every pixel of the small image (normalised coordinates).
+  // Monomials of every pixel of the small image (normalised coordinates in [-1, 1]).
   cv::Mat design(small.rows * small.cols, nk, CV_32F);
   for (int r = 0; r < small.rows; ++r) {
     for (int c = 0; c < small.cols; ++c) {
@@ -158,21 +170,31 @@ cv::Mat estimate_backdrop(const cv::Mat& gray, const FlatFieldSettings& s,
     }
   }
   const cv::Mat values = small.reshape(1, small.rows * small.cols);
+  cv::Mat fit;
   for (int it = 0; it <= s.iterations; ++it) {
+    // Normal equations over the backdrop pixels (nk <= 15 unknowns).
     const cv::Mat flags = is_backdrop.reshape(1, small.rows * small.cols);
-    const int n = cv::countNonZero(flags);
+    cv::Mat ata = cv::Mat::zeros(nk, nk, CV_64F), atb = cv::Mat::zeros(nk, 1, CV_64F);
+    int n = 0;
+    for (int i = 0; i < flags.rows; ++i) {
+      if (!flags.at<uchar>(i)) continue;
+      const float* m = design.ptr<float>(i);
+      const double v = values.at<float>(i);
+      for (int p = 0; p < nk; ++p) {
+        double* row = ata.ptr<double>(p);
+        for (int q = 0; q <= p; ++q) row[q] += static_cast<double>(m[p]) * m[q];
+        atb.at<double>(p) += m[p] * v;
+      }
+      ++n;
+    }
     if (n < 4 * nk)
       throw std::runtime_error(where + ": no backdrop found (only " + str(n) +
                                " bright pixels in the downsampled image)");
-    cv::Mat a(n, nk, CV_32F), b(n, 1, CV_32F);
-    int k = 0;
-    for (int i = 0; i < flags.rows; ++i) {
-      if (!flags.at<uchar>(i)) continue;
-      design.row(i).copyTo(a.row(k));
-      b.at<float>(k) = values.at<float>(i);
-      ++k;
-    }
-    cv::solve(a, b, coef, cv::DECOMP_QR);
+    for (int p = 0; p < nk; ++p)
+      for (int q = p + 1; q < nk; ++q) ata.at<double>(p, q) = ata.at<double>(q, p);
+    cv::Mat coef;
+    cv::solve(ata, atb, coef, cv::DECOMP_SVD);
+    coef.convertTo(coef, CV_32F);
     fit = cv::Mat(design * coef).reshape(1, small.rows);
     if (it == s.iterations) break;
     cv::Mat rel;

@@ -119,12 +119,14 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
   m.source = where;
   m.note = scale.note;
   SideSettings set = settings;
+  const SideImage prepared = prepare_side(image, settings, where);
   if (!scale.camera && !scale.mm_per_px) {
     if (!scale.search_marker)
       throw std::runtime_error(where +
                                ": scale cannot be determined (no camera, no mm per pixel, and "
                                "the scale-bar search is off)");
-    m.scale_bar = find_scale_bar(image, scale.marker, where);
+    m.scale_bar = find_scale_bar_flat(prepared.flat, scale.marker);
+    if (m.scale_bar) m.scale_bar->box += prepared.roi.tl();
     if (!m.scale_bar)
       throw std::runtime_error(where +
                                ": scale cannot be determined: no camera sidecar, no mm "
@@ -140,7 +142,7 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
     ex.height += 4 * pad;
     set.exclude.push_back(ex);
   }
-  m.pixels = measure_side_pixels(image, set, where);
+  m.pixels = measure_side_pixels(prepared, set, where);
   const SideProfile& p = m.pixels;
 
   if (!scale.camera) {

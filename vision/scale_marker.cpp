@@ -188,7 +188,10 @@ std::optional<CheckerCard> find_checker_card(const cv::Mat& image, const MarkerS
   cv::Mat g8;
   gray.convertTo(g8, CV_8U);
   // White squares: the brightest class, well above the median (plate or pile).
-  std::vector<uchar> v(g8.begin<uchar>(), g8.end<uchar>());
+  cv::Mat sub;
+  const int step = std::max(1, std::max(g8.cols, g8.rows) / 500);
+  cv::resize(g8, sub, cv::Size(), 1.0 / step, 1.0 / step, cv::INTER_NEAREST);
+  std::vector<uchar> v(sub.begin<uchar>(), sub.end<uchar>());
   std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
   const double med = v[v.size() / 2];
   std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() * 999 / 1000), v.end());

@@ -307,8 +307,7 @@ FlankFit fit_flank(const std::vector<cv::Point2d>& points, const PlateLine& plat
   return f;
 }
 
-SideProfile measure_side_pixels(const cv::Mat& image, const SideSettings& s,
-                                const std::string& where) {
+SideImage prepare_side(const cv::Mat& image, const SideSettings& s, const std::string& where) {
   check_settings(s, where);
   const cv::Mat gray_full = gray_levels(image, where);
   check_contrast(gray_full, where);
@@ -325,30 +324,49 @@ SideProfile measure_side_pixels(const cv::Mat& image, const SideSettings& s,
       throw std::invalid_argument(where + ": backdrop image size differs from the image size");
     backdrop = s.backdrop(roi);
   }
-  const cv::Mat gray = gray_full(roi);
-  cv::Mat flat = flat_field(gray, backdrop, s.flat_field, where);
+  SideImage out;
+  out.roi = roi;
+  out.flat = flat_field(gray_full(roi), backdrop, s.flat_field, where);
   if (s.smoothing_sigma_px > 0.0)
-    cv::GaussianBlur(flat, flat, cv::Size(), s.smoothing_sigma_px, s.smoothing_sigma_px);
+    cv::GaussianBlur(out.flat, out.flat, cv::Size(), s.smoothing_sigma_px, s.smoothing_sigma_px);
+  return out;
+}
 
+SideProfile measure_side_pixels(const cv::Mat& image, const SideSettings& s,
+                                const std::string& where) {
+  return measure_side_pixels(prepare_side(image, s, where), s, where);
+}
+
+SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s,
+                                const std::string& where) {
+  check_settings(s, where);
+  const cv::Mat& flat = prepared.flat;
+  const cv::Rect roi = prepared.roi;
   SideProfile out;
   PlateLine plate = find_plate_line(flat, s, where);
 
-  // Region strictly above the plate line (whole pixels).
-  cv::Mat above(flat.size(), CV_8U, cv::Scalar(0));
-  for (int c = 0; c < flat.cols; ++c) {
-    const int last = std::min(flat.rows - 1, static_cast<int>(std::floor(plate.v_at(c) - 0.5)));
-    if (last >= 0) above(cv::Rect(c, 0, 1, last + 1)).setTo(255);
+  // Region strictly above the plate line (whole pixels); segmentation works on those rows only.
+  int rows_above = 0;
+  for (double c : {0.0, flat.cols - 1.0})
+    rows_above = std::max(rows_above, static_cast<int>(std::floor(plate.v_at(c) - 0.5)) + 1);
+  rows_above = std::clamp(rows_above, 1, flat.rows);
+  const cv::Mat upper = flat.rowRange(0, rows_above);
+  cv::Mat above(upper.size(), CV_8U, cv::Scalar(0));
+  for (int r = 0; r < rows_above; ++r) {
+    uchar* m = above.ptr<uchar>(r);
+    for (int c = 0; c < flat.cols; ++c)
+      if (r <= std::floor(plate.v_at(c) - 0.5)) m[c] = 255;
   }
   for (const cv::Rect& ex : s.exclude) {
-    const cv::Rect local = (ex - roi.tl()) & cv::Rect(0, 0, flat.cols, flat.rows);
+    const cv::Rect local = (ex - roi.tl()) & cv::Rect(0, 0, above.cols, above.rows);
     if (!local.empty()) above(local).setTo(0);
   }
   if (cv::countNonZero(above) < 64)
     throw std::runtime_error(where + ": no pile found (the plate line at row " +
                              str(plate.v_at(0.5 * flat.cols) + roi.y) +
                              " leaves no image above it)");
-  const double threshold = s.threshold > 0.0 ? s.threshold : otsu_threshold(flat, 0.0, 1.5, above);
-  cv::Mat fg = (flat < threshold) & above;
+  const double threshold = s.threshold > 0.0 ? s.threshold : otsu_threshold(upper, 0.0, 1.5, above);
+  cv::Mat fg = (upper < threshold) & above;
   if (s.morph_radius_px > 0) {
     const int k = 2 * s.morph_radius_px + 1;
     const cv::Mat se = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k));

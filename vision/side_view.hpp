@@ -103,6 +103,21 @@ struct SideProfile {
 PlateLine find_plate_line(const cv::Mat& flat, const SideSettings& settings = {},
                           const std::string& where = "image");
 
+/// A side view after the common first step: its region of interest, flat-fielded and smoothed.
+struct SideImage {
+  cv::Mat flat;  // CV_32F, backdrop about 1, size of the ROI
+  cv::Rect roi;  // where `flat` sits in the full image [px]
+};
+
+/// Validates the settings and the image and computes its SideImage. Throws as
+/// measure_side_pixels does.
+SideImage prepare_side(const cv::Mat& image, const SideSettings& settings = {},
+                       const std::string& where = "image");
+
+/// Measures the pile silhouette of a prepared side view (see the overload below).
+SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& settings = {},
+                                const std::string& where = "image");
+
 /// Measures the pile silhouette of a side view. `image` is any image `gray_levels` accepts.
 /// Throws std::invalid_argument for unusable input (empty, all black, bad settings) and
 /// std::runtime_error when no pile is found; messages start with `where`.

@@ -152,22 +152,22 @@ TopProfile measure_top_pixels(const cv::Mat& image, const TopSettings& s,
   if (mo.m00 < 50.0)
     throw std::runtime_error(where + ": no footprint found (blob of " + str(mo.m00) + " px)");
   const cv::Point2d c0(mo.m10 / mo.m00, mo.m01 / mo.m00);
-  // Outside level: median of a ring just outside the blob.
-  cv::Mat ring;
-  cv::dilate(blob, ring,
-             cv::getStructuringElement(
-                 cv::MORPH_ELLIPSE, cv::Size(2 * s.edge_window_px + 9, 2 * s.edge_window_px + 9)));
-  {
-    cv::Mat inner;
-    cv::dilate(blob, inner,
-               cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * s.edge_window_px + 3,
-                                                                     2 * s.edge_window_px + 3)));
-    ring &= ~inner;
-  }
+  // Outside level: median of a ring just outside the blob (worked on the blob's padded box).
+  const int pad = 2 * s.edge_window_px + 10;
+  const cv::Rect padded =
+      cv::Rect(box.x - pad, box.y - pad, box.width + 2 * pad, box.height + 2 * pad) &
+      cv::Rect(0, 0, roi.width, roi.height);
+  cv::Mat ring, inner;
+  const int k_out = 2 * s.edge_window_px + 9, k_in = 2 * s.edge_window_px + 3;
+  cv::dilate(blob(padded), ring,
+             cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k_out, k_out)));
+  cv::dilate(blob(padded), inner,
+             cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k_in, k_in)));
+  ring &= ~inner;
   std::vector<double> outside;
   for (int r = 0; r < ring.rows; ++r)
     for (int c = 0; c < ring.cols; ++c)
-      if (ring.at<uchar>(r, c)) outside.push_back(gray.at<float>(r, c));
+      if (ring.at<uchar>(r, c)) outside.push_back(gray.at<float>(r + padded.y, c + padded.x));
   if (outside.empty()) throw std::runtime_error(where + ": no footprint surroundings found");
   std::nth_element(outside.begin(), outside.begin() + static_cast<long>(outside.size() / 2),
                    outside.end());
