@@ -85,6 +85,10 @@ int main(int argc, char** argv) {
     std::cout << "  " << name << " view: first " << first_s * 1e3 << " ms, then " << each * 1e3
               << " ms per image (" << 1.0 / each << " images/s)"
               << (each < 1.0 ? "  [goal < 1 s: met]" : "  [goal < 1 s: NOT met]") << "\n";
+    const render::RenderProfile& p = renderer.last_profile();
+    std::cout << "    last image: prepare " << p.prepare_s * 1e3 << " ms, draw " << p.draw_s * 1e3
+              << " ms, read back " << p.readback_s * 1e3 << " ms, warp " << p.warp_s * 1e3
+              << " ms; " << p.spheres_drawn << " spheres drawn\n";
     if (argc > 2) {
       const std::string stem = std::string(argv[2]) + "_" + name;
       render::write_render(stem, first,

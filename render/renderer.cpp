@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
@@ -305,6 +306,87 @@ Canvas make_canvas(const camera::Camera& cam) {
   return c;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Occlusion culling. Most spheres of a pile are buried: drawing them costs fragment work (the
+// ray-cast depth defeats early depth tests) and changes no pixel. Per pixel we record the
+// smallest "back" depth z + r of the spheres that certainly cover its centre: the ray through it
+// hits such a sphere no deeper than that. The image of a sphere contains the disc of radius
+// f r / z about its projected centre (the image of its cross-section facing the camera), shrunk
+// here by a safety margin for the shader's float arithmetic. A sphere whose bounding box (with
+// the drawn quad's margin) holds only pixels with a recorded depth clearly below its front
+// z - r wins no depth test anywhere, so leaving it out gives the same bytes; a test checks that.
+
+struct PixelBox {
+  double u_lo, u_hi, v_lo, v_hi;
+};
+
+// The bounding box of a sphere's image on the canvas [px], as the vertex shader computes it.
+PixelBox sphere_box(const Eigen::Vector3d& c, double r, double f, double cx, double cy,
+                    bool ortho) {
+  if (ortho) {
+    return {cx + f * (c.x() - r), cx + f * (c.x() + r), cy + f * (c.y() - r), cy + f * (c.y() + r)};
+  }
+  const double d = c.z() * c.z() - r * r;
+  const double qx = std::sqrt(c.x() * c.x() + d), qy = std::sqrt(c.y() * c.y() + d);
+  return {cx + f * (c.x() * c.z() - r * qx) / d, cx + f * (c.x() * c.z() + r * qx) / d,
+          cy + f * (c.y() * c.z() - r * qy) / d, cy + f * (c.y() * c.z() + r * qy) / d};
+}
+
+std::vector<char> visible_spheres(const std::vector<Eigen::Vector3d>& centres,
+                                  const std::vector<double>& radii, const std::vector<char>& drawn,
+                                  double f, double cx, double cy, bool ortho, int width,
+                                  int height) {
+  constexpr double kMarginPx = 0.02;     // inner disc shrink [px]
+  constexpr double kDepthMargin = 1e-5;  // relative depth gap required to cull [-]
+  std::vector<float> occluder(static_cast<std::size_t>(width) * height,
+                              std::numeric_limits<float>::infinity());
+  const std::size_t n = centres.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!drawn[i]) continue;
+    const Eigen::Vector3d& c = centres[i];
+    const double scale = ortho ? f : f / c.z();
+    const double u0 = cx + scale * c.x(), v0 = cy + scale * c.y();
+    const double rho = scale * radii[i] * (1.0 - 1e-4) - kMarginPx;
+    if (rho <= 0.0) continue;
+    // Rounded up, so a float compared below is never nearer than the true back depth.
+    const float back = std::nextafter(static_cast<float>(c.z() + radii[i]),
+                                      std::numeric_limits<float>::infinity());
+    const int v_lo = std::max(static_cast<int>(std::ceil(v0 - rho)), 0);
+    const int v_hi = std::min(static_cast<int>(std::floor(v0 + rho)), height - 1);
+    for (int v = v_lo; v <= v_hi; ++v) {
+      const double w = std::sqrt(std::max(rho * rho - (v - v0) * (v - v0), 0.0));
+      const int u_lo = std::max(static_cast<int>(std::ceil(u0 - w)), 0);
+      const int u_hi = std::min(static_cast<int>(std::floor(u0 + w)), width - 1);
+      float* row = occluder.data() + static_cast<std::size_t>(v) * width;
+      for (int u = u_lo; u <= u_hi; ++u) row[u] = std::min(row[u], back);
+    }
+  }
+  std::vector<char> visible(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!drawn[i]) continue;
+    const PixelBox b = sphere_box(centres[i], radii[i], f, cx, cy, ortho);
+    const double front_d = (centres[i].z() - radii[i]) * (1.0 - kDepthMargin);
+    const float front = static_cast<float>(front_d);
+    // The drawn quad's one-pixel margin, plus one for rounding.
+    const int u_lo = std::max(static_cast<int>(std::floor(b.u_lo - 2.0)), 0);
+    const int u_hi = std::min(static_cast<int>(std::ceil(b.u_hi + 2.0)), width - 1);
+    const int v_lo = std::max(static_cast<int>(std::floor(b.v_lo - 2.0)), 0);
+    const int v_hi = std::min(static_cast<int>(std::ceil(b.v_hi + 2.0)), height - 1);
+    bool hidden = u_lo <= u_hi && v_lo <= v_hi;  // off the canvas: leave it to the clipper
+    for (int v = v_lo; v <= v_hi && hidden; ++v) {
+      const float* row = occluder.data() + static_cast<std::size_t>(v) * width;
+      for (int u = u_lo; u <= u_hi; ++u) {
+        if (!(row[u] < front)) {
+          hidden = false;
+          break;
+        }
+      }
+    }
+    visible[i] = hidden ? 0 : 1;
+  }
+  return visible;
+}
+
 struct MeshVertex {
   float position[3];
   float normal[3];
@@ -328,6 +410,7 @@ struct Renderer::Impl {
   GLuint mesh_vao = 0, mesh_vbo = 0;
   GLuint fbo = 0, color_rb = 0, depth_rb = 0;
   int fbo_width = 0, fbo_height = 0;
+  RenderProfile profile;
 
   Impl() {
     sphere_program = link(kSphereVertex, kSphereFragment);
@@ -432,6 +515,7 @@ struct Renderer::Impl {
   }
 
   cv::Mat render(const Scene& scene, const camera::Camera& cam, const RenderOptions& options) {
+    const auto t0 = std::chrono::steady_clock::now();
     validate(scene, cam, options);
     context.make_current();
     const Canvas canvas = make_canvas(cam);
@@ -467,13 +551,23 @@ struct Renderer::Impl {
     const double near_z = 0.5 * std::max(std::min(sphere_front, mesh_front), 0.1 * sphere_front);
     far_z = 1.01 * far_z + 1e-6;
 
+    std::vector<char> drawn(n, 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      // Spheres beside or behind the camera (perspective) are not drawn.
+      if (!ortho && centres[i].z() - scene.radii[i] <= near_z) drawn[i] = 0;
+    }
+    const std::vector<char> visible =
+        !options.occlusion_culling
+            ? drawn
+            : visible_spheres(centres, scene.radii, drawn, camera::focal_px(cam), canvas.cx,
+                              canvas.cy, ortho, canvas.width, canvas.height);
     std::vector<SphereInstance> instances;
     instances.reserve(n);
     const std::vector<std::array<float, 3>> colors = sphere_colors(scene, options);
     for (std::size_t i = 0; i < n; ++i) {
+      if (!visible[i]) continue;
       const Eigen::Vector3d& c = centres[i];
       const double r = scene.radii[i];
-      if (!ortho && c.z() - r <= near_z) continue;  // beside or behind the camera
       instances.push_back({{static_cast<float>(c.x()), static_cast<float>(c.y()),
                             static_cast<float>(c.z()), static_cast<float>(r)},
                            {colors[i][0], colors[i][1], colors[i][2]}});
@@ -489,6 +583,7 @@ struct Renderer::Impl {
           {col.r / 255.0f, col.g / 255.0f, col.b / 255.0f, fixtures.lit[i] ? 1.0f : 0.0f}};
     }
 
+    const auto t1 = std::chrono::steady_clock::now();
     ensure_framebuffer(canvas.width, canvas.height);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo);
     glViewport(0, 0, canvas.width, canvas.height);
@@ -519,15 +614,22 @@ struct Renderer::Impl {
       glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(instances.size()));
     }
     glBindVertexArray(0);
+    glFinish();
+    const auto t2 = std::chrono::steady_clock::now();
 
     cv::Mat image(canvas.height, canvas.width, CV_8UC3);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glReadPixels(0, 0, canvas.width, canvas.height, GL_BGR, GL_UNSIGNED_BYTE, image.data);
     check("rendering");
+    const auto t3 = std::chrono::steady_clock::now();
+    auto seconds = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
+    profile =
+        RenderProfile{seconds(t0, t1), seconds(t1, t2), seconds(t2, t3), 0.0, instances.size()};
     if (canvas.map_u.empty()) return image;
     cv::Mat out;
     cv::remap(image, out, canvas.map_u, canvas.map_v, cv::INTER_LINEAR, cv::BORDER_CONSTANT,
               cv::Scalar(bg.b, bg.g, bg.r));
+    profile.warp_s = seconds(t3, std::chrono::steady_clock::now());
     return out;
   }
 };
@@ -539,6 +641,8 @@ cv::Mat Renderer::render(const Scene& scene, const camera::Camera& cam,
                          const RenderOptions& options) {
   return impl_->render(scene, cam, options);
 }
+
+const RenderProfile& Renderer::last_profile() const { return impl_->profile; }
 
 std::string Renderer::gl_description() const {
   return impl_->context.version() + " / " + impl_->context.renderer();

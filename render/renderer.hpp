@@ -28,6 +28,15 @@
 
 namespace reposetwin::render {
 
+/// Where the time of the last render went [s], for benchmarks.
+struct RenderProfile {
+  double prepare_s = 0.0;   // validation, distortion maps, camera-frame transforms, colours
+  double draw_s = 0.0;      // upload and rasterisation (GL, finished)
+  double readback_s = 0.0;  // glReadPixels
+  double warp_s = 0.0;      // distortion warp (cv::remap); 0 without distortion
+  std::size_t spheres_drawn = 0;
+};
+
 /// Owns an offscreen GL context, the shaders and the buffers; reuse one for many renders.
 /// Not thread-safe: use one per thread.
 class Renderer {
@@ -41,6 +50,9 @@ class Renderer {
   /// Renders the scene through `cam` at the camera's resolution: an 8-bit BGR image, top row
   /// first. Throws std::invalid_argument on bad input (see validate(scene, cam, options)).
   cv::Mat render(const Scene& scene, const camera::Camera& cam, const RenderOptions& options = {});
+
+  /// The timing of the last successful render.
+  const RenderProfile& last_profile() const;
 
   /// The GL version and renderer strings, for provenance.
   std::string gl_description() const;

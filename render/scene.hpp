@@ -100,6 +100,7 @@ struct RenderOptions {
   double diffuse = 0.65;              // diffuse light fraction [-]
   Eigen::Vector3d light_direction_camera{-0.35, -0.6, -1.0};  // towards the light, camera frame
                                                               // (x right, y down, z forward)
+  bool occlusion_culling = true;  // skip spheres provably hidden by others: same bytes, faster
 };
 
 /// The extent of the pile of spheres (bounding cylinder about the z axis).
