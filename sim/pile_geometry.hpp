@@ -34,8 +34,12 @@
 //    centre-of-mass angle atan(4 z_com / (D/2)), exact for a solid cone (z_com = H/4).
 //
 // On a pile of spheres these definitions are exact for a cone whose outer surface particles
-// touch the cone and whose outermost plate particles reach the base circle. All angles are in
-// radians.
+// touch the cone and whose outermost plate particles reach the base circle. On a packed heap the
+// bottom spheres cannot fill the corner between the flank and the plate: the footprint ends about
+// r (cot(theta/2) - 1) inside the point where the flank line meets the plate (2.3 r at 34
+// degrees), so D is that much smaller than the flank cone's base and atan(2H/D) reads higher than
+// the flank angle by about sin(theta) cos(theta) * 2.3 r / (D/2) (0.8 degrees for r = 0.75 mm and
+// D = 110 mm), as a photo would. Compare like with like. All angles are in radians.
 #pragma once
 
 #include <Eigen/Core>
