@@ -161,7 +161,9 @@ double evaluate(const MonotoneFit& fit, double mu_r);
 /// the angle lies outside the fitted range.
 std::optional<double> invert(const MonotoneFit& fit, double angle_deg);
 
-/// Calibrates from a fixed set of observations (no new simulations).
+/// Calibrates from a fixed set of observations (no new simulations). The status is kCalibrated
+/// whenever the target is reachable (no tolerance applies here) and `simulations` is the number of
+/// observations.
 CalibrationResult calibrate_observations(const std::vector<Observation>& observations,
                                          const Target& target,
                                          const BootstrapSettings& bootstrap = {});
