@@ -93,4 +93,27 @@ void write_render(const std::string& stem, const cv::Mat& image, const nlohmann:
   write_bytes_atomic(stem + ".json", text.data(), text.size());
 }
 
+cv::Mat render_and_write(Renderer& renderer, const Scene& scene, const camera::Camera& cam,
+                         const RenderOptions& options, const std::string& stem,
+                         const nlohmann::json& provenance) {
+  cv::Mat image = renderer.render(scene, cam, options);
+  write_render(stem, image, make_sidecar(scene, cam, options, provenance));
+  return image;
+}
+
+std::vector<camera::Camera> write_lab_views(Renderer& renderer, const Scene& scene,
+                                            const std::string& prefix,
+                                            const LabCameraSettings& cameras,
+                                            const RenderOptions& options,
+                                            const nlohmann::json& provenance) {
+  const camera::Camera side = lab_side_camera(scene, cameras);
+  const camera::Camera top = lab_top_camera(scene, cameras);
+  RenderOptions o = options;
+  o.view = View::kSide;
+  render_and_write(renderer, scene, side, o, prefix + "_side", provenance);
+  o.view = View::kTop;
+  render_and_write(renderer, scene, top, o, prefix + "_top", provenance);
+  return {side, top};
+}
+
 }  // namespace reposetwin::render

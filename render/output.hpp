@@ -11,8 +11,10 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <string>
+#include <vector>
 
 #include "camera/camera.hpp"
+#include "render/renderer.hpp"
 #include "render/scene.hpp"
 
 namespace reposetwin::render {
@@ -33,5 +35,20 @@ nlohmann::json make_sidecar(const Scene& scene, const camera::Camera& cam,
 /// same folder, then rename). Creates missing parent folders. Throws std::runtime_error naming
 /// the path on failure, std::invalid_argument for an empty or non-8-bit image.
 void write_render(const std::string& stem, const cv::Mat& image, const nlohmann::json& sidecar);
+
+/// Renders `scene` through `cam` and writes STEM.png and STEM.json (make_sidecar + write_render).
+/// Returns the image.
+cv::Mat render_and_write(Renderer& renderer, const Scene& scene, const camera::Camera& cam,
+                         const RenderOptions& options, const std::string& stem,
+                         const nlohmann::json& provenance = nullptr);
+
+/// Renders the lab's two views of the scene (lab_side_camera, lab_top_camera) and writes
+/// PREFIX_side.png/.json and PREFIX_top.png/.json; `options.view` is set per view. Returns the
+/// two cameras used, side first.
+std::vector<camera::Camera> write_lab_views(Renderer& renderer, const Scene& scene,
+                                            const std::string& prefix,
+                                            const LabCameraSettings& cameras = {},
+                                            const RenderOptions& options = {},
+                                            const nlohmann::json& provenance = nullptr);
 
 }  // namespace reposetwin::render

@@ -334,10 +334,11 @@ PixelBox sphere_box(const Eigen::Vector3d& c, double r, double f, double cx, dou
 
 std::vector<char> visible_spheres(const std::vector<Eigen::Vector3d>& centres,
                                   const std::vector<double>& radii, const std::vector<char>& drawn,
-                                  double f, double cx, double cy, bool ortho, int width,
-                                  int height) {
+                                  double f, double cx, double cy, bool ortho, int width, int height,
+                                  double depth_range) {
   constexpr double kMarginPx = 0.02;     // inner disc shrink [px]
-  constexpr double kDepthMargin = 1e-5;  // relative depth gap required to cull [-]
+  constexpr double kDepthMargin = 1e-5;  // depth gap required to cull, relative to the larger
+                                         // of the sphere's depth and the depth range [-]
   std::vector<float> occluder(static_cast<std::size_t>(width) * height,
                               std::numeric_limits<float>::infinity());
   const std::size_t n = centres.size();
@@ -365,7 +366,9 @@ std::vector<char> visible_spheres(const std::vector<Eigen::Vector3d>& centres,
   for (std::size_t i = 0; i < n; ++i) {
     if (!drawn[i]) continue;
     const PixelBox b = sphere_box(centres[i], radii[i], f, cx, cy, ortho);
-    const double front_d = (centres[i].z() - radii[i]) * (1.0 - kDepthMargin);
+    const double front_exact = centres[i].z() - radii[i];
+    const double front_d =
+        front_exact - kDepthMargin * std::max(std::abs(front_exact), depth_range);
     const float front = static_cast<float>(front_d);
     // The drawn quad's one-pixel margin, plus one for rounding.
     const int u_lo = std::max(static_cast<int>(std::floor(b.u_lo - 2.0)), 0);
@@ -411,6 +414,26 @@ struct Renderer::Impl {
   GLuint fbo = 0, color_rb = 0, depth_rb = 0;
   int fbo_width = 0, fbo_height = 0;
   RenderProfile profile;
+  // The last canvas and distortion maps, reused while the lens and resolution stay the same
+  // (the maps cost one iterative undistortion per pixel).
+  std::array<double, 7> canvas_key{};
+  Canvas canvas_cache;
+
+  const Canvas& canvas_for(const camera::Camera& cam) {
+    const camera::Intrinsics& in = cam.intrinsics;
+    const std::array<double, 7> key = {static_cast<double>(in.width_px),
+                                       static_cast<double>(in.height_px),
+                                       camera::focal_px(cam),
+                                       camera::principal_u(cam),
+                                       camera::principal_v(cam),
+                                       in.k1,
+                                       in.k2};
+    if (canvas_cache.width == 0 || key != canvas_key) {
+      canvas_cache = make_canvas(cam);
+      canvas_key = key;
+    }
+    return canvas_cache;
+  }
 
   Impl() {
     sphere_program = link(kSphereVertex, kSphereFragment);
@@ -518,7 +541,7 @@ struct Renderer::Impl {
     const auto t0 = std::chrono::steady_clock::now();
     validate(scene, cam, options);
     context.make_current();
-    const Canvas canvas = make_canvas(cam);
+    const Canvas& canvas = canvas_for(cam);
     const Eigen::Matrix3d rot = camera::rotation_world_to_camera(cam);
     const Eigen::Vector3d eye = cam.extrinsics.position;
     const bool ortho = cam.projection == camera::Projection::kOrthographic;
@@ -526,12 +549,14 @@ struct Renderer::Impl {
     // Spheres to the camera frame (double), then the depth range from everything drawn.
     const std::size_t n = scene.positions.size();
     std::vector<Eigen::Vector3d> centres(n);
-    double sphere_front = std::numeric_limits<double>::infinity();
-    double far_z = 0.0;
+    double sphere_front = std::numeric_limits<double>::infinity();  // nearest positive front
+    double z_lo = std::numeric_limits<double>::infinity();          // nearest point of anything
+    double far_z = -std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < n; ++i) {
       centres[i] = rot * (scene.positions[i] - eye);
       const double front = centres[i].z() - scene.radii[i];
       if (front > 0.0) sphere_front = std::min(sphere_front, front);
+      z_lo = std::min(z_lo, front);
       far_z = std::max(far_z, centres[i].z() + scene.radii[i]);
     }
     const TriangleMesh fixtures = build_fixtures(scene, cam, options.view);
@@ -540,16 +565,25 @@ struct Renderer::Impl {
     for (std::size_t i = 0; i < mesh_cam.size(); ++i) {
       mesh_cam[i] = rot * (fixtures.positions[i] - eye);
       if (mesh_cam[i].z() > 0.0) mesh_front = std::min(mesh_front, mesh_cam[i].z());
+      z_lo = std::min(z_lo, mesh_cam[i].z());
       far_z = std::max(far_z, mesh_cam[i].z());
     }
-    if (!std::isfinite(sphere_front)) {
-      throw std::invalid_argument(
-          "render: camera.extrinsics.position sees no sphere in front of it");
+    double near_z = 0.0;
+    if (ortho) {
+      // Depth is linear in z: the range simply covers everything, with a margin.
+      const double pad = 0.01 * (far_z - z_lo) + 1e-6;
+      near_z = z_lo - pad;
+      far_z += pad;
+    } else {
+      if (!std::isfinite(sphere_front)) {
+        throw std::invalid_argument(
+            "render: camera.extrinsics.position sees no sphere in front of it");
+      }
+      // Depth precision goes as near / z^2: keep the near plane within 10x of the pile's front.
+      // Fixture parts nearer than that (a plate corner beside the camera) are clipped.
+      near_z = 0.5 * std::max(std::min(sphere_front, mesh_front), 0.1 * sphere_front);
+      far_z = 1.01 * far_z + 1e-6;
     }
-    // Depth precision goes as near / z^2: keep the near plane within 10x of the pile's front.
-    // Fixture parts nearer than that (a plate corner beside the camera) are clipped.
-    const double near_z = 0.5 * std::max(std::min(sphere_front, mesh_front), 0.1 * sphere_front);
-    far_z = 1.01 * far_z + 1e-6;
 
     std::vector<char> drawn(n, 1);
     for (std::size_t i = 0; i < n; ++i) {
@@ -560,7 +594,7 @@ struct Renderer::Impl {
         !options.occlusion_culling
             ? drawn
             : visible_spheres(centres, scene.radii, drawn, camera::focal_px(cam), canvas.cx,
-                              canvas.cy, ortho, canvas.width, canvas.height);
+                              canvas.cy, ortho, canvas.width, canvas.height, far_z - near_z);
     std::vector<SphereInstance> instances;
     instances.reserve(n);
     const std::vector<std::array<float, 3>> colors = sphere_colors(scene, options);

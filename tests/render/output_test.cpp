@@ -90,6 +90,28 @@ TEST(WriteRender, WritesPngAndSidecarThatReadBack) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(WriteRender, LabViewsWriteBothViews) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / "reposetwin_render_lab_views_test";
+  std::filesystem::remove_all(dir);
+  Renderer renderer;
+  const auto cams =
+      write_lab_views(renderer, small_pile(), (dir / "pile").string(),
+                      {.width_px = 160, .height_px = 120}, RenderOptions{}, {{"seed", 1}});
+  ASSERT_EQ(cams.size(), 2u);
+  for (const char* view : {"side", "top"}) {
+    const std::string stem = (dir / (std::string("pile_") + view)).string();
+    const cv::Mat img = cv::imread(stem + ".png", cv::IMREAD_COLOR);
+    EXPECT_EQ(img.cols, 160);
+    EXPECT_EQ(img.rows, 120);
+    std::ifstream in(stem + ".json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["view"], view);
+    EXPECT_EQ(j["provenance"]["seed"], 1);
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST(WriteRender, RejectsEmptyImage) {
   try {
     write_render("/tmp/never_written", cv::Mat(), nlohmann::json::object());

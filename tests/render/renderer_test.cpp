@@ -248,9 +248,8 @@ TEST_F(RendererTest, OcclusionCullingChangesNoPixel) {
   // leave every byte as it was.
   const Scene s = random_pile(6000, 11);
   for (const View view : {View::kSide, View::kTop}) {
-    const Camera cam = view == View::kSide
-                           ? lab_side_camera(s, {.width_px = 480, .height_px = 270})
-                           : lab_top_camera(s, {.width_px = 480, .height_px = 270});
+    const Camera cam = view == View::kSide ? lab_side_camera(s, {.width_px = 480, .height_px = 270})
+                                           : lab_top_camera(s, {.width_px = 480, .height_px = 270});
     RenderOptions o;
     o.view = view;
     o.occlusion_culling = false;
