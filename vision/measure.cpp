@@ -308,6 +308,20 @@ TopMeasurement measure_top(const cv::Mat& image, const ScaleSpec& scale,
   return m;
 }
 
+SideMeasurement measure_side(const cv::Mat& image, const camera::Camera& cam,
+                             const SideSettings& settings, const std::string& where) {
+  ScaleSpec spec;
+  spec.camera = cam;
+  return measure_side(image, spec, settings, where);
+}
+
+TopMeasurement measure_top(const cv::Mat& image, const camera::Camera& cam,
+                           const TopSettings& settings, const std::string& where) {
+  ScaleSpec spec;
+  spec.camera = cam;
+  return measure_top(image, spec, settings, where);
+}
+
 SideSummary combine_sides(const std::vector<SideMeasurement>& views) {
   if (views.empty()) throw std::invalid_argument("combine_sides: no side views given");
   SideSummary s;

@@ -85,6 +85,10 @@ struct SideMeasurement {
 SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale = {},
                              const SideSettings& settings = {}, const std::string& where = "image");
 
+/// Convenience for renders: a side view through a known camera (perspective corrected).
+SideMeasurement measure_side(const cv::Mat& image, const camera::Camera& cam,
+                             const SideSettings& settings = {}, const std::string& where = "image");
+
 /// A top view measured in metres.
 struct TopMeasurement {
   std::string source;
@@ -105,6 +109,10 @@ struct TopMeasurement {
 /// Measures a top view; scale as for measure_side (the marker is the checker card). When the
 /// camera is known and `settings.seed` is unset, the seed is the projected axis foot.
 TopMeasurement measure_top(const cv::Mat& image, const ScaleSpec& scale = {},
+                           const TopSettings& settings = {}, const std::string& where = "image");
+
+/// Convenience for renders: a top view through a known camera (perspective corrected).
+TopMeasurement measure_top(const cv::Mat& image, const camera::Camera& cam,
                            const TopSettings& settings = {}, const std::string& where = "image");
 
 /// Mean and spread of one quantity over several views.

@@ -231,14 +231,56 @@ std::optional<CheckerCard> find_checker_card(const cv::Mat& image, const MarkerS
     best_spacing = spacing;
   }
   if (best.empty()) return std::nullopt;
+  // Lattice fit: centre k = c0 + i_k a + j_k b with integer (i_k, j_k) found from the nearest
+  // diagonal neighbour of the first square, so the whole card's span sets the square size
+  // (single centroids of a render without anti-aliasing are quantised to half pixels).
   CheckerCard card;
-  const double sq = median(best_spacing);
-  double var = 0.0;
-  for (double x : best_spacing) var += (x - sq) * (x - sq);
+  const double sq0 = median(best_spacing);
+  const Blob& ref = best.front();
+  cv::Point2d diag(0, 0);
+  double nn = 1e300;
+  for (const Blob& b : best) {
+    const double d = cv::norm(b.centroid - ref.centroid);
+    if (&b != &ref && d < nn) {
+      nn = d;
+      diag = b.centroid - ref.centroid;
+    }
+  }
+  const cv::Point2d perp(-diag.y, diag.x);
+  const cv::Point2d a0 = 0.5 * (diag + perp), b0 = 0.5 * (diag - perp);
+  const double det = a0.x * b0.y - a0.y * b0.x;
+  double sq = sq0;
+  double sigma_rel = 0.0;
+  if (std::abs(det) > 1e-9 && best.size() >= 3) {
+    const int n = static_cast<int>(best.size());
+    cv::Mat design(n, 3, CV_64F), xs(n, 1, CV_64F), ys(n, 1, CV_64F);
+    for (int k = 0; k < n; ++k) {
+      const cv::Point2d d = best[k].centroid - ref.centroid;
+      design.at<double>(k, 0) = 1.0;
+      design.at<double>(k, 1) = std::round((d.x * b0.y - d.y * b0.x) / det);
+      design.at<double>(k, 2) = std::round((a0.x * d.y - a0.y * d.x) / det);
+      xs.at<double>(k) = best[k].centroid.x;
+      ys.at<double>(k) = best[k].centroid.y;
+    }
+    cv::Mat px, py;
+    if (cv::solve(design, xs, px, cv::DECOMP_SVD) && cv::solve(design, ys, py, cv::DECOMP_SVD)) {
+      const double la = std::hypot(px.at<double>(1), py.at<double>(1));
+      const double lb = std::hypot(px.at<double>(2), py.at<double>(2));
+      if (la > 0.5 * sq0 && la < 2.0 * sq0 && lb > 0.5 * sq0 && lb < 2.0 * sq0) {
+        sq = 0.5 * (la + lb);
+        cv::Mat rx = design * px - xs, ry = design * py - ys;
+        const double rms = std::sqrt((rx.dot(rx) + ry.dot(ry)) / (2.0 * n));
+        double sii = 0.0;
+        const double im = cv::mean(design.col(1))[0];
+        for (int k = 0; k < n; ++k) sii += std::pow(design.at<double>(k, 1) - im, 2);
+        sigma_rel = sii > 0.0 ? rms / std::sqrt(sii) / sq : 0.0;
+      }
+    }
+  }
   card.square_px = sq;
   card.square_mm = s.square_mm;
   card.mm_per_px = s.square_mm / sq;
-  card.sigma_rel = std::sqrt(var / best_spacing.size() / best_spacing.size()) / sq;
+  card.sigma_rel = sigma_rel;
   card.squares = static_cast<int>(best.size());
   cv::Rect box = best.front().box;
   for (const Blob& b : best) box |= b.box;
