@@ -262,6 +262,13 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
   } else {
     write_file_atomic((out / "scene.resolved.toml").string(), scene.resolved_toml);
     fill_container(world, scene, diameters, mat);
+    world.refresh_forces();
+    const sim::Diagnostics d0 = world.diagnose();
+    if (d0.max_overlap_ratio > settings.max_overlap_ratio) {
+      throw InputError(scene.file + ": the initial packing overlaps by " +
+                       std::to_string(d0.max_overlap_ratio) + " of a radius, above " +
+                       "numerics.max_overlap_ratio = " + std::to_string(settings.max_overlap_ratio));
+    }
     double m_mean = 0.0;
     for (double m : world.state().particles.mass) m_mean += m;
     m_mean /= std::max<std::size_t>(1, world.state().particles.size());
@@ -431,7 +438,7 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
     pile = pile_json(sim::measure_pile(st.particles.x, st.particles.radius, scene.pile));
   }
   write_vtp((out / "final.vtp").string(), st.particles);
-  if (scene.output.frame_interval > 0) write_frame();
+  write_frame();  // the series always ends with the final state
   save_checkpoint();
   const double wall_total = ctl.wall_seconds + wall_now();
   const double steps = static_cast<double>(st.step);

@@ -97,14 +97,22 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
     const bool has_file = t.has("psd_file"), has_inline = t.has("psd");
     if (has_file == has_inline)
       t.fail("psd_file", "or an inline [sample.psd] table is required (exactly one of them)");
-    if (has_file) {
-      const std::filesystem::path p = dir / t.string("psd_file");
-      if (!std::filesystem::exists(p))
-        t.fail("psd_file", "= \"" + p.string() + "\" does not exist");
-      s.psd = read_psd_file(p.string());
-    } else {
-      t.mark_used("psd");
-      s.psd = parse_psd_table(*doc["sample"]["psd"].as_table(), file, t.where("psd"));
+    try {
+      if (has_file) {
+        const std::filesystem::path p = dir / t.string("psd_file");
+        if (!std::filesystem::exists(p))
+          t.fail("psd_file", "= \"" + p.string() + "\" does not exist");
+        s.psd = read_psd_file(p.string());
+      } else {
+        t.mark_used("psd");
+        const toml::table* psd = doc["sample"]["psd"].as_table();
+        if (!psd) t.fail("psd", "must be a table");
+        s.psd = parse_psd_table(*psd, file, t.where("psd"));
+      }
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::invalid_argument& e) {  // the PSD reader names the file and key
+      throw InputError(e.what());
     }
     if (t.has("d_min_mm")) s.psd.spec.d_min = 1e-3 * t.number("d_min_mm");
     if (t.has("d_max_mm")) s.psd.spec.d_max = 1e-3 * t.number("d_max_mm");
@@ -237,6 +245,10 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
     t->finish();
   }
   root.finish();
+  {  // Validate the numerics now (time step against the stability limit, pair parameters).
+    const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
+    build_model(s, 0.5 * psd.d_min, 0.5 * psd.d_max);
+  }
   std::ostringstream os;
   os << doc;
   s.resolved_toml = os.str();
