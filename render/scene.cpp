@@ -69,7 +69,8 @@ void validate(const Scene& scene) {
   for (std::size_t i = 0; i < n; ++i) {
     if (!scene.positions[i].allFinite())
       fail("scene.positions[" + str(i) + "]", "must be finite, got " + str(scene.positions[i]));
-    require_positive(scene.radii[i], "scene.radii[" + str(i) + "]");
+    const double r = scene.radii[i];
+    if (!(r > 0.0) || !std::isfinite(r)) require_positive(r, "scene.radii[" + str(i) + "]");
   }
   for (std::size_t i = 0; i < scene.material_ids.size(); ++i) {
     if (scene.material_ids[i] < 0)
