@@ -372,15 +372,19 @@ CalibrationResult calibrate_batch(const SimulateBatchFn& simulate, const Target&
     const double span = pts[ib].fitted_deg - pts[ia].fitted_deg;
     const bool converged =
         span <= 2.0 * s.tolerance_deg && r.fitted_angle_halfwidth_deg <= s.tolerance_deg;
+    constexpr const char* kSequentialNote =
+        "; sequential design: on synthetic tests this 95% interval held the truth about 87% of "
+        "the time (a fixed sweep gives 95%)";
     if (converged) {
       r.status = CalibrationStatus::kCalibrated;
+      r.message += kSequentialNote;
       return r;
     }
     if (budget_left() < k) {
       r.status = CalibrationStatus::kBudgetSpent;
       r.message += "; budget of " + std::to_string(s.max_simulations) +
                    " simulations spent before the tolerance of " + num(s.tolerance_deg) +
-                   " deg was met";
+                   " deg was met" + kSequentialNote;
       return r;
     }
     // Splitting the bracket only helps while its expected angle span (wide-baseline slope of the
