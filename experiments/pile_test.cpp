@@ -335,6 +335,15 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
     }
     if ((st.step - step0) % check_every != 0) continue;
 
+    if (ctl.phase == Phase::kFill) {
+      // Filling is preparation, not the test: the sample is lowered gently, as a lab fills the
+      // funnel by hand, so soft particles do not hit the bottom at free-fall speed.
+      const double cap = scene.procedure.fill_max_speed;
+      for (sim::Vec3& v : world.state().particles.v) {
+        const double s = v.norm();
+        if (s > cap) v *= cap / s;
+      }
+    }
     const sim::Diagnostics d = world.diagnose();
     if (d.status != sim::Status::kOk) {
       ctl.stop_reason = std::string("physics: ") + sim::status_name(d.status);

@@ -195,6 +195,9 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
     p.max_time = t->number("max_time_s", p.max_time);
     p.clog_window = t->number("clog_window_s", p.clog_window);
     p.lattice_gap = t->number("lattice_gap", p.lattice_gap);
+    p.fill_max_speed = t->number("fill_max_speed_m_s", p.fill_max_speed);
+    if (!(p.fill_max_speed > 0))
+      t->fail("fill_max_speed_m_s", "= " + num(p.fill_max_speed) + " must be positive");
     if (!(p.lift_speed > 0)) t->fail("lift_speed_m_s", "= " + num(p.lift_speed) + " must be positive");
     if (!(p.settle_speed > 0))
       t->fail("settle_speed_m_s", "= " + num(p.settle_speed) + " must be positive");
