@@ -308,15 +308,15 @@ TopMeasurement measure_top(const cv::Mat& image, const ScaleSpec& scale,
   return m;
 }
 
-SideMeasurement measure_side(const cv::Mat& image, const camera::Camera& cam,
-                             const SideSettings& settings, const std::string& where) {
+SideMeasurement measure_side_camera(const cv::Mat& image, const camera::Camera& cam,
+                                    const SideSettings& settings, const std::string& where) {
   ScaleSpec spec;
   spec.camera = cam;
   return measure_side(image, spec, settings, where);
 }
 
-TopMeasurement measure_top(const cv::Mat& image, const camera::Camera& cam,
-                           const TopSettings& settings, const std::string& where) {
+TopMeasurement measure_top_camera(const cv::Mat& image, const camera::Camera& cam,
+                                  const TopSettings& settings, const std::string& where) {
   ScaleSpec spec;
   spec.camera = cam;
   return measure_top(image, spec, settings, where);

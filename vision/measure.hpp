@@ -86,8 +86,9 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale = {},
                              const SideSettings& settings = {}, const std::string& where = "image");
 
 /// Convenience for renders: a side view through a known camera (perspective corrected).
-SideMeasurement measure_side(const cv::Mat& image, const camera::Camera& cam,
-                             const SideSettings& settings = {}, const std::string& where = "image");
+SideMeasurement measure_side_camera(const cv::Mat& image, const camera::Camera& cam,
+                                    const SideSettings& settings = {},
+                                    const std::string& where = "image");
 
 /// A top view measured in metres.
 struct TopMeasurement {
@@ -112,8 +113,9 @@ TopMeasurement measure_top(const cv::Mat& image, const ScaleSpec& scale = {},
                            const TopSettings& settings = {}, const std::string& where = "image");
 
 /// Convenience for renders: a top view through a known camera (perspective corrected).
-TopMeasurement measure_top(const cv::Mat& image, const camera::Camera& cam,
-                           const TopSettings& settings = {}, const std::string& where = "image");
+TopMeasurement measure_top_camera(const cv::Mat& image, const camera::Camera& cam,
+                                  const TopSettings& settings = {},
+                                  const std::string& where = "image");
 
 /// Mean and spread of one quantity over several views.
 struct Spread {
