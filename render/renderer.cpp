@@ -470,7 +470,11 @@ struct Renderer::Impl {
   }
 
   ~Impl() {
-    context.make_current();
+    try {
+      context.make_current();
+    } catch (const std::exception&) {
+      return;  // the context is gone; its objects went with it
+    }
     glDeleteRenderbuffers(1, &color_rb);
     glDeleteRenderbuffers(1, &depth_rb);
     glDeleteFramebuffers(1, &fbo);

@@ -266,6 +266,58 @@ TEST_F(RendererTest, OcclusionCullingChangesNoPixel) {
   }
 }
 
+TEST_F(RendererTest, PhotoTintStaysWithinItsBand) {
+  // 7 x 5 separated spheres, unlit: each centre pixel is the rock grey times (1 + t),
+  // |t| <= tint_fraction, and the tints do differ.
+  Scene s;
+  s.plate.enabled = false;
+  s.scale_reference.enabled = false;
+  for (int i = 0; i < 7; ++i)
+    for (int j = 0; j < 5; ++j) {
+      s.positions.emplace_back(-0.15 + 0.05 * i, 0.0, -0.1 + 0.05 * j);
+      s.radii.push_back(0.015);
+    }
+  const Camera cam = small_camera(Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 0, 0));
+  RenderOptions o = flat();
+  o.tint_fraction = 0.08;
+  const cv::Mat img = renderer().render(s, cam, o);
+  double lo = 2.0, hi = 0.0;
+  for (const Eigen::Vector3d& p : s.positions) {
+    const Eigen::Vector2d uv = *camera::project(cam, p);
+    const cv::Vec3b px = img.at<cv::Vec3b>(std::lround(uv.y()), std::lround(uv.x()));
+    const double k = px[2] / 120.0;  // red channel of (120, 115, 108)
+    EXPECT_NEAR(px[0] / 108.0, k, 0.02);
+    lo = std::min(lo, k);
+    hi = std::max(hi, k);
+  }
+  EXPECT_GE(lo, 0.92 - 0.01);
+  EXPECT_LE(hi, 1.08 + 0.01);
+  EXPECT_GT(hi - lo, 0.05);
+}
+
+TEST_F(RendererTest, ColourBySizeRunsFromPurpleToYellow) {
+  Scene s;
+  s.plate.enabled = false;
+  s.scale_reference.enabled = false;
+  s.positions = {Eigen::Vector3d(-0.1, 0, 0), Eigen::Vector3d(0.1, 0, 0)};
+  s.radii = {0.01, 0.04};
+  const Camera cam = small_camera(Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 0, 0));
+  RenderOptions o = flat();
+  o.shading = Shading::kBySize;
+  const cv::Mat img = renderer().render(s, cam, o);
+  const Eigen::Vector2d small = *camera::project(cam, s.positions[0]);
+  const Eigen::Vector2d large = *camera::project(cam, s.positions[1]);
+  // Viridis: (68, 1, 84) at the low end, (253, 231, 37) at the high end (BGR below).
+  const cv::Vec3b ps = img.at<cv::Vec3b>(std::lround(small.y()), std::lround(small.x()));
+  const cv::Vec3b pl = img.at<cv::Vec3b>(std::lround(large.y()), std::lround(large.x()));
+  EXPECT_NEAR(ps[0], 84, 3);
+  EXPECT_NEAR(ps[1], 1, 3);
+  EXPECT_NEAR(ps[2], 68, 3);
+  EXPECT_NEAR(pl[0], 37, 3);
+  EXPECT_NEAR(pl[1], 231, 3);
+  EXPECT_NEAR(pl[2], 253, 3);
+}
+
 bool is_backdrop(const cv::Vec3b& p) { return p == cv::Vec3b(220, 225, 225); }
 
 TEST_F(RendererTest, PlateLineLevelCameraSitsWhereTheModelPutsIt) {
