@@ -134,10 +134,13 @@ void fill_container(sim::World& world, const SceneConfig& scene,
   for (double d : diameters) d_max = std::max(d_max, d);
   const double s = d_max * (1.0 + scene.procedure.lattice_gap);
   const ContainerConfig& c = scene.container;
+  // Clearance from a slanted wall, measured horizontally: (s/2) / cos(wall slant).
+  const double slope = 0.5 * (c.top_diameter - c.bottom_diameter) / c.height;
+  const double clearance = 0.5 * s * std::sqrt(1.0 + slope * slope);
   std::size_t next = 0;
   for (int level = 0; next < diameters.size(); ++level) {
     const double z_rel = 0.5 * s + level * s;
-    const double r_avail = container_radius(c, z_rel) - 0.5 * s;
+    const double r_avail = container_radius(c, z_rel) - clearance;
     if (level > 100000) throw std::logic_error("fill_container: runaway lattice");
     if (r_avail <= 0.0) continue;
     const int k = static_cast<int>(std::floor(r_avail / s));
