@@ -326,9 +326,18 @@ SideImage prepare_side(const cv::Mat& image, const SideSettings& s, const std::s
   }
   SideImage out;
   out.roi = roi;
-  out.flat = flat_field(gray_full(roi), backdrop, s.flat_field, where);
+  out.flat = flat_field(gray_full(roi), cv::Mat(), s.flat_field, where);
   if (s.smoothing_sigma_px > 0.0)
     cv::GaussianBlur(out.flat, out.flat, cv::Size(), s.smoothing_sigma_px, s.smoothing_sigma_px);
+  if (backdrop.empty()) {
+    out.segment = out.flat;
+  } else {
+    // Background difference: the empty scene cancels backdrop texture, plate and markers alike.
+    out.segment = flat_field(gray_full(roi), backdrop, s.flat_field, where);
+    if (s.smoothing_sigma_px > 0.0)
+      cv::GaussianBlur(out.segment, out.segment, cv::Size(), s.smoothing_sigma_px,
+                       s.smoothing_sigma_px);
+  }
   return out;
 }
 
@@ -340,10 +349,12 @@ SideProfile measure_side_pixels(const cv::Mat& image, const SideSettings& s,
 SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s,
                                 const std::string& where) {
   check_settings(s, where);
-  const cv::Mat& flat = prepared.flat;
+  const cv::Mat& flat = prepared.segment;
   const cv::Rect roi = prepared.roi;
+  if (flat.empty() || flat.size() != prepared.flat.size())
+    throw std::invalid_argument(where + ": prepared side image is incomplete");
   SideProfile out;
-  PlateLine plate = find_plate_line(flat, s, where);
+  PlateLine plate = find_plate_line(prepared.flat, s, where);
 
   // Region strictly above the plate line (whole pixels); segmentation works on those rows only.
   int rows_above = 0;

@@ -105,8 +105,10 @@ PlateLine find_plate_line(const cv::Mat& flat, const SideSettings& settings = {}
 
 /// A side view after the common first step: its region of interest, flat-fielded and smoothed.
 struct SideImage {
-  cv::Mat flat;  // CV_32F, backdrop about 1, size of the ROI
-  cv::Rect roi;  // where `flat` sits in the full image [px]
+  cv::Mat flat;     // CV_32F, divided by the fitted backdrop (about 1): plate line and markers
+  cv::Mat segment;  // CV_32F, divided by the empty-scene image if one was given, else `flat`:
+                    // pile segmentation and edges
+  cv::Rect roi;     // where both sit in the full image [px]
 };
 
 /// Validates the settings and the image and computes its SideImage. Throws as

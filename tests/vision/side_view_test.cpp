@@ -75,6 +75,28 @@ TEST(SideView, HardPhotoConditions) {
   EXPECT_GT(p.left.residual_px, 0.0);
 }
 
+TEST(SideView, BackgroundDifferenceWithAnEmptySceneImage) {
+  // A strongly textured, unevenly lit backdrop; the empty scene photographed the same way.
+  SideScene s;
+  s.height_mm = 62.0;
+  s.look.backdrop_texture = 30.0;
+  s.look.lighting_gradient = 0.3;
+  s.look.noise_sigma = 4.0;
+  SideScene empty = s;
+  empty.pile = false;
+  SideSettings set;
+  set.backdrop = synthetic::draw_side(empty);
+  const SideProfile p = measure_side_pixels(synthetic::draw_side(s), set);
+  const double theta = true_theta_deg(62.0, 200.0);
+  EXPECT_NEAR(p.theta_deg, theta, 0.3);
+  EXPECT_NEAR(p.left.angle_deg, theta, 0.5);
+  EXPECT_NEAR(p.right.angle_deg, theta, 0.5);
+  EXPECT_NEAR(p.plate.v_at(640.0), s.plate_v, 0.3);
+  // The backdrop must match the image.
+  set.backdrop = cv::Mat(100, 100, CV_8UC3, cv::Scalar::all(200));
+  EXPECT_THROW(measure_side_pixels(synthetic::draw_side(s), set), std::invalid_argument);
+}
+
 TEST(SideView, RegionOfInterestKeepsFullImageCoordinates) {
   SideScene s;
   SideSettings set;

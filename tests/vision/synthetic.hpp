@@ -43,6 +43,7 @@ struct SideScene {
   double plate_v = 520.0;                // row of the plate line [px]
   double plate_thickness_mm = 15.0;      // plate band thickness [mm]
   double tilt_deg = 0.0;                 // whole-scene rotation about (axis_u, plate_v) [deg]
+  bool pile = true;                      // draw the cone (false: the empty scene)
   bool scale_bar = true;                 // draw the band scale bar
   double bar_offset_mm = -140.0;         // lateral offset of the bar from the axis [mm]
   double band_mm = 10.0;                 // band height [mm]
@@ -249,7 +250,7 @@ inline cv::Mat draw_side(const SideScene& s) {
   paint(img, coverage(size, plate), kPlate);
   if (!black.empty()) paint(img, coverage(size, black), kBlack);
   if (!white.empty()) paint(img, coverage(size, white), kWhite);
-  paint(img, coverage(size, pile), kPile, speckle(size, s.look, rng));
+  if (s.pile) paint(img, coverage(size, pile), kPile, speckle(size, s.look, rng));
   return finish(img, s.look, rng);
 }
 
