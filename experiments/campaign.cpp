@@ -372,7 +372,7 @@ Campaign parse_campaign(std::string_view text, const std::string& path) {
     const std::string p = "calibration.";
     check_keys(*t,
                {"key", "target_deg", "target_sd_deg", "mu_r_range", "seeds_per_point", "first_seed",
-                "tolerance_deg", "max_simulations", "bootstrap_replicates"},
+                "tolerance_deg", "max_simulations", "bootstrap_replicates", "confirm"},
                file, p);
     CampaignCalibration cc;
     cc.key = get_string(*t, "key", file, p, false, cc.key);
@@ -413,11 +413,23 @@ Campaign parse_campaign(std::string_view text, const std::string& path) {
         throw bad(file, p + "tolerance_deg", value_text(*t->get("tolerance_deg")), "must be > 0");
       cc.settings.tolerance_deg = *v;
     }
+    if (const toml::node* v = t->get("confirm")) {
+      if (!v->is_boolean()) throw bad(file, p + "confirm", value_text(*v), "must be true or false");
+      cc.settings.confirm_bracket = v->as_boolean()->get();
+    }
+    const int min_sims = (cc.settings.confirm_bracket ? 4 : 2) * cc.settings.seeds_per_point;
     if (auto v = get_int(*t, "max_simulations", file, p)) {
-      if (*v < 2 * cc.settings.seeds_per_point || *v > 1000000)
-        throw bad(file, p + "max_simulations", std::to_string(*v),
-                  "must be at least 2 x seeds_per_point (both range ends)");
+      if (*v < min_sims || *v > 1000000)
+        throw bad(
+            file, p + "max_simulations", std::to_string(*v),
+            "must be at least " + std::to_string(min_sims) +
+                " (seeds_per_point at both range ends" +
+                (cc.settings.confirm_bracket ? " and at the two confirmed bracket points)" : ")"));
       cc.settings.max_simulations = static_cast<int>(*v);
+    } else if (cc.settings.max_simulations < min_sims) {
+      throw bad(file, p + "seeds_per_point", std::to_string(cc.settings.seeds_per_point),
+                "needs max_simulations >= " + std::to_string(min_sims) + " (default " +
+                    std::to_string(cc.settings.max_simulations) + ")");
     }
     if (auto v = get_int(*t, "bootstrap_replicates", file, p)) {
       if (*v < 100 || *v > 1000000)

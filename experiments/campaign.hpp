@@ -48,7 +48,7 @@
 //   mu_r_range = [0.02, 0.4]
 //   key = "contacts.rock-rock.rolling_friction"  # optional (this is the default)
 //   seeds_per_point = 3                       # optional, as are first_seed (1), tolerance_deg
-//   max_simulations = 40                      # (0.5), bootstrap_replicates (2000)
+//   max_simulations = 40                      # (0.5), bootstrap_replicates (2000), confirm
 #pragma once
 
 #include <toml++/toml.h>

@@ -105,7 +105,8 @@ TEST(Calibration, RecoversKnownMuRFromNoisyCurve) {
     EXPECT_TRUE(r.status == CalibrationStatus::kCalibrated ||
                 r.status == CalibrationStatus::kBudgetSpent);
     EXPECT_EQ(r.simulations, calls);
-    EXPECT_EQ(static_cast<int>(r.observations.size()), calls);
+    EXPECT_EQ(static_cast<int>(r.observations.size() + r.excluded.size()), calls);
+    EXPECT_GE(r.excluded.size(), 3u);  // the bracket's search runs were replaced
     EXPECT_LE(calls, s.max_simulations);
     // Close to the truth, and the interval is not absurdly wide: the local slope is about
     // 60 deg per unit mu_r, so 0.4 deg of noise is about 0.007 in mu_r per run.
@@ -117,6 +118,42 @@ TEST(Calibration, RecoversKnownMuRFromNoisyCurve) {
   }
   // A 95% interval covers the truth in most trials (binomial: P(<= 15 of 20) < 0.3% at 95%).
   EXPECT_GE(covered, 16) << covered << " of " << trials;
+}
+
+TEST(Calibration, ConfirmationReplacesTheBracketsSearchRuns) {
+  int calls = 0;
+  auto sim = [&](double mu, std::uint64_t seed) {
+    ++calls;
+    return true_angle(mu) + noise(5, mu, seed, 0.4);
+  };
+  CalibrationSettings s;
+  s.mu_r_lo = 0.0;
+  s.mu_r_hi = 0.5;
+  const auto r = calibrate(sim, {true_angle(0.15), 0.0}, s);
+  ASSERT_TRUE(r.mu_r.has_value());
+  ASSERT_FALSE(r.excluded.empty());
+  std::set<double> bracket;
+  for (const auto& o : r.excluded) bracket.insert(o.mu_r);
+  EXPECT_LE(bracket.size(), 2u);
+  EXPECT_LE(*bracket.begin(), *r.mu_r);  // the excluded points bracket the answer
+  EXPECT_GE(*bracket.rbegin(), *r.mu_r);
+  for (double mu : bracket) {
+    std::uint64_t max_excluded = 0;
+    for (const auto& o : r.excluded)
+      if (o.mu_r == mu) max_excluded = std::max(max_excluded, o.seed);
+    int fresh = 0;
+    for (const auto& o : r.observations) {
+      if (o.mu_r != mu) continue;
+      EXPECT_GT(o.seed, max_excluded);  // only fresh seeds remain at a bracket point
+      ++fresh;
+    }
+    EXPECT_GE(fresh, s.seeds_per_point);
+  }
+  EXPECT_EQ(static_cast<int>(r.observations.size() + r.excluded.size()), calls);
+  // Without the confirmation nothing is excluded.
+  s.confirm_bracket = false;
+  const auto u = calibrate(sim, {true_angle(0.15), 0.0}, s);
+  EXPECT_TRUE(u.excluded.empty());
 }
 
 TEST(Calibration, TargetUncertaintyWidensTheInterval) {
@@ -186,12 +223,12 @@ TEST(Calibration, BudgetIsRespected) {
   s.mu_r_lo = 0.0;
   s.mu_r_hi = 0.5;
   s.seeds_per_point = 3;
-  s.tolerance_deg = 0.05;  // unreachable with 1 deg noise in 9 runs
-  s.max_simulations = 10;
+  s.tolerance_deg = 0.05;  // unreachable with 1 deg noise in 13 runs
+  s.max_simulations = 16;  // 6 reserved for the confirmation: ends (6) + one point (3) fit in 10
   const auto r = calibrate(sim, {35.0, 0.0}, s);
   EXPECT_EQ(r.status, CalibrationStatus::kBudgetSpent);
-  EXPECT_EQ(calls, 9);
-  EXPECT_EQ(r.simulations, 9);
+  EXPECT_EQ(calls, 15);
+  EXPECT_EQ(r.simulations, 15);
   EXPECT_TRUE(r.mu_r.has_value());
 }
 
@@ -213,7 +250,7 @@ TEST(Calibration, BadInputIsRejected) {
   bad.mu_r_lo = -0.1;
   EXPECT_THROW(calibrate(sim, {30.0, 0.0}, bad), std::invalid_argument);
   bad = s;
-  bad.max_simulations = 5;  // below 2 x 3 seeds
+  bad.max_simulations = 11;  // below 2 x 3 seeds for the ends + 2 x 3 for the confirmation
   EXPECT_THROW(calibrate(sim, {30.0, 0.0}, bad), std::invalid_argument);
   try {
     calibrate(sim, {95.0, 0.0}, s);
