@@ -362,6 +362,30 @@ TEST_F(RendererTest, PlateBackEdgeRaisedCameraSitsWhereTheModelPutsIt) {
   }
 }
 
+TEST_F(RendererTest, PlateHidesTheSunkenHalfOfASphere) {
+  // A sphere centred on the plate's top face, seen from above the plate: its image must end
+  // where the plate plane cuts it, at the circle's nearest point (mesh and impostor depths agree).
+  const Eigen::Vector3d c(0.05, 0.0, 0.0);
+  const double r = 0.04;
+  Scene s = one_sphere(c, r);
+  s.plate.enabled = true;
+  const Camera cam = small_camera(Eigen::Vector3d(0, -1, 0.3), Eigen::Vector3d(0, 0, 0), 50.0);
+  const RenderOptions o = flat();  // unlit: sphere (120, 115, 108), plate (70, 80, 95)
+  const cv::Mat img = renderer().render(s, cam, o);
+  const Eigen::Vector2d pc = *camera::project(cam, c);
+  const int u = static_cast<int>(std::lround(pc.x()));
+  int first_plate = -1;
+  for (int v = static_cast<int>(std::lround(pc.y())); v < img.rows && first_plate < 0; ++v) {
+    if (img.at<cv::Vec3b>(v, u) == cv::Vec3b(95, 80, 70)) first_plate = v;
+  }
+  ASSERT_GT(first_plate, 0);
+  EXPECT_EQ(img.at<cv::Vec3b>(first_plate - 1, u), cv::Vec3b(108, 115, 120));
+  const double cut = camera::project(cam, Eigen::Vector3d(c.x(), c.y() - r, 0.0))->y();
+  EXPECT_NEAR(first_plate - 0.5, cut, 0.5);
+  // Unhidden, the outline would reach much lower.
+  EXPECT_GT(exact_ellipse(cam, c, r).first.y() + exact_ellipse(cam, c, r).second, cut + 5.0);
+}
+
 TEST_F(RendererTest, DistortionMovesAPointWhereProjectSays) {
   const Eigen::Vector3d c(0.42, 0.0, -0.28);
   const double r = 0.012;
