@@ -677,7 +677,23 @@ Renderer::~Renderer() = default;
 
 cv::Mat Renderer::render(const Scene& scene, const camera::Camera& cam,
                          const RenderOptions& options) {
-  return impl_->render(scene, cam, options);
+  if (options.supersample == 1) return impl_->render(scene, cam, options);
+  validate(scene, cam, options);
+  // The same camera at s times the resolution: pixel centre u maps to s (u + 0.5) - 0.5, so the
+  // s x s block averaged into output pixel u is centred on it and centroids stay put.
+  const int s = options.supersample;
+  camera::Camera fine = cam;
+  fine.intrinsics.width_px = s * cam.intrinsics.width_px;
+  fine.intrinsics.height_px = s * cam.intrinsics.height_px;
+  fine.intrinsics.cx_px = s * (camera::principal_u(cam) + 0.5) - 0.5;
+  fine.intrinsics.cy_px = s * (camera::principal_v(cam) + 0.5) - 0.5;
+  RenderOptions o = options;
+  o.supersample = 1;
+  const cv::Mat big = impl_->render(scene, fine, o);
+  cv::Mat out;
+  cv::resize(big, out, cv::Size(cam.intrinsics.width_px, cam.intrinsics.height_px), 0.0, 0.0,
+             cv::INTER_AREA);
+  return out;
 }
 
 const RenderProfile& Renderer::last_profile() const { return impl_->profile; }

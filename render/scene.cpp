@@ -115,6 +115,8 @@ void validate(const Scene& scene, const camera::Camera& cam, const RenderOptions
   validate(scene);
   camera::validate(cam, "render: camera");
   validate_color_fraction(options.tint_fraction, "options.tint_fraction");
+  if (options.supersample < 1 || options.supersample > 8)
+    fail("options.supersample", "must be in [1, 8], got " + str(options.supersample));
   validate_color_fraction(options.ambient, "options.ambient");
   validate_color_fraction(options.diffuse, "options.diffuse");
   if (!options.light_direction_camera.allFinite() || options.light_direction_camera.norm() < 1e-12)

@@ -101,6 +101,8 @@ struct RenderOptions {
   Eigen::Vector3d light_direction_camera{-0.35, -0.6, -1.0};  // towards the light, camera frame
                                                               // (x right, y down, z forward)
   bool occlusion_culling = true;  // skip spheres provably hidden by others: same bytes, faster
+  int supersample = 1;  // render at this many times the resolution, then average s x s blocks:
+                        // anti-aliased edges like a photograph's; 1 = exact binary coverage [-]
 };
 
 /// The extent of the pile of spheres (bounding cylinder about the z axis).

@@ -169,6 +169,30 @@ TEST_F(RendererTest, SphereMatchesProjectionOrthographic) {
   EXPECT_NEAR(std::sqrt(blob.area / M_PI), camera::focal_px(cam) * r, 0.5);
 }
 
+TEST_F(RendererTest, SupersampledSphereKeepsCentroidAndArea) {
+  // Anti-aliased by 3 x 3 supersampling: same centroid and area, and partial edge pixels.
+  const Eigen::Vector3d c(0.021, 0.0, -0.013);
+  const double r = 0.03;
+  const Scene s = one_sphere(c, r);
+  const Camera cam = small_camera(Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 0, 0), 50.0);
+  RenderOptions o = flat();
+  o.supersample = 3;
+  const cv::Mat img = renderer().render(s, cam, o);
+  ASSERT_EQ(img.cols, 320);
+  const Blob blob = measure(img, s, o);
+  const auto [centre, radius] = exact_ellipse(cam, c, r);
+  EXPECT_NEAR(blob.centroid.x(), centre.x(), 0.2);
+  EXPECT_NEAR(blob.centroid.y(), centre.y(), 0.2);
+  EXPECT_NEAR(std::sqrt(blob.area / M_PI), radius, 0.2);
+  int partial = 0;
+  for (int v = 0; v < img.rows; ++v)
+    for (int u = 0; u < img.cols; ++u) {
+      const int b = img.at<cv::Vec3b>(v, u)[0];
+      if (b > 110 && b < 218) ++partial;
+    }
+  EXPECT_GT(partial, 20);
+}
+
 TEST_F(RendererTest, PrincipalPointShiftsTheImage) {
   const Eigen::Vector3d c(0.0, 0.0, 0.0);
   const Scene s = one_sphere(c, 0.03);

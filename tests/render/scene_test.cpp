@@ -70,6 +70,11 @@ TEST(Validate, OptionsAreChecked) {
   o.ambient = 1.5;
   EXPECT_NE(message_of([&] { validate(s, cam, o); }).find("options.ambient"), std::string::npos);
   o = RenderOptions{};
+  o.supersample = 0;
+  EXPECT_NE(
+      message_of([&] { validate(s, cam, o); }).find("options.supersample must be in [1, 8], got 0"),
+      std::string::npos);
+  o = RenderOptions{};
   o.light_direction_camera.setZero();
   EXPECT_NE(message_of([&] { validate(s, cam, o); }).find("options.light_direction_camera"),
             std::string::npos);
