@@ -24,6 +24,7 @@
 // Usage: bench_sim [--quick] [--particles N] [--settle N] [--steps N] [--threads 1,2]
 //                  [--rolling epsd|cdt] [--rolling-damping ETA] [--write-liggghts DIR]
 #include <omp.h>
+#include <time.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -74,9 +75,10 @@ constexpr double kHeapAngleDeg = 30.0;       // slope of the constructed cone [d
 
 struct Options {
   int particles = 50000;
-  int settle = 3000;         // steps under settle_gravity g
-  int relax = 2000;          // then steps under 1 g before timing
+  int settle = 4000;         // steps under settle_gravity g
+  int relax = 3000;          // then steps under 1 g before timing
   double settle_gravity = 10.0;  // gravity factor of the settle (collapses the lattice faster)
+  int settle_threads = 1;        // threads of the (untimed) settle; 1 suits a shared machine
   int steps = 2000;
   std::vector<int> threads{1, 2};
   std::string rolling = "epsd";
@@ -318,9 +320,18 @@ void print_profile(const Profile& pr, double particle_steps) {
   std::cout << std::defaultfloat;
 }
 
+/// CPU seconds used by the whole process so far (all threads). On a shared machine the CPU time
+/// of a one-thread run measures the work without the time spent waiting for a core.
+double process_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
 struct RunResult {
   int threads = 0;
-  double seconds = 0.0;
+  double seconds = 0.0;      // wall clock [s]
+  double cpu_seconds = 0.0;  // process CPU time, all threads [s]
   double particle_steps_per_s = 0.0;
   double contacts_per_s = 0.0;
   std::uint64_t hash = 0;
@@ -335,12 +346,14 @@ RunResult timed_run(const World& settled, int steps, int threads) {
   const std::size_t n = w.state().particles.size();
   // Contacts are counted every `every` steps, outside the timed region.
   const int every = std::max(1, steps / 20);
-  double seconds = 0.0, contact_sum = 0.0, pair_sum = 0.0, wall_sum = 0.0;
+  double seconds = 0.0, cpu = 0.0, contact_sum = 0.0, pair_sum = 0.0, wall_sum = 0.0;
   int samples = 0;
   for (int done = 0; done < steps;) {
     const int chunk = std::min(every, steps - done);
     const auto t0 = std::chrono::steady_clock::now();
+    const double c0 = process_cpu_seconds();
     for (int s = 0; s < chunk; ++s) w.step();
+    cpu += process_cpu_seconds() - c0;
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     done += chunk;
     const ContactCount c = count_contacts(w);
@@ -352,12 +365,13 @@ RunResult timed_run(const World& settled, int steps, int threads) {
   RunResult r;
   r.threads = threads;
   r.seconds = seconds;
+  r.cpu_seconds = cpu;
   r.particle_steps_per_s = static_cast<double>(n) * steps / seconds;
   r.contacts_per_s = contact_sum / samples * steps / seconds;
   r.hash = reposetwin::sim::state_hash(w.state());
   const auto diag = w.diagnose();
   std::cout << "  threads " << threads << ": " << steps << " steps in " << std::setprecision(4)
-            << seconds << " s; " << std::setprecision(4) << r.particle_steps_per_s
+            << seconds << " s wall, " << cpu << " s CPU; " << std::setprecision(4) << r.particle_steps_per_s
             << " particle-steps/s (" << r.particle_steps_per_s / threads << " per core); "
             << r.contacts_per_s << " contacts/s; contacts per step " << std::setprecision(6)
             << pair_sum / samples << " pairs + " << wall_sum / samples << " plate; "
@@ -388,6 +402,8 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--relax", o.relax, "then steps under 1 g before timing")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--settle-threads", o.settle_threads, "threads of the untimed settle")
+      ->check(CLI::PositiveNumber);
   app.add_option("--settle-gravity", o.settle_gravity, "gravity factor of the settle [-]")
       ->check(CLI::PositiveNumber);
   app.add_option("--steps", o.steps, "timed steps")->check(CLI::PositiveNumber);
@@ -421,11 +437,10 @@ int main(int argc, char** argv) {
               << " T_R), skin " << world.state().neighbors.skin << " m\n";
     std::cout << "load average before: " << load_average() << "\n";
 
-    // Settle (not timed) on the largest thread count asked for: first under settle_gravity g,
+    // Settle (not timed) on settle_threads threads: first under settle_gravity g,
     // which collapses the loose lattice sqrt(settle_gravity) times faster, then under 1 g in a
     // world with the true model, to which the whole state (contact springs included) moves.
-    const int settle_threads = *std::max_element(o.threads.begin(), o.threads.end());
-    omp_set_num_threads(settle_threads);
+    omp_set_num_threads(o.settle_threads);
     const auto t0 = std::chrono::steady_clock::now();
     auto report = [&](const World& w, const char* phase) {
       const auto d = w.diagnose();
@@ -488,7 +503,8 @@ int main(int argc, char** argv) {
       std::cout << " particle_steps_per_s_" << r.threads << "t=" << r.particle_steps_per_s
                 << " per_core_" << r.threads << "t=" << r.particle_steps_per_s / r.threads
                 << " contacts_per_s_" << r.threads << "t=" << r.contacts_per_s << " seconds_"
-                << r.threads << "t=" << r.seconds;
+                << r.threads << "t=" << r.seconds << " cpu_seconds_" << r.threads
+                << "t=" << r.cpu_seconds;
     }
     std::cout << "\n";
     return same ? 0 : 1;
