@@ -56,6 +56,16 @@ std::string load_error(const fs::path& file) {
   return "";
 }
 
+// A fresh folder removed at the end of the test (forked children _exit and leave it alone).
+struct ScratchDir {
+  explicit ScratchDir(const std::string& name) : path(fresh_dir(name)) {}
+  ~ScratchDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  fs::path path;
+};
+
 // Counts starts of each run in a log file (one line per start; O_APPEND keeps lines whole across
 // processes).
 void log_start(const fs::path& log, const CaseSpec& s) {
@@ -128,7 +138,8 @@ overrides = { rolling.mu_r = 0.2, "sample.mass" = 1 }
 )";
 
 TEST(Campaign, ParsesCasesCrossedWithSeeds) {
-  const auto dir = fresh_dir("parse_cases");
+  const ScratchDir scratch("parse_cases");
+  const fs::path& dir = scratch.path;
   const auto c = load_campaign(write_campaign(dir, kCasesCampaign).string());
   EXPECT_EQ(c.name, "cases_demo");
   EXPECT_EQ(c.paper, "Fig. 8");
@@ -148,7 +159,8 @@ TEST(Campaign, ParsesCasesCrossedWithSeeds) {
 }
 
 TEST(Campaign, ParsesSweepAndCalibration) {
-  const auto dir = fresh_dir("parse_sweep");
+  const ScratchDir scratch("parse_sweep");
+  const fs::path& dir = scratch.path;
   fs::create_directories(dir / "campaigns");
   const auto file = write_campaign(dir / "campaigns", R"(
 name = "mu_sweep"
@@ -180,7 +192,8 @@ max_simulations = 20
 }
 
 TEST(Campaign, MissingSceneIsAClearError) {
-  const auto dir = fresh_dir("missing_scene");
+  const ScratchDir scratch("missing_scene");
+  const fs::path& dir = scratch.path;
   const auto e = load_error(write_campaign(dir, R"(
 name = "x"
 scene = "no_such_scene.toml"
@@ -205,7 +218,8 @@ scene = "other.toml"
 }
 
 TEST(Campaign, BadKeysAndValuesAreRejected) {
-  const auto dir = fresh_dir("bad_keys");
+  const ScratchDir scratch("bad_keys");
+  const fs::path& dir = scratch.path;
   const std::string head = "name = \"x\"\nscene = \"scene.toml\"\nseeds = [1, 2]\n";
   struct Bad {
     std::string text, must_contain;
@@ -263,7 +277,8 @@ values = [0.05, 0.1, 0.15, 0.2]
 )";
 
 TEST(Campaign, KilledCampaignResumesToTheSameResults) {
-  const auto dir = fresh_dir("resume");
+  const ScratchDir scratch("resume");
+  const fs::path& dir = scratch.path;
   const auto c = load_campaign(write_campaign(dir, kRunCampaign).string());
   ASSERT_EQ(c.runs.size(), 12u);
 
@@ -358,7 +373,8 @@ TEST(Campaign, KilledCampaignResumesToTheSameResults) {
 }
 
 TEST(Campaign, FailingAndCrashingCasesAreRecordedAndOthersFinish) {
-  const auto dir = fresh_dir("failing");
+  const ScratchDir scratch("failing");
+  const fs::path& dir = scratch.path;
   const auto c = load_campaign(write_campaign(dir, R"(
 name = "failing"
 scene = "scene.toml"
@@ -408,7 +424,8 @@ overrides = { "rolling.mu_r" = 0.3 }
 }
 
 TEST(Campaign, ResumeRefusesChangedInputsAndAnotherCampaign) {
-  const auto dir = fresh_dir("changed");
+  const ScratchDir scratch("changed");
+  const fs::path& dir = scratch.path;
   auto c = load_campaign(write_campaign(dir, kCasesCampaign).string());
   const fs::path out = dir / "out";
   run_campaign(c, out.string(), fake_case(dir / "log", 1), quiet(WorkerMode::kThreads));
@@ -427,7 +444,8 @@ TEST(Campaign, ResumeRefusesChangedInputsAndAnotherCampaign) {
 }
 
 TEST(Campaign, MpiRanksSplitTheRunsAndRankZeroWritesTheManifest) {
-  const auto dir = fresh_dir("mpi");
+  const ScratchDir scratch("mpi");
+  const fs::path& dir = scratch.path;
   const auto c = load_campaign(write_campaign(dir, kRunCampaign).string());
   const fs::path out = dir / "out";
   const fs::path log = dir / "log";
@@ -480,7 +498,8 @@ TEST(Campaign, DetectsOpenMpiEnvironment) {
 }
 
 TEST(Campaign, CalibrationRunsThroughBatchesAndResumesWithoutRedoing) {
-  const auto dir = fresh_dir("calib");
+  const ScratchDir scratch("calib");
+  const fs::path& dir = scratch.path;
   const auto c = load_campaign(write_campaign(dir, R"(
 name = "calib_demo"
 scene = "scene.toml"
