@@ -10,6 +10,7 @@ int exit_code();
 void set_exit_code(int code);
 
 void add_run_command(CLI::App& app);
+void add_render_command(CLI::App& app);
 void add_measure_command(CLI::App& app);
 
 }  // namespace reposetwin::cli

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   // Subcommand registry: one line per command.
   reposetwin::cli::add_run_command(app);
+  reposetwin::cli::add_render_command(app);
   reposetwin::cli::add_measure_command(app);
   try {
     app.parse(argc, argv);

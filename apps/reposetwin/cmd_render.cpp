@@ -1,0 +1,37 @@
+#include <iostream>
+#include <memory>
+
+#include "apps/reposetwin/commands.hpp"
+#include "experiments/pile_images.hpp"
+
+namespace reposetwin::cli {
+
+void add_render_command(CLI::App& app) {
+  struct Args {
+    std::string run_dir;
+    experiments::ImageSettings images;
+  };
+  auto args = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "render", "Photograph a finished run's pile (side views and top view) and measure the images");
+  cmd->add_option("run_dir", args->run_dir, "Run folder written by `reposetwin run`")->required();
+  cmd->add_option("--views", args->images.side_views, "Side views over 180 degrees")
+      ->capture_default_str();
+  cmd->add_option("--width", args->images.width_px, "Image width [px]")->capture_default_str();
+  cmd->add_option("--height", args->images.height_px, "Image height [px]")->capture_default_str();
+  cmd->add_option("--camera-height", args->images.camera_height_m,
+                  "Side camera height above the plate [m]")->capture_default_str();
+  cmd->add_flag("!--no-top", args->images.top_view, "Skip the top view");
+  cmd->callback([args]() {
+    const nlohmann::json m = experiments::render_and_measure_run(args->run_dir, args->images);
+    std::cout << nlohmann::json{{"theta_deg", m["theta_deg"]},
+                                {"theta_sd_deg", m["theta_sd_deg"]},
+                                {"height_m", m["height_m"]},
+                                {"diameter_m", m["diameter_m"]},
+                                {"images", args->run_dir + "/images"}}
+                     .dump(2)
+              << "\n";
+  });
+}
+
+}  // namespace reposetwin::cli

@@ -1,0 +1,46 @@
+// Renders of a pile measured by vision agree with the particle-position measurement of the
+// same pile (within 1 degree), and the image angle follows the pile's true angle.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "../support/cone_pile.hpp"
+#include "experiments/pile_images.hpp"
+#include "sim/pile_geometry.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+namespace fs = std::filesystem;
+
+class RenderedCone : public ::testing::TestWithParam<double> {};
+
+TEST_P(RenderedCone, ImageAngleAgreesWithParticleMeasurement) {
+  const double angle_deg = GetParam();
+  const double big_r = 0.04;  // base radius [m]
+  const double h = big_r * std::tan(angle_deg * 3.14159265358979 / 180.0);
+  const test_support::Spheres s = test_support::make_cone(h, big_r, 0.002, -0.001, 1e-3, 5, 0.3);
+  const sim::PileGeometry g = sim::measure_pile(s.x, s.r);
+  ASSERT_EQ(g.status, sim::PileStatus::kOk);
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_rendered_cone";
+  fs::remove_all(dir);
+  ImageSettings settings;
+  settings.width_px = 960;
+  settings.height_px = 540;
+  settings.side_views = 2;
+  const nlohmann::json m =
+      render_and_measure(s.x, s.r, std::vector<int>(s.r.size(), 0), dir.string(), settings);
+  const double image_theta = m["theta_deg"];
+  EXPECT_NEAR(image_theta, g.theta_hd * 180.0 / 3.14159265358979, 1.0);
+  EXPECT_NEAR(image_theta, angle_deg, 1.0);
+  EXPECT_NEAR(m["height_m"].get<double>(), h, 0.02 * h);
+  EXPECT_NEAR(m["top"]["diameter_circle_m"].get<double>(), 2 * big_r, 0.03 * 2 * big_r);
+  EXPECT_TRUE(fs::exists(dir / "side_az000.png"));
+  EXPECT_TRUE(fs::exists(dir / "side_az000.json"));
+  EXPECT_TRUE(fs::exists(dir / "side_az000.measured.png"));
+  EXPECT_TRUE(fs::exists(dir / "measurement.json"));
+}
+
+INSTANTIATE_TEST_SUITE_P(Angles, RenderedCone, ::testing::Values(25.0, 35.0));
+
+}  // namespace
+}  // namespace reposetwin::experiments
