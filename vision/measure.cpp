@@ -144,6 +144,21 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
   }
   m.pixels = measure_side_pixels(prepared, set, where);
   const SideProfile& p = m.pixels;
+  if (std::abs(p.plate.tilt_deg()) > 1.0)
+    m.warnings.push_back("plate line tilted by " + fixed(p.plate.tilt_deg(), 2) +
+                         " deg: level the camera");
+  if (std::abs(p.left.angle_deg - p.right.angle_deg) > 3.0)
+    m.warnings.push_back("flank angles differ by " +
+                         fixed(std::abs(p.left.angle_deg - p.right.angle_deg), 1) +
+                         " deg: asymmetric pile or camera off the pile axis");
+  if (scale.camera) {
+    const auto foot = camera::project(*scale.camera, scale.axis_foot);
+    if (foot && std::abs(foot->y() - p.plate.v_at(foot->x())) > 2.0)
+      m.warnings.push_back(
+          "the camera puts the axis foot " + fixed(p.plate.v_at(foot->x()) - foot->y(), 1) +
+          " px from the detected plate line (camera above the plate, or the camera does not "
+          "match the image): H and D are biased");
+  }
 
   if (!scale.camera) {
     double k;  // [m/px]
@@ -431,6 +446,7 @@ nlohmann::json to_json(const SideMeasurement& m) {
         {"flank_right", flank_json(p.right)},
         {"pile_level", p.pile_level},
         {"threshold", p.threshold}}}};
+  j["warnings"] = m.warnings;
   if (m.perspective_corrected) {
     j["camera_correction"] = {
         {"base_center_m", {m.base_center_m.x(), m.base_center_m.y(), m.base_center_m.z()}},

@@ -75,8 +75,9 @@ struct SideMeasurement {
   bool perspective_corrected = false;            // false: an orthographic view was assumed
   std::optional<ScaleBar> scale_bar;             // the marker, when it gave the scale
   Eigen::Vector3d base_center_m{0.0, 0.0, 0.0};  // base circle centre (camera case) [m]
-  double plate_line_z_m = 0.0;  // the detected plate line at the axis (camera case) [m]
-  std::string note;             // ScaleSpec::note
+  double plate_line_z_m = 0.0;        // the detected plate line at the axis (camera case) [m]
+  std::string note;                   // ScaleSpec::note
+  std::vector<std::string> warnings;  // conditions that may bias the result, in words
 };
 
 /// Measures a side view (`image`: any image vision::gray_levels accepts). `where` names the

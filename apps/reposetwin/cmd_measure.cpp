@@ -154,6 +154,10 @@ void run_measure(const MeasureOptions& o) {
                     : any_corrected ? "mixed (see side)"
                                     : "assumed orthographic";
   j["scale_sources"] = sources;
+  std::vector<std::string> warnings;
+  for (const auto& v : views)
+    for (const auto& w : v.warnings) warnings.push_back(v.source + ": " + w);
+  j["warnings"] = warnings;
   j["summary"] = vision::to_json(summary);
   j["side"] = nlohmann::json::array();
   for (const auto& v : views) j["side"].push_back(vision::to_json(v));

@@ -69,8 +69,14 @@ TEST(MeasureSide, PerspectiveCorrectionRecoversHandD) {
   EXPECT_NEAR(m.flank_left_deg, theta_of(60.0, 200.0), 0.3);
   EXPECT_NEAR(m.flank_right_deg, theta_of(60.0, 200.0), 0.3);
   EXPECT_NEAR(m.base_center_m.norm(), 0.0, 0.001);
-  EXPECT_DOUBLE_EQ(measure_side_camera(img, cam).theta_deg,
-                   m.theta_deg);  // the convenience overload
+  // The convenience overload gives the same.
+  EXPECT_DOUBLE_EQ(measure_side_camera(img, cam).theta_deg, m.theta_deg);
+  EXPECT_TRUE(m.warnings.empty());
+  // A camera description that does not match the picture (here: 5 cm higher) is flagged.
+  ScaleSpec raised = spec;
+  raised.camera->extrinsics.position.z() += 0.05;
+  raised.camera->extrinsics.look_at.z() += 0.05;
+  EXPECT_FALSE(measure_side(img, raised).warnings.empty());
   // The same image read orthographically at the axis scale is visibly off: the correction matters.
   ScaleSpec ortho;
   ortho.mm_per_px = camera::mm_per_px_at(cam, Eigen::Vector3d::Zero());
