@@ -59,6 +59,7 @@ struct Controller {
   double ke_threshold = 0.0;       // KE per particle below which the pile is settled [J]
   double r_min = 0.0, r_max = 0.0; // particle radii the model was built for [m]
   double wall_seconds = 0.0;       // wall time of earlier sessions of this run [s]
+  double max_overlap_seen = 0.0;   // largest overlap / smaller radius at any check [-]
   std::string stop_reason;         // set when done
   std::string stop_detail;
   json psd = json::object();       // PSD sampling summary
@@ -70,7 +71,7 @@ struct Controller {
             {"inside_last", inside_last}, {"inside_changed", inside_changed},
             {"next_frame", next_frame},   {"frames", frames},
             {"ke_threshold", ke_threshold}, {"r_min", r_min},
-            {"r_max", r_max},             {"wall_seconds", wall_seconds},
+            {"r_max", r_max},             {"wall_seconds", wall_seconds}, {"max_overlap_seen", max_overlap_seen},
             {"stop_reason", stop_reason}, {"stop_detail", stop_detail},
             {"psd", psd},                 {"events", events}};
   }
@@ -88,6 +89,7 @@ struct Controller {
     c.r_min = j.at("r_min");
     c.r_max = j.at("r_max");
     c.wall_seconds = j.at("wall_seconds");
+    c.max_overlap_seen = j.at("max_overlap_seen");
     c.stop_reason = j.at("stop_reason");
     c.stop_detail = j.at("stop_detail");
     c.psd = j.at("psd");
@@ -267,10 +269,11 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
     fill_container(world, scene, diameters, mat);
     world.refresh_forces();
     const sim::Diagnostics d0 = world.diagnose();
-    if (d0.max_overlap_ratio > settings.max_overlap_ratio) {
+    if (d0.max_overlap_ratio > settings.initial_overlap_tolerance) {
       throw InputError(scene.file + ": the initial packing overlaps by " +
                        std::to_string(d0.max_overlap_ratio) + " of a radius, above " +
-                       "numerics.max_overlap_ratio = " + std::to_string(settings.max_overlap_ratio));
+                       "numerics.initial_overlap_tolerance = " +
+                       std::to_string(settings.initial_overlap_tolerance));
     }
     double m_mean = 0.0;
     for (double m : world.state().particles.mass) m_mean += m;
@@ -348,6 +351,7 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
       }
     }
     const sim::Diagnostics d = world.diagnose();
+    ctl.max_overlap_seen = std::max(ctl.max_overlap_seen, d.max_overlap_ratio);
     if (d.status != sim::Status::kOk) {
       ctl.stop_reason = std::string("physics: ") + sim::status_name(d.status);
       ctl.stop_detail = d.detail;
@@ -475,7 +479,8 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
        {{"steps", st.step},
         {"wall_s", wall_total},
         {"particle_steps_per_s", steps * static_cast<double>(n0) / std::max(wall_total, 1e-9)},
-        {"neighbor_builds", st.neighbors.builds}}},
+        {"neighbor_builds", st.neighbors.builds},
+        {"max_overlap_ratio_seen", ctl.max_overlap_seen}}},
       {"files", {{"final_snapshot", "final.vtp"}, {"series", "series.pvd"},
                  {"checkpoint", "checkpoint.bin"}, {"scene", "scene.resolved.toml"}}}};
   write_json_atomic(result_path.string(), result);

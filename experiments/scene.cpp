@@ -216,6 +216,8 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
     n.threads = static_cast<int>(t->integer("threads", n.threads));
     n.gravity.z() = -t->number("gravity_m_s2", -n.gravity.z());
     n.max_overlap_ratio = t->number("max_overlap_ratio", n.max_overlap_ratio);
+    n.initial_overlap_tolerance =
+        t->number("initial_overlap_tolerance", n.initial_overlap_tolerance);
     n.escape_distance = t->number("escape_distance_m", n.escape_distance);
     if (n.time_step < 0) t->fail("time_step_s", "= " + num(n.time_step) + " must not be negative");
     if (!(n.rayleigh_fraction > 0))

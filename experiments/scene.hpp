@@ -34,7 +34,7 @@ struct ProcedureConfig {
   double max_time = 60.0;            // simulated-time limit of the whole run [s]
   double clog_window = 1.0;          // lodged if the count inside does not change for [s]
   double lattice_gap = 0.05;         // fill lattice spacing = d_max (1 + this) [-]
-  double fill_max_speed = 0.5;       // gentle pour: speeds capped at this while filling [m/s]
+  double fill_max_speed = 0.3;       // gentle pour: speeds capped at this while filling [m/s]
 };
 
 struct OutputConfig {

@@ -65,7 +65,9 @@ struct Settings {
   double skin = 0.0;           // Verlet skin [m]; 0 = 0.25 * smallest diameter
   int threads = 0;             // OpenMP threads; 0 = OpenMP's default
   int parallel_min_particles = 2000;  // fewer particles run each phase on one thread [-]
-  double max_overlap_ratio = 0.05;  // overlap / smaller radius above this is reported [-]
+  double max_overlap_ratio = 0.2;   // overlap / smaller radius above this stops the run [-]
+                                    // (a blow-up guard; the largest overlap seen is reported)
+  double initial_overlap_tolerance = 0.01;  // largest overlap allowed at the start [-]
   double escape_distance = 1.0;     // a particle farther than this from the origin escaped [m]
 };
 
