@@ -47,6 +47,30 @@ TEST(SideView, AnyScaleAndOffCentre) {
   EXPECT_NEAR(0.5 * (p.toe_left.x + p.toe_right.x), 800.0, 1.0);
 }
 
+TEST(SideView, RoundedApexLeavesTheFlanksAndLowersH) {
+  // A real pile's apex is rounded: H is the top of the rounding, while the flank fit over the
+  // 20-80% band still sees the straight flank.
+  SideScene s;
+  s.height_mm = 70.0;
+  s.diameter_mm = 200.0;
+  s.apex_radius_mm = 40.0;
+  const SideProfile p = measure_side_pixels(synthetic::draw_side(s));
+  const double phi = std::atan(70.0 / 100.0);
+  const double h_top = 70.0 - 40.0 * (1.0 / std::cos(phi) - 1.0);
+  EXPECT_NEAR(p.height_px * s.mm_per_px, h_top, 0.3);
+  EXPECT_NEAR(p.theta_deg, true_theta_deg(h_top, 200.0), 0.3);
+  EXPECT_NEAR(p.left.angle_deg, phi * 180.0 / synthetic::kPi, 0.5);
+  EXPECT_NEAR(p.right.angle_deg, phi * 180.0 / synthetic::kPi, 0.5);
+  // With a 20-100% band the rounding enters the fit: the Huber fit keeps the angle but the
+  // reported residual shows the curvature.
+  SideSettings wide;
+  wide.flank_band_high = 1.0;
+  const SideProfile q = measure_side_pixels(synthetic::draw_side(s), wide);
+  EXPECT_LT(p.left.residual_px, 0.1);
+  EXPECT_GT(q.left.residual_px, 1.0);
+  EXPECT_GT(q.left.sigma_deg, p.left.sigma_deg);
+}
+
 TEST(SideView, TiltedPlateLine) {
   SideScene s;
   s.tilt_deg = 1.5;

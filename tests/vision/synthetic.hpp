@@ -42,6 +42,7 @@ struct SideScene {
   double axis_u = -1.0;                  // column of the cone axis [px]; < 0 = image centre
   double plate_v = 520.0;                // row of the plate line [px]
   double plate_thickness_mm = 15.0;      // plate band thickness [mm]
+  double apex_radius_mm = 0.0;           // round the apex with this radius (0 = sharp) [mm]
   double tilt_deg = 0.0;                 // whole-scene rotation about (axis_u, plate_v) [deg]
   bool pile = true;                      // draw the cone (false: the empty scene)
   bool scale_bar = true;                 // draw the band scale bar
@@ -202,7 +203,20 @@ inline cv::Mat draw_side(const SideScene& s) {
     // The cone reaches 2 px into the plate so that it, not the plate, owns the toe row.
     const double r = 0.5 * s.diameter_mm, below = 2.0 * s.mm_per_px;
     const double rb = r * (1.0 + below / s.height_mm);
-    pile.push_back({px(-rb, -below), px(rb, -below), px(0, s.height_mm)});
+    if (s.apex_radius_mm <= 0.0) {
+      pile.push_back({px(-rb, -below), px(rb, -below), px(0, s.height_mm)});
+    } else {
+      // Apex rounded by an arc tangent to both flanks: centre on the axis rho / cos(phi) below
+      // the cone's apex, tangent points at polar angles 90 deg -+ phi (the flank normals).
+      const double phi = std::atan(s.height_mm / r), rho = s.apex_radius_mm;
+      const double zc = s.height_mm - rho / std::cos(phi);
+      std::vector<cv::Point2d> poly{px(-rb, -below), px(rb, -below)};
+      for (int i = 0; i <= 180; ++i) {
+        const double a = 0.5 * kPi - phi + 2.0 * phi * i / 180.0;  // right to left
+        poly.push_back(px(rho * std::cos(a), zc + rho * std::sin(a)));
+      }
+      pile.push_back(poly);
+    }
     if (s.scale_bar) {
       for (int i = 0; i < s.bands; ++i) {
         const double x0 = s.bar_offset_mm - 0.5 * s.bar_width_mm,
