@@ -3,12 +3,16 @@
 // Design note. This follows the lab's photo method (theta = atan(2H/D)) and the published image
 // recipe, step by step, each step a function that can be tested alone:
 //  1. Flat field (vision/image.hpp): grey / backdrop, so thresholds hold under uneven light.
+//     Given an image of the empty scene, the pile is segmented on grey / empty scene instead
+//     (background difference), while the plate line still comes from the fitted flat field.
 //  2. Plate line: the strongest long "darker below" horizontal edge, found from the signed row
 //     sum of the vertical gradient (noise and sloping flanks cancel in that sum, a long edge does
 //     not), then refined column by column to sub-pixel and fitted with a robust (Huber) line, so
 //     a slightly tilted camera is handled. It is detected, never taken as the lowest blob pixel.
 //  3. Pile: Otsu's dark class above the plate line, opened and closed, the largest component
-//     resting on the plate line (scale markers and dust are other components).
+//     resting on the plate line (scale markers and dust are other components). The pile must
+//     be darker than the backdrop (true of the renders and of a light lab backdrop); a pile cut
+//     by the image or ROI border is refused.
 //  4. Sub-pixel silhouette: along each row, the edge is placed where the integral of the pixel
 //     coverage says it is (coverage = (backdrop - value) / (backdrop - pile)). Blur preserves
 //     that integral, so the estimate is unbiased for blurred and anti-aliased edges alike.
@@ -16,6 +20,8 @@
 //     edges just above the plate (a low band, excluding the blurred rows at the plate)
 //     extrapolated to the plate line; D is their distance. Flank angles are Huber line fits over
 //     a middle band of the height (20-80% by default, excluding the rounded apex and the toe).
+//     The apex of a sharp cone reads about half a pixel low (the tip narrower than a pixel is
+//     lost); real apexes are rounded and H is then the top of the rounding.
 // Everything here is in pixels and orthographic; vision/measure.hpp adds the scale and the
 // perspective correction.
 #pragma once
