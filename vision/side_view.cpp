@@ -127,6 +127,29 @@ InterceptFit fit_intercept(const std::vector<double>& h, const std::vector<doubl
   return f;
 }
 
+// The toe line x(h) fitted robustly: a Theil-Sen line first, then least squares over the rows
+// within max(1 px, 3 robust sigmas) of it, so a few particles lying loose beyond the toe (which
+// a level camera sees as a low skirt along the plate) do not drag the toe outwards.
+InterceptFit robust_intercept(const std::vector<double>& h, const std::vector<double>& x) {
+  std::vector<cv::Point2d> pts;
+  for (size_t i = 0; i < h.size(); ++i) pts.emplace_back(h[i], x[i]);
+  double a = 0.0, b = 0.0;
+  theil_sen(pts, a, b);
+  std::vector<double> res;
+  for (const auto& p : pts) res.push_back(p.y - (a + b * p.x));
+  const double med = median(res);
+  std::vector<double> dev;
+  for (double r : res) dev.push_back(std::abs(r - med));
+  const double cut = std::max(1.0, 3.0 * 1.4826 * median(dev));
+  std::vector<double> hk, xk;
+  for (size_t i = 0; i < pts.size(); ++i)
+    if (std::abs(res[i] - med) <= cut) {
+      hk.push_back(h[i]);
+      xk.push_back(x[i]);
+    }
+  return hk.size() >= 3 ? fit_intercept(hk, xk) : fit_intercept(h, x);
+}
+
 }  // namespace
 
 double PlateLine::height_above(const cv::Point2d& p) const {
@@ -538,7 +561,7 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
                                str(toe_lo) + " and " + str(toe_hi) +
                                " px above the plate line (pile too small or cut by the image "
                                "border)");
-    return fit_intercept(hs, xs);
+    return robust_intercept(hs, xs);
   };
   const InterceptFit tl = toe(left, "left"), tr = toe(right, "right");
   const cv::Point2d toe_left(tl.alpha, plate.v_at(tl.alpha));
