@@ -71,6 +71,17 @@ TEST(SideView, RoundedApexLeavesTheFlanksAndLowersH) {
   EXPECT_GT(q.left.sigma_deg, p.left.sigma_deg);
 }
 
+TEST(SideView, LooseParticlesBeyondTheToeDoNotMoveIt) {
+  // Two loose 3 mm particles lie on the plate beyond each toe, touching the silhouette's foot:
+  // they fill the lowest rows of the toe band, which the robust toe fit sets aside.
+  SideScene s;
+  s.height_mm = 60.0;
+  s.strays = 2;
+  const SideProfile p = measure_side_pixels(synthetic::draw_side(s));
+  EXPECT_NEAR(p.diameter_px * s.mm_per_px, 200.0, 0.6);
+  EXPECT_NEAR(p.theta_deg, true_theta_deg(60.0, 200.0), 0.3);
+}
+
 TEST(SideView, TiltedPlateLine) {
   SideScene s;
   s.tilt_deg = 1.5;

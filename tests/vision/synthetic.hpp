@@ -35,21 +35,23 @@ struct Degradation {
 
 /// A side view of a cone on a plate, with the band scale bar.
 struct SideScene {
-  int width = 1280, height = 720;        // image size [px]
-  double mm_per_px = 0.25;               // orthographic scale [mm/px]
-  double height_mm = 60.0;               // cone height H [mm]
-  double diameter_mm = 200.0;            // cone base diameter D [mm]
-  double axis_u = -1.0;                  // column of the cone axis [px]; < 0 = image centre
-  double plate_v = 520.0;                // row of the plate line [px]
-  double plate_thickness_mm = 15.0;      // plate band thickness [mm]
-  double apex_radius_mm = 0.0;           // round the apex with this radius (0 = sharp) [mm]
-  double tilt_deg = 0.0;                 // whole-scene rotation about (axis_u, plate_v) [deg]
-  bool pile = true;                      // draw the cone (false: the empty scene)
-  bool scale_bar = true;                 // draw the band scale bar
-  double bar_offset_mm = -140.0;         // lateral offset of the bar from the axis [mm]
-  double band_mm = 10.0;                 // band height [mm]
-  int bands = 10;                        // number of bands
-  double bar_width_mm = 20.0;            // bar width [mm]
+  int width = 1280, height = 720;    // image size [px]
+  double mm_per_px = 0.25;           // orthographic scale [mm/px]
+  double height_mm = 60.0;           // cone height H [mm]
+  double diameter_mm = 200.0;        // cone base diameter D [mm]
+  double axis_u = -1.0;              // column of the cone axis [px]; < 0 = image centre
+  double plate_v = 520.0;            // row of the plate line [px]
+  double plate_thickness_mm = 15.0;  // plate band thickness [mm]
+  double apex_radius_mm = 0.0;       // round the apex with this radius (0 = sharp) [mm]
+  int strays = 0;                  // loose particles (disks) lying on the plate beyond each toe [-]
+  double stray_diameter_mm = 3.0;  // their diameter [mm]
+  double tilt_deg = 0.0;           // whole-scene rotation about (axis_u, plate_v) [deg]
+  bool pile = true;                // draw the cone (false: the empty scene)
+  bool scale_bar = true;           // draw the band scale bar
+  double bar_offset_mm = -140.0;   // lateral offset of the bar from the axis [mm]
+  double band_mm = 10.0;           // band height [mm]
+  int bands = 10;                  // number of bands
+  double bar_width_mm = 20.0;      // bar width [mm]
   std::optional<camera::Camera> camera;  // when set: perspective scene in metres, plate a box
   double plate_half_size_m = 0.25;       // plate half size (camera scenes) [m]
   Degradation look;
@@ -216,6 +218,17 @@ inline cv::Mat draw_side(const SideScene& s) {
         poly.push_back(px(rho * std::cos(a), zc + rho * std::sin(a)));
       }
       pile.push_back(poly);
+    }
+    for (int i = 0; i < s.strays; ++i) {
+      const double rs = 0.5 * s.stray_diameter_mm;
+      for (double side : {-1.0, 1.0}) {
+        const double xc = side * (r + rs * (0.3 + 2.0 * i));  // a touching chain
+        std::vector<cv::Point2d> disk;
+        for (int k = 0; k < 64; ++k)
+          disk.push_back(
+              px(xc + rs * std::cos(2.0 * kPi * k / 64), rs + rs * std::sin(2.0 * kPi * k / 64)));
+        pile.push_back(disk);
+      }
     }
     if (s.scale_bar) {
       for (int i = 0; i < s.bands; ++i) {
