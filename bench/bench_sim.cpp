@@ -31,6 +31,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -435,7 +436,9 @@ int main(int argc, char** argv) {
               << o.rolling << " mu_r " << kRollingFriction << " eta_r " << o.rolling_damping
               << "; dt " << model.dt << " s (" << model.settings.rayleigh_fraction
               << " T_R), skin " << world.state().neighbors.skin << " m\n";
-    std::cout << "load average before: " << load_average() << "\n";
+    const char* wait_policy = std::getenv("OMP_WAIT_POLICY");
+    std::cout << "load average before: " << load_average()
+              << "; OMP_WAIT_POLICY=" << (wait_policy ? wait_policy : "(unset)") << "\n";
 
     // Settle (not timed) on settle_threads threads: first under settle_gravity g,
     // which collapses the loose lattice sqrt(settle_gravity) times faster, then under 1 g in a
