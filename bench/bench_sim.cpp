@@ -7,13 +7,17 @@
 // small horizontal jitter) inside a 30-degree cone, placed half-layer by half-layer, and each
 // one is lowered until it rests, within a 1 um gap, on the plate or on the spheres below it. In
 // that lattice only the sphere below in the same column and the four in the nearest columns of
-// the other sublattice are closer than a horizontally, so checking those guarantees no overlap,
-// and the heap starts at about the solid fraction of a loose packing with every sphere nearly
-// touching its supports: a few thousand steps form the contact network (the crystalline start
-// then relaxes; the benchmark prints the kinetic energy so one can see how quiet it is). The same
-// settled state is then timed for N steps on each requested thread count (the engine is
-// deterministic, so every thread count computes the identical trajectory; the benchmark checks
-// that the state hashes agree).
+// the other sublattice are closer than a horizontally, so checking those guarantees no overlap.
+// Each sphere then touches one support only, so the start is loose (solid fraction about 0.47)
+// and must collapse: an untimed settle runs 5,000 steps at 5 g (the collapse goes sqrt(5) times
+// faster), moves the whole state (springs included) into a world with 1 g, and relaxes 3,000
+// steps with a small velocity damping so the springs loaded at 5 g unload without throwing the
+// heap apart. The 50k heap ends with about 3.3 touching pairs per sphere and a kinetic energy of
+// a few 1e-7 J (printed). The same settled state is then timed for N steps on each requested
+// thread count (the engine is deterministic, so every thread count computes the identical
+// trajectory; the benchmark checks that the state hashes agree). Each timed run prints wall and
+// process CPU time: on a shared machine the CPU time of a one-thread run is the figure that other
+// jobs' load does not inflate.
 //
 // With --write-liggghts DIR the settled heap is written as a LIGGGHTS data file (positions,
 // diameters, density, velocities, angular velocities) and the matching input script, so that
@@ -21,8 +25,9 @@
 // (bench/compare_liggghts.sh drives both). Contact histories cannot be carried over, so
 // LIGGGHTS starts from zero tangential and rolling springs.
 //
-// Usage: bench_sim [--quick] [--particles N] [--settle N] [--steps N] [--threads 1,2]
-//                  [--rolling epsd|cdt] [--rolling-damping ETA] [--write-liggghts DIR]
+// Usage: bench_sim [--quick] [--particles N] [--steps N] [--threads 1,2] [--rolling epsd|cdt]
+//                  [--rolling-damping ETA] [--settle N] [--relax N] [--settle-gravity G]
+//                  [--settle-threads N] [--write-liggghts DIR] [--seed S]
 #include <omp.h>
 #include <time.h>
 
@@ -58,28 +63,28 @@ using reposetwin::sim::WallSpec;
 using reposetwin::sim::World;
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kDensity = 2760.0;          // [kg/m^3]
-constexpr double kRealYoungs = 46.8e9;       // the rock's E [Pa]
-constexpr double kSoftYoungs = 46.8e6;       // softened E used by the run [Pa]
-constexpr double kPoisson = 0.19;            // [-]
-constexpr double kRestitution = 0.79;        // [-]
-constexpr double kFriction = 0.466;          // mu_s [-]
-constexpr double kRollingFriction = 0.15;    // mu_r [-]
-constexpr double kDiameterMin = 1.0e-3;      // [m]
-constexpr double kDiameterMax = 2.0e-3;      // [m]
-constexpr double kLattice = 2.03e-3;         // BCC lattice constant, > d_max [m] (design note)
-constexpr double kJitter = 0.01e-3;          // largest horizontal shift of a lattice site [m]
-constexpr double kGap = 1.0e-6;              // clearance left above the supporting spheres [m]
-constexpr double kRelaxDamping = 0.005;      // velocity damping per relax step [-]
+constexpr double kDensity = 2760.0;              // [kg/m^3]
+constexpr double kRealYoungs = 46.8e9;           // the rock's E [Pa]
+constexpr double kSoftYoungs = 46.8e6;           // softened E used by the run [Pa]
+constexpr double kPoisson = 0.19;                // [-]
+constexpr double kRestitution = 0.79;            // [-]
+constexpr double kFriction = 0.466;              // mu_s [-]
+constexpr double kRollingFriction = 0.15;        // mu_r [-]
+constexpr double kDiameterMin = 1.0e-3;          // [m]
+constexpr double kDiameterMax = 2.0e-3;          // [m]
+constexpr double kLattice = 2.03e-3;             // BCC lattice constant, > d_max [m] (design note)
+constexpr double kJitter = 0.01e-3;              // largest horizontal shift of a lattice site [m]
+constexpr double kGap = 1.0e-6;                  // clearance left above the supporting spheres [m]
+constexpr double kRelaxDamping = 0.005;          // velocity damping per relax step [-]
 constexpr double kExpectedSolidFraction = 0.55;  // of the constructed heap, to size the cone [-]
-constexpr double kHeapAngleDeg = 30.0;       // slope of the constructed cone [deg]
+constexpr double kHeapAngleDeg = 30.0;           // slope of the constructed cone [deg]
 
 struct Options {
   int particles = 50000;
-  int settle = 5000;         // steps under settle_gravity g
-  int relax = 3000;          // then steps under 1 g before timing
-  double settle_gravity = 5.0;   // gravity factor of the settle (collapses the lattice faster)
-  int settle_threads = 1;        // threads of the (untimed) settle; 1 suits a shared machine
+  int settle = 5000;            // steps under settle_gravity g
+  int relax = 3000;             // then steps under 1 g before timing
+  double settle_gravity = 5.0;  // gravity factor of the settle (collapses the lattice faster)
+  int settle_threads = 1;       // threads of the (untimed) settle; 1 suits a shared machine
   int steps = 2000;
   std::vector<int> threads{1, 2};
   std::string rolling = "epsd";
@@ -138,8 +143,8 @@ void build_heap(World& world, int n, std::uint64_t seed) {
       (4.0 * (kDiameterMax - kDiameterMin));
   reposetwin::sim::Rng rng(seed);
   // A cone that holds about 10% more spheres than asked for at the expected solid fraction.
-  double radius = std::cbrt(3.0 * 1.1 * n * mean_volume / kExpectedSolidFraction /
-                            (kPi * tan_slope));
+  double radius =
+      std::cbrt(3.0 * 1.1 * n * mean_volume / kExpectedSolidFraction / (kPi * tan_slope));
   for (int attempt = 0; attempt < 20; ++attempt, radius *= 1.05) {
     const double height = radius * tan_slope;
     const int nxy = static_cast<int>(std::ceil(radius / kLattice)) + 1;
@@ -183,9 +188,10 @@ void build_heap(World& world, int n, std::uint64_t seed) {
             for (std::size_t q = m > 3 ? m - 3 : 0; q < m; ++q) {
               const Placed& b = (*c)[q];
               const double reach = r + b.r + kGap;
-              const double dxy2 = (x.x() - b.x.x()) * (x.x() - b.x.x()) +
-                                  (x.y() - b.x.y()) * (x.y() - b.x.y());
-              if (dxy2 < reach * reach) x.z() = std::max(x.z(), b.x.z() + std::sqrt(reach * reach - dxy2));
+              const double dxy2 =
+                  (x.x() - b.x.x()) * (x.x() - b.x.x()) + (x.y() - b.x.y()) * (x.y() - b.x.y());
+              if (dxy2 < reach * reach)
+                x.z() = std::max(x.z(), b.x.z() + std::sqrt(reach * reach - dxy2));
             }
           };
           rest_on(own);
@@ -255,8 +261,8 @@ void write_liggghts(const World& w, const Options& o, const std::string& dir) {
     // Velocities of a granular atom: atom-ID vx vy vz wx wy wz
     f << "\nVelocities\n\n";
     for (std::size_t i = 0; i < p.size(); ++i)
-      f << i + 1 << " " << p.v[i].x() << " " << p.v[i].y() << " " << p.v[i].z() << " "
-        << p.w[i].x() << " " << p.w[i].y() << " " << p.w[i].z() << "\n";
+      f << i + 1 << " " << p.v[i].x() << " " << p.v[i].y() << " " << p.v[i].z() << " " << p.w[i].x()
+        << " " << p.w[i].y() << " " << p.w[i].z() << "\n";
     if (!f) throw std::runtime_error("--write-liggghts: cannot write " + dir + "/heap.data");
   }
   {
@@ -372,11 +378,11 @@ RunResult timed_run(const World& settled, int steps, int threads) {
   r.hash = reposetwin::sim::state_hash(w.state());
   const auto diag = w.diagnose();
   std::cout << "  threads " << threads << ": " << steps << " steps in " << std::setprecision(4)
-            << seconds << " s wall, " << cpu << " s CPU; " << std::setprecision(4) << r.particle_steps_per_s
-            << " particle-steps/s (" << r.particle_steps_per_s / threads << " per core); "
-            << r.contacts_per_s << " contacts/s; contacts per step " << std::setprecision(6)
-            << pair_sum / samples << " pairs + " << wall_sum / samples << " plate; "
-            << w.state().neighbors.builds - builds0 << " neighbor rebuilds; "
+            << seconds << " s wall, " << cpu << " s CPU; " << std::setprecision(4)
+            << r.particle_steps_per_s << " particle-steps/s (" << r.particle_steps_per_s / threads
+            << " per core); " << r.contacts_per_s << " contacts/s; contacts per step "
+            << std::setprecision(6) << pair_sum / samples << " pairs + " << wall_sum / samples
+            << " plate; " << w.state().neighbors.builds - builds0 << " neighbor rebuilds; "
             << w.state().neighbors.pairs() << " listed pairs; KE " << std::setprecision(4)
             << diag.kinetic_energy << " J; status " << reposetwin::sim::status_name(diag.status)
             << "\n";
@@ -434,8 +440,8 @@ int main(int argc, char** argv) {
     std::cout << "bench_sim: " << o.particles << " spheres, d " << kDiameterMin * 1e3 << "-"
               << kDiameterMax * 1e3 << " mm, E " << kSoftYoungs << " Pa (softened), rolling "
               << o.rolling << " mu_r " << kRollingFriction << " eta_r " << o.rolling_damping
-              << "; dt " << model.dt << " s (" << model.settings.rayleigh_fraction
-              << " T_R), skin " << world.state().neighbors.skin << " m\n";
+              << "; dt " << model.dt << " s (" << model.settings.rayleigh_fraction << " T_R), skin "
+              << world.state().neighbors.skin << " m\n";
     const char* wait_policy = std::getenv("OMP_WAIT_POLICY");
     std::cout << "load average before: " << load_average()
               << "; OMP_WAIT_POLICY=" << (wait_policy ? wait_policy : "(unset)") << "\n";
@@ -450,9 +456,8 @@ int main(int argc, char** argv) {
       const ContactCount c = count_contacts(w);
       std::cout << "  " << phase << " step " << w.state().step << ": KE " << d.kinetic_energy
                 << " J, max overlap " << d.max_overlap_ratio << " of r, " << c.pairs
-                << " touching pairs (" << 2.0 * c.pairs / o.particles << " per sphere), "
-                << c.walls << " on the plate, status " << reposetwin::sim::status_name(d.status)
-                << "\n";
+                << " touching pairs (" << 2.0 * c.pairs / o.particles << " per sphere), " << c.walls
+                << " on the plate, status " << reposetwin::sim::status_name(d.status) << "\n";
       if (d.status != reposetwin::sim::Status::kOk)
         throw std::runtime_error(std::string("settle failed: ") + d.detail);
     };
