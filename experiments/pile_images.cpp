@@ -85,9 +85,15 @@ json render_and_measure(const std::vector<Eigen::Vector3d>& positions,
     const camera::Camera cam = render::lab_top_camera(scene, cams);
     const std::string base = (fs::path(out_dir) / "top").string();
     const cv::Mat image = render::render_and_write(renderer, scene, cam, options, base, provenance);
-    const vision::TopMeasurement m = vision::measure_top_camera(image, cam, {}, base + ".png");
-    cv::imwrite(base + ".measured.png", vision::draw_top_overlay(image, m));
-    out["top"] = vision::to_json(m);
+    try {
+      const vision::TopMeasurement m = vision::measure_top_camera(image, cam, {}, base + ".png");
+      cv::imwrite(base + ".measured.png", vision::draw_top_overlay(image, m));
+      out["top"] = vision::to_json(m);
+    } catch (const std::exception& e) {
+      // The footprint is a secondary quantity (the angle comes from the side views): a top view
+      // that cannot be measured (a thin, patchy pile) is reported, not fatal.
+      out["top"] = {{"error", e.what()}};
+    }
     out["top"]["image"] = "top.png";
   }
   write_json_atomic((fs::path(out_dir) / "measurement.json").string(), out);

@@ -223,6 +223,13 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
   if (fs::exists(result_path) && opt.resume && !opt.force) {
     throw InputError(result_path.string() + ": the run is already finished; nothing to resume");
   }
+  if (opt.force && !opt.resume) {  // start clean: no stale result may look like this run's
+    for (const char* f : {"result.json", "final.vtp", "checkpoint.bin", "controller.json",
+                          "series.pvd", "scene.resolved.toml"})
+      fs::remove(out / f);
+    fs::remove_all(out / "frames");
+    fs::remove_all(out / "images");
+  }
   fs::create_directories(out / "frames");
   const auto wall0 = std::chrono::steady_clock::now();
   auto wall_now = [&]() {
@@ -436,13 +443,15 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
       last_ckpt_wall = wall;
       save_checkpoint();
     }
-    if (opt.stop_after_wall_s > 0 && wall > opt.stop_after_wall_s && ctl.phase != Phase::kDone) {
+    const bool wall_up = opt.stop_after_wall_s > 0 && wall > opt.stop_after_wall_s;
+    const bool steps_up = opt.stop_after_steps > 0 && st.step - step0 >= opt.stop_after_steps;
+    if ((wall_up || steps_up) && ctl.phase != Phase::kDone) {
       save_checkpoint();
       stopped_early = true;
       break;
     }
   }
-  if (stopped_early) return json{{"stopped", "wall-time limit; resume with --resume"}};
+  if (stopped_early) return json{{"stopped", "time or step limit; resume with --resume"}};
 
   // Measure the pile from the particle positions.
   const sim::State& st = world.state();

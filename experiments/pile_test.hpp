@@ -27,7 +27,9 @@ struct RunOptions {
   bool resume = false;      // continue from out_dir's checkpoint
   bool progress = true;     // progress lines on stderr
   int threads = 0;          // OpenMP threads; 0 = the scene's setting
-  double stop_after_wall_s = 0.0;  // testing aid: stop (with a checkpoint) after this [s]; 0 = never
+  double stop_after_wall_s = 0.0;  // stop (with a checkpoint) after this wall time [s]; 0 = never
+  std::int64_t stop_after_steps = 0;  // stop (with a checkpoint) after this many steps of this
+                                      // session; 0 = never (deterministic, for tests)
   nlohmann::json extra_provenance = nlohmann::json::object();  // e.g. the campaign case
 };
 

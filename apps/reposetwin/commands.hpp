@@ -11,6 +11,9 @@ void set_exit_code(int code);
 
 void add_run_command(CLI::App& app);
 void add_render_command(CLI::App& app);
+void add_campaign_command(CLI::App& app);
+void add_calibrate_command(CLI::App& app);
+void add_report_command(CLI::App& app);
 void add_measure_command(CLI::App& app);
 
 }  // namespace reposetwin::cli

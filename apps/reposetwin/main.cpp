@@ -14,6 +14,9 @@ int main(int argc, char** argv) {
   // Subcommand registry: one line per command.
   reposetwin::cli::add_run_command(app);
   reposetwin::cli::add_render_command(app);
+  reposetwin::cli::add_campaign_command(app);
+  reposetwin::cli::add_calibrate_command(app);
+  reposetwin::cli::add_report_command(app);
   reposetwin::cli::add_measure_command(app);
   try {
     app.parse(argc, argv);

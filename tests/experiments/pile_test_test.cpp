@@ -1,11 +1,12 @@
 // The pile test as a run: a tiny funnel pile that settles and is measured, the clog of a
 // narrow outlet, resume after an interruption, no silent overwrite, and bad scene input.
+#include "experiments/pile_test.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 
-#include "experiments/pile_test.hpp"
 #include "experiments/provenance.hpp"
 #include "experiments/scene.hpp"
 #include "experiments/scene_overrides.hpp"
@@ -22,7 +23,8 @@ std::string tiny_scene(double mass, double w, const std::string& extra = "") {
 name = "tiny"
 seed = 3
 [sample]
-mass_kg = )" + std::to_string(mass) + R"(
+mass_kg = )" +
+         std::to_string(mass) + R"(
 material = "rock"
 [sample.psd]
 sieve_mm = [3.0, 3.5, 4.0]
@@ -46,7 +48,8 @@ rolling_friction = 0.1
 [container]
 kind = "funnel"
 material = "steel"
-bottom_diameter_m = )" + std::to_string(w) + R"(
+bottom_diameter_m = )" +
+         std::to_string(w) + R"(
 top_diameter_m = 0.05
 height_m = 0.04
 [plate]
@@ -124,10 +127,10 @@ TEST(PileTest, InterruptedRunResumesToTheSameResult) {
   const nlohmann::json a = run_pile_test(scene, full);
   RunOptions part = full;
   part.out_dir = (dir / "part").string();
-  part.stop_after_wall_s = 0.2;
+  part.stop_after_steps = 2000;
   const nlohmann::json stopped = run_pile_test(scene, part);
   ASSERT_TRUE(stopped.contains("stopped")) << "the run finished before the interruption";
-  part.stop_after_wall_s = 0.0;
+  part.stop_after_steps = 0;
   part.resume = true;
   const nlohmann::json b = run_pile_test(scene, part);
   EXPECT_EQ(a["pile"]["height_m"], b["pile"]["height_m"]);
@@ -158,26 +161,31 @@ TEST(SceneFile, BadInputNamesFileKeyAndValue) {
   expect_scene_error(good + "\n[extra]\nfoo = 1\n", "extra");
   expect_scene_error(replace("seed = 3", "seed = 3\nsede = 4"), "scene.sede");
   expect_scene_error(replace("density_kg_m3 = 2760.0", "density_kg_m3 = 0.0"), "density_kg_m3");
-  expect_scene_error(replace("restitution = 0.5\nfriction = 0.5", "restitution = 1.5\nfriction = 0.5"),
-                     "restitution");
+  expect_scene_error(
+      replace("restitution = 0.5\nfriction = 0.5", "restitution = 1.5\nfriction = 0.5"),
+      "restitution");
   expect_scene_error(replace("friction = 0.5", "friction = -0.2"), "friction");
-  expect_scene_error(replace("passing_percent = [0.0, 50.0, 100.0]", "passing_percent = [0.0, 60.0, 50.0]"),
-                     "passing");
-  expect_scene_error(replace("passing_percent = [0.0, 50.0, 100.0]", "passing_percent = [0.0, 50.0, 90.0]"),
-                     "100");
+  expect_scene_error(
+      replace("passing_percent = [0.0, 50.0, 100.0]", "passing_percent = [0.0, 60.0, 50.0]"),
+      "passing");
+  expect_scene_error(
+      replace("passing_percent = [0.0, 50.0, 100.0]", "passing_percent = [0.0, 50.0, 90.0]"),
+      "100");
   expect_scene_error(replace("sieve_mm = [3.0, 3.5, 4.0]", "sieve_mm = [-3.0, 3.5, 4.0]"), "sieve");
   expect_scene_error(replace("mass_kg = 0.008", "mass_kg = 50.0"), "mass_kg");
   expect_scene_error(replace("bottom_diameter_m = 0.02", "bottom_diameter_m = 0.0035"), "outlet");
   expect_scene_error(replace("rayleigh_fraction = 0.3", "time_step_s = 1.0"), "time_step");
-  expect_scene_error(replace("rolling_friction = 0.3", "rolling_friction = 0.3\nrolling_model = \"magic\""),
-                     "rolling_model");
+  expect_scene_error(
+      replace("rolling_friction = 0.3", "rolling_friction = 0.3\nrolling_model = \"magic\""),
+      "rolling_model");
 }
 
 TEST(SceneFile, EmbeddedQuickSceneParsesAndOverridesApply) {
   const SceneConfig q = load_scene("");
   EXPECT_EQ(q.name, "quick");
   EXPECT_EQ(q.file, "<embedded>");
-  const SceneConfig o = load_scene("", {"contacts.rock-rock.rolling_friction=0.05", "scene.seed=7"});
+  const SceneConfig o =
+      load_scene("", {"contacts.rock-rock.rolling_friction=0.05", "scene.seed=7"});
   EXPECT_EQ(o.seed, 7u);
   EXPECT_DOUBLE_EQ(o.contacts.at({"rock", "rock"}).rolling_friction, 0.05);
   EXPECT_THROW(load_scene("", {"contacts.rock-rock.rolling_friction=\"x\""}), std::exception);

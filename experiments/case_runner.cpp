@@ -1,0 +1,50 @@
+#include "experiments/case_runner.hpp"
+
+#include <filesystem>
+
+#include "experiments/pile_test.hpp"
+#include "experiments/scene.hpp"
+
+namespace reposetwin::experiments {
+using nlohmann::json;
+
+CaseFn pile_case_fn(const CaseRunSettings& settings) {
+  return [settings](const CaseSpec& spec, const std::string& case_dir) -> json {
+    toml::table doc = build_case_scene(spec);
+    if (toml::table* s = doc["scene"].as_table())
+      s->insert_or_assign("seed", static_cast<std::int64_t>(spec.seed));
+    const SceneConfig scene = parse_scene_table(doc, spec.scene_path);
+    RunOptions opt;
+    opt.out_dir = (std::filesystem::path(case_dir) / "run").string();
+    opt.progress = false;
+    opt.threads = settings.threads;
+    opt.extra_provenance = {{"campaign_case", spec.id()}};
+    const json run = run_pile_test(scene, opt);
+    json out = {{"stop", run.at("stop")},
+                {"pile", run.at("pile")},
+                {"particles", run.at("particles")},
+                {"performance", run.at("performance")},
+                {"provenance", run.at("provenance")},
+                {"psd_fines_fraction", run.at("psd").at("fines_fraction_not_simulated")},
+                {"run_dir", "run"}};
+    if (settings.images && run.at("pile").at("status") == "ok") {
+      const json m = render_and_measure_run(opt.out_dir, settings.image);
+      out["image"] = {{"theta_deg", m.at("theta_deg")},
+                      {"theta_sd_deg", m.at("theta_sd_deg")},
+                      {"height_m", m.at("height_m")},
+                      {"diameter_m", m.at("diameter_m")},
+                      {"flank_deg", m.at("flank_deg")},
+                      {"images", "run/images"}};
+    }
+    return out;
+  };
+}
+
+double case_angle_deg(const json& r, bool prefer_image) {
+  const json& res = r.contains("result") ? r.at("result") : r;
+  if (res.at("pile").at("status") == "no pile") return 0.0;
+  if (prefer_image && res.contains("image")) return res.at("image").at("theta_deg");
+  return res.at("pile").at("theta_hd_deg");
+}
+
+}  // namespace reposetwin::experiments

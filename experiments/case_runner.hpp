@@ -1,0 +1,27 @@
+// One campaign run = one pile test (+ its photographs measured by vision).
+//
+// The campaign runner (campaign.hpp) knows nothing of piles: it hands a CaseSpec and a folder to
+// a case function. pile_case_fn() is that function for the pile test: it builds the case's scene
+// (overrides and seed applied), runs it into CASE_DIR/run, photographs and measures the pile,
+// and returns the numbers a report or a calibration needs: the particle-position angles, the
+// image angle, the stop reason and the provenance.
+#pragma once
+
+#include "experiments/campaign.hpp"
+#include "experiments/pile_images.hpp"
+
+namespace reposetwin::experiments {
+
+struct CaseRunSettings {
+  bool images = true;           // render and measure the final pile (vision angle)
+  ImageSettings image;          // cameras and resolution
+  int threads = 1;              // OpenMP threads per run (the pool runs runs side by side)
+};
+
+CaseFn pile_case_fn(const CaseRunSettings& settings);
+
+/// The angle a calibration matches: the vision angle on the renders when present, otherwise
+/// atan(2H/D) from particle positions; 0 for "no pile". Throws if the result has neither.
+double case_angle_deg(const nlohmann::json& case_result, bool prefer_image = true);
+
+}  // namespace reposetwin::experiments
