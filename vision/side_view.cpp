@@ -93,61 +93,56 @@ double col_mean(const cv::Mat& img, int c, int r0, int r1) {
   return s / (r1 - r0 + 1);
 }
 
-// Least-squares line x = alpha + beta * h with the standard error of alpha (the value at h = 0).
+// The toe on one side: the column alpha where the silhouette's low band meets the plate
+// (h = 0), with its standard error. beta = dx/dh is the fixed slope used to carry the band down.
 struct InterceptFit {
   double alpha = 0.0, beta = 0.0, sigma_alpha = 0.0;
   int n = 0;
 };
 
-InterceptFit fit_intercept(const std::vector<double>& h, const std::vector<double>& x) {
+// The toe from the low band's silhouette points (heights h above the plate line, columns x) and
+// the flank fitted over the middle band. Only the band's position is taken from the band; its
+// slope is the flank's. A band a few percent of H tall is only a few particles tall on a real
+// or simulated pile, and its local slope is the particles' outline (the bottom layer's near-
+// vertical sides), not the pile's: a free line through it, extrapolated to the plate, throws the
+// toe outwards by (slope error) x (band height). Carrying each band point to the plate along the
+// flank direction instead makes the toe the band's offset from the flank line, which the
+// particle texture only scatters. The offsets' median and then the mean of those within
+// max(1 px, 3 robust sigmas) of it set aside loose particles lying on the plate beyond the toe
+// (a low skirt in a level view). On a smooth cone the result is the flank line's toe.
+InterceptFit toe_intercept(const std::vector<double>& h, const std::vector<double>& x,
+                           const FlankFit& flank, const PlateLine& plate) {
+  const cv::Point2d pd = plate.direction();
+  const cv::Point2d up(pd.y, -pd.x);
+  const double rise = flank.direction.dot(up);  // > 0 by fit_flank's orientation
   InterceptFit f;
-  f.n = static_cast<int>(h.size());
-  double hm = 0.0, xm = 0.0;
-  for (int i = 0; i < f.n; ++i) {
-    hm += h[i];
-    xm += x[i];
-  }
-  hm /= f.n;
-  xm /= f.n;
-  double shh = 0.0, shx = 0.0;
-  for (int i = 0; i < f.n; ++i) {
-    shh += (h[i] - hm) * (h[i] - hm);
-    shx += (h[i] - hm) * (x[i] - xm);
-  }
-  f.beta = shh > 0.0 ? shx / shh : 0.0;
-  f.alpha = xm - f.beta * hm;
-  double ss = 0.0;
-  for (int i = 0; i < f.n; ++i) {
-    const double r = x[i] - f.alpha - f.beta * h[i];
-    ss += r * r;
-  }
-  const double s2 = f.n > 2 ? ss / (f.n - 2) : 0.0;
-  f.sigma_alpha = std::sqrt(s2 * (1.0 / f.n + (shh > 0.0 ? hm * hm / shh : 0.0)) +
-                            kQuantisationPx * kQuantisationPx / f.n);
-  return f;
-}
-
-// The toe line x(h) fitted robustly: a Theil-Sen line first, then least squares over the rows
-// within max(1 px, 3 robust sigmas) of it, so a few particles lying loose beyond the toe (which
-// a level camera sees as a low skirt along the plate) do not drag the toe outwards.
-InterceptFit robust_intercept(const std::vector<double>& h, const std::vector<double>& x) {
-  std::vector<cv::Point2d> pts;
-  for (size_t i = 0; i < h.size(); ++i) pts.emplace_back(h[i], x[i]);
-  double a = 0.0, b = 0.0;
-  theil_sen(pts, a, b);
-  std::vector<double> res;
-  for (const auto& p : pts) res.push_back(p.y - (a + b * p.x));
-  const double med = median(res);
+  f.beta = flank.direction.x / std::max(rise, 1e-6);
+  std::vector<double> off;
+  off.reserve(h.size());
+  for (size_t i = 0; i < h.size(); ++i) off.push_back(x[i] - f.beta * h[i]);
+  const double med = median(off);
   std::vector<double> dev;
-  for (double r : res) dev.push_back(std::abs(r - med));
+  for (double o : off) dev.push_back(std::abs(o - med));
   const double cut = std::max(1.0, 3.0 * 1.4826 * median(dev));
-  std::vector<double> hk, xk;
-  for (size_t i = 0; i < pts.size(); ++i)
-    if (std::abs(res[i] - med) <= cut) {
-      hk.push_back(h[i]);
-      xk.push_back(x[i]);
+  double sum = 0.0, hsum = 0.0;
+  for (size_t i = 0; i < off.size(); ++i)
+    if (std::abs(off[i] - med) <= cut) {
+      sum += off[i];
+      hsum += h[i];
+      ++f.n;
     }
-  return hk.size() >= 3 ? fit_intercept(hk, xk) : fit_intercept(h, x);
+  f.alpha = sum / f.n;
+  const double hm = hsum / f.n;
+  double ss = 0.0;
+  for (double o : off)
+    if (std::abs(o - med) <= cut) ss += (o - f.alpha) * (o - f.alpha);
+  const double s2 = f.n > 1 ? ss / (f.n - 1) : 0.0;
+  // The slope's own error, dbeta = dphi / sin^2(phi), moves the toe by hm * dbeta.
+  const double sin_phi = std::sin(flank.angle_deg / kRadToDeg);
+  const double sigma_beta = flank.sigma_deg / kRadToDeg / std::max(sin_phi * sin_phi, 1e-6);
+  f.sigma_alpha = std::sqrt((s2 + kQuantisationPx * kQuantisationPx) / f.n +
+                            hm * hm * sigma_beta * sigma_beta);
+  return f;
 }
 
 }  // namespace
@@ -544,10 +539,23 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
     throw std::runtime_error(where + ": no pile found (blob only " + str(height) +
                              " px above the plate line)");
 
-  // Toe points: extrapolate the low band of each flank to the plate line.
+  // Flank lines over the middle band of the height.
+  auto band = [&](const std::vector<cv::Point2d>& edge) {
+    std::vector<cv::Point2d> pts;
+    for (const auto& p : edge) {
+      const double h = plate.height_above(p);
+      if (h >= s.flank_band_low * height && h <= s.flank_band_high * height) pts.push_back(p);
+    }
+    return pts;
+  };
+  out.left = fit_flank(band(left), plate, where + ": left flank");
+  out.right = fit_flank(band(right), plate, where + ": right flank");
+
+  // Toe points: the low band of each flank carried to the plate line along the flank's slope.
   const double toe_lo = std::max(s.toe_band_low * height, s.toe_min_gap_px);
   const double toe_hi = std::max(s.toe_band_high * height, toe_lo + 3.0);
-  auto toe = [&](const std::vector<cv::Point2d>& edge, const std::string& side) {
+  auto toe = [&](const std::vector<cv::Point2d>& edge, const FlankFit& flank,
+                 const std::string& side) {
     std::vector<double> hs, xs;
     for (const auto& p : edge) {
       const double h = plate.height_above(p);
@@ -561,22 +569,11 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
                                str(toe_lo) + " and " + str(toe_hi) +
                                " px above the plate line (pile too small or cut by the image "
                                "border)");
-    return robust_intercept(hs, xs);
+    return toe_intercept(hs, xs, flank, plate);
   };
-  const InterceptFit tl = toe(left, "left"), tr = toe(right, "right");
+  const InterceptFit tl = toe(left, out.left, "left"), tr = toe(right, out.right, "right");
   const cv::Point2d toe_left(tl.alpha, plate.v_at(tl.alpha));
   const cv::Point2d toe_right(tr.alpha, plate.v_at(tr.alpha));
-
-  auto band = [&](const std::vector<cv::Point2d>& edge) {
-    std::vector<cv::Point2d> pts;
-    for (const auto& p : edge) {
-      const double h = plate.height_above(p);
-      if (h >= s.flank_band_low * height && h <= s.flank_band_high * height) pts.push_back(p);
-    }
-    return pts;
-  };
-  out.left = fit_flank(band(left), plate, where + ": left flank");
-  out.right = fit_flank(band(right), plate, where + ": right flank");
 
   out.plate = plate;
   out.apex = apex;

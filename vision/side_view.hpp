@@ -16,10 +16,15 @@
 //  4. Sub-pixel silhouette: along each row, the edge is placed where the integral of the pixel
 //     coverage says it is (coverage = (backdrop - value) / (backdrop - pile)). Blur preserves
 //     that integral, so the estimate is unbiased for blurred and anti-aliased edges alike.
-//  5. H is the apex's perpendicular distance to the plate line; the toe points are the flank
-//     edges just above the plate (a low band, excluding the blurred rows at the plate)
-//     extrapolated to the plate line; D is their distance. Flank angles are Huber line fits over
-//     a middle band of the height (20-80% by default, excluding the rounded apex and the toe).
+//  5. H is the apex's perpendicular distance to the plate line. Flank angles are Huber line fits
+//     over a middle band of the height (20-80% by default, excluding the rounded apex and the
+//     toe). The toe points are the flank edges just above the plate (a low band, 2-12% of H,
+//     excluding the blurred rows at the plate) carried to the plate line along the fitted
+//     flank's slope; D is their distance. The low band gives the toe's position only, never its
+//     own slope: on a pile of particles that band is one or two particles tall and its local
+//     slope is the particles' outline (the bottom layer's near-vertical sides), so a free line
+//     through it, extrapolated, put the toes of a rendered 80 mm sphere cone 3 mm too far out
+//     each side (D 86 mm); along the flank's slope they land on the bottom layer's reach.
 //     The apex of a sharp cone reads about half a pixel low (the tip narrower than a pixel is
 //     lost); real apexes are rounded and H is then the top of the rounding.
 // Everything here is in pixels and orthographic; vision/measure.hpp adds the scale and the
@@ -79,8 +84,8 @@ struct SideSettings {
   int edge_window_px = 5;         // half width of the sub-pixel edge window along a row [px]
   double flank_band_low = 0.2;    // flank fit band, lower end, as a fraction of H [-]
   double flank_band_high = 0.8;   // flank fit band, upper end, as a fraction of H [-]
-  double toe_band_low = 0.02;     // toe extrapolation band, lower end, fraction of H [-]
-  double toe_band_high = 0.12;    // toe extrapolation band, upper end, fraction of H [-]
+  double toe_band_low = 0.02;     // toe band (carried down the flank), lower end, of H [-]
+  double toe_band_high = 0.12;    // toe band, upper end, fraction of H [-]
   double toe_min_gap_px = 3.0;    // rows this close to the plate line are never used [px]
   std::vector<cv::Rect> exclude;  // image regions ignored by the pile search (scale markers)
 };
@@ -94,7 +99,7 @@ struct SideProfile {
   double height_px = 0.0;          // H: apex distance perpendicular to the plate line [px]
   double diameter_px = 0.0;        // D: distance between the toe points [px]
   double sigma_height_px = 0.0;    // uncertainty of H (apex quantisation, plate line) [px]
-  double sigma_diameter_px = 0.0;  // uncertainty of D (toe extrapolation) [px]
+  double sigma_diameter_px = 0.0;  // uncertainty of D (toe band scatter, flank slope) [px]
   double theta_deg = 0.0;          // atan(2H/D) [deg]
   double sigma_theta_deg = 0.0;    // propagated from sigma_height_px and sigma_diameter_px [deg]
   FlankFit left, right;            // flank line fits

@@ -33,7 +33,7 @@ TEST_P(RenderedCone, ImageAngleAgreesWithParticleMeasurement) {
   EXPECT_NEAR(image_theta, g.theta_hd * 180.0 / 3.14159265358979, 1.0);
   EXPECT_NEAR(image_theta, angle_deg, 1.0);
   EXPECT_NEAR(m["height_m"].get<double>(), h, 0.02 * h);
-  EXPECT_NEAR(m["top"]["diameter_circle_m"].get<double>(), 2 * big_r, 0.03 * 2 * big_r);
+  EXPECT_NEAR(m["top"]["D_circle_m"].get<double>(), 2 * big_r, 0.03 * 2 * big_r);
   EXPECT_TRUE(fs::exists(dir / "side_az000.png"));
   EXPECT_TRUE(fs::exists(dir / "side_az000.json"));
   EXPECT_TRUE(fs::exists(dir / "side_az000.measured.png"));
