@@ -140,8 +140,8 @@ InterceptFit toe_intercept(const std::vector<double>& h, const std::vector<doubl
   // The slope's own error, dbeta = dphi / sin^2(phi), moves the toe by hm * dbeta.
   const double sin_phi = std::sin(flank.angle_deg / kRadToDeg);
   const double sigma_beta = flank.sigma_deg / kRadToDeg / std::max(sin_phi * sin_phi, 1e-6);
-  f.sigma_alpha = std::sqrt((s2 + kQuantisationPx * kQuantisationPx) / f.n +
-                            hm * hm * sigma_beta * sigma_beta);
+  f.sigma_alpha =
+      std::sqrt((s2 + kQuantisationPx * kQuantisationPx) / f.n + hm * hm * sigma_beta * sigma_beta);
   return f;
 }
 

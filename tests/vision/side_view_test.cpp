@@ -82,6 +82,24 @@ TEST(SideView, LooseParticlesBeyondTheToeDoNotMoveIt) {
   EXPECT_NEAR(p.theta_deg, true_theta_deg(60.0, 200.0), 0.3);
 }
 
+TEST(SideView, BottomLayerParticleDoesNotTiltTheToe) {
+  // The rendered 80 mm sphere cone in miniature (0.5 mm/px, H = 28 mm, 2 mm particles): the
+  // bottom layer's outer particle reaches the toe and bulges out of the flank in the lowest rows
+  // of the toe band. A line fitted freely through that band and extrapolated put each toe about
+  // 3 mm out (D 86 mm); carried down along the flank's slope the toe stays at the base.
+  for (double phi_deg : {25.0, 35.0}) {
+    SideScene s;
+    s.mm_per_px = 0.5;
+    s.diameter_mm = 80.0;
+    s.height_mm = 40.0 * std::tan(phi_deg * synthetic::kPi / 180.0);
+    s.base_particle_mm = 2.0;
+    s.bar_offset_mm = -120.0;
+    const SideProfile p = measure_side_pixels(synthetic::draw_side(s));
+    EXPECT_NEAR(p.diameter_px * s.mm_per_px, 80.0, 0.03 * 80.0) << phi_deg;
+    EXPECT_NEAR(p.theta_deg, phi_deg, 1.0) << phi_deg;
+  }
+}
+
 TEST(SideView, TiltedPlateLine) {
   SideScene s;
   s.tilt_deg = 1.5;

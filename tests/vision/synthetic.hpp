@@ -45,13 +45,17 @@ struct SideScene {
   double apex_radius_mm = 0.0;       // round the apex with this radius (0 = sharp) [mm]
   int strays = 0;                  // loose particles (disks) lying on the plate beyond each toe [-]
   double stray_diameter_mm = 3.0;  // their diameter [mm]
-  double tilt_deg = 0.0;           // whole-scene rotation about (axis_u, plate_v) [deg]
-  bool pile = true;                // draw the cone (false: the empty scene)
-  bool scale_bar = true;           // draw the band scale bar
-  double bar_offset_mm = -140.0;   // lateral offset of the bar from the axis [mm]
-  double band_mm = 10.0;           // band height [mm]
-  int bands = 10;                  // number of bands
-  double bar_width_mm = 20.0;      // bar width [mm]
+  // A bottom-layer particle (disk) of this diameter resting on the plate at each end of the base,
+  // its outer edge at the toe, as the outermost ring of a sphere pile: near the plate it sticks
+  // out of the flank with a near-vertical side. 0 = none [mm].
+  double base_particle_mm = 0.0;
+  double tilt_deg = 0.0;                 // whole-scene rotation about (axis_u, plate_v) [deg]
+  bool pile = true;                      // draw the cone (false: the empty scene)
+  bool scale_bar = true;                 // draw the band scale bar
+  double bar_offset_mm = -140.0;         // lateral offset of the bar from the axis [mm]
+  double band_mm = 10.0;                 // band height [mm]
+  int bands = 10;                        // number of bands
+  double bar_width_mm = 20.0;            // bar width [mm]
   std::optional<camera::Camera> camera;  // when set: perspective scene in metres, plate a box
   double plate_half_size_m = 0.25;       // plate half size (camera scenes) [m]
   Degradation look;
@@ -218,6 +222,16 @@ inline cv::Mat draw_side(const SideScene& s) {
         poly.push_back(px(rho * std::cos(a), zc + rho * std::sin(a)));
       }
       pile.push_back(poly);
+    }
+    if (s.base_particle_mm > 0.0) {
+      const double rp = 0.5 * s.base_particle_mm;
+      for (double side : {-1.0, 1.0}) {
+        std::vector<cv::Point2d> disk;
+        for (int k = 0; k < 64; ++k)
+          disk.push_back(px(side * (r - rp) + rp * std::cos(2.0 * kPi * k / 64),
+                            rp + rp * std::sin(2.0 * kPi * k / 64)));
+        pile.push_back(disk);
+      }
     }
     for (int i = 0; i < s.strays; ++i) {
       const double rs = 0.5 * s.stray_diameter_mm;
