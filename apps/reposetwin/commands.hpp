@@ -14,6 +14,7 @@ void add_render_command(CLI::App& app);
 void add_campaign_command(CLI::App& app);
 void add_calibrate_command(CLI::App& app);
 void add_report_command(CLI::App& app);
+void add_timestep_command(CLI::App& app);
 void add_measure_command(CLI::App& app);
 
 }  // namespace reposetwin::cli

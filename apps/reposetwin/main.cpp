@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   reposetwin::cli::add_campaign_command(app);
   reposetwin::cli::add_calibrate_command(app);
   reposetwin::cli::add_report_command(app);
+  reposetwin::cli::add_timestep_command(app);
   reposetwin::cli::add_measure_command(app);
   try {
     app.parse(argc, argv);

@@ -9,6 +9,7 @@
 #include "experiments/case_runner.hpp"
 #include "experiments/provenance.hpp"
 #include "experiments/report.hpp"
+#include "experiments/timestep_study.hpp"
 #include "experiments/toml_reader.hpp"
 
 namespace reposetwin::experiments {
@@ -87,6 +88,39 @@ overrides = { "contacts.rock-rock.rolling_friction" = 0.4 }
     (k["case"] == "low_mu" ? low : high) = k["particle_theta_mean_deg"].get<double>();
   EXPECT_GT(high, low);
   EXPECT_THROW(build_report((dir / "nothing_here").string()), InputError);
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
+
+namespace reposetwin::experiments {
+namespace {
+
+TEST(TimestepStudy, LargestStableStepStopsAtTheFirstDeparture) {
+  // Angles converge as dt shrinks: stable up to 2e-6 (within 0.5 deg of the finest), and a
+  // later point back within tolerance does not count once one has left it.
+  const std::vector<std::pair<double, double>> pts = {
+      {4e-6, 21.0}, {1e-6, 22.5}, {2e-6, 22.2}, {3e-6, 21.8}, {5e-6, 22.4}};
+  EXPECT_DOUBLE_EQ(largest_stable_dt(pts, 0.5), 2e-6);
+  EXPECT_DOUBLE_EQ(largest_stable_dt(pts, 1.0), 4e-6 - 1e-6);
+  EXPECT_THROW(largest_stable_dt({}, 0.5), InputError);
+}
+
+TEST(TimestepStudy, RunsASweepOfTinyPiles) {
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_timestep_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "tiny.toml") << kTinyScene;
+  TimestepStudySettings s;
+  s.rayleigh_fractions = {0.15, 0.3};
+  s.runner.mode = WorkerMode::kThreads;
+  s.runner.progress = false;
+  const nlohmann::json r = run_timestep_study((dir / "tiny.toml").string(), (dir / "out").string(), s);
+  ASSERT_EQ(r["points"].size(), 2u);
+  EXPECT_LT(r["points"][0]["time_step_s"].get<double>(), r["points"][1]["time_step_s"].get<double>());
+  EXPECT_NEAR(r["points"][1]["time_step_s"].get<double>() / r["points"][0]["time_step_s"].get<double>(), 2.0, 1e-9);
+  EXPECT_TRUE(r.contains("largest_stable_time_step_s"));
+  EXPECT_THROW(run_timestep_study((dir / "missing.toml").string(), (dir / "o2").string(), s), InputError);
 }
 
 }  // namespace
