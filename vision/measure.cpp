@@ -484,7 +484,8 @@ nlohmann::json to_json(const TopMeasurement& m) {
         {"circle_residual_px", p.circle_residual_px},
         {"ellipse_axes_px", {p.ellipse_major_px, p.ellipse_minor_px}},
         {"ellipse_angle_deg", p.ellipse_angle_deg},
-        {"outline_points", p.outline.size()}}}};
+        {"outline_points", p.outline.size()},
+        {"cue", p.cue}}}};
 }
 
 nlohmann::json to_json(const SideSummary& s) {

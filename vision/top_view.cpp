@@ -63,32 +63,13 @@ bool fit_circle(const std::vector<cv::Point2d>& pts, cv::Point2d& center, double
   return std::isfinite(radius);
 }
 
-TopProfile measure_top_pixels(const cv::Mat& image, const TopSettings& s,
-                              const std::string& where) {
-  if (s.rays < 8 || s.rays > 100000)
-    throw std::invalid_argument(where + ": top settings rays must be 8..100000, got " +
-                                str(s.rays));
-  if (s.edge_window_px < 1 || s.edge_window_px > 50)
-    throw std::invalid_argument(where + ": top settings edge_window_px must be 1..50, got " +
-                                str(s.edge_window_px));
-  const cv::Mat gray_full = gray_levels(image, where);
-  check_contrast(gray_full, where);
-  const cv::Rect full(0, 0, gray_full.cols, gray_full.rows);
-  const cv::Rect roi = s.roi.empty() ? full : s.roi;
-  if ((roi & full) != roi || roi.width < 16 || roi.height < 16)
-    throw std::invalid_argument(where + ": roi " + str(roi.x) + "," + str(roi.y) + " " +
-                                str(roi.width) + "x" + str(roi.height) +
-                                " is not inside the image or smaller than 16x16 px");
-  cv::Mat gray = gray_full(roi).clone();
-  if (s.smoothing_sigma_px > 0.0)
-    cv::GaussianBlur(gray, gray, cv::Size(), s.smoothing_sigma_px, s.smoothing_sigma_px);
-  const cv::Point2d seed = (s.seed.x < 0 || s.seed.y < 0)
-                               ? cv::Point2d(0.5 * (roi.width - 1), 0.5 * (roi.height - 1))
-                               : s.seed - cv::Point2d(roi.x, roi.y);
-  if (!cv::Rect2d(0, 0, roi.width, roi.height).contains(seed))
-    throw std::invalid_argument(where + ": seed point " + str(s.seed.x) + "," + str(s.seed.y) +
-                                " is outside the region of interest");
+namespace {
 
+// Segments and measures the footprint on one feature image `gray` (ROI coordinates, CV_32F, grey
+// levels 0..255): the region around `seed` whose level is closer to the seed's than to the
+// dominant levels on either side. Throws std::runtime_error when no footprint stands out.
+TopProfile measure_on_levels(const cv::Mat& gray, const cv::Point2d& seed, const TopSettings& s,
+                             const cv::Rect& roi, const std::string& where) {
   // Pile level at the seed, and the dominant levels below and above it.
   const int half = std::max(3, std::min(roi.width, roi.height) / 100);
   const cv::Rect win = cv::Rect(static_cast<int>(seed.x) - half, static_cast<int>(seed.y) - half,
@@ -245,11 +226,91 @@ TopProfile measure_top_pixels(const cv::Mat& image, const TopSettings& s,
   out.ellipse_angle_deg = el.angle;
   out.ellipticity = 1.0 - out.ellipse_minor_px / out.ellipse_major_px;
   out.pile_level = p;
-  const cv::Point2d off(roi.x, roi.y);
-  out.center += off;
-  for (auto& q : outline) q += off;
   out.outline = std::move(outline);
   return out;
+}
+
+}  // namespace
+
+TopProfile measure_top_pixels(const cv::Mat& image, const TopSettings& s,
+                              const std::string& where) {
+  if (s.rays < 8 || s.rays > 100000)
+    throw std::invalid_argument(where + ": top settings rays must be 8..100000, got " +
+                                str(s.rays));
+  if (s.edge_window_px < 1 || s.edge_window_px > 50)
+    throw std::invalid_argument(where + ": top settings edge_window_px must be 1..50, got " +
+                                str(s.edge_window_px));
+  if (!(s.texture_sigma_px > 0.0 && s.texture_sigma_px <= 50.0))
+    throw std::invalid_argument(where + ": top settings texture_sigma_px must be in (0, 50], got " +
+                                str(s.texture_sigma_px));
+  const cv::Mat gray_full = gray_levels(image, where);
+  check_contrast(gray_full, where);
+  const cv::Rect full(0, 0, gray_full.cols, gray_full.rows);
+  const cv::Rect roi = s.roi.empty() ? full : s.roi;
+  if ((roi & full) != roi || roi.width < 16 || roi.height < 16)
+    throw std::invalid_argument(where + ": roi " + str(roi.x) + "," + str(roi.y) + " " +
+                                str(roi.width) + "x" + str(roi.height) +
+                                " is not inside the image or smaller than 16x16 px");
+  const cv::Point2d seed = (s.seed.x < 0 || s.seed.y < 0)
+                               ? cv::Point2d(0.5 * (roi.width - 1), 0.5 * (roi.height - 1))
+                               : s.seed - cv::Point2d(roi.x, roi.y);
+  if (!cv::Rect2d(0, 0, roi.width, roi.height).contains(seed))
+    throw std::invalid_argument(where + ": seed point " + str(s.seed.x) + "," + str(s.seed.y) +
+                                " is outside the region of interest");
+  const cv::Mat gray_roi = gray_full(roi).clone();
+  auto smoothed = [&](cv::Mat m) {
+    if (s.smoothing_sigma_px > 0.0)
+      cv::GaussianBlur(m, m, cv::Size(), s.smoothing_sigma_px, s.smoothing_sigma_px);
+    return m;
+  };
+
+  // Cues, in order: grey level; colour (blue minus red, offset to mid-grey), for colour images;
+  // local texture (standard deviation of the grey level in a Gaussian window, doubled).
+  std::vector<std::pair<std::string, cv::Mat>> cues;
+  cues.emplace_back("grey level", smoothed(gray_roi.clone()));
+  if (image.channels() >= 3) {
+    std::vector<cv::Mat> ch;
+    cv::split(image(roi), ch);
+    cv::Mat b, r;
+    const double k = image.depth() == CV_16U ? 255.0 / 65535.0 : 1.0;
+    ch[0].convertTo(b, CV_32F, k);
+    ch[2].convertTo(r, CV_32F, k);
+    cues.emplace_back("colour (blue - red)", smoothed(b - r + 128.0));
+  }
+  {
+    cv::Mat mu, mu2;
+    cv::GaussianBlur(gray_roi, mu, cv::Size(), s.texture_sigma_px, s.texture_sigma_px);
+    cv::GaussianBlur(gray_roi.mul(gray_roi), mu2, cv::Size(), s.texture_sigma_px,
+                     s.texture_sigma_px);
+    cv::Mat var = cv::max(mu2 - mu.mul(mu), 0.0), sd;
+    cv::sqrt(var, sd);
+    cues.emplace_back("texture (local grey-level deviation)", sd * 2.0);
+  }
+  std::string failures;
+  for (const auto& [name, level] : cues) {
+    try {
+      TopProfile out = measure_on_levels(level, seed, s, roi, where);
+      // The pile level reported is always the grey level at the seed.
+      const int half = std::max(3, std::min(roi.width, roi.height) / 100);
+      const cv::Rect win = cv::Rect(static_cast<int>(seed.x) - half,
+                                    static_cast<int>(seed.y) - half, 2 * half + 1, 2 * half + 1) &
+                           cv::Rect(0, 0, roi.width, roi.height);
+      const cv::Mat patch = cues.front().second(win).clone();
+      std::vector<float> vals(patch.begin<float>(), patch.end<float>());
+      std::nth_element(vals.begin(), vals.begin() + static_cast<long>(vals.size() / 2), vals.end());
+      out.pile_level = vals[vals.size() / 2];
+      out.cue = name;
+      const cv::Point2d off(roi.x, roi.y);
+      out.center += off;
+      for (auto& q : out.outline) q += off;
+      return out;
+    } catch (const std::runtime_error& e) {
+      std::string msg = e.what();
+      if (msg.rfind(where + ": ", 0) == 0) msg = msg.substr(where.size() + 2);
+      failures += (failures.empty() ? "" : "; ") + name + ": " + msg;
+    }
+  }
+  throw std::runtime_error(where + ": no footprint found by any cue (" + failures + ")");
 }
 
 }  // namespace reposetwin::vision

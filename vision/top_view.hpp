@@ -10,6 +10,15 @@
 // ray (blur preserves it), and the circle (algebraic least squares), the equal-area diameter
 // (shoelace area of the sub-pixel outline) and an ellipse fit (cv::fitEllipse) are computed on
 // those sub-pixel points.
+//
+// Grey level alone is not always enough: rendered rock grey in shade can have nearly the plate's
+// luminance (a bluish plate, RGB about 70,80,95, against rock about 120,115,108 whose shadowed
+// gaps darken it), and the grey-level region then leaks into the plate and reaches the border.
+// The pile differs from such a plate in two other ways a lab photo shares: its colour (rock is
+// neutral or warm, the plate bluish: blue minus red) and its texture (a heap of grains is
+// speckled, a board is uniform: local standard deviation). So the same segmentation and
+// sub-pixel outline are run on these cues in turn (grey level, then colour, then texture) and
+// the first that isolates a footprint not touching the border is used; its name is reported.
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -27,6 +36,7 @@ struct TopSettings {
   int morph_radius_px = 3;          // closing / opening radius [px]
   int rays = 360;                   // sub-pixel rays around the outline [-]
   int edge_window_px = 6;           // half length of the window along each ray [px]
+  double texture_sigma_px = 4.0;    // Gaussian window of the local texture cue [px]
 };
 
 /// The footprint measurement in pixels (full-image coordinates).
@@ -43,6 +53,7 @@ struct TopProfile {
   double ellipticity = 0.0;               // 1 - minor / major [-]
   std::vector<cv::Point2d> outline;       // sub-pixel outline, one point per ray [px]
   double pile_level = 0.0;                // grey level of the pile at the seed [grey levels]
+  std::string cue;                        // the cue that found the footprint (e.g. "grey level")
 };
 
 /// Measures the footprint in a top view. Throws std::invalid_argument for unusable input and
