@@ -261,16 +261,7 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
 }
 
 SceneConfig parse_scene_text(const std::string& text, const std::string& file) {
-  toml::table doc;
-  try {
-    doc = toml::parse(text, file);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream os;
-    os << file << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
-       << e.description();
-    throw InputError(os.str());
-  }
-  return parse_scene_table(doc, file);
+  return parse_scene_table(parse_toml(text, file), file);
 }
 
 SceneConfig parse_scene_file(const std::string& path) {

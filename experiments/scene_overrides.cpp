@@ -14,15 +14,7 @@ SceneConfig load_scene(const std::string& path, const std::vector<std::string>& 
   if (!path.empty() && !std::filesystem::exists(path))
     throw InputError(path + ": scene file does not exist");
   const std::string text = path.empty() ? embedded_quick_scene() : read_file(path);
-  toml::table doc;
-  try {
-    doc = toml::parse(text, file);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream os;
-    os << file << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
-       << e.description();
-    throw InputError(os.str());
-  }
+  toml::table doc = parse_toml(text, file);
   for (const std::string& s : sets) {
     const auto eq = s.find('=');
     if (eq == std::string::npos || eq == 0)

@@ -16,6 +16,17 @@ std::string show_node(const toml::node& node) {
   return os.str();
 }
 
+toml::table parse_toml(const std::string& text, const std::string& file) {
+  try {
+    return toml::parse(text, file);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << file << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
+       << e.description();
+    throw InputError(os.str());
+  }
+}
+
 TableReader::TableReader(const toml::table& table, std::string file, std::string path)
     : table_(&table), file_(std::move(file)), path_(std::move(path)) {}
 

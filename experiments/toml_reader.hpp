@@ -58,6 +58,9 @@ class TableReader {
   std::set<std::string> used_;
 };
 
+/// Parses TOML text; a syntax error becomes an InputError "file:line:column: description".
+toml::table parse_toml(const std::string& text, const std::string& file);
+
 /// The text of a TOML value for messages.
 std::string show_node(const toml::node& node);
 

@@ -2,6 +2,8 @@
 // case appears with its angle, and the HTML links the case files.
 #include <gtest/gtest.h>
 
+#include "../support/tiny_scene.hpp"
+
 #include <filesystem>
 #include <fstream>
 
@@ -16,39 +18,7 @@ namespace reposetwin::experiments {
 namespace {
 namespace fs = std::filesystem;
 
-const char* kTinyScene = R"(
-[scene]
-name = "tiny"
-seed = 1
-[sample]
-mass_kg = 0.006
-material = "rock"
-[sample.psd]
-sieve_mm = [3.0, 3.5, 4.0]
-passing_percent = [0.0, 50.0, 100.0]
-[materials.rock]
-density_kg_m3 = 2760.0
-youngs_modulus_pa = 46.8e9
-poisson_ratio = 0.19
-[contacts.rock-rock]
-restitution = 0.5
-friction = 0.5
-rolling_friction = 0.3
-[container]
-kind = "funnel"
-material = "rock"
-bottom_diameter_m = 0.02
-top_diameter_m = 0.05
-height_m = 0.04
-[plate]
-material = "rock"
-[procedure]
-lift_speed_m_s = 0.05
-settle_speed_m_s = 0.01
-[numerics]
-softened_youngs_modulus_pa = 5e6
-rayleigh_fraction = 0.3
-)";
+using test_support::kTinyScene;
 
 TEST(Report, BuildsFromATinyCampaignWithEveryCase) {
   const fs::path dir = fs::temp_directory_path() / "reposetwin_report_test";
