@@ -100,19 +100,24 @@ json render_and_measure(const std::vector<Eigen::Vector3d>& positions,
   return out;
 }
 
-json render_and_measure_run(const std::string& run_dir, const ImageSettings& settings) {
+json render_and_measure_run(const std::string& run_dir, const ImageSettings& settings,
+                            const std::string& frame) {
   const fs::path dir(run_dir);
-  const fs::path result = dir / "result.json", snapshot = dir / "final.vtp";
-  if (!fs::exists(result) || !fs::exists(snapshot))
-    throw InputError(run_dir + ": not a finished run (result.json and final.vtp are needed)");
+  const fs::path result = dir / "result.json";
+  const fs::path snapshot = dir / (frame.empty() ? "final.vtp" : frame);
+  if (!fs::exists(result))
+    throw InputError(run_dir + ": not a finished run (result.json is missing)");
+  if (!fs::exists(snapshot)) throw InputError(snapshot.string() + ": snapshot does not exist");
   const json r = json::parse(read_file(result.string()));
-  if (r.at("pile").at("status") == "no pile")
+  if (frame.empty() && r.at("pile").at("status") == "no pile")
     throw InputError(run_dir + ": the run formed no pile (" +
                      r["stop"]["detail"].get<std::string>() + "); nothing to photograph");
   const SnapshotParticles p = read_vtp(snapshot.string());
   json prov = r.at("provenance");
   prov["run_dir"] = run_dir;
-  return render_and_measure(p.x, p.radius, p.material, (dir / "images").string(), settings, prov);
+  prov["snapshot"] = snapshot.filename().string();
+  const fs::path out = frame.empty() ? dir / "images" : dir / "images" / snapshot.stem();
+  return render_and_measure(p.x, p.radius, p.material, out.string(), settings, prov);
 }
 
 }  // namespace reposetwin::experiments

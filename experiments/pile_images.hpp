@@ -37,8 +37,11 @@ nlohmann::json render_and_measure(const std::vector<Eigen::Vector3d>& positions,
                                   const ImageSettings& settings,
                                   const nlohmann::json& provenance = nlohmann::json::object());
 
-/// The same for a finished run folder: reads RUN_DIR/final.vtp and result.json (provenance),
-/// writes RUN_DIR/images/. Throws InputError when the folder holds no finished run.
-nlohmann::json render_and_measure_run(const std::string& run_dir, const ImageSettings& settings);
+/// The same for a finished run folder: reads RUN_DIR/final.vtp (or `frame`, a snapshot of the
+/// run's series such as "frames/frame_00012.vtp") and result.json (provenance), writes
+/// RUN_DIR/images/ (RUN_DIR/images/<frame name>/ for a frame). Throws InputError when the folder
+/// holds no finished run or the frame does not exist.
+nlohmann::json render_and_measure_run(const std::string& run_dir, const ImageSettings& settings,
+                                      const std::string& frame = "");
 
 }  // namespace reposetwin::experiments

@@ -1,5 +1,7 @@
 #include <iostream>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "apps/reposetwin/commands.hpp"
 #include "experiments/pile_images.hpp"
@@ -10,6 +12,7 @@ void add_render_command(CLI::App& app) {
   struct Args {
     std::string run_dir;
     experiments::ImageSettings images;
+    std::vector<std::string> frames;
   };
   auto args = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
@@ -22,7 +25,11 @@ void add_render_command(CLI::App& app) {
   cmd->add_option("--camera-height", args->images.camera_height_m,
                   "Side camera height above the plate [m]")->capture_default_str();
   cmd->add_flag("!--no-top", args->images.top_view, "Skip the top view");
+  cmd->add_option("--frame", args->frames,
+                  "Also photograph these snapshots of the series (e.g. frames/frame_00004.vtp)");
   cmd->callback([args]() {
+    for (const std::string& f : args->frames)
+      experiments::render_and_measure_run(args->run_dir, args->images, f);
     const nlohmann::json m = experiments::render_and_measure_run(args->run_dir, args->images);
     std::cout << nlohmann::json{{"theta_deg", m["theta_deg"]},
                                 {"theta_sd_deg", m["theta_sd_deg"]},

@@ -44,3 +44,35 @@ INSTANTIATE_TEST_SUITE_P(Angles, RenderedCone, ::testing::Values(25.0, 35.0));
 
 }  // namespace
 }  // namespace reposetwin::experiments
+
+#include "../support/tiny_scene.hpp"
+#include "experiments/pile_test.hpp"
+#include "experiments/scene.hpp"
+#include "experiments/toml_reader.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+
+TEST(RenderRun, FinalPileAndChosenFramesArePhotographed) {
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_render_run";
+  fs::remove_all(dir);
+  RunOptions opt;
+  opt.out_dir = (dir / "run").string();
+  opt.progress = false;
+  run_pile_test(parse_scene_text(test_support::kTinyScene, (dir / "tiny.toml").string()), opt);
+  ImageSettings s;
+  s.width_px = 640;
+  s.height_px = 360;
+  s.side_views = 2;
+  const nlohmann::json m = render_and_measure_run(opt.out_dir, s);
+  EXPECT_GT(m["theta_deg"].get<double>(), 5.0);
+  EXPECT_EQ(m["provenance"]["seed"], 1);
+  EXPECT_TRUE(fs::exists(dir / "run" / "images" / "side_az000.png"));
+  render_and_measure_run(opt.out_dir, s, "frames/frame_00000.vtp");
+  EXPECT_TRUE(fs::exists(dir / "run" / "images" / "frame_00000" / "measurement.json"));
+  EXPECT_THROW(render_and_measure_run(opt.out_dir, s, "frames/nope.vtp"), InputError);
+  EXPECT_THROW(render_and_measure_run((dir / "empty").string(), s), InputError);
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
