@@ -60,6 +60,29 @@ class Reader {
   std::string path_;
 };
 
+/// The state's contents in file order, for writing (const State) and reading (State): one list,
+/// so the reader cannot drift from the writer.
+template <class Archive, class StateT>
+void transfer_state(Archive& ar, StateT& s) {
+#define REPOSETWIN_TRANSFER_FIELD(type, name, doc) ar.vec(s.particles.name);
+  REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_TRANSFER_FIELD)
+#undef REPOSETWIN_TRANSFER_FIELD
+  ar.pod(s.time);
+  ar.pod(s.step);
+  ar.pod(s.next_id);
+  ar.pod(s.forces_valid);
+  ar.vec(s.walls);
+  ar.pod(s.neighbors.skin);
+  ar.pod(s.neighbors.builds);
+  ar.vec(s.neighbors.start);
+  ar.vec(s.neighbors.second);
+  ar.vec(s.neighbors.history);
+  ar.vec(s.neighbors.in_start);
+  ar.vec(s.neighbors.in_pairs);
+  ar.vec(s.neighbors.x_at_build);
+  ar.vec(s.pair_overlap);
+}
+
 }  // namespace
 
 void write_checkpoint(const World& world, const std::string& path) {
@@ -72,24 +95,7 @@ void write_checkpoint(const World& world, const std::string& path) {
     Writer w(out);
     w.pod(world.model().dt);
     w.pod<std::uint64_t>(world.model().walls.size());
-#define REPOSETWIN_WRITE_FIELD(type, name, doc) w.vec(s.particles.name);
-    REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_WRITE_FIELD)
-#undef REPOSETWIN_WRITE_FIELD
-    w.pod(s.time);
-    w.pod(s.step);
-    w.pod(s.next_id);
-    w.pod(s.forces_valid);
-    w.vec(s.walls);
-    const NeighborList& nl = s.neighbors;
-    w.pod(nl.skin);
-    w.pod(nl.builds);
-    w.vec(nl.start);
-    w.vec(nl.second);
-    w.vec(nl.history);
-    w.vec(nl.in_start);
-    w.vec(nl.in_pairs);
-    w.vec(nl.x_at_build);
-    w.vec(s.pair_overlap);
+    transfer_state(w, s);
     out.flush();
     if (!out) throw std::runtime_error(path + ": checkpoint write failed");
   }
@@ -112,29 +118,13 @@ void read_checkpoint(World& world, const std::string& path) {
   r.pod(nwalls);
   if (nwalls != world.model().walls.size()) r.fail("was made with another number of walls");
   State s;
-#define REPOSETWIN_READ_FIELD(type, name, doc) r.vec(s.particles.name);
-  REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_READ_FIELD)
-#undef REPOSETWIN_READ_FIELD
+  transfer_state(r, s);
   const std::size_t n = s.particles.x.size();
 #define REPOSETWIN_CHECK_FIELD(type, name, doc) \
   if (s.particles.name.size() != n) r.fail("has particle arrays of different lengths");
   REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_CHECK_FIELD)
 #undef REPOSETWIN_CHECK_FIELD
-  r.pod(s.time);
-  r.pod(s.step);
-  r.pod(s.next_id);
-  r.pod(s.forces_valid);
-  r.vec(s.walls);
   NeighborList& nl = s.neighbors;
-  r.pod(nl.skin);
-  r.pod(nl.builds);
-  r.vec(nl.start);
-  r.vec(nl.second);
-  r.vec(nl.history);
-  r.vec(nl.in_start);
-  r.vec(nl.in_pairs);
-  r.vec(nl.x_at_build);
-  r.vec(s.pair_overlap);
   if (s.walls.size() != nwalls) r.fail("has an inconsistent wall count");
   const std::size_t np = nl.second.size();
   if (nl.history.size() != np || s.pair_overlap.size() != np)
