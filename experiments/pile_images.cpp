@@ -1,5 +1,6 @@
 #include "experiments/pile_images.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
@@ -31,6 +32,8 @@ json render_and_measure(const std::vector<Eigen::Vector3d>& positions,
   }
   scene.radii = radii;
   scene.material_ids = materials;
+  // The plate is as large as the lab's board must be: wider than the pile's footprint.
+  scene.plate.half_size_m = std::max(scene.plate.half_size_m, 1.3 * render::pile_extent(scene).radius_m);
   fs::create_directories(out_dir);
   render::Renderer renderer;
   render::RenderOptions options;

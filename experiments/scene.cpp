@@ -1,5 +1,6 @@
 #include "experiments/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -206,6 +207,8 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
     if (!(p.lattice_gap >= 0)) t->fail("lattice_gap", "= " + num(p.lattice_gap) + " must not be negative");
     t->finish();
   }
+  // Escape limit scaled to the test: the fill lattice may stand well above a tall column.
+  s.settings.escape_distance = std::max(1.0, 10.0 * s.container.height);
   if (auto t = root.table("numerics", true)) {
     sim::Settings& n = s.settings;
     n.rayleigh_fraction = t->number("rayleigh_fraction", n.rayleigh_fraction);

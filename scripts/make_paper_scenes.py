@@ -103,7 +103,12 @@ def scene(name, description, mass_kg, psd, w, mu_r, e_soft, soft_note, d_min_mm=
         lines.append(f"d_min_mm = {d_min_mm}  # declared reduction: finer particles not simulated")
     text = "\n".join(lines) + "\n" + COMMON.format(mu_r=mu_r)
     text += COLUMN if column else FUNNEL.format(w=w)
-    text += NUMERICS.format(e_soft=e_soft, soft_note=soft_note, frames=frames)
+    numerics = NUMERICS.format(e_soft=e_soft, soft_note=soft_note, frames=frames)
+    if column:  # a tall lattice falls longer into the column, and big rocks ring longer
+        numerics = numerics.replace("settle_speed_m_s = 0.005\n",
+                                    "settle_speed_m_s = 0.005\nfill_settle_max_s = 15.0\n"
+                                    "final_settle_max_s = 15.0\n")
+    text += numerics
     (OUT / f"{name}.toml").write_text(text)
 
 
