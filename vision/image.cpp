@@ -82,15 +82,8 @@ void check_contrast(const cv::Mat& gray, const std::string& where, double min_co
   cv::Mat sub = gray;
   const int step = std::max(1, std::max(gray.cols, gray.rows) / 500);
   if (step > 1) cv::resize(gray, sub, cv::Size(), 1.0 / step, 1.0 / step, cv::INTER_NEAREST);
-  cv::Mat g8;
-  sub.convertTo(g8, CV_8U);
-  const int channels[] = {0};
-  const int bins[] = {256};
-  const float range[] = {0.f, 256.f};
-  const float* ranges[] = {range};
-  cv::Mat hist;
-  cv::calcHist(&g8, 1, channels, cv::Mat(), hist, 1, bins, ranges);
-  const double total = static_cast<double>(g8.total());
+  const cv::Mat hist = histogram256(sub);
+  const double total = static_cast<double>(sub.total());
   double cum = 0.0;
   int p1 = -1, p99 = 255;
   for (int i = 0; i < 256; ++i) {
@@ -110,6 +103,18 @@ void check_contrast(const cv::Mat& gray, const std::string& where, double min_co
     throw std::invalid_argument(where +
                                 ": image has no contrast (grey levels 1st-99th percentile " +
                                 str(p1) + ".." + str(p99) + ")");
+}
+
+cv::Mat histogram256(const cv::Mat& gray) {
+  cv::Mat g8;
+  gray.convertTo(g8, CV_8U);
+  const int channels[] = {0};
+  const int bins[] = {256};
+  const float range[] = {0.f, 256.f};
+  const float* ranges[] = {range};
+  cv::Mat hist;
+  cv::calcHist(&g8, 1, channels, cv::Mat(), hist, 1, bins, ranges);
+  return hist;
 }
 
 double otsu_threshold(const cv::Mat& values, double lo, double hi, const cv::Mat& mask) {

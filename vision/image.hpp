@@ -51,6 +51,9 @@ cv::Mat flat_field(const cv::Mat& gray, const cv::Mat& backdrop, const FlatField
                    const std::string& where = "image");
 
 /// Otsu's threshold of a CV_32F image over the values in [lo, hi] (histogram of 256 bins).
+/// The 256-bin histogram (CV_32F, 256 x 1) of a grey image converted to 8 bits.
+cv::Mat histogram256(const cv::Mat& gray);
+
 double otsu_threshold(const cv::Mat& values, double lo, double hi, const cv::Mat& mask = cv::Mat());
 
 }  // namespace reposetwin::vision

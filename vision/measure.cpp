@@ -108,12 +108,21 @@ ScaleSpec scale_from_sidecar(const std::string& path) {
   return s;
 }
 
-SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
-                             const SideSettings& settings, const std::string& where) {
+namespace {
+
+/// Rejects an empty image and a non-positive or non-finite given scale.
+void check_input(const cv::Mat& image, const ScaleSpec& scale, const std::string& where) {
   if (image.empty()) throw std::invalid_argument(where + ": image is empty (0 x 0 pixels)");
   if (scale.mm_per_px && !(*scale.mm_per_px > 0.0 && std::isfinite(*scale.mm_per_px)))
     throw std::invalid_argument(where + ": mm_per_px must be a positive number, got " +
                                 str(*scale.mm_per_px));
+}
+
+}  // namespace
+
+SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
+                             const SideSettings& settings, const std::string& where) {
+  check_input(image, scale, where);
   if (scale.camera) check_camera_size(*scale.camera, image, where);
   SideMeasurement m;
   m.source = where;
@@ -249,10 +258,7 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
 
 TopMeasurement measure_top(const cv::Mat& image, const ScaleSpec& scale,
                            const TopSettings& settings, const std::string& where) {
-  if (image.empty()) throw std::invalid_argument(where + ": image is empty (0 x 0 pixels)");
-  if (scale.mm_per_px && !(*scale.mm_per_px > 0.0 && std::isfinite(*scale.mm_per_px)))
-    throw std::invalid_argument(where + ": mm_per_px must be a positive number, got " +
-                                str(*scale.mm_per_px));
+  check_input(image, scale, where);
   TopMeasurement m;
   m.source = where;
   m.note = scale.note;

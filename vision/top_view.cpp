@@ -79,15 +79,8 @@ TopProfile measure_on_levels(const cv::Mat& gray, const cv::Point2d& seed, const
   std::vector<float> vals(patch.begin<float>(), patch.end<float>());
   std::nth_element(vals.begin(), vals.begin() + static_cast<long>(vals.size() / 2), vals.end());
   const double p = vals[vals.size() / 2];
-  cv::Mat g8;
-  gray.convertTo(g8, CV_8U);
-  const int channels[] = {0};
-  const int bins[] = {256};
-  const float range[] = {0.f, 256.f};
-  const float* ranges[] = {range};
-  cv::Mat hist;
-  cv::calcHist(&g8, 1, channels, cv::Mat(), hist, 1, bins, ranges);
-  const double total = static_cast<double>(g8.total());
+  const cv::Mat hist = histogram256(gray);
+  const double total = static_cast<double>(gray.total());
   auto dominant = [&](int lo, int hi) {
     int best = -1;
     float count = 0.0f;
