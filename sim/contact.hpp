@@ -11,6 +11,10 @@
 //   forces and torques returned act on i; body j receives -force and its own torque.
 // The equations cited are those of EDEM's Hertz-Mindlin (no slip) model, as also used by
 // LIGGGHTS (normal_model hertz, tangential_model history) and LAMMPS (hertz/material, mindlin).
+// Two optional effects, off by default, each switched on per material pair by one parameter:
+// simplified-JKR cohesion (sjkr_cohesion) and a rolling coefficient that scales with the contact
+// diameter (rolling_size_factor). Both are gated by flags precomputed in ContactConstants, so
+// with the defaults the kernel does exactly the arithmetic it did without them.
 #pragma once
 
 #include <Eigen/Core>
@@ -43,12 +47,16 @@ struct RollingModelInfo {
 inline constexpr RollingModelInfo kRollingModels[] = {
     {"none", RollingModel::kNone, "none", "-", "-"},
     {"cdt", RollingModel::kCdt,
-     "M_i = -mu_r |F_n| a_i w_i/|w_i| on each body separately (EDEM Standard, type A)",
+     "M_i = -mu_r |F_n| a_i w_i/|w_i| on each body separately (EDEM Standard, type A); "
+     "mu_r -> mu_r (d_c/d_ref)^alpha if rolling_size_exponent alpha != 0 (d_c = 4 R*, 2 R_i on "
+     "a wall)",
      "a_i: the body's own centre-to-contact distance (about R_i, as EDEM)",
      "w_i: the body's own angular velocity (as EDEM; LIGGGHTS cdt uses w_i - w_j and R*)"},
     {"epsd", RollingModel::kEpsd,
      "incremental spring k_r = k_t R_r^2 on the relative rolling rotation, capped at "
-     "mu_r |F_n| R_r; viscous damping 2 eta_r sqrt(I_r k_r) below the cap (type C, LIGGGHTS epsd2)",
+     "mu_r |F_n| R_r; viscous damping 2 eta_r sqrt(I_r k_r) below the cap (type C, LIGGGHTS "
+     "epsd2); mu_r -> mu_r (d_c/d_ref)^alpha if rolling_size_exponent alpha != 0 (d_c = 4 R*, "
+     "2 R_i on a wall)",
      "R_r = R* = R_i R_j / (R_i + R_j) (R_i on a wall), as LIGGGHTS and LAMMPS",
      "w_r = (w_i - w_j) minus its twist component along n"},
 };
@@ -75,6 +83,11 @@ struct ContactConstants {
   double mu_r = 0.0;     // rolling resistance coefficient [-]
   double eta_r = 0.0;    // EPSD rolling damping ratio [-]
   RollingModel rolling = RollingModel::kNone;
+  double cohesion_energy_density = 0.0;  // k_c of the simplified-JKR cohesion [J/m^3 = Pa]
+  bool cohesive = false;                 // k_c > 0: the kernel adds the cohesive force
+  double rolling_size_exponent = 0.0;    // alpha in mu_r (d_c / d_ref)^alpha [-]
+  double rolling_reference_diameter = 0.0;  // d_ref [m]
+  bool size_dependent_rolling = false;   // alpha != 0: the kernel scales mu_r with d_c
 };
 
 /// Damping factor beta from the coefficient of restitution e (EDEM, LIGGGHTS, LAMMPS):
@@ -97,6 +110,8 @@ struct ContactInput {
   double a_i, a_j;   // lever arms [m] (a_j = 0 for a wall)
   Vec3 v_rel;        // velocity of i relative to j at the contact point [m/s]
   Vec3 w_i, w_j;     // angular velocities [rad/s] (w_j = 0 for a wall)
+  double contact_diameter = 0.0;  // d_c: 4 R* for a pair, 2 R_i on a wall [m]; read only by
+                                  // size-dependent rolling (ContactConstants::size_dependent_rolling)
 };
 
 /// History carried by a contact from step to step.
@@ -109,7 +124,7 @@ struct ContactOutput {
   Vec3 force;     // on i [N]
   Vec3 torque_i;  // on i [N m]
   Vec3 torque_j;  // on j [N m]
-  double normal;  // signed normal force magnitude (elastic + damping) [N]
+  double normal;  // signed normal force magnitude (elastic + damping, without cohesion) [N]
 };
 
 /// Hertz normal force with restitution damping (EDEM Hertz-Mindlin):
@@ -164,9 +179,10 @@ inline Vec3 rolling_cdt(double mu_r, double f_n, double lever, const Vec3& w) {
 ///   k_r = S_t R_r^2, M_k <- M_k - k_r w_r dt, |M_k| <= mu_r F_n R_r,
 ///   M_d = -2 eta_r sqrt(I_r k_r) w_r while |M_k| is below the cap (zero at the cap).
 /// Returns the torque on i; j receives its negative. `spring` is the torque M_k on i.
-inline Vec3 rolling_epsd(const ContactConstants& c, const Vec3& n, double delta, double r_eff,
-                         double i_roll, const Vec3& w_i, const Vec3& w_j, double f_n, double dt,
-                         Vec3& spring) {
+/// `mu_r` is the rolling coefficient in force (c.mu_r, or c.mu_r scaled by size).
+inline Vec3 rolling_epsd(const ContactConstants& c, double mu_r, const Vec3& n, double delta,
+                         double r_eff, double i_roll, const Vec3& w_i, const Vec3& w_j,
+                         double f_n, double dt, Vec3& spring) {
   Vec3 w_r = w_i - w_j;
   w_r -= w_r.dot(n) * n;  // rolling only: remove the twist about n
   const double len = spring.norm();
@@ -177,7 +193,7 @@ inline Vec3 rolling_epsd(const ContactConstants& c, const Vec3& n, double delta,
   }
   const double k_r = 8.0 * c.g_star * std::sqrt(r_eff * delta) * r_eff * r_eff;
   spring -= k_r * dt * w_r;
-  const double cap = c.mu_r * std::max(f_n, 0.0) * r_eff;
+  const double cap = mu_r * std::max(f_n, 0.0) * r_eff;
   const double m = spring.norm();
   if (m >= cap) {
     spring *= m > 0.0 ? cap / m : 0.0;
@@ -186,7 +202,47 @@ inline Vec3 rolling_epsd(const ContactConstants& c, const Vec3& n, double delta,
   return spring - (2.0 * c.eta_r * std::sqrt(i_roll * k_r)) * w_r;
 }
 
-/// The full Hertz-Mindlin contact with rolling resistance: normal, tangential, rolling.
+/// The same with the pair's own coefficient c.mu_r.
+inline Vec3 rolling_epsd(const ContactConstants& c, const Vec3& n, double delta, double r_eff,
+                         double i_roll, const Vec3& w_i, const Vec3& w_j, double f_n, double dt,
+                         Vec3& spring) {
+  return rolling_epsd(c, c.mu_r, n, delta, r_eff, i_roll, w_i, w_j, f_n, dt, spring);
+}
+
+/// Simplified-JKR cohesion (the physical law of LIGGGHTS "cohesion sjkr"; Johnson, Kendall,
+/// Roberts 1971 reduced to a force proportional to the contact area):
+///   F_c = k_c A,   A = pi a^2,   a^2 = R* delta (the Hertz contact radius),
+/// so F_c = pi k_c R* delta, attractive (it acts on i along -n), only while delta > 0; it vanishes
+/// continuously at first touch and at separation. k_c is a cohesion energy density [J/m^3].
+/// Note on porting k_c: LIGGGHTS sjkr takes A as the area of the geometric sphere-sphere
+/// intersection, pi/4 (d-R_i-R_j)(d+R_i-R_j)(d-R_i+R_j)(d+R_i+R_j)/d^2 ~ 2 pi R* delta for
+/// small delta (twice the Hertz area), so a LIGGGHTS value k corresponds to k_c = 2 k here.
+/// Returns the magnitude F_c >= 0 [N].
+inline double sjkr_cohesion(double k_c, double r_eff, double delta) {
+  constexpr double kPi = 3.14159265358979323846;
+  return kPi * k_c * r_eff * delta;
+}
+
+/// Size factor of the rolling coefficient, (d_c / d_ref)^alpha [-]: with alpha < 0 small
+/// particles resist rolling more (the fines), with alpha > 0 large ones do. d_c = 4 R* for a
+/// pair (the diameter for equal spheres), 2 R_i on a wall; d_ref > 0 (Model::finalize checks).
+inline double rolling_size_factor(const ContactConstants& c, double contact_diameter) {
+  return std::pow(contact_diameter / c.rolling_reference_diameter, c.rolling_size_exponent);
+}
+
+/// The full Hertz-Mindlin contact with rolling resistance: normal, tangential, rolling, and the
+/// optional cohesion and size-dependent rolling coefficient.
+///
+/// Which normal force caps friction under cohesion: the Coulomb limit mu_s F_n of
+/// mindlin_tangential and the rolling caps use the repulsive Hertz force F_n (elastic + damping,
+/// hertz_normal), not the net force F_n - F_c; this is LIGGGHTS' "tangential_reduce on" choice
+/// for its cohesion models. Reasons: (1) in JKR-type adhesion the friction a contact can carry
+/// grows with its real area, i.e. with the compressive (Hertz) load the adhesion adds, whereas
+/// the net force would let cohesion remove friction: a grain held to a wall by cohesion alone
+/// (net normal force 0) would slide freely, and one pulled on would get a negative cap; (2) the
+/// cap and the rolling torque then stay continuous and non-negative through every contact, as
+/// without cohesion; (3) with k_c = 0 the cap is unchanged by construction. Only the force on
+/// the bodies carries -F_c n.
 inline ContactOutput hertz_mindlin(const ContactConstants& c, const ContactInput& in, double dt,
                                    ContactHistory& h) {
   ContactOutput out;
@@ -197,21 +253,27 @@ inline ContactOutput hertz_mindlin(const ContactConstants& c, const ContactInput
   const Vec3 f_t =
       mindlin_tangential(c, in.n, in.delta, in.r_eff, in.m_eff, v_t, f_n, dt, h.tangential);
   out.normal = f_n;
-  out.force = f_n * in.n + f_t;
+  if (c.cohesive) {
+    out.force = (f_n - sjkr_cohesion(c.cohesion_energy_density, in.r_eff, in.delta)) * in.n + f_t;
+  } else {
+    out.force = f_n * in.n + f_t;
+  }
   // Lever from i's centre to the contact point is -a_i n; from j's centre it is +a_j n.
   const Vec3 nxf = in.n.cross(f_t);
   out.torque_i = -in.a_i * nxf;
   out.torque_j = -in.a_j * nxf;
+  const double mu_r =
+      c.size_dependent_rolling ? c.mu_r * rolling_size_factor(c, in.contact_diameter) : c.mu_r;
   switch (c.rolling) {
     case RollingModel::kNone:
       break;
     case RollingModel::kCdt:
-      out.torque_i += rolling_cdt(c.mu_r, f_n, in.a_i, in.w_i);
-      out.torque_j += rolling_cdt(c.mu_r, f_n, in.a_j, in.w_j);
+      out.torque_i += rolling_cdt(mu_r, f_n, in.a_i, in.w_i);
+      out.torque_j += rolling_cdt(mu_r, f_n, in.a_j, in.w_j);
       break;
     case RollingModel::kEpsd: {
-      const Vec3 m = rolling_epsd(c, in.n, in.delta, in.r_eff, in.i_roll, in.w_i, in.w_j, f_n,
-                                  dt, h.rolling);
+      const Vec3 m = rolling_epsd(c, mu_r, in.n, in.delta, in.r_eff, in.i_roll, in.w_i, in.w_j,
+                                  f_n, dt, h.rolling);
       out.torque_i += m;
       out.torque_j -= m;
       break;

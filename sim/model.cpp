@@ -70,6 +70,17 @@ void Model::finalize(double rmin, double rmax) {
         bad(f + "rolling_friction", p.rolling_friction, "must not be negative");
       if (!(p.rolling_damping >= 0.0))
         bad(f + "rolling_damping", p.rolling_damping, "must not be negative");
+      if (!(p.cohesion_energy_density >= 0.0 && std::isfinite(p.cohesion_energy_density)))
+        bad(f + "cohesion_energy_density", p.cohesion_energy_density,
+            "must be finite and not negative [J/m^3]");
+      if (!std::isfinite(p.rolling_size_exponent))
+        bad(f + "rolling_size_exponent", p.rolling_size_exponent, "must be finite");
+      if (!(p.rolling_reference_diameter >= 0.0 && std::isfinite(p.rolling_reference_diameter)))
+        bad(f + "rolling_reference_diameter", p.rolling_reference_diameter,
+            "must be finite and not negative [m]");
+      if (p.rolling_size_exponent != 0.0 && !(p.rolling_reference_diameter > 0.0))
+        bad(f + "rolling_reference_diameter", p.rolling_reference_diameter,
+            "must be positive when rolling_size_exponent is not 0 [m]");
       const double ea = youngs_modulus_used(a), eb = youngs_modulus_used(b);
       const double na = materials[a].poisson_ratio, nb = materials[b].poisson_ratio;
       ContactConstants& c = table.consts[a * n + b];
@@ -80,6 +91,11 @@ void Model::finalize(double rmin, double rmax) {
       c.mu_r = p.rolling_friction;
       c.eta_r = p.rolling_damping;
       c.rolling = p.rolling_model;
+      c.cohesion_energy_density = p.cohesion_energy_density;
+      c.cohesive = p.cohesion_energy_density > 0.0;
+      c.rolling_size_exponent = p.rolling_size_exponent;
+      c.rolling_reference_diameter = p.rolling_reference_diameter;
+      c.size_dependent_rolling = p.rolling_size_exponent != 0.0;
     }
   }
   if (static_cast<int>(walls.size()) > kMaxWalls)

@@ -31,6 +31,13 @@ struct PairParams {
   double rolling_friction = 0.15;  // mu_r [-], meaning depends on the rolling model (contact.hpp)
   RollingModel rolling_model = RollingModel::kEpsd;  // rolling resistance law
   double rolling_damping = 0.3;    // eta_r, EPSD viscous damping ratio [-]
+  // Optional effects, off by default (contact.hpp: sjkr_cohesion, rolling_size_factor).
+  double cohesion_energy_density = 0.0;  // k_c [J/m^3 = Pa]: simplified-JKR cohesion
+                                         // F_c = pi k_c R* delta while overlapping; 0 = none
+  double rolling_size_exponent = 0.0;    // alpha [-]: mu_r,eff = mu_r (d_c / d_ref)^alpha,
+                                         // d_c = 4 R* (2 R_i on a wall); 0 = mu_r for all sizes
+  double rolling_reference_diameter = 0.0;  // d_ref [m], where mu_r,eff = mu_r; must be > 0
+                                            // when alpha != 0 (unused otherwise)
 };
 
 /// Axisymmetric wall geometry about a vertical axis through `axis_xy`.

@@ -144,6 +144,7 @@ void World::pair_forces() {
       in.w_i = p.w[i];
       in.w_j = p.w[j];
       in.v_rel = p.v[i] - p.v[j] - in.a_i * p.w[i].cross(in.n) - in.a_j * p.w[j].cross(in.n);
+      in.contact_diameter = 4.0 * in.r_eff;  // = d for equal spheres (size-dependent rolling)
       const ContactOutput out =
           hertz_mindlin(table.c(p.material[i], p.material[j]), in, dt, nl.history[k]);
       state_.pair_force[k] = out.force;
@@ -211,6 +212,7 @@ void World::wall_forces() {
       in.w_i = p.w[i];
       in.w_j = Vec3::Zero();
       in.v_rel = p.v[i] - in.a_i * p.w[i].cross(normal) - ws.velocity;
+      in.contact_diameter = 2.0 * ri;  // the particle's diameter (size-dependent rolling)
       const ContactOutput out = hertz_mindlin(table.c(p.material[i], spec.material), in, dt, h);
       p.force[i] += out.force;
       p.torque[i] += out.torque_i;
