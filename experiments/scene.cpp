@@ -48,6 +48,23 @@ sim::PairParams read_contact(TableReader t) {
     t.fail("rolling_model", "= \"" + model + "\" is not a rolling model (known:" + known + ")");
   }
   p.rolling_model = info->model;
+  // Optional effects (off by default): simplified-JKR cohesion and size-dependent rolling.
+  p.cohesion_energy_density = t.number("cohesion_energy_density", p.cohesion_energy_density);
+  p.rolling_size_exponent = t.number("rolling_size_exponent", p.rolling_size_exponent);
+  p.rolling_reference_diameter =
+      t.number("rolling_reference_diameter_m", p.rolling_reference_diameter);
+  if (!(p.cohesion_energy_density >= 0 && std::isfinite(p.cohesion_energy_density)))
+    t.fail("cohesion_energy_density",
+           "= " + num(p.cohesion_energy_density) + " must be finite and not negative [J/m^3]");
+  if (!std::isfinite(p.rolling_size_exponent))
+    t.fail("rolling_size_exponent", "= " + num(p.rolling_size_exponent) + " must be finite");
+  if (!(p.rolling_reference_diameter >= 0 && std::isfinite(p.rolling_reference_diameter)))
+    t.fail("rolling_reference_diameter_m",
+           "= " + num(p.rolling_reference_diameter) + " must be finite and not negative [m]");
+  if (p.rolling_size_exponent != 0 && !(p.rolling_reference_diameter > 0))
+    t.fail("rolling_reference_diameter_m", "= " + num(p.rolling_reference_diameter) +
+                                               " must be positive when rolling_size_exponent = " +
+                                               num(p.rolling_size_exponent) + " is not 0");
   if (!(p.restitution > 0 && p.restitution <= 1))
     t.fail("restitution", "= " + num(p.restitution) + " must lie in (0, 1]");
   if (!(p.friction >= 0)) t.fail("friction", "= " + num(p.friction) + " must not be negative");
@@ -57,6 +74,29 @@ sim::PairParams read_contact(TableReader t) {
     t.fail("rolling_damping", "= " + num(p.rolling_damping) + " must not be negative");
   t.finish();
   return p;
+}
+
+/// The scene as read, with the optional contact effects written out in every [contacts.a-b]
+/// table (defaults included), so a run folder states whether cohesion or size-dependent rolling
+/// was on without knowing the parser's defaults.
+std::string resolved_text(const toml::table& doc, const SceneConfig& s) {
+  toml::table out = doc;
+  if (toml::table* contacts = out["contacts"].as_table()) {
+    for (auto& [key, node] : *contacts) {
+      toml::table* t = node.as_table();
+      const std::string name(key.str());
+      const auto dash = name.find('-');
+      const auto it = s.contacts.find({name.substr(0, dash), name.substr(dash + 1)});
+      if (!t || it == s.contacts.end()) continue;
+      const sim::PairParams& p = it->second;
+      t->insert_or_assign("cohesion_energy_density", p.cohesion_energy_density);
+      t->insert_or_assign("rolling_size_exponent", p.rolling_size_exponent);
+      t->insert_or_assign("rolling_reference_diameter_m", p.rolling_reference_diameter);
+    }
+  }
+  std::ostringstream os;
+  os << out;
+  return os.str();
 }
 
 /// Volume of the container's inside [m^3].
@@ -257,9 +297,7 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
     const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
     build_model(s, 0.5 * psd.d_min, 0.5 * psd.d_max);
   }
-  std::ostringstream os;
-  os << doc;
-  s.resolved_toml = os.str();
+  s.resolved_toml = resolved_text(doc, s);
   return s;
 }
 

@@ -59,7 +59,8 @@ struct SceneConfig {
   sim::Settings settings;            // numerics
   OutputConfig output;
   sim::PileGeometrySettings pile;    // measurement from particle positions
-  std::string resolved_toml;         // the scene as read (after overrides), for the run folder
+  std::string resolved_toml;         // the scene as read (after overrides), for the run folder,
+                                     // with every contact's optional-effect keys written out
 };
 
 /// Parses a scene from TOML text; `file` names it in messages and resolves relative paths.

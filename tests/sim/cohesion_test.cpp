@@ -169,8 +169,8 @@ TEST(CohesionPull, DampedSphereWithoutGravitySettlesAtTheZeroForceOverlap) {
 }
 
 struct PairImpact {
-  bool separated;   // the spheres left each other
-  double ratio;     // final over initial relative speed
+  bool separated;      // the spheres left each other
+  double ratio;        // final over initial relative speed
   double max_overlap;  // [m]
 };
 
