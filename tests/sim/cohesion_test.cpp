@@ -3,7 +3,8 @@
 //   rest on a plate under gravity:      A delta^1.5 - B delta = m g (solved here by bisection),
 //   rest without gravity:               delta_eq = (B / A)^2,
 //   undamped motion conserves           1/2 m* v^2 + U(delta), U = 2/5 A delta^2.5 - B/2 delta^2,
-//   the work to pull a resting contact apart is W = -U(delta_eq) = B delta_eq^2 / 10.
+//   the work to pull a resting contact apart is W = -U(delta_eq) = B delta_eq^2 / 10,
+//   the Coulomb cap is mu_s times the Hertz force (not the net force): mu_s B delta_eq unloaded.
 // k_c = 0 must leave a run bit-identical to the model without the effect.
 #include <gtest/gtest.h>
 
@@ -166,6 +167,37 @@ TEST(CohesionPull, DampedSphereWithoutGravitySettlesAtTheZeroForceOverlap) {
   w.add_particle(Vec3(0, 0, kR - 0.05 * law.delta_eq()), kR, 0);
   while (w.state().time < 0.05) w.step();
   EXPECT_NEAR((kR - w.state().particles.x[0].z()) / law.delta_eq(), 1.0, 0.01);
+}
+
+TEST(CohesionFriction, CoulombCapUsesTheHertzForceSoCohesionAloneHoldsAGrain) {
+  // Gravity along a plate (no normal load): the net normal force is zero at delta_eq, where the
+  // Hertz force equals the cohesion, F_H = B delta_eq. The documented choice caps friction at
+  // mu_s F_H: the sphere (rolling blocked) holds if m g < mu_s F_H and otherwise slides with
+  // a = g - mu_s F_H / m. With the net force as the cap it would slide at any mu_s.
+  const Law law(kR);
+  const double m = sphere_mass(kR);
+  const double f_h = law.b * law.delta_eq();
+  const double mu_c = m * kG / f_h;
+  ASSERT_LT(mu_c, 1.0);
+  auto displacement = [&](double mu_s, double t) {
+    PairParams pair = cohesive_pair(0.5);
+    pair.friction = mu_s;
+    pair.rolling_model = RollingModel::kEpsd;  // a huge mu_r blocks rolling
+    pair.rolling_friction = 100.0;
+    pair.rolling_damping = 1.0;
+    Model model = make_model(pair, kE, Vec3(kG, 0, 0));
+    model.walls.push_back(plate());
+    model.finalize(kR, kR);
+    World w(model);
+    w.add_particle(Vec3(0, 0, kR - law.delta_eq()), kR, 0);
+    while (w.state().time < t) w.step();
+    return w.state().particles.x[0].x();
+  };
+  const double t = 0.1;
+  EXPECT_LT(std::abs(displacement(1.2 * mu_c, t)), 1e-6);
+  const double mu = 0.8 * mu_c;
+  const double acc = kG - mu * f_h / m;
+  EXPECT_NEAR(displacement(mu, t) / (0.5 * acc * t * t), 1.0, 0.02);
 }
 
 struct PairImpact {
