@@ -1,0 +1,123 @@
+// reposetwin loop DATA.csv --out DIR: close the loop on measured data (experiments/loop.hpp).
+// reposetwin loop-synth DESIGN.toml --out DIR: a synthetic lab dataset with hidden settings.
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "apps/reposetwin/commands.hpp"
+#include "experiments/loop.hpp"
+#include "experiments/loop_synth.hpp"
+#include "experiments/toml_reader.hpp"
+
+namespace reposetwin::cli {
+
+namespace {
+
+std::vector<double> parse_list(const std::string& text, const std::string& option) {
+  std::vector<double> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      std::size_t used = 0;
+      out.push_back(std::stod(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw experiments::InputError(option + ": \"" + item + "\" is not a number");
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+void add_loop_command(CLI::App& app) {
+  struct Args {
+    std::string data;
+    std::string out = "loop_out";
+    std::string grid;
+    std::string seeds;
+    std::string candidates;
+    experiments::LoopSettings settings;
+    bool quiet = false;
+  };
+  auto args = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "loop", "Calibrate mu_r on measured tests, trace the residual to a missing effect, refit, "
+              "and report the error before and after (docs/loop.md)");
+  cmd->add_option("data", args->data, "Measured data CSV (docs/loop.md)")->required();
+  cmd->add_option("--out,-o", args->out, "Output folder (loop.json, index.html, cache/)")
+      ->capture_default_str();
+  cmd->add_option("--mu-grid", args->grid, "mu_r grid, comma separated (default 0.05,0.15,0.3,0.5)");
+  cmd->add_option("--seeds", args->seeds, "Seeds, comma separated (default 1001,1002,1003)");
+  cmd->add_option("--candidates", args->candidates,
+                  "Candidate effects to try, comma separated (default: all in the registry)");
+  cmd->add_option("--max-effects", args->settings.max_effects, "Stop after this many effects")
+      ->capture_default_str();
+  cmd->add_option("--min-t", args->settings.rule.min_t, "Significance threshold |c|/se")
+      ->capture_default_str();
+  cmd->add_option("--workers", args->settings.workers, "Concurrent simulations")
+      ->capture_default_str();
+  cmd->add_option("--width", args->settings.image.width_px, "Render width [px]")
+      ->capture_default_str();
+  cmd->add_option("--height", args->settings.image.height_px, "Render height [px]")
+      ->capture_default_str();
+  cmd->add_option("--views", args->settings.image.side_views, "Side views per pile")
+      ->capture_default_str();
+  cmd->add_option("--cache", args->settings.cache_dir, "Simulation cache (default OUT/cache)");
+  cmd->add_flag("--force", args->settings.force, "Recompute a finished loop.json (cache kept)");
+  cmd->add_flag("--quiet,-q", args->quiet, "No progress lines");
+  cmd->callback([args]() {
+    experiments::LoopSettings s = args->settings;
+    if (!args->grid.empty()) s.mu_grid = parse_list(args->grid, "--mu-grid");
+    if (!args->seeds.empty()) {
+      s.seeds.clear();
+      for (double v : parse_list(args->seeds, "--seeds")) {
+        if (!(v >= 0.0) || v != static_cast<double>(static_cast<std::uint64_t>(v)))
+          throw experiments::InputError("--seeds: " + std::to_string(v) + " is not a seed");
+        s.seeds.push_back(static_cast<std::uint64_t>(v));
+      }
+    }
+    if (!args->candidates.empty()) {
+      std::stringstream ss(args->candidates);
+      std::string c;
+      while (std::getline(ss, c, ',')) {
+        (void)experiments::find_effect(c);
+        s.candidates.push_back(c);
+      }
+    }
+    s.progress = !args->quiet;
+    const experiments::LabData data = experiments::read_lab_csv(args->data);
+    const nlohmann::json loop = experiments::run_loop(data, args->out, s);
+    std::cout << loop["summary"].dump(2) << "\n";
+    std::cout << "report: " << args->out << "/index.html, " << args->out << "/loop.json\n";
+    set_exit_code(0);
+  });
+
+  struct SynthArgs {
+    std::string design;
+    std::string out = "loop_synth";
+    std::string cache;
+    int workers = 2;
+  };
+  auto sargs = std::make_shared<SynthArgs>();
+  auto* syn = app.add_subcommand(
+      "loop-synth", "Make a synthetic lab dataset (CSV + photos) from the twin with hidden "
+                    "settings; the hidden settings are not written");
+  syn->add_option("design", sargs->design, "Design file (TOML, see experiments/loop_synth.hpp)")
+      ->required();
+  syn->add_option("--out,-o", sargs->out, "Output folder")->capture_default_str();
+  syn->add_option("--cache", sargs->cache, "Simulation cache (default: a hidden folder)");
+  syn->add_option("--workers", sargs->workers, "Concurrent simulations")->capture_default_str();
+  syn->callback([sargs]() {
+    const experiments::SynthDesign d = experiments::read_synth_design(sargs->design);
+    experiments::SimCache cache(sargs->cache.empty() ? sargs->out + "/.hidden_cache" : sargs->cache,
+                                {sargs->workers, true});
+    std::cout << experiments::make_synthetic_dataset(d, sargs->out, cache) << "\n";
+    set_exit_code(0);
+  });
+}
+
+}  // namespace reposetwin::cli

@@ -1,0 +1,70 @@
+// Measured lab data for the loop (reposetwin loop): one CSV row per lab pile test.
+//
+// Design note. A lab test is the twin's scene plus a few conditions, so every condition column is
+// turned into a dotted scene override (the same mechanism as `--set` and campaigns), applied to
+// the row's base scene, and the scene is parsed at load time: a test the engine cannot build
+// fails here, naming the file, the row and the column, not an hour later inside a worker. Named
+// columns cover the conditions a lab sheet records; `set:KEY` carries any other scene key. The
+// measured values are either numbers typed from the lab sheet or the photographs themselves,
+// which the loop measures with vision/ exactly as it measures the twin's renders (a photo needs
+// a scale: its camera sidecar JSON, or mm_per_px, or the render convention's scale marker in the
+// image). Full format: docs/loop.md.
+#pragma once
+
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace reposetwin::experiments {
+
+/// One measured lab test.
+struct LabTest {
+  int line = 0;             // line of the CSV file (1-based), for messages
+  std::string id;           // unique, filesystem-safe
+  std::string role;         // "calibrate" or "validate"
+  std::string scene_path;   // absolute path of the base scene
+  std::vector<std::pair<std::string, std::string>> overrides;  // dotted key -> TOML value text
+  std::vector<std::string> override_columns;  // the column each override came from (same order)
+  std::map<std::string, double> conditions;   // numeric conditions by column (for plots)
+  double angle_deg = 0.0;                     // measured angle of repose [deg], in (0, 90)
+  std::optional<double> height_mm;            // measured H [mm]
+  std::optional<double> diameter_mm;          // measured D [mm]
+  std::optional<double> camera_height_m;      // declared camera height above the plate [m]
+  int repeats = 1;                            // piles averaged into the measured values [-]
+  std::vector<std::string> photos;            // absolute paths (side views), may be empty
+  nlohmann::json photo_measurement;           // what vision measured on the photos (if any)
+};
+
+/// A measured dataset.
+struct LabData {
+  std::string file;            // absolute path of the CSV
+  std::vector<LabTest> tests;  // in file order
+};
+
+/// Reads a loop CSV (see docs/loop.md): checks every column, builds every test's scene (with
+/// its overrides) and measures the photos. Throws InputError (std::invalid_argument) whose
+/// message names the file, the line, the test id and the column: missing required columns,
+/// unknown columns, non-numbers, an angle outside (0, 90), neither an angle nor H and D nor a
+/// photo, an unknown role, duplicate ids, scene or override errors, unreadable photos or photos
+/// without a usable scale.
+LabData read_lab_csv(const std::string& path);
+
+/// Splits one CSV line into fields (RFC 4180 quotes: "a,b" and "" inside quotes). Throws
+/// std::invalid_argument naming `where` for an unterminated quote.
+std::vector<std::string> split_csv_line(const std::string& line, const std::string& where);
+
+/// The named condition columns and the scene key each one drives (with its unit conversion).
+struct ConditionColumn {
+  const char* column;  // CSV header
+  const char* key;     // dotted scene key
+  double factor;       // scene value = factor x CSV value (0: a string value)
+  const char* unit;    // the CSV unit, for docs
+};
+const std::vector<ConditionColumn>& condition_columns();
+
+nlohmann::json to_json(const LabTest& t);
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,186 @@
+#include "experiments/loop_effects.hpp"
+
+#include <cstdio>
+#include <stdexcept>
+
+#include "experiments/overrides.hpp"
+#include "experiments/provenance.hpp"
+#include "experiments/scene_overrides.hpp"
+#include "experiments/toml_reader.hpp"
+
+namespace reposetwin::experiments {
+using nlohmann::json;
+
+namespace {
+
+std::string num(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.12g", v);
+  std::string s = b;
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
+  return s;
+}
+
+std::vector<std::string> sets_of(const LabTest& t) {
+  std::vector<std::string> s;
+  for (const auto& [k, v] : t.overrides) s.push_back(k + "=" + v);
+  return s;
+}
+
+toml::table resolved_doc(const LabTest& t) {
+  toml::table doc = parse_toml(read_file(t.scene_path), t.scene_path);
+  for (const auto& [k, v] : t.overrides) {
+    toml::table value = toml::parse("v = " + v);
+    apply_override(doc, k, *value.get("v"), t.scene_path);
+  }
+  return doc;
+}
+
+// "contacts.{sample}-{plate}.friction" -> "contacts.rock-plate.friction" (or plate-rock, whichever
+// the scene file names).
+std::string resolve_key(const LabTest& t, const std::string& key) {
+  if (key.find('{') == std::string::npos) return key;
+  const SceneConfig scene = load_scene(t.scene_path, sets_of(t));
+  auto sub = [](std::string s, const std::string& from, const std::string& to) {
+    for (auto p = s.find(from); p != std::string::npos; p = s.find(from, p + to.size()))
+      s.replace(p, from.size(), to);
+    return s;
+  };
+  std::string k = sub(sub(key, "{sample}", scene.sample_material), "{plate}", scene.plate_material);
+  if (k.rfind("contacts.", 0) == 0) {
+    const auto dot = k.find('.', 9);
+    const std::string pair = k.substr(9, dot - 9);
+    const auto dash = pair.find('-');
+    const std::string swapped = pair.substr(dash + 1) + "-" + pair.substr(0, dash);
+    const toml::table doc = resolved_doc(t);
+    if (!doc["contacts"][pair] && doc["contacts"][swapped])
+      k = "contacts." + swapped + k.substr(dot);
+  }
+  return k;
+}
+
+}  // namespace
+
+const std::vector<CandidateEffect>& candidate_effects() {
+  static const std::vector<CandidateEffect> k = {
+      {"plate_friction", EffectKind::kPhysics, EffectApply::kSetScene,
+       "contacts.{sample}-{plate}.friction", 0.0, true, 0.15, 0.0, 1.5, "-",
+       "Sliding friction of the sample on the base plate differs from the declared value "
+       "(smooth or dusted board); shows most on small piles and as a step between plates.",
+       {}},
+      {"cohesion", EffectKind::kPhysics, EffectApply::kSetScene,
+       "contacts.{sample}-{sample}.cohesion_energy_density", 0.0, false, 5000.0, 0.0, 1e6,
+       "J/m^3",
+       "Cohesion between particles (simplified JKR, moisture or clay coating); steepens small "
+       "piles most (roughly as 1/H).",
+       {}},
+      {"rolling_size", EffectKind::kPhysics, EffectApply::kSetScene,
+       "contacts.{sample}-{sample}.rolling_size_exponent", 0.0, false, 1.0, -3.0, 3.0, "-",
+       "Rolling resistance that varies with particle size, mu_r (d / 5 mm)^alpha (shape "
+       "differs between fine and coarse grains); shows between samples of different d_max.",
+       {{"contacts.{sample}-{sample}.rolling_reference_diameter_m", "0.005"}}},
+      {"lift_speed", EffectKind::kPhysics, EffectApply::kFactorScene, "procedure.lift_speed_m_s",
+       1.0, false, 4.0, 0.1, 20.0, "x declared",
+       "The container was lifted faster (or slower) than declared; above a quasi-static "
+       "speed the angle drops.",
+       {}},
+      {"fines", EffectKind::kPhysics, EffectApply::kFactorScene, "sample.d_min_mm", 1.0, false,
+       0.7, 0.2, 1.0, "x declared d_min",
+       "Fines below the simulated cut-off d_min take part (d_min lowered by this factor).", {}},
+      {"camera_height", EffectKind::kMeasurement, EffectApply::kImageHeight,
+       "image.camera_height_m", 0.0, false, 0.03, 0.0, 1.0, "m",
+       "The photographs were taken from above plate level while measured as if level "
+       "(perspective grows with height over distance).",
+       {}},
+      {"lens_k1", EffectKind::kMeasurement, EffectApply::kImageK1, "image.k1", 0.0, false, -0.3,
+       -0.9, 0.9, "-",
+       "Radial lens distortion of the lab camera, measured as if undistorted.", {}},
+  };
+  return k;
+}
+
+const CandidateEffect& find_effect(const std::string& name) {
+  std::string known;
+  for (const auto& e : candidate_effects()) {
+    if (e.name == name) return e;
+    known += " " + e.name;
+  }
+  throw std::invalid_argument("unknown candidate effect \"" + name + "\" (known:" + known + ")");
+}
+
+double scene_value(const LabTest& t, const std::string& key_pattern) {
+  const std::string key = resolve_key(t, key_pattern);
+  if (key == "sample.d_min_mm" || key == "procedure.lift_speed_m_s") {
+    const SceneConfig s = load_scene(t.scene_path, sets_of(t));
+    return key == "sample.d_min_mm" ? 1e3 * s.psd.spec.d_min : s.procedure.lift_speed;
+  }
+  const toml::table doc = resolved_doc(t);
+  const toml::node_view<const toml::node> n = doc.at_path(key);
+  if (auto v = n.value<double>()) return *v;
+  throw InputError(t.scene_path + " (test " + t.id + "): scene key " + key +
+                   " has no numeric value");
+}
+
+SimRequest make_request(const LabTest& test, const std::string& mu_key, double mu_r,
+                        std::uint64_t seed, const std::vector<EffectSetting>& effects,
+                        const ImageVariant& base_image) {
+  SimRequest r;
+  r.test = &test;
+  r.seed = seed;
+  r.image = base_image;
+  if (test.camera_height_m) {
+    r.image.camera_height_m = *test.camera_height_m;
+    r.image.declared_height_m = *test.camera_height_m;
+  }
+  r.extra.emplace_back(resolve_key(test, mu_key), num(mu_r));
+  for (const EffectSetting& s : effects) {
+    const CandidateEffect& e = *s.effect;
+    switch (e.apply) {
+      case EffectApply::kSetScene:
+        r.extra.emplace_back(resolve_key(test, e.key), num(s.value));
+        for (const auto& [k, v] : e.companions) r.extra.emplace_back(resolve_key(test, k), v);
+        break;
+      case EffectApply::kFactorScene:
+        r.extra.emplace_back(resolve_key(test, e.key), num(s.value * scene_value(test, e.key)));
+        break;
+      case EffectApply::kImageHeight:
+        r.image.camera_height_m = r.image.declared_height_m + s.value;
+        break;
+      case EffectApply::kImageK1:
+        r.image.k1 = r.image.declared_k1 + s.value;
+        break;
+    }
+  }
+  return r;
+}
+
+std::string effect_unavailable(const LabTest& test, const CandidateEffect& e) {
+  if (e.kind == EffectKind::kMeasurement) return "";
+  try {
+    if (e.key.find("{plate}") != std::string::npos) {
+      const SceneConfig s = load_scene(test.scene_path, sets_of(test));
+      if (s.plate_material == s.sample_material)
+        return "the plate is made of the sample's material (" + s.plate_material +
+               "), so its friction cannot differ";
+    }
+    const SimRequest r = make_request(test, "contacts.{sample}-{sample}.rolling_friction", 0.1, 1,
+                                      {{&e, e.probe}}, ImageVariant{});
+    (void)load_scene(test.scene_path, resolved_overrides(r));
+  } catch (const std::exception& ex) {
+    return ex.what();
+  }
+  return "";
+}
+
+json to_json(const CandidateEffect& e) {
+  return {{"name", e.name},
+          {"kind", e.kind == EffectKind::kPhysics ? "physics" : "measurement"},
+          {"key", e.key},
+          {"off", e.off_from_scene ? json("scene value") : json(e.off)},
+          {"probe", e.probe},
+          {"range", {e.lo, e.hi}},
+          {"units", e.units},
+          {"description", e.description}};
+}
+
+}  // namespace reposetwin::experiments

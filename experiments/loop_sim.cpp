@@ -1,0 +1,298 @@
+#include "experiments/loop_sim.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <opencv2/core.hpp>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "experiments/campaign.hpp"
+#include "experiments/overrides.hpp"
+#include "experiments/pile_test.hpp"
+#include "experiments/provenance.hpp"
+#include "experiments/scene.hpp"
+#include "experiments/toml_reader.hpp"
+#include "experiments/vtk_output.hpp"
+#include "render/output.hpp"
+#include "render/renderer.hpp"
+#include "render/scene.hpp"
+#include "sim/pile_geometry.hpp"
+#include "vision/measure.hpp"
+
+namespace reposetwin::experiments {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string num(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.9g", v);
+  return b;
+}
+
+// A pile run: what its case function needs.
+struct SimJob {
+  std::string scene_path;
+  std::vector<std::string> sets;  // key=value, in order
+  std::uint64_t seed = 1;
+};
+
+// A photograph of a finished pile run.
+struct PhotoJob {
+  std::string sim_run_dir;  // absolute: <cache>/sim_<h>/seed_<n>/run
+  ImageVariant variant;
+};
+
+toml::table scene_doc(const SimJob& job) {
+  toml::table doc = parse_toml(read_file(job.scene_path), job.scene_path);
+  for (const std::string& s : job.sets) {
+    const auto eq = s.find('=');
+    toml::table v = toml::parse("v = " + s.substr(eq + 1));
+    apply_override(doc, s.substr(0, eq), *v.get("v"), job.scene_path);
+  }
+  if (toml::table* t = doc["scene"].as_table())
+    t->insert_or_assign("seed", static_cast<std::int64_t>(job.seed));
+  // The loop needs the final pile only: no frame series.
+  if (toml::table* o = doc["output"].as_table()) o->insert_or_assign("frame_interval_s", 0.0);
+  return doc;
+}
+
+Campaign cache_campaign(const std::string& dir) {
+  Campaign c;
+  c.name = "loop_cache";
+  c.file = dir;
+  c.scene_path = dir;
+  return c;
+}
+
+// run_batch with the cache's lock: another process (a parallel test) may hold the folder for a
+// while; wait for it instead of failing.
+std::vector<json> batch_with_retry(const std::string& dir, const std::vector<CaseSpec>& runs,
+                                   const CaseFn& fn, const RunnerSettings& rs) {
+  for (int attempt = 0;; ++attempt) {
+    try {
+      return run_batch(cache_campaign(dir), runs, dir, fn, rs);
+    } catch (const std::runtime_error& e) {
+      if (std::string(e.what()).find("another campaign process") == std::string::npos ||
+          attempt > 3600)
+        throw;
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    }
+  }
+}
+
+}  // namespace
+
+std::string ImageVariant::key() const {
+  std::ostringstream s;
+  s << width_px << "x" << height_px << "_v" << side_views << "_d" << num(distance_radii) << "_h"
+    << num(camera_height_m) << "_k" << num(k1) << "_dh" << num(declared_height_m) << "_dk"
+    << num(declared_k1) << "_n" << num(noise_sd) << "_s" << noise_seed
+    << (keep_photos ? "_keep" : "");
+  return s.str();
+}
+
+std::string fnv1a_hex(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  char b[17];
+  std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(h));
+  return b;
+}
+
+std::vector<std::string> resolved_overrides(const SimRequest& r) {
+  std::vector<std::string> out;
+  std::map<std::string, std::size_t> at;
+  auto add = [&](const std::string& k, const std::string& v) {
+    if (auto it = at.find(k); it != at.end()) {
+      out[it->second] = k + "=" + v;
+    } else {
+      at[k] = out.size();
+      out.push_back(k + "=" + v);
+    }
+  };
+  for (const auto& [k, v] : r.test->overrides) add(k, v);
+  for (const auto& [k, v] : r.extra) add(k, v);
+  return out;
+}
+
+json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
+                     const std::vector<double>& radii, const std::vector<int>& materials,
+                     const ImageVariant& v, const std::string& out_dir) {
+  if (v.side_views < 1) throw InputError("loop images: side_views must be at least 1");
+  const sim::PileGeometry g = sim::measure_pile(positions, radii);
+  render::Scene scene;
+  scene.positions = positions;
+  for (Eigen::Vector3d& x : scene.positions) {
+    x.x() -= g.centre.x();
+    x.y() -= g.centre.y();
+  }
+  scene.radii = radii;
+  scene.material_ids = materials;
+  scene.plate.half_size_m =
+      std::max(scene.plate.half_size_m, 1.3 * render::pile_extent(scene).radius_m);
+  render::Renderer renderer;
+  render::RenderOptions options;
+  options.tint_seed = v.noise_seed;
+  options.view = render::View::kSide;
+  render::LabCameraSettings cams;
+  cams.width_px = v.width_px;
+  cams.height_px = v.height_px;
+  cams.distance_radii = v.distance_radii;
+  cams.side_height_m = v.camera_height_m;
+  if (v.keep_photos) fs::create_directories(out_dir);
+  cv::RNG rng(v.noise_seed * 7919 + 17);
+  std::vector<vision::SideMeasurement> sides;
+  json views = json::array();
+  for (int k = 0; k < v.side_views; ++k) {
+    cams.azimuth_deg = 180.0 * k / v.side_views;
+    camera::Camera truth = render::lab_side_camera(scene, cams);
+    truth.intrinsics.k1 = v.k1;
+    // The lab's declared camera: same lens, distance and azimuth, its declared height and
+    // distortion (a lab that does not know its camera is high measures as if level).
+    camera::Camera declared = truth;
+    declared.extrinsics.position.z() = v.declared_height_m;
+    declared.extrinsics.look_at.z() = v.declared_height_m;
+    declared.intrinsics.k1 = v.declared_k1;
+    cv::Mat image = renderer.render(scene, truth, options);
+    if (v.noise_sd > 0.0) {
+      cv::Mat noise(image.size(), CV_32FC(image.channels()));
+      rng.fill(noise, cv::RNG::NORMAL, 0.0, v.noise_sd);
+      cv::Mat f;
+      image.convertTo(f, CV_32F);
+      f += noise;
+      f.convertTo(image, image.type());  // saturating
+    }
+    char stem[32];
+    std::snprintf(stem, sizeof stem, "side_az%03d", static_cast<int>(cams.azimuth_deg + 0.5));
+    const std::string base = (fs::path(out_dir) / stem).string();
+    if (v.keep_photos)
+      render::write_render(base, image, render::make_sidecar(scene, declared, options, nullptr));
+    const vision::SideMeasurement m = vision::measure_side_camera(image, declared, {}, base);
+    sides.push_back(m);
+    json j = vision::to_json(m);
+    j["azimuth_deg"] = cams.azimuth_deg;
+    if (v.keep_photos) j["photo"] = std::string(stem) + ".png";
+    views.push_back(j);
+  }
+  const vision::SideSummary s = vision::combine_sides(sides);
+  return {{"angle_deg", s.theta_deg.mean},
+          {"angle_sd_deg", s.theta_deg.stddev},
+          {"height_mm", 1e3 * s.height_m.mean},
+          {"diameter_mm", 1e3 * s.diameter_m.mean},
+          {"views", views},
+          {"variant", v.key()}};
+}
+
+SimCache::SimCache(std::string dir, SimCacheSettings settings)
+    : dir_(fs::absolute(dir).lexically_normal().string()), settings_(settings) {
+  fs::create_directories(dir_);
+}
+
+std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
+  // 1. Pile runs, one per distinct (scene text, overrides, seed).
+  std::map<std::string, SimJob> sim_jobs;  // case name -> job
+  std::vector<CaseSpec> sim_specs;
+  std::vector<std::string> sim_of(requests.size());
+  std::map<std::string, std::string> scene_hash;  // path -> hash of its text
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    const SimRequest& r = requests[i];
+    if (r.test == nullptr) throw std::invalid_argument("SimCache: request without a test");
+    SimJob job{r.test->scene_path, resolved_overrides(r), r.seed};
+    if (!scene_hash.count(job.scene_path))
+      scene_hash[job.scene_path] = fnv1a_hex(read_file(job.scene_path));
+    std::string key = scene_hash[job.scene_path];
+    for (const auto& s : job.sets) key += "\n" + s;
+    const std::string name = "sim_" + fnv1a_hex(key);
+    sim_of[i] = name + "/seed_" + std::to_string(r.seed);
+    if (sim_jobs.count(sim_of[i])) continue;
+    sim_jobs[sim_of[i]] = job;
+    CaseSpec spec;
+    spec.case_name = name;
+    spec.seed = r.seed;
+    spec.scene_path = job.scene_path;
+    spec.scene_hash = scene_hash[job.scene_path];
+    for (std::size_t k = 0; k < job.sets.size(); ++k)
+      spec.overrides.insert(std::to_string(k), job.sets[k]);
+    sim_specs.push_back(spec);
+  }
+  RunnerSettings rs;
+  rs.workers = settings_.workers;
+  rs.progress = settings_.progress;
+  rs.rank = std::nullopt;
+  for (const CaseSpec& s : sim_specs)
+    if (!fs::exists(fs::path(dir_) / s.relative_dir() / "result.json")) ++started_sims_;
+  const CaseFn sim_fn = [sim_jobs](const CaseSpec& spec, const std::string& case_dir) -> json {
+    const SimJob& job = sim_jobs.at(spec.id());
+    const SceneConfig scene = parse_scene_table(scene_doc(job), job.scene_path);
+    RunOptions opt;
+    opt.out_dir = (fs::path(case_dir) / "run").string();
+    opt.progress = false;
+    opt.threads = 1;
+    opt.extra_provenance = {{"loop_overrides", job.sets}};
+    const json run = run_pile_test(scene, opt);
+    return {{"stop", run.at("stop")},
+            {"pile", run.at("pile")},
+            {"provenance", run.at("provenance")},
+            {"overrides", job.sets}};
+  };
+  const std::vector<json> sims = batch_with_retry(dir_, sim_specs, sim_fn, rs);
+  std::map<std::string, json> sim_result;
+  for (std::size_t k = 0; k < sim_specs.size(); ++k) sim_result[sim_specs[k].id()] = sims[k];
+
+  // 2. Photographs of the piles that formed.
+  std::map<std::string, PhotoJob> photo_jobs;
+  std::vector<CaseSpec> photo_specs;
+  std::vector<std::string> photo_of(requests.size());
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    if (sim_result[sim_of[i]].at("pile").at("status") != "ok") continue;
+    const ImageVariant& v = requests[i].image;
+    const std::string name = "img_" + fnv1a_hex(sim_of[i] + "\n" + v.key());
+    photo_of[i] = name + "/seed_" + std::to_string(requests[i].seed);
+    if (photo_jobs.count(photo_of[i])) continue;
+    photo_jobs[photo_of[i]] = {(fs::path(dir_) / sim_of[i] / "run").string(), v};
+    CaseSpec spec;
+    spec.case_name = name;
+    spec.seed = requests[i].seed;
+    spec.scene_path = sim_of[i];
+    spec.scene_hash = v.key();
+    photo_specs.push_back(spec);
+  }
+  for (const CaseSpec& s : photo_specs)
+    if (!fs::exists(fs::path(dir_) / s.relative_dir() / "result.json")) ++started_photos_;
+  const CaseFn photo_fn = [photo_jobs](const CaseSpec& spec, const std::string& case_dir) -> json {
+    const PhotoJob& job = photo_jobs.at(spec.id());
+    const SnapshotParticles p = read_vtp((fs::path(job.sim_run_dir) / "final.vtp").string());
+    return photograph_pile(p.x, p.radius, p.material, job.variant, case_dir);
+  };
+  const std::vector<json> photos = batch_with_retry(dir_, photo_specs, photo_fn, rs);
+  std::map<std::string, json> photo_result;
+  for (std::size_t k = 0; k < photo_specs.size(); ++k) photo_result[photo_specs[k].id()] = photos[k];
+
+  std::vector<SimOutcome> out(requests.size());
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    const json& s = sim_result[sim_of[i]];
+    SimOutcome& o = out[i];
+    o.sim_dir = (fs::path(dir_) / sim_of[i]).string();
+    o.provenance = s.at("provenance");
+    if (photo_of[i].empty()) continue;
+    const json& p = photo_result[photo_of[i]];
+    o.pile = true;
+    o.angle_deg = p.at("angle_deg");
+    o.height_mm = p.at("height_mm");
+    o.diameter_mm = p.at("diameter_mm");
+    o.positions_angle_deg = s.at("pile").value("theta_hd_deg", 0.0);
+    o.image_dir = (fs::path(dir_) / photo_of[i]).string();
+  }
+  return out;
+}
+
+}  // namespace reposetwin::experiments

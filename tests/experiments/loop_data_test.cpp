@@ -1,0 +1,129 @@
+// The loop's measured-data CSV: a good file is read into tests with their overrides, and every
+// kind of bad input gives an error naming the file, the line and the column.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "experiments/loop_data.hpp"
+#include "experiments/loop_effects.hpp"
+#include "experiments/provenance.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+namespace fs = std::filesystem;
+
+const std::string kScene = std::string(REPOSETWIN_SOURCE_DIR) + "/data/loop/tiny_scene.toml";
+
+// Writes `body` (after a header) as a CSV in a fresh folder and returns its path.
+std::string write_csv(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_loop_data_test";
+  fs::create_directories(dir);
+  const fs::path p = dir / (name + ".csv");
+  write_file_atomic(p.string(), text);
+  return p.string();
+}
+
+// The error message of reading `text`, or "" if it reads.
+std::string error_of(const std::string& name, const std::string& text) {
+  try {
+    (void)read_lab_csv(write_csv(name, text));
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(LoopData, AGoodFileBecomesTestsWithOverrides) {
+  const std::string csv = write_csv(
+      "good",
+      "# comment line\n"
+      "id,role,scene,mass_g,W_mm,lift_speed_m_s,set:contacts.rock-plate.friction,H_mm,D_mm,"
+      "angle_deg,repeats\n"
+      "a,calibrate," + kScene + ",6,20,0.05,0.3,10,40,,2\n"
+      "b,validate," + kScene + ",4,25,,,,,27.5,\n");
+  const LabData d = read_lab_csv(csv);
+  ASSERT_EQ(d.tests.size(), 2u);
+  const LabTest& a = d.tests[0];
+  EXPECT_EQ(a.id, "a");
+  EXPECT_EQ(a.line, 3);
+  EXPECT_EQ(a.repeats, 2);
+  // The angle from H and D: atan(2H/D).
+  EXPECT_NEAR(a.angle_deg, std::atan(0.5) * 180.0 / M_PI, 1e-12);
+  EXPECT_NEAR(a.conditions.at("mass_g"), 6.0, 1e-12);
+  // The condition columns became scene keys in SI units.
+  EXPECT_NEAR(scene_value(a, "sample.mass_kg"), 0.006, 1e-15);
+  EXPECT_NEAR(scene_value(a, "container.bottom_diameter_m"), 0.020, 1e-15);
+  EXPECT_NEAR(scene_value(a, "contacts.rock-plate.friction"), 0.3, 1e-15);
+  EXPECT_NEAR(scene_value(d.tests[1], "contacts.{sample}-{plate}.friction"), 0.5, 1e-15);
+  EXPECT_NEAR(d.tests[1].angle_deg, 27.5, 1e-12);
+  EXPECT_FALSE(d.tests[1].height_mm.has_value());
+}
+
+TEST(LoopData, BadInputNamesTheLineAndColumn) {
+  const std::string head = "id,role,scene,mass_kg,W_mm,angle_deg\n";
+  auto row = [&](const std::string& rest) { return head + "t1,calibrate," + kScene + "," + rest + "\n"; };
+  std::string e = error_of("missing", "id,role,mass_kg,angle_deg\nt1,calibrate,0.006,30\n");
+  EXPECT_NE(e.find("required column \"scene\""), std::string::npos) << e;
+  e = error_of("nonnumber", row("heavy,20,30"));
+  EXPECT_NE(e.find("line 2 (test t1), column mass_kg"), std::string::npos) << e;
+  EXPECT_NE(e.find("\"heavy\" is not a number"), std::string::npos) << e;
+  e = error_of("angle", row("0.006,20,95"));
+  EXPECT_NE(e.find("column angle_deg"), std::string::npos) << e;
+  EXPECT_NE(e.find("outside (0, 90)"), std::string::npos) << e;
+  e = error_of("noangle", head + "t1,calibrate," + kScene + ",0.006,20,\n");
+  EXPECT_NE(e.find("no measured value"), std::string::npos) << e;
+  e = error_of("unknown", "id,role,scene,angel_deg\nt1,calibrate," + kScene + ",30\n");
+  EXPECT_NE(e.find("unknown column \"angel_deg\""), std::string::npos) << e;
+  e = error_of("role", head + "t1,fit," + kScene + ",0.006,20,30\n");
+  EXPECT_NE(e.find("column role"), std::string::npos) << e;
+  e = error_of("dup", row("0.006,20,30") + "t1,calibrate," + kScene + ",0.006,20,31\n");
+  EXPECT_NE(e.find("appears twice"), std::string::npos) << e;
+  e = error_of("fields", head + "t1,calibrate," + kScene + ",0.006\n");
+  EXPECT_NE(e.find("4 fields for 6 columns"), std::string::npos) << e;
+  e = error_of("noscene", head + "t1,calibrate,nowhere.toml,0.006,20,30\n");
+  EXPECT_NE(e.find("column scene"), std::string::npos) << e;
+}
+
+TEST(LoopData, ATestTheEngineCannotBuildNamesItsColumn) {
+  // A scene key that does not exist and a plate material that does not exist.
+  std::string e = error_of("badkey", "id,role,scene,set:contacts.rock-plate.fricton,angle_deg\n"
+                                     "t1,calibrate," + kScene + ",0.3,30\n");
+  EXPECT_NE(e.find("column set:contacts.rock-plate.fricton"), std::string::npos) << e;
+  EXPECT_NE(e.find("cannot build"), std::string::npos) << e;
+  e = error_of("badplate", "id,role,scene,plate,angle_deg\nt1,calibrate," + kScene + ",glass,30\n");
+  EXPECT_NE(e.find("line 2 (test t1), column plate"), std::string::npos) << e;
+  e = error_of("badmass", "id,role,scene,mass_kg,angle_deg\nt1,calibrate," + kScene + ",-1,30\n");
+  EXPECT_NE(e.find("column mass_kg"), std::string::npos) << e;
+}
+
+TEST(LoopData, PhotosWithoutAUsableScaleAreRejected) {
+  // An image with no pile, no sidecar and no scale marker; then one that does not exist.
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_loop_data_test";
+  fs::create_directories(dir);
+  {
+    std::ofstream f(dir / "blank.pgm", std::ios::binary);
+    f << "P5\n64 48\n255\n" << std::string(64 * 48, char(200));
+  }
+  std::string e = error_of("photo", "id,role,scene,photo\nt1,calibrate," + kScene + ",blank.pgm\n");
+  EXPECT_NE(e.find("line 2 (test t1), column photo"), std::string::npos) << e;
+  EXPECT_NE(e.find("photo_camera sidecar JSON or mm_per_px"), std::string::npos) << e;
+  e = error_of("nophoto", "id,role,scene,photo\nt1,calibrate," + kScene + ",missing.png\n");
+  EXPECT_NE(e.find("cannot be read"), std::string::npos) << e;
+  e = error_of("badscale",
+               "id,role,scene,photo,mm_per_px\nt1,calibrate," + kScene + ",blank.pgm,-2\n");
+  EXPECT_NE(e.find("column mm_per_px"), std::string::npos) << e;
+}
+
+TEST(LoopData, CsvFieldsFollowQuotes) {
+  const auto f = split_csv_line("a,\"b,c\",\"d\"\"e\",", "x");
+  ASSERT_EQ(f.size(), 4u);
+  EXPECT_EQ(f[1], "b,c");
+  EXPECT_EQ(f[2], "d\"e");
+  EXPECT_EQ(f[3], "");
+  EXPECT_THROW(split_csv_line("a,\"b", "x"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
