@@ -16,5 +16,6 @@ void add_calibrate_command(CLI::App& app);
 void add_report_command(CLI::App& app);
 void add_timestep_command(CLI::App& app);
 void add_measure_command(CLI::App& app);
+void add_loop_command(CLI::App& app);  // loop and loop-synth
 
 }  // namespace reposetwin::cli

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   reposetwin::cli::add_report_command(app);
   reposetwin::cli::add_timestep_command(app);
   reposetwin::cli::add_measure_command(app);
+  reposetwin::cli::add_loop_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
