@@ -132,7 +132,6 @@ void read_checkpoint(World& world, const std::string& path) {
   for (std::int32_t j : nl.second)
     if (j < 0 || static_cast<std::size_t>(j) >= n) r.fail("has a neighbor index out of range");
   s.pair_force.assign(np, Vec3::Zero());
-  s.pair_torque_i.assign(np, Vec3::Zero());
   s.pair_torque_j.assign(np, Vec3::Zero());
   nl.parallel_min = static_cast<std::size_t>(world.model().settings.parallel_min_particles);
   world.state() = std::move(s);

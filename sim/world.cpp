@@ -102,7 +102,6 @@ void World::update_neighbors() {
   build_neighbor_list(state_.particles, state_.neighbors, /*sort_particles=*/true);
   const std::size_t np = state_.neighbors.pairs();
   state_.pair_force.resize(np);
-  state_.pair_torque_i.resize(np);
   state_.pair_torque_j.resize(np);
   state_.pair_overlap.resize(np);
 }
@@ -112,46 +111,58 @@ void World::pair_forces() {
   Particles& p = state_.particles;
   NeighborList& nl = state_.neighbors;
   const PairTable& table = model_.table;
+  const Vec3 g = model_.settings.gravity;
   const double dt = model_.dt;
   const std::size_t n = p.size();
   const std::size_t par_min = model_.settings.parallel_min_particles;
+  // Each particle sums gravity and the pairs it owns here, in list order; gather_forces() then
+  // adds the reactions of the pairs it is second in. The sum's order is the same on any number
+  // of threads, so results stay bit-identical.
 #pragma omp parallel for schedule(dynamic, 512) if (n > par_min)
   for (std::size_t i = 0; i < n; ++i) {
+    Vec3 f = p.mass[i] * g;
+    Vec3 tq = Vec3::Zero();
+    const double ri = p.radius[i];
     for (std::int32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
       const std::int32_t j = nl.second[k];
       const Vec3 d = p.x[i] - p.x[j];
-      const double ri = p.radius[i], rj = p.radius[j];
+      const double rj = p.radius[j];
       const double cut = ri + rj;
       const double dist2 = d.squaredNorm();
       if (dist2 >= cut * cut) {
         nl.history[k] = ContactHistory{};
         state_.pair_force[k].setZero();
-        state_.pair_torque_i[k].setZero();
         state_.pair_torque_j[k].setZero();
         state_.pair_overlap[k] = 0.0;
         continue;
       }
       const double dist = std::sqrt(dist2);
+      const ContactConstants& c = table.c(p.material[i], p.material[j]);
       ContactInput in;
       in.n = d / dist;
       in.delta = cut - dist;
       in.r_eff = ri * rj / cut;
       in.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
-      in.i_roll = 1.0 / (1.0 / (p.inertia[i] + p.mass[i] * ri * ri) +
-                         1.0 / (p.inertia[j] + p.mass[j] * rj * rj));
+      // The rolling inertia is read only by the EPSD dashpot.
+      in.i_roll = c.rolling == RollingModel::kEpsd && c.eta_r > 0.0
+                      ? 1.0 / (1.0 / (p.inertia[i] + p.mass[i] * ri * ri) +
+                               1.0 / (p.inertia[j] + p.mass[j] * rj * rj))
+                      : 0.0;
       in.a_i = ri - 0.5 * in.delta;
       in.a_j = rj - 0.5 * in.delta;
       in.w_i = p.w[i];
       in.w_j = p.w[j];
       in.v_rel = p.v[i] - p.v[j] - in.a_i * p.w[i].cross(in.n) - in.a_j * p.w[j].cross(in.n);
       in.contact_diameter = 4.0 * in.r_eff;  // = d for equal spheres (size-dependent rolling)
-      const ContactOutput out =
-          hertz_mindlin(table.c(p.material[i], p.material[j]), in, dt, nl.history[k]);
+      const ContactOutput out = hertz_mindlin(c, in, dt, nl.history[k]);
+      f += out.force;
+      tq += out.torque_i;
       state_.pair_force[k] = out.force;
-      state_.pair_torque_i[k] = out.torque_i;
       state_.pair_torque_j[k] = out.torque_j;
       state_.pair_overlap[k] = in.delta / std::min(ri, rj);
     }
+    p.force[i] = f;
+    p.torque[i] = tq;
   }
 }
 
@@ -159,17 +170,12 @@ void World::gather_forces() {
   PhaseTimer t(profile_.gather);
   Particles& p = state_.particles;
   const NeighborList& nl = state_.neighbors;
-  const Vec3 g = model_.settings.gravity;
   const std::size_t n = p.size();
   const std::size_t par_min = model_.settings.parallel_min_particles;
 #pragma omp parallel for schedule(static) if (n > par_min)
   for (std::size_t i = 0; i < n; ++i) {
-    Vec3 f = p.mass[i] * g;
-    Vec3 tq = Vec3::Zero();
-    for (std::int32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
-      f += state_.pair_force[k];
-      tq += state_.pair_torque_i[k];
-    }
+    Vec3 f = p.force[i];
+    Vec3 tq = p.torque[i];
     for (std::int32_t q = nl.in_start[i]; q < nl.in_start[i + 1]; ++q) {
       const std::int32_t k = nl.in_pairs[q];
       f -= state_.pair_force[k];
@@ -291,7 +297,6 @@ std::size_t World::remove_particles(const std::vector<char>& remove) {
   compact_neighbor_list(state_.neighbors, keep);
   const std::size_t np = state_.neighbors.pairs();
   state_.pair_force.assign(np, Vec3::Zero());
-  state_.pair_torque_i.assign(np, Vec3::Zero());
   state_.pair_torque_j.assign(np, Vec3::Zero());
   state_.pair_overlap.assign(np, 0.0);
   state_.forces_valid = false;

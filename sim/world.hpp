@@ -4,8 +4,10 @@
 //   1. kick_drift       v += dt/2 F/m, w += dt/2 T/I, x += dt v      (forces of the last step)
 //   2. move_walls       prescribed wall motion (the lift)
 //   3. update_neighbors rebuild the Verlet list if a particle moved more than skin/2
-//   4. pair_forces      Hertz-Mindlin + rolling kernel once per pair, result stored per pair
-//   5. gather_forces    each particle sums its pairs in a fixed order (deterministic)
+//   4. pair_forces      Hertz-Mindlin + rolling kernel once per pair; the pair's first member
+//                       sums its own pairs (and gravity) at once, the reaction is stored per pair
+//   5. gather_forces    each particle adds the stored reactions of the pairs it is second in,
+//                       in a fixed order (deterministic)
 //   6. wall_forces      every particle against every enabled wall
 //   7. kick             v += dt/2 F/m, w += dt/2 T/I
 //   8. diagnostics      energy, overlap, NaN and escape checks (every few steps)
@@ -60,7 +62,7 @@ struct State {
   std::int64_t next_id = 0;         // id given to the next inserted particle
   bool forces_valid = false;        // particles.force holds the forces of the current positions
   // Per-pair results of the last force phase (scratch, sized with the neighbor list).
-  std::vector<Vec3> pair_force, pair_torque_i, pair_torque_j;
+  std::vector<Vec3> pair_force, pair_torque_j;  // on the first member i, on j
   std::vector<double> pair_overlap;  // overlap / smaller radius, 0 if not touching
 };
 
