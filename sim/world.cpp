@@ -49,6 +49,7 @@ std::size_t World::add_particle(const Vec3& x, double radius, int material) {
   const std::size_t i =
       state_.particles.add(x, radius, density, material, state_.next_id++);
   state_.forces_valid = false;
+  state_.wall_candidates_valid = false;
   return i;
 }
 
@@ -56,7 +57,10 @@ void World::set_wall_velocity(int wall, const Vec3& velocity) {
   state_.walls.at(wall).velocity = velocity;
 }
 
-void World::set_wall_enabled(int wall, bool enabled) { state_.walls.at(wall).enabled = enabled; }
+void World::set_wall_enabled(int wall, bool enabled) {
+  state_.walls.at(wall).enabled = enabled;
+  state_.wall_candidates_valid = false;
+}
 
 void World::step() {
   if (!state_.forces_valid) compute_forces();
@@ -98,12 +102,58 @@ void World::move_walls() {
 
 void World::update_neighbors() {
   PhaseTimer t(profile_.neighbors);
-  if (!state_.neighbors.needs_rebuild(state_.particles)) return;
+  // The wall candidates are rebuilt with the list (never alone: the half-skin bound on the
+  // particles' displacement counts from the list's build).
+  if (!state_.neighbors.needs_rebuild(state_.particles) && wall_candidates_current()) return;
   build_neighbor_list(state_.particles, state_.neighbors, /*sort_particles=*/true);
   const std::size_t np = state_.neighbors.pairs();
   state_.pair_force.resize(np);
   state_.pair_torque_j.resize(np);
   state_.pair_overlap.resize(np);
+  build_wall_candidates();
+}
+
+bool World::wall_candidates_current() const {
+  if (!state_.wall_candidates_valid) return false;
+  const double half_skin = 0.5 * state_.neighbors.skin;
+  for (std::size_t w = 0; w < state_.walls.size(); ++w) {
+    if ((state_.walls[w].offset - state_.wall_offset_at_build[w]).squaredNorm() >
+        half_skin * half_skin)
+      return false;
+  }
+  return true;
+}
+
+void World::build_wall_candidates() {
+  Particles& p = state_.particles;
+  const std::size_t n = p.size();
+  const int nw = static_cast<int>(model_.walls.size());
+  const double skin = state_.neighbors.skin;
+  state_.wall_cand_particle.clear();
+  state_.wall_cand_start.assign(1, 0);
+  state_.wall_cand_wall.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    bool any = false;
+    for (int w = 0; w < nw; ++w) {
+      const WallState& ws = state_.walls[w];
+      Vec3 normal;
+      double delta;
+      if (ws.enabled &&
+          wall_contact(model_.walls[w], ws.offset, p.x[i], p.radius[i] + skin, &normal, &delta)) {
+        state_.wall_cand_wall.push_back(w);
+        any = true;
+      } else {
+        p.wall_history[i][w] = ContactHistory{};  // farther than a skin: not touching now
+      }
+    }
+    if (any) {
+      state_.wall_cand_particle.push_back(static_cast<std::int32_t>(i));
+      state_.wall_cand_start.push_back(static_cast<std::int32_t>(state_.wall_cand_wall.size()));
+    }
+  }
+  state_.wall_offset_at_build.resize(nw);
+  for (int w = 0; w < nw; ++w) state_.wall_offset_at_build[w] = state_.walls[w].offset;
+  state_.wall_candidates_valid = true;
 }
 
 void World::pair_forces() {
@@ -191,18 +241,19 @@ void World::wall_forces() {
   Particles& p = state_.particles;
   const PairTable& table = model_.table;
   const double dt = model_.dt;
-  const std::size_t n = p.size();
+  const std::size_t m = state_.wall_cand_particle.size();
   const std::size_t par_min = model_.settings.parallel_min_particles;
-  const int nw = static_cast<int>(model_.walls.size());
-#pragma omp parallel for schedule(static) if (n > par_min)
-  for (std::size_t i = 0; i < n; ++i) {
-    for (int w = 0; w < nw; ++w) {
+#pragma omp parallel for schedule(static) if (m > par_min / 4)
+  for (std::size_t c = 0; c < m; ++c) {
+    const std::size_t i = state_.wall_cand_particle[c];
+    for (std::int32_t q = state_.wall_cand_start[c]; q < state_.wall_cand_start[c + 1]; ++q) {
+      const int w = state_.wall_cand_wall[q];
       const WallSpec& spec = model_.walls[w];
       const WallState& ws = state_.walls[w];
       ContactHistory& h = p.wall_history[i][w];
       Vec3 normal;
       double delta;
-      if (!ws.enabled || !wall_contact(spec, ws.offset, p.x[i], p.radius[i], &normal, &delta)) {
+      if (!wall_contact(spec, ws.offset, p.x[i], p.radius[i], &normal, &delta)) {
         h = ContactHistory{};
         continue;
       }
@@ -300,6 +351,7 @@ std::size_t World::remove_particles(const std::vector<char>& remove) {
   state_.pair_torque_j.assign(np, Vec3::Zero());
   state_.pair_overlap.assign(np, 0.0);
   state_.forces_valid = false;
+  state_.wall_candidates_valid = false;
   return removed;
 }
 

@@ -8,7 +8,7 @@
 //                       sums its own pairs (and gravity) at once, the reaction is stored per pair
 //   5. gather_forces    each particle adds the stored reactions of the pairs it is second in,
 //                       in a fixed order (deterministic)
-//   6. wall_forces      every particle against every enabled wall
+//   6. wall_forces      the particles near an enabled wall (candidates listed at rebuild)
 //   7. kick             v += dt/2 F/m, w += dt/2 T/I
 //   8. diagnostics      energy, overlap, NaN and escape checks (every few steps)
 // Each phase is timed into Profile, which the benchmark prints. No phase writes memory another
@@ -64,6 +64,15 @@ struct State {
   // Per-pair results of the last force phase (scratch, sized with the neighbor list).
   std::vector<Vec3> pair_force, pair_torque_j;  // on the first member i, on j
   std::vector<double> pair_overlap;  // overlap / smaller radius, 0 if not touching
+  // Wall candidates (scratch, rebuilt with the neighbor list): the particles within one skin of
+  // an enabled wall, each with its walls in increasing order (CSR). Only these are tested in
+  // wall_forces; every other particle is at least skin/2 - skin/2 = 0 away from every wall until
+  // the next rebuild, which also happens when a wall has moved by half a skin.
+  bool wall_candidates_valid = false;
+  std::vector<std::int32_t> wall_cand_particle;   // particle index
+  std::vector<std::int32_t> wall_cand_start;      // CSR offsets into wall_cand_wall
+  std::vector<std::int32_t> wall_cand_wall;       // wall index
+  std::vector<Vec3> wall_offset_at_build;         // each wall's offset when they were built [m]
 };
 
 class World {
@@ -101,6 +110,8 @@ class World {
   void kick_drift();
   void move_walls();
   void update_neighbors();
+  bool wall_candidates_current() const;
+  void build_wall_candidates();
   void pair_forces();
   void gather_forces();
   void wall_forces();
