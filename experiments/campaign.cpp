@@ -10,6 +10,7 @@
 #include <cctype>
 #include <charconv>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -25,6 +26,7 @@
 
 #include "experiments/overrides.hpp"
 #include "experiments/provenance.hpp"
+#include "sim/contact.hpp"
 
 namespace reposetwin::experiments {
 namespace fs = std::filesystem;
@@ -121,6 +123,41 @@ toml::table get_overrides(const toml::table& t, const std::string& file,
   for (const auto& [k, v] : out)
     split_dotted_key(k.str(), file + ": key '" + prefix + "overrides'");
   return out;
+}
+
+// Seeds: a list of distinct non-negative integers, or a count n meaning 1..n.
+std::vector<std::uint64_t> parse_seeds(const toml::node& s, const std::string& file,
+                                       const std::string& key) {
+  std::vector<std::uint64_t> seeds;
+  if (s.is_integer()) {
+    const auto n = s.as_integer()->get();
+    if (n < 1 || n > 100000) throw bad(file, key, value_text(s), "a count must be 1..100000");
+    for (std::int64_t i = 1; i <= n; ++i) seeds.push_back(static_cast<std::uint64_t>(i));
+  } else if (const auto* a = s.as_array()) {
+    std::set<std::int64_t> seen;
+    for (const auto& e : *a) {
+      if (!e.is_integer() || e.as_integer()->get() < 0)
+        throw bad(file, key, value_text(s), "every seed must be an integer >= 0");
+      if (!seen.insert(e.as_integer()->get()).second)
+        throw bad(file, key, value_text(s), "seed " + value_text(e) + " is repeated");
+      seeds.push_back(static_cast<std::uint64_t>(e.as_integer()->get()));
+    }
+    if (seeds.empty()) throw bad(file, key, "[]", "needs at least one seed");
+  } else {
+    throw bad(file, key, value_text(s), "must be a list of integers or a count");
+  }
+  return seeds;
+}
+
+// An optional Table 1 sample number (1..4, the paper's samples).
+std::optional<int> get_sample(const toml::table& t, const std::string& file,
+                              const std::string& prefix) {
+  const toml::node* n = t.get("table1_sample");
+  if (n == nullptr) return std::nullopt;
+  if (!n->is_integer() || n->as_integer()->get() < 1 || n->as_integer()->get() > 4)
+    throw bad(file, prefix + "table1_sample", value_text(*n),
+              "must be the paper's Table 1 sample number, an integer 1..4");
+  return static_cast<int>(n->as_integer()->get());
 }
 
 std::string fnv1a_hex(const std::string& text) {
@@ -224,7 +261,7 @@ Campaign parse_campaign(std::string_view text, const std::string& path) {
   }
   check_keys(root,
              {"name", "description", "paper", "scene", "seeds", "overrides", "case", "sweep",
-              "calibration"},
+              "calibration", "predict"},
              file, "");
 
   Campaign c;
@@ -238,27 +275,7 @@ Campaign parse_campaign(std::string_view text, const std::string& path) {
   c.paper = get_string(root, "paper", file, "", false);
   c.scene_path = resolve_scene(file, "scene", get_string(root, "scene", file, "", true));
 
-  // Seeds: a list of distinct non-negative integers, or a count n meaning 1..n.
-  if (const toml::node* s = root.get("seeds")) {
-    if (s->is_integer()) {
-      const auto n = s->as_integer()->get();
-      if (n < 1 || n > 100000)
-        throw bad(file, "seeds", value_text(*s), "a count must be 1..100000");
-      for (std::int64_t i = 1; i <= n; ++i) c.seeds.push_back(static_cast<std::uint64_t>(i));
-    } else if (const auto* a = s->as_array()) {
-      std::set<std::int64_t> seen;
-      for (const auto& e : *a) {
-        if (!e.is_integer() || e.as_integer()->get() < 0)
-          throw bad(file, "seeds", value_text(*s), "every seed must be an integer >= 0");
-        if (!seen.insert(e.as_integer()->get()).second)
-          throw bad(file, "seeds", value_text(*s), "seed " + value_text(e) + " is repeated");
-        c.seeds.push_back(static_cast<std::uint64_t>(e.as_integer()->get()));
-      }
-      if (c.seeds.empty()) throw bad(file, "seeds", "[]", "needs at least one seed");
-    } else {
-      throw bad(file, "seeds", value_text(*s), "must be a list of integers or a count");
-    }
-  }
+  if (const toml::node* s = root.get("seeds")) c.seeds = parse_seeds(*s, file, "seeds");
 
   const toml::table common = get_overrides(root, file, "");
   c.overrides = common;
@@ -370,13 +387,28 @@ Campaign parse_campaign(std::string_view text, const std::string& path) {
     const auto* t = cal->as_table();
     if (t == nullptr) throw bad(file, "calibration", value_text(*cal), "must be a table");
     const std::string p = "calibration.";
-    check_keys(*t,
-               {"key", "target_deg", "target_sd_deg", "mu_r_range", "seeds_per_point", "first_seed",
-                "tolerance_deg", "max_simulations", "bootstrap_replicates", "confirm"},
-               file, p);
+    check_keys(
+        *t,
+        {"key", "target_deg", "target_sd_deg", "mu_r_range", "seeds_per_point", "first_seed",
+         "tolerance_deg", "max_simulations", "bootstrap_replicates", "confirm", "table1_sample"},
+        file, p);
     CampaignCalibration cc;
-    cc.key = get_string(*t, "key", file, p, false, cc.key);
-    split_dotted_key(cc.key, file + ": key 'calibration.key'");
+    if (const toml::node* k = t->get("key"); k && k->is_array()) {
+      for (const auto& e : *k->as_array()) {
+        if (!e.is_string())
+          throw bad(file, p + "key", value_text(*k), "must be a string or a list of strings");
+        cc.keys.push_back(e.as_string()->get());
+      }
+      if (cc.keys.empty()) throw bad(file, p + "key", "[]", "needs at least one key");
+      if (std::set<std::string>(cc.keys.begin(), cc.keys.end()).size() != cc.keys.size())
+        throw bad(file, p + "key", value_text(*k), "a key is repeated");
+      cc.key = cc.keys.front();
+    } else {
+      cc.key = get_string(*t, "key", file, p, false, cc.key);
+      cc.keys = {cc.key};
+    }
+    for (const auto& k : cc.keys) split_dotted_key(k, file + ": key 'calibration.key'");
+    cc.table1_sample = get_sample(*t, file, p);
     const auto target = get_number(*t, "target_deg", file, p);
     if (!target) throw bad(file, p + "target_deg", "", "missing (the measured angle in degrees)");
     cc.target.angle_deg = *target;
@@ -436,11 +468,83 @@ Campaign parse_campaign(std::string_view text, const std::string& path) {
         throw bad(file, p + "bootstrap_replicates", std::to_string(*v), "must be 100..1000000");
       cc.settings.bootstrap.replicates = static_cast<int>(*v);
     }
-    // The key must apply to the base scene.
+    // The keys must apply to the base scene.
     toml::table copy = scene_of(c.scene_path);
-    apply_override(copy, cc.key, toml::value<double>(cc.settings.mu_r_lo),
-                   file + ", key 'calibration.key' (scene " + c.scene_path + ")");
+    for (const auto& k : cc.keys)
+      apply_override(copy, k, toml::value<double>(cc.settings.mu_r_lo),
+                     file + ", key 'calibration.key' (scene " + c.scene_path + ")");
     c.calibration = cc;
+  }
+
+  if (const toml::node* pred = root.get("predict")) {
+    const auto* arr = pred->as_array();
+    if (arr == nullptr || !arr->is_array_of_tables() || arr->empty())
+      throw bad(file, "predict", value_text(*pred), "must be one or more [[predict]] tables");
+    if (!c.calibration)
+      throw bad(file, "predict", "",
+                "[[predict]] needs a [calibration] (it runs at the calibrated mu_r)");
+    std::set<std::string> names;
+    std::size_t i = 0;
+    for (const auto& e : *arr) {
+      const auto& t = *e.as_table();
+      const std::string prefix = "predict[" + std::to_string(i++) + "].";
+      check_keys(t,
+                 {"name", "description", "scene", "measured_deg", "measured_sd_deg", "seeds",
+                  "overrides", "interval_ends", "table1_sample"},
+                 file, prefix);
+      PredictionCase pc;
+      pc.name = get_string(t, "name", file, prefix, true);
+      if (!is_safe_name(pc.name))
+        throw bad(file, prefix + "name", "\"" + pc.name + "\"",
+                  "not filesystem-safe (use letters, digits, '.', '_', '-'; start with a letter or "
+                  "digit; at most 100 characters)");
+      std::string lower;
+      for (char ch : pc.name)
+        lower.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(ch))));
+      if (!names.insert(lower).second)
+        throw bad(file, prefix + "name", "\"" + pc.name + "\"", "prediction name is not unique");
+      pc.description = get_string(t, "description", file, prefix, false);
+      pc.scene_path =
+          resolve_scene(file, prefix + "scene", get_string(t, "scene", file, prefix, true));
+      const auto measured = get_number(t, "measured_deg", file, prefix);
+      if (!measured)
+        throw bad(file, prefix + "measured_deg", "", "missing (the test's measured angle in deg)");
+      pc.measured.angle_deg = *measured;
+      pc.measured.sd_deg = get_number(t, "measured_sd_deg", file, prefix).value_or(0.0);
+      try {
+        validate_target(pc.measured);
+      } catch (const std::invalid_argument& err) {
+        const std::string k = t.get("measured_sd_deg") && !(pc.measured.sd_deg >= 0.0)
+                                  ? "measured_sd_deg"
+                                  : "measured_deg";
+        throw bad(file, prefix + k, value_text(*t.get(k)), err.what());
+      }
+      if (const toml::node* sd = t.get("seeds")) {
+        pc.seeds = parse_seeds(*sd, file, prefix + "seeds");
+      } else if (!c.seeds.empty()) {
+        pc.seeds = c.seeds;
+      } else {
+        for (int k = 0; k < c.calibration->settings.seeds_per_point; ++k)
+          pc.seeds.push_back(c.calibration->settings.first_seed + static_cast<std::uint64_t>(k));
+      }
+      if (const toml::node* v = t.get("interval_ends")) {
+        if (!v->is_boolean())
+          throw bad(file, prefix + "interval_ends", value_text(*v), "must be true or false");
+        pc.interval_ends = v->as_boolean()->get();
+      }
+      pc.table1_sample = get_sample(t, file, prefix);
+      pc.overrides = common;
+      for (const auto& [k, v] : get_overrides(t, file, prefix))
+        v.visit([&](const auto& x) { pc.overrides.insert_or_assign(k, x); });
+      toml::table check = scene_of(pc.scene_path);
+      toml::table with_mu = pc.overrides;
+      for (const auto& k : c.calibration->keys)
+        with_mu.insert_or_assign(k, c.calibration->settings.mu_r_lo);
+      apply_overrides(check, with_mu,
+                      file + ", prediction " + pc.name + " (scene " + pc.scene_path + ")");
+      pc.scene_hash = fnv1a_hex(read_file(pc.scene_path));
+      c.predictions.push_back(std::move(pc));
+    }
   }
 
   if (c.runs.empty() && !c.calibration)
@@ -912,8 +1016,37 @@ CaseSpec calibration_run(const Campaign& campaign, double mu_r, std::uint64_t se
   const auto r = std::to_chars(buf, buf + sizeof buf, mu_r);
   toml::table ov;
   ov.insert_or_assign(key, mu_r);
+  for (const auto& k : campaign.calibration->keys) ov.insert_or_assign(k, mu_r);
   return make_run(campaign, sanitize("calib_" + parts.back() + "_" + std::string(buf, r.ptr)), ov,
                   seed);
+}
+
+CaseSpec prediction_run(const Campaign& campaign, const PredictionCase& p, double mu_r,
+                        std::uint64_t seed) {
+  if (!campaign.calibration)
+    throw std::invalid_argument(campaign.file + ": no [calibration] table");
+  if (!std::isfinite(mu_r) || mu_r < 0.0)
+    throw std::invalid_argument(campaign.file + ", prediction " + p.name +
+                                ": mu_r = " + std::to_string(mu_r) + " must be finite and >= 0");
+  const auto parts =
+      split_dotted_key(campaign.calibration->key, campaign.file + ": key 'calibration.key'");
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, mu_r);
+  const std::string name =
+      sanitize("predict_" + p.name + "_" + parts.back() + "_" + std::string(buf, r.ptr));
+  if (!is_safe_name(name))
+    throw std::invalid_argument(campaign.file + ": run name \"" + name +
+                                "\" is not filesystem-safe");
+  CaseSpec s;
+  s.case_name = name;
+  s.seed = seed;
+  s.scene_path = p.scene_path;
+  s.scene_hash = fnv1a_hex(read_file(p.scene_path));
+  s.overrides = p.overrides;
+  for (const auto& k : campaign.calibration->keys) s.overrides.insert_or_assign(k, mu_r);
+  toml::table check = parse_toml_file(p.scene_path);
+  apply_overrides(check, s.overrides, campaign.file + ", prediction run " + name);
+  return s;
 }
 
 std::vector<nlohmann::json> run_batch(const Campaign& campaign, const std::vector<CaseSpec>& runs,
@@ -942,6 +1075,264 @@ std::vector<nlohmann::json> run_batch(const Campaign& campaign, const std::vecto
   }
   if (!failures.empty()) throw std::runtime_error("run_batch: run(s) failed: " + failures);
   return results;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Calibrate, then predict.
+
+namespace {
+
+constexpr const char* kCalibrationFile = "calibration.json";
+constexpr const char* kPredictionsFile = "predictions.json";
+
+const CampaignCalibration& calibration_of(const Campaign& c) {
+  if (!c.calibration)
+    throw std::invalid_argument(c.file + ": [calibration] is missing (target_deg, mu_r_range)");
+  return *c.calibration;
+}
+
+std::vector<std::string> keys_of(const CampaignCalibration& cc) {
+  return cc.keys.empty() ? std::vector<std::string>{cc.key} : cc.keys;
+}
+
+// The rolling law behind the calibrated key: the scene's rolling_model beside the key (the
+// scene format's default "epsd" when the scene does not say), described by sim::kRollingModels.
+nlohmann::json rolling_model_of(const Campaign& c) {
+  const auto& cc = calibration_of(c);
+  const toml::table doc = build_case_scene(calibration_run(c, cc.settings.mu_r_lo, 1));
+  const auto dot = cc.key.rfind('.');
+  const std::string parent = dot == std::string::npos ? std::string() : cc.key.substr(0, dot);
+  std::string keyword = "epsd";
+  bool stated = false;
+  if (!parent.empty()) {
+    if (auto v = toml::at_path(doc, parent + ".rolling_model").value<std::string>()) {
+      keyword = *v;
+      stated = true;
+    }
+  }
+  nlohmann::json j = {{"keyword", keyword}, {"stated_in_scene", stated}};
+  if (const sim::RollingModelInfo* info = sim::find_rolling_model(keyword)) {
+    j["torque"] = std::string(info->torque);
+    j["radius"] = std::string(info->radius);
+    j["angular_velocity"] = std::string(info->angular_velocity);
+  }
+  return j;
+}
+
+struct AngleStats {
+  int n = 0;
+  double mean = 0.0, sd = 0.0;
+};
+
+AngleStats angle_stats(const std::vector<double>& v) {
+  AngleStats s;
+  s.n = static_cast<int>(v.size());
+  if (v.empty()) return s;
+  for (double x : v) s.mean += x;
+  s.mean /= s.n;
+  if (s.n > 1) {
+    for (double x : v) s.sd += (x - s.mean) * (x - s.mean);
+    s.sd = std::sqrt(s.sd / (s.n - 1));
+  }
+  return s;
+}
+
+std::vector<Observation> observations_of(const nlohmann::json& cal, const std::string& file) {
+  std::vector<Observation> obs;
+  if (!cal.contains("observations") || !cal["observations"].is_array())
+    throw std::runtime_error(file + ": field 'observations' is missing");
+  for (const auto& o : cal["observations"])
+    obs.push_back({o.at("mu_r").get<double>(), o.at("seed").get<std::uint64_t>(),
+                   o.at("angle_deg").get<double>()});
+  return obs;
+}
+
+}  // namespace
+
+nlohmann::json run_calibration(const Campaign& c, const std::string& out_dir, const CaseFn& case_fn,
+                               const AngleFn& angle_of, const RunnerSettings& runner,
+                               const CalibrateOptions& options) {
+  const CampaignCalibration& cc = calibration_of(c);
+  if (!angle_of) throw std::invalid_argument("run_calibration: no angle function");
+  auto simulate = [&](const std::vector<std::pair<double, std::uint64_t>>& points) {
+    std::vector<CaseSpec> runs;
+    for (const auto& [mu, seed] : points) runs.push_back(calibration_run(c, mu, seed));
+    std::vector<double> angles;
+    for (const nlohmann::json& r : run_batch(c, runs, out_dir, case_fn, runner))
+      angles.push_back(angle_of(r));
+    return angles;
+  };
+  const CalibrationResult r = calibrate_batch(simulate, cc.target, cc.settings);
+  nlohmann::json j = to_json(r);
+  j["campaign"] = c.file;
+  j["campaign_name"] = c.name;
+  j["key"] = cc.key;
+  j["keys"] = keys_of(cc);
+  j["mu_r_range"] = {cc.settings.mu_r_lo, cc.settings.mu_r_hi};
+  j["tolerance_deg"] = cc.settings.tolerance_deg;
+  j["seeds_per_point"] = cc.settings.seeds_per_point;
+  j["table1_sample"] = cc.table1_sample ? nlohmann::json(*cc.table1_sample) : nlohmann::json();
+  j["scene"] = c.scene_path;
+  j["rolling_model"] = rolling_model_of(c);
+  j["angle_method"] = options.angle_method;
+  j["created_utc"] = utc_now();
+  if (options.extra.is_object())
+    for (const auto& [k, v] : options.extra.items()) j[k] = v;
+  const fs::path out = fs::path(out_dir);
+  fs::create_directories(out);
+  if (!runner.rank || runner.rank->rank == 0)
+    write_json_atomic((out / kCalibrationFile).string(), j);
+  return j;
+}
+
+nlohmann::json read_calibration(const Campaign& c, const std::string& out_dir) {
+  const CampaignCalibration& cc = calibration_of(c);
+  const std::string file = (fs::path(out_dir) / kCalibrationFile).string();
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec))
+    throw std::runtime_error(file + ": no finished calibration here (run `reposetwin calibrate " +
+                             c.file + "` first, or give its --out folder)");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(read_file(file));
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(file + ": not a calibration file (" + e.what() + ")");
+  }
+  auto differs = [&](const std::string& field, const nlohmann::json& stored,
+                     const nlohmann::json& now) {
+    return std::runtime_error(file + ": field '" + field + "' = " + stored.dump() +
+                              " differs from the campaign file's " + now.dump() + " (" + c.file +
+                              "): this calibration was made from other inputs");
+  };
+  const nlohmann::json name = j.value("campaign_name", nlohmann::json());
+  if (name != nlohmann::json(c.name)) throw differs("campaign_name", name, c.name);
+  const nlohmann::json keys = j.value("keys", nlohmann::json());
+  if (keys != nlohmann::json(keys_of(cc))) throw differs("keys", keys, keys_of(cc));
+  const nlohmann::json target =
+      j.contains("target") ? j["target"].value("angle_deg", nlohmann::json()) : nlohmann::json();
+  if (target != nlohmann::json(cc.target.angle_deg))
+    throw differs("target.angle_deg", target, cc.target.angle_deg);
+  const nlohmann::json range = j.value("mu_r_range", nlohmann::json());
+  const nlohmann::json range_now = {cc.settings.mu_r_lo, cc.settings.mu_r_hi};
+  if (range != range_now) throw differs("mu_r_range", range, range_now);
+  return j;
+}
+
+nlohmann::json run_predictions(const Campaign& c, const nlohmann::json& cal,
+                               const std::string& out_dir, const CaseFn& case_fn,
+                               const AngleFn& angle_of, const RunnerSettings& runner,
+                               const CalibrateOptions& options) {
+  calibration_of(c);
+  if (!angle_of) throw std::invalid_argument("run_predictions: no angle function");
+  const std::string cal_file = (fs::path(out_dir) / kCalibrationFile).string();
+  if (!cal.contains("mu_r") || !cal["mu_r"].is_number())
+    throw std::runtime_error(cal_file + ": status '" + cal.value("status", std::string("?")) +
+                             "': no calibrated mu_r to predict with (" +
+                             cal.value("message", std::string()) + ")");
+  const double mu = cal["mu_r"].get<double>();
+  const double lo = cal.at("mu_r_interval").at(0).get<double>();
+  const double hi = cal.at("mu_r_interval").at(1).get<double>();
+  const MonotoneFit fit = fit_monotone(observations_of(cal, cal_file));
+
+  // One batch for every prediction: the calibrated mu_r first, then the interval ends.
+  std::vector<CaseSpec> runs;
+  std::set<std::string> ids;
+  auto add = [&](const PredictionCase& p, double m) {
+    for (auto seed : p.seeds) {
+      CaseSpec s = prediction_run(c, p, m, seed);
+      if (ids.insert(s.id()).second) runs.push_back(std::move(s));
+    }
+  };
+  for (const auto& p : c.predictions) add(p, mu);
+  for (const auto& p : c.predictions)
+    if (p.interval_ends)
+      for (double m : {lo, hi}) add(p, m);
+  std::map<std::string, double> angle;
+  if (!runs.empty()) {
+    const auto results = run_batch(c, runs, out_dir, case_fn, runner);
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      const double a = angle_of(results[i]);
+      if (!std::isfinite(a) || a < 0.0 || a > 90.0)
+        throw std::runtime_error("prediction run " + runs[i].id() + " returned angle " +
+                                 std::to_string(a) + " outside [0, 90] deg");
+      angle[runs[i].id()] = a;
+    }
+  }
+  auto at = [&](const PredictionCase& p, double m) {
+    nlohmann::json angles = nlohmann::json::array(), dirs = nlohmann::json::array();
+    std::vector<double> v;
+    for (auto seed : p.seeds) {
+      const CaseSpec s = prediction_run(c, p, m, seed);
+      v.push_back(angle.at(s.id()));
+      angles.push_back(v.back());
+      dirs.push_back(s.relative_dir());
+    }
+    const AngleStats st = angle_stats(v);
+    return nlohmann::json{{"mu_r", m},
+                          {"angles_deg", angles},
+                          {"runs", dirs},
+                          {"n", st.n},
+                          {"mean_deg", st.mean},
+                          {"seed_sd_deg", st.sd},
+                          {"sem_deg", st.n > 0 ? st.sd / std::sqrt(st.n) : 0.0}};
+  };
+
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& p : c.predictions) {
+    nlohmann::json j = at(p, mu);
+    const double mean = j["mean_deg"].get<double>();
+    nlohmann::json seeds = nlohmann::json::array();
+    for (auto s : p.seeds) seeds.push_back(s);
+    j["name"] = p.name;
+    j["description"] = p.description;
+    j["scene"] = p.scene_path;
+    j["table1_sample"] = p.table1_sample ? nlohmann::json(*p.table1_sample) : nlohmann::json();
+    j["check"] = p.scene_path == c.scene_path && p.overrides == c.overrides;
+    j["measured_deg"] = p.measured.angle_deg;
+    j["measured_sd_deg"] = p.measured.sd_deg;
+    j["seeds"] = seeds;
+    j["error_deg"] = mean - p.measured.angle_deg;
+    j["abs_error_deg"] = std::abs(mean - p.measured.angle_deg);
+    j["mu_r_interval"] = {lo, hi};
+    nlohmann::json effect;
+    if (p.interval_ends) {
+      const nlohmann::json a = at(p, lo), b = at(p, hi);
+      const double x = a["mean_deg"].get<double>(), y = b["mean_deg"].get<double>();
+      effect = {{"method", "runs"},
+                {"note", "the test run with the same seeds at both ends of the 95% mu_r interval"},
+                {"at_low", a},
+                {"at_high", b},
+                {"angle_range_deg", {std::min(x, y), std::max(x, y)}}};
+    } else {
+      const double f0 = evaluate(fit, mu);
+      const double dl =
+          evaluate(fit, std::clamp(lo, fit.points.front().mu_r, fit.points.back().mu_r)) - f0;
+      const double dh =
+          evaluate(fit, std::clamp(hi, fit.points.front().mu_r, fit.points.back().mu_r)) - f0;
+      effect = {{"method", "calibration_slope"},
+                {"note",
+                 "not run: the prediction shifted by the calibration test's fitted angle change "
+                 "over the 95% mu_r interval (assumes this test responds to mu_r as that one)"},
+                {"angle_range_deg", {mean + std::min(dl, dh), mean + std::max(dl, dh)}}};
+    }
+    j["interval_effect"] = effect;
+    list.push_back(j);
+  }
+  nlohmann::json out = {{"campaign", c.file},
+                        {"campaign_name", c.name},
+                        {"calibration_file", kCalibrationFile},
+                        {"calibration_status", cal.value("status", std::string())},
+                        {"mu_r", mu},
+                        {"mu_r_interval", {lo, hi}},
+                        {"keys", keys_of(*c.calibration)},
+                        {"angle_method", options.angle_method},
+                        {"created_utc", utc_now()},
+                        {"predictions", list}};
+  if (options.extra.is_object())
+    for (const auto& [k, v] : options.extra.items()) out[k] = v;
+  if (!runner.rank || runner.rank->rank == 0)
+    write_json_atomic((fs::path(out_dir) / kPredictionsFile).string(), out);
+  return out;
 }
 
 }  // namespace reposetwin::experiments

@@ -49,6 +49,30 @@
 //   key = "contacts.rock-rock.rolling_friction"  # optional (this is the default)
 //   seeds_per_point = 3                       # optional, as are first_seed (1), tolerance_deg
 //   max_simulations = 40                      # (0.5), bootstrap_replicates (2000), confirm
+//   table1_sample = 3                         # optional: the paper's Table 1 sample (reports)
+//   [[predict]]                               # optional, with [calibration]: other tests run at
+//   name = "sample4"                          # the calibrated mu_r (filesystem-safe, unique)
+//   scene = "s4.toml"                         # required: the other test's scene
+//   measured_deg = 37.17                      # required: its measured angle, in (0, 90)
+//   measured_sd_deg = 0.3                     # optional, its 1-sigma uncertainty
+//   seeds = [1, 2, 3]                         # optional: list or count (default: the campaign's
+//                                             # seeds, else seeds_per_point from first_seed)
+//   overrides = { ... }                       # optional, on top of the common overrides
+//   interval_ends = true                      # optional (true): also run the seeds at the ends
+//                                             # of the calibrated mu_r's 95% interval
+//   table1_sample = 4                         # optional: the paper's Table 1 sample (reports)
+//   description = "..."                       # optional
+// `calibration.key` may also be a list of keys that all take the calibrated value (e.g. rock-rock
+// and rock-plate rolling friction); the first names the calibration runs.
+//
+// Calibrate, then predict. run_calibration() drives calibrate_batch() through run_batch() and
+// writes calibration.json; run_predictions() runs every [[predict]] test at the calibrated mu_r
+// (and, unless interval_ends = false, at both ends of its 95% interval) through the same
+// resumable pool, and writes predictions.json. A prediction's mu_r comes from calibration.json,
+// whose numbers round-trip exactly through JSON, so a resumed or predict-only call names the same
+// run folders and reuses every finished run. The interval's effect on a prediction is measured by
+// those end runs; with interval_ends = false it is estimated by shifting the prediction by the
+// calibration test's own fitted angle change over the interval (stated as such in the file).
 #pragma once
 
 #include <toml++/toml.h>
@@ -81,8 +105,23 @@ struct CaseSpec {
 /// The [calibration] table of a campaign file, for the calibrate command.
 struct CampaignCalibration {
   std::string key = "contacts.rock-rock.rolling_friction";  // dotted scene key that is varied
-  Target target;                                            // measured angle to match
-  CalibrationSettings settings;  // mu_r range, seeds per point, tolerance, budget
+  std::vector<std::string> keys;     // every key set to mu_r (keys.front() == key); empty = {key}
+  Target target;                     // measured angle to match
+  CalibrationSettings settings;      // mu_r range, seeds per point, tolerance, budget
+  std::optional<int> table1_sample;  // the paper's Table 1 sample it calibrates on (reports)
+};
+
+/// One [[predict]] entry: another test, run at the calibrated mu_r with its own seeds.
+struct PredictionCase {
+  std::string name;                  // filesystem-safe, unique among the predictions
+  std::string description;           // free text (optional)
+  std::string scene_path;            // absolute path of the test's scene
+  std::string scene_hash;            // FNV-1a 64 of the scene file's text (hex)
+  toml::table overrides;             // the campaign's common overrides, then the entry's own
+  Target measured;                   // the test's measured angle and its 1-sigma uncertainty
+  std::vector<std::uint64_t> seeds;  // run seeds
+  bool interval_ends = true;         // also run the seeds at both ends of the mu_r interval
+  std::optional<int> table1_sample;  // the paper's Table 1 sample it predicts (reports)
 };
 
 /// A parsed campaign file.
@@ -96,6 +135,7 @@ struct Campaign {
   toml::table overrides;       // the file's top-level overrides, common to every run
   std::vector<CaseSpec> runs;  // cases x seeds, in file order then seed order
   std::optional<CampaignCalibration> calibration;
+  std::vector<PredictionCase> predictions;  // [[predict]] entries (only with [calibration])
 };
 
 /// Reads a campaign file. Throws std::invalid_argument (or std::runtime_error for unreadable files)
@@ -169,6 +209,11 @@ CaseSpec make_run(const Campaign& campaign, const std::string& case_name,
 /// with the calibration key set to mu_r. Throws if the campaign has no [calibration].
 CaseSpec calibration_run(const Campaign& campaign, double mu_r, std::uint64_t seed);
 
+/// The run of prediction `p` at one mu_r and seed: named "predict_<name>_<leaf>_<mu_r>", the
+/// test's scene with its overrides and every calibration key set to mu_r.
+CaseSpec prediction_run(const Campaign& campaign, const PredictionCase& p, double mu_r,
+                        std::uint64_t seed);
+
 /// Runs an explicit list of runs with the same folder, resume and failure rules as run_campaign
 /// (finished runs are reused, so a killed calibration resumes without redoing simulations) and
 /// returns each run's result (the case function's JSON) in order. Under MPI every rank runs its
@@ -184,5 +229,39 @@ std::optional<nlohmann::json> read_run_result(const std::string& out_dir, const 
 
 /// Scans out_dir and builds the manifest of `campaign` (status of every run) without running.
 nlohmann::json campaign_manifest(const Campaign& campaign, const std::string& out_dir);
+
+/// The angle a calibration or prediction uses from one run's result (the case function's JSON).
+using AngleFn = std::function<double(const nlohmann::json& case_result)>;
+
+/// What the calibrate command records beside the numbers.
+struct CalibrateOptions {
+  std::string angle_method;  // how the angle is measured, in words (stored in the JSON files)
+  nlohmann::json extra;      // more fields for calibration.json (e.g. code version)
+};
+
+/// Calibrates the campaign's [calibration] through run_batch (resumable: finished runs are
+/// reused) and writes OUT/calibration.json atomically; returns its content. Besides to_json of the
+/// result it records the campaign (file, name), the keys, the mu_r range, table1_sample, the
+/// scene and the scene's rolling model (keyword and the exact law, from sim::kRollingModels).
+/// Throws std::invalid_argument if the campaign has no [calibration].
+nlohmann::json run_calibration(const Campaign& campaign, const std::string& out_dir,
+                               const CaseFn& case_fn, const AngleFn& angle_of,
+                               const RunnerSettings& runner = {},
+                               const CalibrateOptions& options = {});
+
+/// Reads OUT/calibration.json and checks that it is this campaign's finished calibration (same
+/// campaign name, keys, target and mu_r range). Throws std::runtime_error naming the file and the
+/// field that differs or is missing.
+nlohmann::json read_calibration(const Campaign& campaign, const std::string& out_dir);
+
+/// Runs every [[predict]] test at the calibration's mu_r (and at its interval ends unless the
+/// entry says interval_ends = false) through run_batch, and writes OUT/predictions.json
+/// atomically; returns its content: per prediction the angles per seed, mean, seed sd, the
+/// measured angle, the error (mean - measured) and the mu_r interval's effect with its method.
+/// Throws std::runtime_error if the calibration has no calibrated mu_r (cannot reach).
+nlohmann::json run_predictions(const Campaign& campaign, const nlohmann::json& calibration,
+                               const std::string& out_dir, const CaseFn& case_fn,
+                               const AngleFn& angle_of, const RunnerSettings& runner = {},
+                               const CalibrateOptions& options = {});
 
 }  // namespace reposetwin::experiments

@@ -23,20 +23,22 @@ struct PoolArgs {
 void add_pool_options(CLI::App* cmd, PoolArgs& a) {
   cmd->add_option("campaign", a.file, "Campaign file (TOML)")->required();
   cmd->add_option("--out,-o", a.out, "Output folder (default: runs/<campaign name>)");
-  cmd->add_option("--workers", a.workers, "Runs side by side on this machine")->capture_default_str();
+  cmd->add_option("--workers", a.workers, "Runs side by side on this machine")
+      ->capture_default_str();
   cmd->add_option("--mode", a.mode, "Local pool: processes or threads")
       ->check(CLI::IsMember({"processes", "threads"}))
       ->capture_default_str();
   cmd->add_flag("--force", a.force, "Redo finished runs too");
   cmd->add_flag("--no-images", a.no_images, "Skip renders and vision (particle angles only)");
-  cmd->add_option("--views", a.views, "Side views per pile for the image angle")->capture_default_str();
+  cmd->add_option("--views", a.views, "Side views per pile for the image angle")
+      ->capture_default_str();
 }
 
 experiments::RunnerSettings runner(const PoolArgs& a) {
   experiments::RunnerSettings s;
   s.workers = a.workers;
-  s.mode = a.mode == "threads" ? experiments::WorkerMode::kThreads
-                               : experiments::WorkerMode::kProcesses;
+  s.mode =
+      a.mode == "threads" ? experiments::WorkerMode::kThreads : experiments::WorkerMode::kProcesses;
   s.force = a.force;
   return s;
 }
@@ -61,9 +63,10 @@ void add_campaign_command(CLI::App& app) {
     const std::string out = a->out.empty() ? "runs/" + c.name : a->out;
     const experiments::CampaignSummary s =
         experiments::run_campaign(c, out, case_fn(*a), runner(*a));
-    std::cout << nlohmann::json{{"campaign", c.name}, {"out", out},      {"total", s.total},
-                                {"finished", s.finished}, {"failed", s.failed},
-                                {"skipped", s.skipped},   {"ran", s.ran}}
+    std::cout << nlohmann::json{{"campaign", c.name}, {"out", out},
+                                {"total", s.total},   {"finished", s.finished},
+                                {"failed", s.failed}, {"skipped", s.skipped},
+                                {"ran", s.ran}}
                      .dump(2)
               << "\n";
     set_exit_code(s.failed > 0 ? 4 : 0);
@@ -73,43 +76,60 @@ void add_campaign_command(CLI::App& app) {
 void add_calibrate_command(CLI::App& app) {
   auto a = std::make_shared<PoolArgs>();
   auto angle = std::make_shared<std::string>("image");
+  auto predict_only = std::make_shared<bool>(false);
   auto* cmd = app.add_subcommand(
-      "calibrate", "Find mu_r so the simulated angle matches the campaign's [calibration] target");
+      "calibrate",
+      "Find mu_r so the simulated angle matches the campaign's [calibration] target, then run "
+      "its [[predict]] tests at the calibrated mu_r");
   add_pool_options(cmd, *a);
   cmd->add_option("--angle", *angle,
                   "Angle matched: image (vision on renders, as the lab photo) or particles")
       ->check(CLI::IsMember({"image", "particles"}))
       ->capture_default_str();
-  cmd->callback([a, angle]() {
+  cmd->add_flag("--predict-only", *predict_only,
+                "Reuse the finished OUT/calibration.json (never recalibrate) and run only the "
+                "[[predict]] tests");
+  cmd->callback([a, angle, predict_only]() {
     const experiments::Campaign c = experiments::load_campaign(a->file);
     if (!c.calibration)
       throw std::invalid_argument(c.file + ": [calibration] is missing (target_deg, mu_r_range)");
+    if (*predict_only && c.predictions.empty())
+      throw std::invalid_argument(c.file + ": --predict-only but the file has no [[predict]]");
     const std::string out = a->out.empty() ? "runs/" + c.name + "_calibration" : a->out;
     PoolArgs pa = *a;
     if (*angle == "particles") pa.no_images = true;
     const experiments::CaseFn fn = case_fn(pa);
     const experiments::RunnerSettings rs = runner(*a);
     const bool prefer_image = *angle == "image";
-    auto simulate = [&](const std::vector<std::pair<double, std::uint64_t>>& points) {
-      std::vector<experiments::CaseSpec> runs;
-      for (const auto& [mu, seed] : points) runs.push_back(experiments::calibration_run(c, mu, seed));
-      const std::vector<nlohmann::json> results = experiments::run_batch(c, runs, out, fn, rs);
-      std::vector<double> angles;
-      for (const nlohmann::json& r : results)
-        angles.push_back(experiments::case_angle_deg(r, prefer_image));
-      return angles;
+    const experiments::AngleFn angle_of = [prefer_image](const nlohmann::json& r) {
+      return experiments::case_angle_deg(r, prefer_image);
     };
-    const experiments::CalibrationResult r = experiments::calibrate_batch(
-        simulate, c.calibration->target, c.calibration->settings);
-    nlohmann::json j = experiments::to_json(r);
-    j["campaign"] = c.file;
-    j["key"] = c.calibration->key;
-    j["angle_method"] = prefer_image ? "vision on renders (atan(2H/D), perspective corrected)"
-                                     : "particle positions (atan(2H/D))";
-    j["code_version"] = experiments::code_version();
-    j["created_utc"] = experiments::utc_now();
-    experiments::write_json_atomic(out + "/calibration.json", j);
-    std::cout << j.dump(2) << "\n";
+    experiments::CalibrateOptions opt;
+    opt.angle_method = prefer_image ? "vision on renders (atan(2H/D), perspective corrected)"
+                                    : "particle positions (atan(2H/D))";
+    opt.extra = {{"code_version", experiments::code_version()}};
+    const nlohmann::json cal = *predict_only
+                                   ? experiments::read_calibration(c, out)
+                                   : experiments::run_calibration(c, out, fn, angle_of, rs, opt);
+    if (!*predict_only) std::cout << cal.dump(2) << "\n";
+    if (c.predictions.empty()) return;
+    if (!cal.contains("mu_r") || !cal["mu_r"].is_number()) {
+      std::cerr << "reposetwin calibrate: no predictions run: " << cal.value("message", "") << "\n";
+      set_exit_code(5);
+      return;
+    }
+    const nlohmann::json p = experiments::run_predictions(c, cal, out, fn, angle_of, rs, opt);
+    nlohmann::json brief = nlohmann::json::array();
+    for (const auto& q : p["predictions"])
+      brief.push_back({{"name", q["name"]},
+                       {"mu_r", q["mu_r"]},
+                       {"mean_deg", q["mean_deg"]},
+                       {"seed_sd_deg", q["seed_sd_deg"]},
+                       {"measured_deg", q["measured_deg"]},
+                       {"error_deg", q["error_deg"]},
+                       {"interval_effect_deg", q["interval_effect"]["angle_range_deg"]}});
+    std::cout << nlohmann::json{{"predictions", brief}, {"file", out + "/predictions.json"}}.dump(2)
+              << "\n";
   });
 }
 

@@ -1,3 +1,5 @@
+#include <algorithm>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -8,20 +10,49 @@ namespace reposetwin::cli {
 
 void add_report_command(CLI::App& app) {
   struct Args {
-    std::string dir;
+    std::vector<std::string> dirs;
+    std::string out;
     experiments::ReportSettings settings;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
-      "report", "Build an HTML report (plots, tables, renders) of a run, campaign or calibration");
-  cmd->add_option("dir", a->dir, "Run, campaign or calibration folder")->required();
+      "report",
+      "Build an HTML report (plots, tables, renders) of a run, campaign or calibration folder; "
+      "over several calibration folders (or their parent), the comparison with the paper's "
+      "Table 3");
+  cmd->add_option("dirs", a->dirs, "Run, campaign or calibration folder(s), or a parent of several")
+      ->required();
+  cmd->add_option("--out,-o", a->out,
+                  "Where the report over several folders goes (OUT/report/index.html; default: "
+                  "their common parent folder)");
   cmd->add_option("--lab-photo", a->settings.lab_photo, "A lab photo to measure and show");
   cmd->add_option("--lab-mm-per-px", a->settings.lab_mm_per_px,
                   "The lab photo's scale [mm/px] (default: find the scale bar)");
   cmd->add_option("--title", a->settings.title, "Report title");
+  cmd->add_option("--paper-data", a->settings.paper_dir,
+                  "Folder of the paper's CSVs (default: data/paper found upwards from the "
+                  "calibration's campaign file, then from the working folder)");
   cmd->callback([a]() {
-    const nlohmann::json s = experiments::build_report(a->dir, a->settings);
-    std::cout << s.dump(2) << "\n" << a->dir << "/report/index.html\n";
+    namespace fs = std::filesystem;
+    std::string out = a->out;
+    if (a->dirs.size() == 1 && out.empty()) {
+      const nlohmann::json s = experiments::build_report(a->dirs[0], a->settings);
+      std::cout << s.dump(2) << "\n" << a->dirs[0] << "/report/index.html\n";
+      return;
+    }
+    if (out.empty()) {  // the folders' common parent
+      fs::path common = fs::absolute(a->dirs[0]).lexically_normal().parent_path();
+      for (const auto& d : a->dirs) {
+        const fs::path p = fs::absolute(d).lexically_normal();
+        while (!common.empty() &&
+               std::mismatch(common.begin(), common.end(), p.begin(), p.end()).first !=
+                   common.end())
+          common = common.parent_path();
+      }
+      out = common.string();
+    }
+    const nlohmann::json s = experiments::build_report(a->dirs, out, a->settings);
+    std::cout << s.dump(2) << "\n" << out << "/report/index.html\n";
   });
 }
 
