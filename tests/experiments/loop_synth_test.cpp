@@ -28,18 +28,19 @@ SynthDesign design(const std::vector<std::pair<std::string, double>>& hidden) {
   d.mu_r = 0.2;
   d.seeds = {7001, 7002, 7003};
   d.hidden = hidden;
-  d.camera.width_px = 640;
-  d.camera.height_px = 480;
+  d.camera.width_px = 1280;
+  d.camera.height_px = 960;
+  d.camera.side_views = 4;
   d.camera.distance_radii = 14.0;
   d.camera.noise_sd = 4.0;
-  const double masses[] = {0.004, 0.007, 0.011};
+  const double masses[] = {0.005, 0.008, 0.012};
   const double widths[] = {20.0, 26.0};
   for (double w : widths)
     for (double m : masses) {
       SynthTest t;
       t.id = "m" + std::to_string(static_cast<int>(m * 1e3 + 0.5)) + "_w" +
              std::to_string(static_cast<int>(w));
-      t.role = (m == 0.007 && w == 26.0) ? "validate" : "calibrate";
+      t.role = (m == 0.008 && w == 26.0) ? "validate" : "calibrate";
       t.conditions = {{"mass_kg", m}, {"W_mm", w}};
       d.tests.push_back(t);
     }
@@ -50,8 +51,9 @@ LoopSettings settings() {
   LoopSettings s;
   s.mu_grid = {0.1, 0.2, 0.35};
   s.seeds = {1001, 1002};
-  s.image.width_px = 640;
-  s.image.height_px = 480;
+  s.image.width_px = 1280;
+  s.image.height_px = 960;
+  s.image.side_views = 3;
   s.max_effects = 1;
   s.progress = true;
   s.force = true;
