@@ -212,8 +212,11 @@ std::string comparison_html(const json& cmp, const std::string& plot_png) {
     h << "<tr" << (pred ? " style='background:#eef'" : "") << "><td>"
       << (r["sample"].is_number() ? std::to_string(r["sample"].get<int>()) : "-") << "</td><td>"
       << paper_or_dash(r["paper_d_max_mm"]) << "</td><td>" << paper_or_dash(r["paper_mass_g"])
-      << "</td><td>" << paper_or_dash(r["measured_deg"]) << "</td><td>"
-      << paper_or_dash(r["paper_mu_r"]) << " <small>"
+      << "</td><td>" << paper_or_dash(r["measured_deg"])
+      << (r.contains("measured_note")
+              ? "<br><small>" + html_escape(r["measured_note"].get<std::string>()) + "</small>"
+              : std::string())
+      << "</td><td>" << paper_or_dash(r["paper_mu_r"]) << " <small>"
       << html_escape(r.value("paper_how", std::string())) << "</small></td><td>"
       << paper_or_dash(r["paper_angle_deg"]) << "</td><td>" << kind << "</td><td>" << mu
       << "</td><td>" << angle << "</td><td>" << fmt_or_dash(r["abs_error_deg"]) << "</td><td>"
@@ -229,6 +232,11 @@ std::string comparison_html(const json& cmp, const std::string& plot_png) {
 std::string comparison_plot(const json& cmp, const fs::path& out) {
   std::ostringstream cal, pred, paper;
   std::set<int> paper_done;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;  // common axis range [deg]
+  auto extend = [&](double a, double b) {
+    lo = std::min(lo, a);
+    hi = std::max(hi, b);
+  };
   for (const json& r : cmp["rows"]) {
     if (!r["measured_deg"].is_number()) continue;
     const double x = r["measured_deg"].get<double>();
@@ -237,12 +245,17 @@ std::string comparison_plot(const json& cmp, const fs::path& out) {
     if (r["angle_mean_deg"].is_number()) {
       const double sd =
           r["angle_seed_sd_deg"].is_number() ? r["angle_seed_sd_deg"].get<double>() : 0.0;
+      const double y = r["angle_mean_deg"].get<double>();
+      extend(std::min(x, y - sd), std::max(x, y + sd));
       (r.value("kind", std::string()) == "prediction" ? pred : cal)
           << x << " " << r["angle_mean_deg"].get<double>() << " " << sd << " \"" << label << "\"\n";
     }
     if (r["paper_angle_deg"].is_number() && r["sample"].is_number() &&
-        paper_done.insert(r["sample"].get<int>()).second)
-      paper << x << " " << r["paper_angle_deg"].get<double>() << " \"" << label << "\"\n";
+        paper_done.insert(r["sample"].get<int>()).second) {
+      const double y = r["paper_angle_deg"].get<double>();
+      paper << x << " " << y << " \"" << label << "\"\n";
+      extend(std::min(x, y), std::max(x, y));
+    }
   }
   std::vector<std::string> parts;
   auto series = [&](const std::string& name, const std::string& data, const std::string& how) {
@@ -268,12 +281,13 @@ std::string comparison_plot(const json& cmp, const fs::path& out) {
   for (const auto& p : parts) plot += p + ", ";
   plot += "x with lines dt 2 lc rgb 'gray' title 'simulated = measured'\n";
   const bool ok = gnuplot((out / "comparison.gp").string(),
-                          "set terminal pngcairo size 700,550\nset output '" +
+                          "set terminal pngcairo size 650,720\nset output '" +
                               (out / "comparison.png").string() +
                               "'\nset xlabel 'measured angle, Table 1 [deg]'\n"
-                              "set ylabel 'simulated angle [deg]'\nset key top left\n"
-                              "set offsets 1,1,1,1\nset size ratio -1\n" +
-                              plot);
+                              "set ylabel 'simulated angle [deg]'\nset key outside below\n"
+                              "set size square\nset xrange [" +
+                              fmt(lo - 1.0, 1) + ":" + fmt(hi + 1.0, 1) + "]\nset yrange [" +
+                              fmt(lo - 1.0, 1) + ":" + fmt(hi + 1.0, 1) + "]\n" + plot);
   return ok ? "comparison.png" : "";
 }
 
@@ -396,7 +410,12 @@ json paper_comparison(const std::vector<std::string>& dirs, const std::string& p
       if (t1.count(s)) {
         r["paper_d_max_mm"] = csv_number(t1[s], "d_max_mm", t1_file);
         r["paper_mass_g"] = csv_number(t1[s], "mass_g", t1_file);
-        r["measured_deg"] = csv_number(t1[s], "theta_measured_deg", t1_file);
+        const double measured = csv_number(t1[s], "theta_measured_deg", t1_file);
+        if (r["measured_deg"].is_number() &&
+            std::abs(r["measured_deg"].get<double>() - measured) > 0.005)
+          r["measured_note"] = "the campaign matched " + fmt(r["measured_deg"].get<double>()) +
+                               " deg, not Table 1's value";
+        r["measured_deg"] = measured;
         r["measured_source"] = "Table 1";
       }
       if (t3.count(s)) {
@@ -440,8 +459,7 @@ json paper_comparison(const std::vector<std::string>& dirs, const std::string& p
       r["angle_mean_deg"] = check["mean_deg"];
       r["angle_seed_sd_deg"] = check["seed_sd_deg"];
       r["angle_n"] = check["n"];
-      r["angle_how"] =
-          "runs at the calibrated mu_r, " + std::to_string(check.value("n", 0)) + " seeds";
+      r["angle_how"] = "runs at the calibrated mu_r, n = " + std::to_string(check.value("n", 0));
       int extra = check.value("n", 0);
       if (check.contains("interval_effect") &&
           check["interval_effect"].value("method", "") == "runs") {
@@ -464,23 +482,23 @@ json paper_comparison(const std::vector<std::string>& dirs, const std::string& p
         const json& e = p.value("interval_effect", json::object());
         if (e.value("method", "") == "runs")
           n += e["at_low"].value("n", 0) + e["at_high"].value("n", 0);
-        json q = {{"kind", "prediction"},
-                  {"name", p.value("name", std::string())},
-                  {"source", dirs[i]},
-                  {"from", from},
-                  {"mu_r", num_or_null(p, "mu_r")},
-                  {"mu_r_interval", p.value("mu_r_interval", json())},
-                  {"interval_open", cal.value("interval_open", json::array({false, false}))},
-                  {"measured_deg", num_or_null(p, "measured_deg")},
-                  {"measured_source", "campaign [[predict]]"},
-                  {"angle_mean_deg", num_or_null(p, "mean_deg")},
-                  {"angle_seed_sd_deg", num_or_null(p, "seed_sd_deg")},
-                  {"angle_n", p.value("n", 0)},
-                  {"angle_how",
-                   "runs at the calibrated mu_r, " + std::to_string(p.value("n", 0)) + " seeds"},
-                  {"interval_effect_deg", e.value("angle_range_deg", json())},
-                  {"interval_effect_method", e.value("method", std::string())},
-                  {"simulations", n}};
+        json q = {
+            {"kind", "prediction"},
+            {"name", p.value("name", std::string())},
+            {"source", dirs[i]},
+            {"from", from},
+            {"mu_r", num_or_null(p, "mu_r")},
+            {"mu_r_interval", p.value("mu_r_interval", json())},
+            {"interval_open", cal.value("interval_open", json::array({false, false}))},
+            {"measured_deg", num_or_null(p, "measured_deg")},
+            {"measured_source", "campaign [[predict]]"},
+            {"angle_mean_deg", num_or_null(p, "mean_deg")},
+            {"angle_seed_sd_deg", num_or_null(p, "seed_sd_deg")},
+            {"angle_n", p.value("n", 0)},
+            {"angle_how", "runs at the calibrated mu_r, n = " + std::to_string(p.value("n", 0))},
+            {"interval_effect_deg", e.value("angle_range_deg", json())},
+            {"interval_effect_method", e.value("method", std::string())},
+            {"simulations", n}};
         with_paper(q, p.value("table1_sample", json()));
       }
     }
@@ -531,8 +549,10 @@ json paper_comparison(const std::vector<std::string>& dirs, const std::string& p
   }
   if (!t3_notes.empty()) {
     cap << "Paper (from " << html_escape(t3_file) << "):";
-    for (const auto& n : t3_notes) cap << html_escape(n);
-    cap << ". ";
+    std::string notes;
+    for (const auto& n : t3_notes) notes += n;
+    while (!notes.empty() && (notes.back() == ' ' || notes.back() == '.')) notes.pop_back();
+    cap << html_escape(notes) << ". ";
   } else {
     cap << "Paper: EDEM, lever arm R = contact-to-centre distance (paper data not found: give "
            "--paper-data). ";
