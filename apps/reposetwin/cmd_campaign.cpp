@@ -80,7 +80,7 @@ void add_calibrate_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "calibrate",
       "Find mu_r so the simulated angle matches the campaign's [calibration] target, then run "
-      "its [[predict]] tests at the calibrated mu_r");
+      "its [[predict]] tests at the calibrated mu_r (exit code 5: the target cannot be reached)");
   add_pool_options(cmd, *a);
   cmd->add_option("--angle", *angle,
                   "Angle matched: image (vision on renders, as the lab photo) or particles")
@@ -112,12 +112,13 @@ void add_calibrate_command(CLI::App& app) {
                                    ? experiments::read_calibration(c, out)
                                    : experiments::run_calibration(c, out, fn, angle_of, rs, opt);
     if (!*predict_only) std::cout << cal.dump(2) << "\n";
-    if (c.predictions.empty()) return;
-    if (!cal.contains("mu_r") || !cal["mu_r"].is_number()) {
-      std::cerr << "reposetwin calibrate: no predictions run: " << cal.value("message", "") << "\n";
+    if (!cal.contains("mu_r") || !cal["mu_r"].is_number()) {  // cannot reach: exit code 5
+      std::cerr << "reposetwin calibrate: " << cal.value("message", "")
+                << (c.predictions.empty() ? "" : "; no predictions run") << "\n";
       set_exit_code(5);
       return;
     }
+    if (c.predictions.empty()) return;
     const nlohmann::json p = experiments::run_predictions(c, cal, out, fn, angle_of, rs, opt);
     nlohmann::json brief = nlohmann::json::array();
     for (const auto& q : p["predictions"])
