@@ -813,7 +813,7 @@ json build_report(const std::vector<std::string>& dirs, const std::string& out_d
       {"folders", json::array()}};
   std::ostringstream links;
   ReportSettings sub = settings;
-  sub.lab_photo.clear();  // shown once, on this page
+  // Each folder's own report shows the lab photo beside its render; this page shows it alone.
   sub.title.clear();
   for (const std::string& d : dirs) {
     if (!holds_results(d))
