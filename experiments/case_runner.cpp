@@ -1,6 +1,7 @@
 #include "experiments/case_runner.hpp"
 
 #include <filesystem>
+#include <stdexcept>
 
 #include "experiments/pile_test.hpp"
 #include "experiments/scene.hpp"
@@ -42,6 +43,13 @@ CaseFn pile_case_fn(const CaseRunSettings& settings) {
 
 double case_angle_deg(const json& r, bool prefer_image) {
   const json& res = r.contains("result") ? r.at("result") : r;
+  if (res.contains("stop")) {
+    const std::string reason = res.at("stop").value("reason", std::string());
+    if (reason.rfind("physics", 0) == 0)
+      throw std::runtime_error("the run stopped on a physics failure (" + reason + ": " +
+                               res.at("stop").value("detail", std::string()) +
+                               "), so it has no angle; " + res.value("run_dir", std::string()));
+  }
   if (res.at("pile").at("status") == "no pile") return 0.0;
   if (prefer_image && res.contains("image")) return res.at("image").at("theta_deg");
   return res.at("pile").at("theta_hd_deg");

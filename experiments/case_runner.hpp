@@ -21,7 +21,8 @@ struct CaseRunSettings {
 CaseFn pile_case_fn(const CaseRunSettings& settings);
 
 /// The angle a calibration matches: the vision angle on the renders when present, otherwise
-/// atan(2H/D) from particle positions; 0 for "no pile". Throws if the result has neither.
+/// atan(2H/D) from particle positions; 0 for "no pile". Throws if the result has neither, or if
+/// the run stopped on a physics failure (overlap, NaN, escape): such a run has no angle.
 double case_angle_deg(const nlohmann::json& case_result, bool prefer_image = true);
 
 }  // namespace reposetwin::experiments

@@ -591,9 +591,13 @@ json build_report(const std::string& dir_in, const ReportSettings& settings) {
       cases[case_name].scene = scene;
     }
     CaseRows& c = cases[case_name];
-    c.stops.push_back(r.at("stop").at("reason").get<std::string>());
+    const std::string reason = r.at("stop").at("reason").get<std::string>();
+    c.stops.push_back(reason);
     c.run_dirs.push_back(run_dir);
     c.provenance = r.at("provenance");
+    // A run stopped by a physics failure (overlap, NaN, escape) has no valid pile: it is listed
+    // with its stop reason but its angles never enter a mean.
+    if (reason.rfind("physics", 0) == 0) return;
     const json& pile = r.at("pile");
     c.particle_deg.push_back(pile.value("theta_hd_deg", 0.0));
     c.slice_deg.push_back(pile.value("slice_angle_mean_deg", 0.0));
@@ -749,7 +753,7 @@ json build_report(const std::string& dir_in, const ReportSettings& settings) {
     h << "<p>(gnuplot not available: no plot)</p>\n";
   if (!order.empty()) {
     h << "<h2>Cases</h2><table><tr><th>case</th><th>inputs (overrides)</th><th>runs</th>"
-         "<th>image angle [deg] mean &plusmn; sd</th><th>particle atan(2H/D) [deg]</th>"
+         "<th>image angle [deg] mean &plusmn; sd (runs stopped by a physics failure left out)</th><th>particle atan(2H/D) [deg]</th>"
          "<th>slice (protractor) [deg]</th><th>stop reasons</th><th>provenance</th>"
          "<th>files</th></tr>\n";
     for (const std::string& name : order) {
