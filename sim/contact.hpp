@@ -160,8 +160,9 @@ inline Vec3 mindlin_tangential(const ContactConstants& c, const Vec3& n, double 
   const double gamma_t = -2.0 * 0.91287092917527685576 * c.beta * std::sqrt(s_t * m_eff);
   Vec3 f = -s_t * spring - gamma_t * v_t;
   const double cap = c.mu_s * std::max(f_n, 0.0);
-  const double fmag = f.norm();
-  if (fmag > cap) {
+  // Compared squared: the square root is taken only when the contact slips.
+  if (f.squaredNorm() > cap * cap) {
+    const double fmag = f.norm();
     f *= fmag > 0.0 ? cap / fmag : 0.0;
     spring = s_t > 0.0 ? Vec3(-f / s_t) : Vec3::Zero();
   }
@@ -194,8 +195,8 @@ inline Vec3 rolling_epsd(const ContactConstants& c, double mu_r, const Vec3& n, 
   const double k_r = 8.0 * c.g_star * std::sqrt(r_eff * delta) * r_eff * r_eff;
   spring -= k_r * dt * w_r;
   const double cap = mu_r * std::max(f_n, 0.0) * r_eff;
-  const double m = spring.norm();
-  if (m >= cap) {
+  if (spring.squaredNorm() >= cap * cap) {  // squared: the root only at the cap
+    const double m = spring.norm();
     spring *= m > 0.0 ? cap / m : 0.0;
     return spring;
   }
