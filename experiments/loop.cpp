@@ -332,7 +332,26 @@ json Loop::run() {
                                      s_.image));
     say("fingerprints: " + std::to_string(cands.size()) + " candidates at mu_r = " +
         std::to_string(s_.mu_grid[node]));
-    const std::vector<SimOutcome> on = cache_.run(req);
+    // One batch per candidate, so that a candidate whose runs or photographs fail (a lens
+    // model that folds, a pile vision cannot find from that camera) is reported, not fatal.
+    std::vector<SimOutcome> on;
+    std::vector<const CandidateEffect*> ok;
+    const std::size_t per = data_.tests.size() * s_.seeds.size();
+    for (std::size_t c = 0; c < cands.size(); ++c) {
+      try {
+        const std::vector<SimRequest> part(req.begin() + c * per, req.begin() + (c + 1) * per);
+        const std::vector<SimOutcome> got = cache_.run(part);
+        bool all = true;
+        for (const SimOutcome& o : got) all = all && o.pile;
+        if (!all) throw std::runtime_error("a run formed no pile with the effect at its probe");
+        on.insert(on.end(), got.begin(), got.end());
+        ok.push_back(cands[c]);
+      } catch (const std::exception& ex) {
+        unavailable.push_back({{"name", cands[c]->name}, {"why", ex.what()}});
+        say("candidate " + cands[c]->name + " failed at its probe: " + ex.what());
+      }
+    }
+    cands = ok;
     std::size_t q = 0;
     for (const CandidateEffect* e : cands) {
       Fingerprint f{e, {}, {}, {}, {}};
@@ -412,14 +431,41 @@ json Loop::run() {
     const CandidateScore& sc = scores[static_cast<std::size_t>(best)];
     const CandidateEffect& e = find_effect(sc.name);
     const double off = e.off_from_scene ? scene_value(data_.tests.front(), e.key) : e.off;
-    const double p1 = std::clamp(off + sc.coef * (e.probe - off), e.lo, e.hi);
+    double p1 = std::clamp(off + sc.coef * (e.probe - off), e.lo, e.hi);
     say("iteration " + std::to_string(it) + ": " + e.name + " accepted (" + sc.why +
         "); linear estimate " + std::to_string(p1) + " " + e.units + ", simulating the grid");
-    std::vector<EffectSetting> with = effects;
-    with.push_back({&e, p1});
-    surfaces_.push_back(std::make_unique<Surface>(simulate_surface(with)));
+    // The linear estimate may overshoot into piles the measurement cannot see (a smooth plate
+    // spreads a small sample into a monolayer): then step back halfway towards off, twice at
+    // most; the joint fit may still extrapolate to t_max.
+    double p_sim = p1;
+    std::unique_ptr<Surface> surf;
+    std::string refit_note;
+    for (int attempt = 0; attempt < 3 && !surf; ++attempt) {
+      std::vector<EffectSetting> with = effects;
+      with.push_back({&e, p_sim});
+      try {
+        surf = std::make_unique<Surface>(simulate_surface(with));
+      } catch (const std::exception& ex) {
+        refit_note += "at " + std::to_string(p_sim) + ": " + std::string(ex.what()).substr(0, 300) + "; ";
+        say("refit at " + std::to_string(p_sim) + " failed; stepping back halfway");
+        p_sim = off + 0.5 * (p_sim - off);
+      }
+    }
+    if (!surf) {
+      iter["chosen"] = {{"name", e.name}, {"refit_failed", refit_note}, {"linear_estimate", p1}};
+      iterations.push_back(iter);
+      break;
+    }
+    const double p1_requested = p1;
+    p1 = p_sim;
+    surfaces_.push_back(std::move(surf));
     const Surface* extra = surfaces_.back().get();
+    // t may extrapolate beyond the simulated value, but never past the effect's range.
+    const double bound = (p1 < off ? e.lo : e.hi) - off;
+    const double saved_t_max = s_.t_max;
+    if (p1 != off) s_.t_max = std::min(s_.t_max, std::max(1.0, bound / (p1 - off)));
     const MuFit joint = fit_mu(model, extra);
+    s_.t_max = saved_t_max;
     const double value = off + joint.t * (p1 - off);
     const double value_se = joint.t_se * std::abs(p1 - off);
     Model next;
@@ -432,7 +478,8 @@ json Loop::run() {
     json c = {{"name", e.name},       {"kind", e.kind == EffectKind::kPhysics ? "physics" : "measurement"},
               {"key", e.key},         {"units", e.units},
               {"off", off},           {"probe", e.probe},
-              {"linear_estimate", p1}, {"value", value},
+              {"linear_estimate", p1_requested}, {"simulated_at", p1},
+              {"refit_notes", refit_note}, {"value", value},
               {"value_se", value_se}, {"t", joint.t},
               {"t_at_limit", joint.t <= 0.0 || joint.t >= s_.t_max},
               {"mu_r", joint.mu},     {"mu_r_se", joint.mu_se}};

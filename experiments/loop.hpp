@@ -23,8 +23,10 @@
 //    to its range) is simulated on the whole mu_r grid. The model becomes
 //    twin(mu_r, p) = (1 - t) twin_before(mu_r) + t twin_p1(mu_r), t = (p - off) / (p1 - off),
 //    i.e. linear in p between two simulated surfaces; (mu_r, t) are fitted jointly (t in closed
-//    form for each mu_r of the scan, t limited to [0, 1.5]). Residuals are recomputed from this
-//    simulated model, and the loop repeats until no candidate is accepted or max_effects are in.
+//    form for each mu_r of the scan, t limited to [0, 3] and to the effect's range). Residuals
+//    are recomputed from this simulated model, and the loop repeats until no candidate is
+//    accepted or max_effects are in. If the refit's simulations cannot be measured (a pile too
+//    flat to photograph), the simulated value steps back halfway towards off, twice at most.
 //  * Caching and resuming: loop_sim.hpp. loop.json (atomic) is written last; an existing one is
 //    never overwritten without `force`.
 #pragma once
@@ -50,7 +52,7 @@ struct LoopSettings {
   AcceptanceRule rule;                     // significance and LOO thresholds
   std::vector<std::string> candidates;     // registry names to try; empty = all
   int max_effects = 2;                     // stop after adding this many effects
-  double t_max = 1.5;                      // largest t = (p - off) / (p1 - off) of a refit [-]
+  double t_max = 3.0;                      // largest t = (p - off) / (p1 - off) of a refit [-]
   int workers = 2;                         // concurrent simulations
   bool progress = true;                    // progress lines on stderr
   bool force = false;                      // overwrite a finished loop.json

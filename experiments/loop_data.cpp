@@ -95,6 +95,7 @@ json measure_photos(LabTest& t, const std::string& camera_json, std::optional<do
   cv::setNumThreads(1);
   std::vector<vision::SideMeasurement> views;
   std::string error;
+  json failures = json::array();
   for (const std::string& p : t.photos) {
     const cv::Mat image = cv::imread(p, cv::IMREAD_COLOR);
     if (image.empty()) {
@@ -103,7 +104,8 @@ json measure_photos(LabTest& t, const std::string& camera_json, std::optional<do
     }
     vision::ScaleSpec this_scale = scale;
     const fs::path sidecar = fs::path(p).replace_extension(".json");
-    if (camera_json.empty() && !mm_per_px && fs::exists(sidecar)) {
+    const bool own_sidecar = camera_json.empty() && !mm_per_px && fs::exists(sidecar);
+    if (own_sidecar) {
       // A render-style sidecar next to the photo gives its camera.
       try {
         this_scale = vision::scale_from_sidecar(sidecar.string());
@@ -116,18 +118,27 @@ json measure_photos(LabTest& t, const std::string& camera_json, std::optional<do
     try {
       views.push_back(vision::measure_side(image, this_scale, {}, p));
     } catch (const std::exception& e) {
-      error = w.at("photo") + ": " + e.what() +
-              (camera_json.empty() && !mm_per_px
-                   ? " (give the photo's scale: a photo_camera sidecar JSON or mm_per_px)"
-                   : "");
-      break;
+      // Several photos of a test: one that cannot be measured is recorded and skipped; a photo
+      // without any scale source is an error at once.
+      const bool no_scale = camera_json.empty() && !mm_per_px && !own_sidecar;
+      if (no_scale || t.photos.size() == 1) {
+        error = w.at("photo") + ": " + e.what() +
+                (no_scale ? " (give the photo's scale: a photo_camera sidecar JSON or mm_per_px)"
+                          : "");
+        break;
+      }
+      failures.push_back({{"photo", p}, {"error", e.what()}});
     }
   }
+  if (error.empty() && views.empty())
+    error = w.at("photo") + ": none of the " + std::to_string(t.photos.size()) +
+            " photos could be measured (" + failures[0]["error"].get<std::string>() + ")";
   cv::setNumThreads(old_threads);
   if (!error.empty()) throw InputError(error);
   const vision::SideSummary s = vision::combine_sides(views);
   json j = vision::to_json(s);
   j["views"] = json::array();
+  j["unmeasured"] = failures;
   for (const auto& v : views) j["views"].push_back(vision::to_json(v));
   t.angle_deg = s.theta_deg.mean;
   t.height_mm = 1e3 * s.height_m.mean;

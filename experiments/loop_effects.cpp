@@ -88,12 +88,12 @@ const std::vector<CandidateEffect>& candidate_effects() {
        0.7, 0.2, 1.0, "x declared d_min",
        "Fines below the simulated cut-off d_min take part (d_min lowered by this factor).", {}},
       {"camera_height", EffectKind::kMeasurement, EffectApply::kImageHeight,
-       "image.camera_height_m", 0.0, false, 0.03, 0.0, 1.0, "m",
+       "image.camera_height_m", 0.0, false, 0.01, 0.0, 1.0, "m",
        "The photographs were taken from above plate level while measured as if level "
        "(perspective grows with height over distance).",
        {}},
-      {"lens_k1", EffectKind::kMeasurement, EffectApply::kImageK1, "image.k1", 0.0, false, -0.3,
-       -0.9, 0.9, "-",
+      {"lens_k1", EffectKind::kMeasurement, EffectApply::kImageK1, "image.k1", 0.0, false, -0.1,
+       -0.25, 0.25, "-",
        "Radial lens distortion of the lab camera, measured as if undistorted.", {}},
   };
   return k;

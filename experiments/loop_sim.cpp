@@ -139,6 +139,9 @@ json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
   scene.material_ids = materials;
   scene.plate.half_size_m =
       std::max(scene.plate.half_size_m, 1.3 * render::pile_extent(scene).radius_m);
+  // The scale comes from the camera (sidecar), so no scale bar: the pile fills the frame
+  // (a 10-band bar is taller than a small pile and would shrink it to a few pixels).
+  scene.scale_reference.enabled = false;
   render::Renderer renderer;
   render::RenderOptions options;
   options.tint_seed = v.noise_seed;
@@ -176,13 +179,22 @@ json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
     const std::string base = (fs::path(out_dir) / stem).string();
     if (v.keep_photos)
       render::write_render(base, image, render::make_sidecar(scene, declared, options, nullptr));
-    const vision::SideMeasurement m = vision::measure_side_camera(image, declared, {}, base);
-    sides.push_back(m);
-    json j = vision::to_json(m);
+    json j;
+    try {
+      const vision::SideMeasurement m = vision::measure_side_camera(image, declared, {}, base);
+      sides.push_back(m);
+      j = vision::to_json(m);
+    } catch (const std::exception& e) {
+      // One view of a small pile may defeat the measurement; the others still count.
+      j = {{"error", e.what()}};
+    }
     j["azimuth_deg"] = cams.azimuth_deg;
     if (v.keep_photos) j["photo"] = std::string(stem) + ".png";
     views.push_back(j);
   }
+  if (sides.empty())
+    throw std::runtime_error("no side view of the pile could be measured: " +
+                             views[0]["error"].get<std::string>());
   const vision::SideSummary s = vision::combine_sides(sides);
   return {{"angle_deg", s.theta_deg.mean},
           {"angle_sd_deg", s.theta_deg.stddev},
@@ -258,7 +270,7 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     const std::string name = "img_" + fnv1a_hex(sim_of[i] + "\n" + v.key());
     photo_of[i] = name + "/seed_" + std::to_string(requests[i].seed);
     if (photo_jobs.count(photo_of[i])) continue;
-    photo_jobs[photo_of[i]] = {(fs::path(dir_) / sim_of[i] / "run").string(), v};
+    photo_jobs[photo_of[i]] = {(fs::path(dir_) / "cases" / sim_of[i] / "run").string(), v};
     CaseSpec spec;
     spec.case_name = name;
     spec.seed = requests[i].seed;
@@ -281,7 +293,7 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
   for (std::size_t i = 0; i < requests.size(); ++i) {
     const json& s = sim_result[sim_of[i]];
     SimOutcome& o = out[i];
-    o.sim_dir = (fs::path(dir_) / sim_of[i]).string();
+    o.sim_dir = (fs::path(dir_) / "cases" / sim_of[i]).string();
     o.provenance = s.at("provenance");
     if (photo_of[i].empty()) continue;
     const json& p = photo_result[photo_of[i]];
@@ -290,7 +302,7 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     o.height_mm = p.at("height_mm");
     o.diameter_mm = p.at("diameter_mm");
     o.positions_angle_deg = s.at("pile").value("theta_hd_deg", 0.0);
-    o.image_dir = (fs::path(dir_) / photo_of[i]).string();
+    o.image_dir = (fs::path(dir_) / "cases" / photo_of[i]).string();
   }
   return out;
 }
