@@ -101,7 +101,17 @@ void add_calibrate_command(CLI::App& app) {
     const experiments::CaseFn fn = case_fn(pa);
     const experiments::RunnerSettings rs = runner(*a);
     const bool prefer_image = *angle == "image";
+    // A clogged run ("no pile", angle 0 in a Fig. 10 report) measures no pile angle: averaged
+    // into a mu_r point it would drag the fit down, so the calibration stops on it and says so.
     const experiments::AngleFn angle_of = [prefer_image](const nlohmann::json& r) {
+      const nlohmann::json& res = r.contains("result") ? r.at("result") : r;
+      if (res.contains("pile") && res["pile"].value("status", std::string()) == "no pile")
+        throw std::runtime_error(
+            "a calibration run clogged the outlet (" +
+            res.value("stop", nlohmann::json::object()).value("detail", std::string("lodged")) +
+            "): it has no pile angle to fit (its folder: cases/calib_*/seed_*/ with "
+            "result.pile.status \"no pile\"). Narrow mu_r_range below the mu_r that arches "
+            "the outlet, or widen the outlet");
       return experiments::case_angle_deg(r, prefer_image);
     };
     experiments::CalibrateOptions opt;
