@@ -468,6 +468,20 @@ json Loop::run() {
     s_.t_max = saved_t_max;
     const double value = off + joint.t * (p1 - off);
     const double value_se = joint.t_se * std::abs(p1 - off);
+    // The simulated refit is the test of the linear tracing: when the joint fit puts the effect
+    // back at its off value (t = 0), the simulations do not confirm it and it is not chosen.
+    if (joint.t <= 0.0) {
+      iter["chosen"] = nullptr;
+      iter["not_confirmed"] = {{"name", e.name},       {"linear_estimate", p1_requested},
+                               {"simulated_at", p1},   {"t", joint.t},
+                               {"refit_notes", refit_note},
+                               {"reason", "the joint refit of mu_r and the effect on simulated "
+                                          "piles puts the effect at its off value (t = 0)"}};
+      say(e.name + ": not confirmed by the simulated refit (t = 0); not chosen");
+      surfaces_.pop_back();
+      iterations.push_back(iter);
+      break;
+    }
     Model next;
     for (const auto& [w, surf] : model.terms) next.terms.push_back({(1.0 - joint.t) * w, surf});
     next.terms.push_back({joint.t, extra});
