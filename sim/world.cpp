@@ -102,9 +102,14 @@ void World::move_walls() {
 
 void World::update_neighbors() {
   PhaseTimer t(profile_.neighbors);
-  // The wall candidates are rebuilt with the list (never alone: the half-skin bound on the
-  // particles' displacement counts from the list's build).
-  if (!state_.neighbors.needs_rebuild(state_.particles) && wall_candidates_current()) return;
+  // The wall candidates are rebuilt with the list, and alone when they are invalid (a restored
+  // checkpoint, a wall switched) or a wall has moved half a skin. Rebuilding them alone never
+  // reorders the particles, so the results do not depend on when it happens (a resumed run stays
+  // bit-identical to an uninterrupted one).
+  if (!state_.neighbors.needs_rebuild(state_.particles)) {
+    if (!wall_candidates_current()) build_wall_candidates();
+    return;
+  }
   build_neighbor_list(state_.particles, state_.neighbors, /*sort_particles=*/true);
   const std::size_t np = state_.neighbors.pairs();
   state_.pair_force.resize(np);
@@ -128,7 +133,10 @@ void World::build_wall_candidates() {
   Particles& p = state_.particles;
   const std::size_t n = p.size();
   const int nw = static_cast<int>(model_.walls.size());
-  const double skin = state_.neighbors.skin;
+  // Listed: gap below 1.5 skins. Until the next list rebuild a particle moves at most one skin
+  // from here (half a skin on each side of the list's build) and a wall at most half a skin (or
+  // the candidates are rebuilt), so every particle left out stays clear of every wall.
+  const double reach = 1.5 * state_.neighbors.skin;
   state_.wall_cand_particle.clear();
   state_.wall_cand_start.assign(1, 0);
   state_.wall_cand_wall.clear();
@@ -139,7 +147,7 @@ void World::build_wall_candidates() {
       Vec3 normal;
       double delta;
       if (ws.enabled &&
-          wall_contact(model_.walls[w], ws.offset, p.x[i], p.radius[i] + skin, &normal, &delta)) {
+          wall_contact(model_.walls[w], ws.offset, p.x[i], p.radius[i] + reach, &normal, &delta)) {
         state_.wall_cand_wall.push_back(w);
         any = true;
       } else {

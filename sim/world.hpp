@@ -64,10 +64,11 @@ struct State {
   // Per-pair results of the last force phase (scratch, sized with the neighbor list).
   std::vector<Vec3> pair_force, pair_torque_j;  // on the first member i, on j
   std::vector<double> pair_overlap;  // overlap / smaller radius, 0 if not touching
-  // Wall candidates (scratch, rebuilt with the neighbor list): the particles within one skin of
-  // an enabled wall, each with its walls in increasing order (CSR). Only these are tested in
-  // wall_forces; every other particle is at least skin/2 - skin/2 = 0 away from every wall until
-  // the next rebuild, which also happens when a wall has moved by half a skin.
+  // Wall candidates (scratch, rebuilt with the neighbor list, and alone when invalid or when a
+  // wall has moved half a skin): the particles within 1.5 skins of an enabled wall, each with its
+  // walls in increasing order (CSR). Only these are tested in wall_forces; every other particle
+  // stays clear of every wall until the next rebuild (it moves at most one skin, a wall at most
+  // half a skin). Which particles are listed never changes a result.
   bool wall_candidates_valid = false;
   std::vector<std::int32_t> wall_cand_particle;   // particle index
   std::vector<std::int32_t> wall_cand_start;      // CSR offsets into wall_cand_wall
