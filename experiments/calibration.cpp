@@ -540,4 +540,17 @@ nlohmann::json to_json(const Prediction& p) {
           {"seed_sd_deg", p.seed_sd_deg}};
 }
 
+SampleStats sample_stats(const std::vector<double>& values) {
+  SampleStats s;
+  s.n = static_cast<int>(values.size());
+  if (values.empty()) return s;
+  for (double x : values) s.mean += x;
+  s.mean /= s.n;
+  if (s.n > 1) {
+    for (double x : values) s.sd += (x - s.mean) * (x - s.mean);
+    s.sd = std::sqrt(s.sd / (s.n - 1));
+  }
+  return s;
+}
+
 }  // namespace reposetwin::experiments

@@ -63,6 +63,14 @@ struct Target {
   double sd_deg = 0.0;     // 1-sigma uncertainty of the measured angle [deg], >= 0
 };
 
+/// Count, mean and sample standard deviation (n - 1; 0 for fewer than two values) of angles.
+struct SampleStats {
+  int n = 0;
+  double mean = 0.0;  // [deg]
+  double sd = 0.0;    // [deg]
+};
+SampleStats sample_stats(const std::vector<double>& values);
+
 /// Statistics of one mu_r point and its fitted value.
 struct FitPoint {
   double mu_r = 0.0;        // [-]

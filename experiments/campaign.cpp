@@ -1119,24 +1119,6 @@ nlohmann::json rolling_model_of(const Campaign& c) {
   return j;
 }
 
-struct AngleStats {
-  int n = 0;
-  double mean = 0.0, sd = 0.0;
-};
-
-AngleStats angle_stats(const std::vector<double>& v) {
-  AngleStats s;
-  s.n = static_cast<int>(v.size());
-  if (v.empty()) return s;
-  for (double x : v) s.mean += x;
-  s.mean /= s.n;
-  if (s.n > 1) {
-    for (double x : v) s.sd += (x - s.mean) * (x - s.mean);
-    s.sd = std::sqrt(s.sd / (s.n - 1));
-  }
-  return s;
-}
-
 std::vector<Observation> observations_of(const nlohmann::json& cal, const std::string& file) {
   std::vector<Observation> obs;
   if (!cal.contains("observations") || !cal["observations"].is_array())
@@ -1267,7 +1249,7 @@ nlohmann::json run_predictions(const Campaign& c, const nlohmann::json& cal,
       angles.push_back(v.back());
       dirs.push_back(s.relative_dir());
     }
-    const AngleStats st = angle_stats(v);
+    const SampleStats st = sample_stats(v);
     return nlohmann::json{{"mu_r", m},
                           {"angles_deg", angles},
                           {"runs", dirs},

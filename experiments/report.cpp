@@ -11,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include "experiments/calibration.hpp"
 #include "experiments/provenance.hpp"
 #include "experiments/toml_reader.hpp"
 #include "sim/contact.hpp"
@@ -21,24 +22,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-struct Stats {
-  int n = 0;
-  double mean = 0.0, sd = 0.0;
-};
-
-Stats stats(const std::vector<double>& v) {
-  Stats s;
-  s.n = static_cast<int>(v.size());
-  if (v.empty()) return s;
-  for (double x : v) s.mean += x;
-  s.mean /= s.n;
-  if (s.n > 1) {
-    for (double x : v) s.sd += (x - s.mean) * (x - s.mean);
-    s.sd = std::sqrt(s.sd / (s.n - 1));
-  }
-  return s;
-}
 
 std::string html_escape(const std::string& s) {
   std::string out;
@@ -647,7 +630,8 @@ json build_report(const std::string& dir_in, const ReportSettings& settings) {
   int k = 0;
   for (const std::string& name : order) {
     const CaseRows& c = cases[name];
-    const Stats im = stats(c.image_deg), pa = stats(c.particle_deg), sl = stats(c.slice_deg);
+    const SampleStats im = sample_stats(c.image_deg), pa = sample_stats(c.particle_deg),
+                      sl = sample_stats(c.slice_deg);
     summary["cases"].push_back({{"case", name},
                                 {"runs", c.run_dirs.size()},
                                 {"image_theta_mean_deg", im.mean},
@@ -758,7 +742,8 @@ json build_report(const std::string& dir_in, const ReportSettings& settings) {
          "<th>files</th></tr>\n";
     for (const std::string& name : order) {
       const CaseRows& c = cases[name];
-      const Stats im = stats(c.image_deg), pa = stats(c.particle_deg), sl = stats(c.slice_deg);
+      const SampleStats im = sample_stats(c.image_deg), pa = sample_stats(c.particle_deg),
+                      sl = sample_stats(c.slice_deg);
       std::map<std::string, int> stops;
       for (const auto& s : c.stops) ++stops[s];
       std::string stop_text;
