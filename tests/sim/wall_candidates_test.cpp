@@ -8,7 +8,6 @@
 #include <set>
 #include <utility>
 
-#include "sim/random.hpp"
 #include "sim/walls.hpp"
 #include "sim/world.hpp"
 #include "sim_test_util.hpp"
@@ -37,33 +36,8 @@ std::pair<std::set<std::pair<int, int>>, std::set<std::pair<int, int>>> touching
 }
 
 TEST(WallCandidates, EveryTouchingParticleIsListedWhileWallsMove) {
-  PairParams pair;
-  Model m = testing::make_model(pair);
-  m.walls.push_back(testing::plate());
-  WallSpec funnel;
-  funnel.name = "funnel";
-  funnel.kind = WallKind::kShell;
-  funnel.material = 1;
-  funnel.z_bottom = 0.0;
-  funnel.z_top = 0.03;
-  funnel.r_bottom = 0.006;
-  funnel.r_top = 0.015;
-  m.walls.push_back(funnel);
-  m.settings.gravity = Vec3(0.0, 0.0, -100.0);  // a fast collapse: many wall contacts soon
-  m.finalize(0.5e-3, 1e-3);
-  World w(m);
-  Rng rng(7);
-  for (int layer = 0, placed = 0; placed < 300; ++layer) {
-    const double z = 0.0015 + 0.0021 * layer;
-    const double r_in = 0.006 + (0.015 - 0.006) * z / 0.03 - 0.0011;
-    for (int ix = -8; ix <= 8 && placed < 300; ++ix)
-      for (int iy = -8; iy <= 8 && placed < 300; ++iy) {
-        const Vec3 x(0.0021 * ix, 0.0021 * iy, z);
-        if (std::hypot(x.x(), x.y()) > r_in) continue;
-        w.add_particle(x, rng.uniform(0.5e-3, 1e-3), 0);
-        ++placed;
-      }
-  }
+  // A fast collapse (100 m/s^2) into the funnel: many wall contacts soon.
+  World w = testing::funnel_pour(300, 2000, -100.0);
   const int steps = 6000;
   std::size_t checked_contacts = 0;
   for (int s = 0; s < steps; ++s) {

@@ -14,38 +14,8 @@
 namespace reposetwin::sim {
 namespace {
 
-/// A small pour: polydisperse spheres dropped into a conical funnel standing on a plate.
 World small_pour(int n = 400, int parallel_min = 2000) {
-  PairParams pair;  // paper defaults: e 0.79, mu_s 0.466, EPSD mu_r 0.15
-  Model m = testing::make_model(pair);
-  m.walls.push_back(testing::plate());
-  WallSpec funnel;
-  funnel.name = "funnel";
-  funnel.kind = WallKind::kShell;
-  funnel.material = 1;
-  funnel.z_bottom = 0.0;
-  funnel.z_top = 0.03;
-  funnel.r_bottom = 0.005;
-  funnel.r_top = 0.015;
-  m.walls.push_back(funnel);
-  m.settings.parallel_min_particles = parallel_min;
-  m.finalize(0.5e-3, 1e-3);
-  World w(m);
-  // Spheres on a lattice of 2.1 mm inside the funnel, layer after layer, no initial overlap.
-  Rng rng(42);
-  int placed = 0;
-  for (int layer = 0; placed < n; ++layer) {
-    const double z = 0.0015 + 0.0021 * layer;
-    const double r_in = 0.005 + (0.015 - 0.005) * z / 0.03 - 0.0011;
-    for (int ix = -8; ix <= 8 && placed < n; ++ix)
-      for (int iy = -8; iy <= 8 && placed < n; ++iy) {
-        const Vec3 x(0.0021 * ix + 0.0002 * (layer % 2), 0.0021 * iy, z);
-        if (std::hypot(x.x(), x.y()) > r_in) continue;
-        w.add_particle(x, rng.uniform(0.5e-3, 1e-3), 0);
-        ++placed;
-      }
-  }
-  return w;
+  return testing::funnel_pour(n, parallel_min);
 }
 
 std::uint64_t run_pour(int threads, int steps) {
