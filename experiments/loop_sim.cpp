@@ -12,6 +12,7 @@
 
 #include "experiments/campaign.hpp"
 #include "experiments/overrides.hpp"
+#include "experiments/pile_images.hpp"
 #include "experiments/pile_test.hpp"
 #include "experiments/provenance.hpp"
 #include "experiments/scene.hpp"
@@ -20,7 +21,6 @@
 #include "render/output.hpp"
 #include "render/renderer.hpp"
 #include "render/scene.hpp"
-#include "sim/pile_geometry.hpp"
 #include "vision/measure.hpp"
 
 namespace reposetwin::experiments {
@@ -128,17 +128,7 @@ json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
                      const std::vector<double>& radii, const std::vector<int>& materials,
                      const ImageVariant& v, const std::string& out_dir) {
   if (v.side_views < 1) throw InputError("loop images: side_views must be at least 1");
-  const sim::PileGeometry g = sim::measure_pile(positions, radii);
-  render::Scene scene;
-  scene.positions = positions;
-  for (Eigen::Vector3d& x : scene.positions) {
-    x.x() -= g.centre.x();
-    x.y() -= g.centre.y();
-  }
-  scene.radii = radii;
-  scene.material_ids = materials;
-  scene.plate.half_size_m =
-      std::max(scene.plate.half_size_m, 1.3 * render::pile_extent(scene).radius_m);
+  render::Scene scene = centred_pile_scene(positions, radii, materials);
   // The scale comes from the camera (sidecar), so no scale bar: the pile fills the frame
   // (a 10-band bar is taller than a small pile and would shrink it to a few pixels).
   scene.scale_reference.enabled = false;

@@ -17,11 +17,9 @@ namespace reposetwin::experiments {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-json render_and_measure(const std::vector<Eigen::Vector3d>& positions,
-                        const std::vector<double>& radii, const std::vector<int>& materials,
-                        const std::string& out_dir, const ImageSettings& settings,
-                        const json& provenance) {
-  if (settings.side_views < 1) throw InputError("images: side_views must be at least 1");
+render::Scene centred_pile_scene(const std::vector<Eigen::Vector3d>& positions,
+                                 const std::vector<double>& radii,
+                                 const std::vector<int>& materials, Eigen::Vector2d* shift) {
   // Centre the pile on the camera axis (the footprint centre, as sim/pile_geometry finds it).
   const sim::PileGeometry g = sim::measure_pile(positions, radii);
   render::Scene scene;
@@ -30,10 +28,22 @@ json render_and_measure(const std::vector<Eigen::Vector3d>& positions,
     x.x() -= g.centre.x();
     x.y() -= g.centre.y();
   }
+  if (shift) *shift = Eigen::Vector2d(g.centre.x(), g.centre.y());
   scene.radii = radii;
   scene.material_ids = materials;
   // The plate is as large as the lab's board must be: wider than the pile's footprint.
-  scene.plate.half_size_m = std::max(scene.plate.half_size_m, 1.3 * render::pile_extent(scene).radius_m);
+  scene.plate.half_size_m =
+      std::max(scene.plate.half_size_m, 1.3 * render::pile_extent(scene).radius_m);
+  return scene;
+}
+
+json render_and_measure(const std::vector<Eigen::Vector3d>& positions,
+                        const std::vector<double>& radii, const std::vector<int>& materials,
+                        const std::string& out_dir, const ImageSettings& settings,
+                        const json& provenance) {
+  if (settings.side_views < 1) throw InputError("images: side_views must be at least 1");
+  Eigen::Vector2d centre;
+  render::Scene scene = centred_pile_scene(positions, radii, materials, &centre);
   fs::create_directories(out_dir);
   render::Renderer renderer;
   render::RenderOptions options;
@@ -73,7 +83,7 @@ json render_and_measure(const std::vector<Eigen::Vector3d>& positions,
               {"height_m", summary.height_m.mean},
               {"diameter_m", summary.diameter_m.mean},
               {"flank_deg", summary.flank_deg.mean},
-              {"pile_centre_shift_m", {g.centre.x(), g.centre.y()}},
+              {"pile_centre_shift_m", {centre.x(), centre.y()}},
               {"settings",
                {{"width_px", settings.width_px},
                 {"height_px", settings.height_px},

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "render/scene.hpp"
+
 namespace reposetwin::experiments {
 
 struct ImageSettings {
@@ -26,6 +28,14 @@ struct ImageSettings {
   double k1 = 0.0;                // lens radial distortion of the side camera [-]
   std::uint64_t tint_seed = 1;    // particle tint seed
 };
+
+/// The render scene of a pile: the spheres moved so the footprint centre is on the camera axis,
+/// on a plate wider than the footprint (1.3 x its radius), as a lab sets up its photograph.
+/// `shift`, when given, receives the footprint centre that was moved to the axis [m].
+render::Scene centred_pile_scene(const std::vector<Eigen::Vector3d>& positions,
+                                 const std::vector<double>& radii,
+                                 const std::vector<int>& materials,
+                                 Eigen::Vector2d* shift = nullptr);
 
 /// Renders and measures the pile of spheres (centres [m], radii [m], material ids) into
 /// `out_dir` (side_az000.png/.json/.measured.png, ..., top.png, measurement.json) and returns
