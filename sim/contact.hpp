@@ -15,6 +15,10 @@
 // simplified-JKR cohesion (sjkr_cohesion) and a rolling coefficient that scales with the contact
 // diameter (rolling_size_factor). Both are gated by flags precomputed in ContactConstants, so
 // with the defaults the kernel does exactly the arithmetic it did without them.
+// Cost: a touching contact takes two square roots for all its stiffnesses and damping
+// coefficients (contact_stiffness: sqrt(R* delta), shared by the normal, tangential and rolling
+// springs, and sqrt(sqrt(R* delta) m*), from which both damping coefficients follow with
+// constant factors), and one per spring to keep its length when it is rotated.
 #pragma once
 
 #include <Eigen/Core>
@@ -88,6 +92,12 @@ struct ContactConstants {
   double rolling_size_exponent = 0.0;    // alpha in mu_r (d_c / d_ref)^alpha [-]
   double rolling_reference_diameter = 0.0;  // d_ref [m]
   bool size_dependent_rolling = false;   // alpha != 0: the kernel scales mu_r with d_c
+  // Derived from the above by derive_contact_constants() (Model::finalize calls it), so that
+  // a contact takes two square roots, sqrt(R* delta) and sqrt(sqrt(R* delta) m*), for all its
+  // stiffnesses and damping coefficients:
+  double hertz_factor = 0.0;    // 4/3 E*: F_el = hertz_factor sqrt(R* delta) delta [Pa]
+  double normal_damping = 0.0;  // -2 sqrt(5/6) beta sqrt(2 E*) [Pa^0.5] (>= 0)
+  double tangential_damping = 0.0;  // -2 sqrt(5/6) beta sqrt(8 G*) [Pa^0.5] (>= 0)
 };
 
 /// Damping factor beta from the coefficient of restitution e (EDEM, LIGGGHTS, LAMMPS):
@@ -98,6 +108,17 @@ inline double damping_beta(double restitution) {
   if (restitution >= 1.0) return 0.0;
   const double l = std::log(restitution);
   return l / std::sqrt(l * l + kPi * kPi);
+}
+
+/// Fills the derived fields of `c` (hertz_factor, normal_damping, tangential_damping) from
+/// e_star, g_star and beta. The damping coefficients of EDEM's Hertz-Mindlin,
+/// -2 sqrt(5/6) beta sqrt(S m*) with S_n = 2 E* sqrt(R* delta) and S_t = 8 G* sqrt(R* delta),
+/// are these constants times sqrt(sqrt(R* delta) m*): one square root serves both.
+inline void derive_contact_constants(ContactConstants& c) {
+  constexpr double kTwoSqrtFiveSixths = 2.0 * 0.91287092917527685576;  // 2 sqrt(5/6)
+  c.hertz_factor = (4.0 / 3.0) * c.e_star;
+  c.normal_damping = -kTwoSqrtFiveSixths * c.beta * std::sqrt(2.0 * c.e_star);
+  c.tangential_damping = -kTwoSqrtFiveSixths * c.beta * std::sqrt(8.0 * c.g_star);
 }
 
 /// Everything a kernel needs about one contact.
@@ -127,44 +148,65 @@ struct ContactOutput {
   double normal;  // signed normal force magnitude (elastic + damping, without cohesion) [N]
 };
 
+/// Stiffnesses and damping coefficients of one contact, from two square roots shared by the
+/// normal, tangential and rolling laws (EDEM Hertz-Mindlin):
+///   S_n = 2 E* sqrt(R* delta),  S_t = 8 G* sqrt(R* delta),
+///   gamma_n = -2 sqrt(5/6) beta sqrt(S_n m*),  gamma_t = -2 sqrt(5/6) beta sqrt(S_t m*).
+struct ContactStiffness {
+  double sqrt_rd = 0.0;  // sqrt(R* delta) [m]
+  double s_t = 0.0;      // tangential stiffness S_t [N/m]
+  double gamma_n = 0.0;  // normal damping coefficient (>= 0) [kg/s]
+  double gamma_t = 0.0;  // tangential damping coefficient (>= 0) [kg/s]
+};
+
+/// Computes the stiffnesses and damping coefficients of a contact of overlap delta [m].
+inline ContactStiffness contact_stiffness(const ContactConstants& c, double delta, double r_eff,
+                                          double m_eff) {
+  ContactStiffness k;
+  k.sqrt_rd = std::sqrt(r_eff * delta);
+  const double root = std::sqrt(k.sqrt_rd * m_eff);  // sqrt(S m*) / sqrt(2 E*) or / sqrt(8 G*)
+  k.s_t = 8.0 * c.g_star * k.sqrt_rd;
+  k.gamma_n = c.normal_damping * root;
+  k.gamma_t = c.tangential_damping * root;
+  return k;
+}
+
 /// Hertz normal force with restitution damping (EDEM Hertz-Mindlin):
-///   F_n = 4/3 E* sqrt(R*) delta^1.5 - 2 sqrt(5/6) beta sqrt(S_n m*) v_n,
-///   S_n = 2 E* sqrt(R* delta),   v_n = v_rel . n (negative while approaching).
-/// Returns the signed magnitude along n (the damping may make it slightly attractive at the
-/// end of the contact; this is what makes the restitution exact). Also returns S_n.
-inline double hertz_normal(const ContactConstants& c, double delta, double r_eff, double m_eff,
-                           double v_n, double* s_n) {
-  const double sqrt_rd = std::sqrt(r_eff * delta);
-  *s_n = 2.0 * c.e_star * sqrt_rd;
-  const double elastic = (4.0 / 3.0) * c.e_star * sqrt_rd * delta;
-  const double damp = 2.0 * 0.91287092917527685576 * c.beta * std::sqrt(*s_n * m_eff);  // sqrt(5/6)
-  return elastic + damp * v_n;  // beta < 0 and v_n < 0 on approach: damping repels
+///   F_n = 4/3 E* sqrt(R*) delta^1.5 - gamma_n v_n,   v_n = v_rel . n (negative while
+/// approaching). Returns the signed magnitude along n (the damping may make it slightly
+/// attractive at the end of the contact; this is what makes the restitution exact).
+inline double hertz_normal(const ContactConstants& c, const ContactStiffness& k, double delta,
+                           double v_n) {
+  return c.hertz_factor * k.sqrt_rd * delta - k.gamma_n * v_n;  // v_n < 0 on approach: repels
+}
+
+/// Rotates an incremental spring into the tangent plane of the current normal n, keeping its
+/// length (one square root: the ratio of the squared lengths before and after).
+inline void rotate_spring(const Vec3& n, Vec3& spring) {
+  const double len2 = spring.squaredNorm();
+  if (len2 > 0.0) {
+    spring -= spring.dot(n) * n;
+    const double proj2 = spring.squaredNorm();
+    spring *= proj2 > 0.0 ? std::sqrt(len2 / proj2) : 0.0;
+  }
 }
 
 /// Mindlin no-slip tangential force on an incremental spring with Coulomb cap (EDEM):
-///   S_t = 8 G* sqrt(R* delta), F_t = -S_t s - 2 sqrt(5/6) beta sqrt(S_t m*) v_t ... with
-/// |F_t| <= mu_s F_n. The spring s is first rotated into the current tangent plane keeping its
-/// length; when the cap is reached the spring is truncated to -F_t / S_t (no damping in slip).
-inline Vec3 mindlin_tangential(const ContactConstants& c, const Vec3& n, double delta,
-                               double r_eff, double m_eff, const Vec3& v_t, double f_n,
-                               double dt, Vec3& spring) {
-  // Rotate the spring into the current tangent plane, preserving its magnitude.
-  const double len = spring.norm();
-  if (len > 0.0) {
-    spring -= spring.dot(n) * n;
-    const double len2 = spring.norm();
-    spring *= len2 > 0.0 ? len / len2 : 0.0;
-  }
+///   F_t = -S_t s - gamma_t v_t with |F_t| <= mu_s F_n. The spring s is first rotated into the
+/// current tangent plane keeping its length; when the cap is reached the spring is truncated to
+/// -F_t / S_t (no damping in slip).
+inline Vec3 mindlin_tangential(const ContactConstants& c, const ContactStiffness& k,
+                               const Vec3& n, const Vec3& v_t, double f_n, double dt,
+                               Vec3& spring) {
+  rotate_spring(n, spring);
   spring += v_t * dt;
-  const double s_t = 8.0 * c.g_star * std::sqrt(r_eff * delta);
-  const double gamma_t = -2.0 * 0.91287092917527685576 * c.beta * std::sqrt(s_t * m_eff);
-  Vec3 f = -s_t * spring - gamma_t * v_t;
+  Vec3 f = -k.s_t * spring - k.gamma_t * v_t;
   const double cap = c.mu_s * std::max(f_n, 0.0);
   // Compared squared: the square root is taken only when the contact slips.
   if (f.squaredNorm() > cap * cap) {
     const double fmag = f.norm();
     f *= fmag > 0.0 ? cap / fmag : 0.0;
-    spring = s_t > 0.0 ? Vec3(-f / s_t) : Vec3::Zero();
+    spring = k.s_t > 0.0 ? Vec3(-f / k.s_t) : Vec3::Zero();
   }
   return f;
 }
@@ -181,18 +223,13 @@ inline Vec3 rolling_cdt(double mu_r, double f_n, double lever, const Vec3& w) {
 ///   M_d = -2 eta_r sqrt(I_r k_r) w_r while |M_k| is below the cap (zero at the cap).
 /// Returns the torque on i; j receives its negative. `spring` is the torque M_k on i.
 /// `mu_r` is the rolling coefficient in force (c.mu_r, or c.mu_r scaled by size).
-inline Vec3 rolling_epsd(const ContactConstants& c, double mu_r, const Vec3& n, double delta,
-                         double r_eff, double i_roll, const Vec3& w_i, const Vec3& w_j,
-                         double f_n, double dt, Vec3& spring) {
+inline Vec3 rolling_epsd(const ContactConstants& c, const ContactStiffness& k, double mu_r,
+                         const Vec3& n, double r_eff, double i_roll, const Vec3& w_i,
+                         const Vec3& w_j, double f_n, double dt, Vec3& spring) {
   Vec3 w_r = w_i - w_j;
   w_r -= w_r.dot(n) * n;  // rolling only: remove the twist about n
-  const double len = spring.norm();
-  if (len > 0.0) {
-    spring -= spring.dot(n) * n;
-    const double len2 = spring.norm();
-    spring *= len2 > 0.0 ? len / len2 : 0.0;
-  }
-  const double k_r = 8.0 * c.g_star * std::sqrt(r_eff * delta) * r_eff * r_eff;
+  rotate_spring(n, spring);
+  const double k_r = k.s_t * r_eff * r_eff;
   spring -= k_r * dt * w_r;
   const double cap = mu_r * std::max(f_n, 0.0) * r_eff;
   if (spring.squaredNorm() >= cap * cap) {  // squared: the root only at the cap
@@ -200,14 +237,8 @@ inline Vec3 rolling_epsd(const ContactConstants& c, double mu_r, const Vec3& n, 
     spring *= m > 0.0 ? cap / m : 0.0;
     return spring;
   }
+  if (c.eta_r == 0.0) return spring;  // no dashpot (LIGGGHTS epsd2)
   return spring - (2.0 * c.eta_r * std::sqrt(i_roll * k_r)) * w_r;
-}
-
-/// The same with the pair's own coefficient c.mu_r.
-inline Vec3 rolling_epsd(const ContactConstants& c, const Vec3& n, double delta, double r_eff,
-                         double i_roll, const Vec3& w_i, const Vec3& w_j, double f_n, double dt,
-                         Vec3& spring) {
-  return rolling_epsd(c, c.mu_r, n, delta, r_eff, i_roll, w_i, w_j, f_n, dt, spring);
 }
 
 /// Simplified-JKR cohesion (the physical law of LIGGGHTS "cohesion sjkr"; Johnson, Kendall,
@@ -247,12 +278,11 @@ inline double rolling_size_factor(const ContactConstants& c, double contact_diam
 inline ContactOutput hertz_mindlin(const ContactConstants& c, const ContactInput& in, double dt,
                                    ContactHistory& h) {
   ContactOutput out;
+  const ContactStiffness k = contact_stiffness(c, in.delta, in.r_eff, in.m_eff);
   const double v_n = in.v_rel.dot(in.n);
-  double s_n = 0.0;
-  const double f_n = hertz_normal(c, in.delta, in.r_eff, in.m_eff, v_n, &s_n);
+  const double f_n = hertz_normal(c, k, in.delta, v_n);
   const Vec3 v_t = in.v_rel - v_n * in.n;
-  const Vec3 f_t =
-      mindlin_tangential(c, in.n, in.delta, in.r_eff, in.m_eff, v_t, f_n, dt, h.tangential);
+  const Vec3 f_t = mindlin_tangential(c, k, in.n, v_t, f_n, dt, h.tangential);
   out.normal = f_n;
   if (c.cohesive) {
     out.force = (f_n - sjkr_cohesion(c.cohesion_energy_density, in.r_eff, in.delta)) * in.n + f_t;
@@ -273,8 +303,8 @@ inline ContactOutput hertz_mindlin(const ContactConstants& c, const ContactInput
       out.torque_j += rolling_cdt(mu_r, f_n, in.a_j, in.w_j);
       break;
     case RollingModel::kEpsd: {
-      const Vec3 m = rolling_epsd(c, mu_r, in.n, in.delta, in.r_eff, in.i_roll, in.w_i, in.w_j,
-                                  f_n, dt, h.rolling);
+      const Vec3 m =
+          rolling_epsd(c, k, mu_r, in.n, in.r_eff, in.i_roll, in.w_i, in.w_j, f_n, dt, h.rolling);
       out.torque_i += m;
       out.torque_j -= m;
       break;

@@ -96,6 +96,7 @@ void Model::finalize(double rmin, double rmax) {
       c.rolling_size_exponent = p.rolling_size_exponent;
       c.rolling_reference_diameter = p.rolling_reference_diameter;
       c.size_dependent_rolling = p.rolling_size_exponent != 0.0;
+      derive_contact_constants(c);
     }
   }
   if (static_cast<int>(walls.size()) > kMaxWalls)
