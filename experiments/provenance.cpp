@@ -11,8 +11,6 @@
 
 namespace reposetwin::experiments {
 
-std::string code_version() { return REPOSETWIN_VERSION; }
-
 std::string utc_now() {
   const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
   std::tm tm{};

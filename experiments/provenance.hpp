@@ -10,7 +10,7 @@
 
 namespace reposetwin::experiments {
 
-/// The code version: project version plus `git describe` at configure time.
+/// The code version: project version plus `git describe` when the build ran.
 std::string code_version();
 
 /// UTC time now, ISO 8601 ("2026-11-22T01:02:03Z").
