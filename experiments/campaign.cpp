@@ -227,6 +227,44 @@ toml::table parse_toml_file(const std::string& path) {
 // ---------------------------------------------------------------------------------------------
 // Campaign file.
 
+namespace {
+struct AngleMeasureInfo {
+  AngleMeasure measure;
+  const char* name;
+  const char* method;
+};
+constexpr AngleMeasureInfo kAngleMeasures[] = {
+    {AngleMeasure::kImage, "image",
+     "vision on renders: atan(2H/D) per side view, perspective corrected (as the lab photo)"},
+    {AngleMeasure::kImageFlank, "image_flank",
+     "vision on renders: flank lines fitted to the silhouette per side view, mean of both flanks"},
+    {AngleMeasure::kParticles, "particles", "particle positions: atan(2H/D)"},
+    {AngleMeasure::kSlice, "slice",
+     "particle positions: protractor on slices through the pile centre (EDEM's method)"},
+};
+}  // namespace
+
+std::string angle_measure_name(AngleMeasure m) {
+  for (const auto& a : kAngleMeasures)
+    if (a.measure == m) return a.name;
+  return "unknown";
+}
+
+std::string angle_measure_method(AngleMeasure m) {
+  for (const auto& a : kAngleMeasures)
+    if (a.measure == m) return a.method;
+  return "unknown";
+}
+
+AngleMeasure parse_angle_measure(const std::string& name, const std::string& where) {
+  std::string list;
+  for (const auto& a : kAngleMeasures) {
+    if (name == a.name) return a.measure;
+    list += (list.empty() ? "" : ", ") + std::string(a.name);
+  }
+  throw std::invalid_argument(where + " = \"" + name + "\": unknown angle (one of " + list + ")");
+}
+
 std::string CaseSpec::relative_dir() const {
   return "cases/" + case_name + "/seed_" + std::to_string(seed);
 }
@@ -390,7 +428,7 @@ Campaign parse_campaign(std::string_view text, const std::string& path) {
     check_keys(
         *t,
         {"key", "target_deg", "target_sd_deg", "mu_r_range", "seeds_per_point", "first_seed",
-         "tolerance_deg", "max_simulations", "bootstrap_replicates", "confirm", "table1_sample"},
+         "tolerance_deg", "max_simulations", "bootstrap_replicates", "confirm", "table1_sample", "angle"},
         file, p);
     CampaignCalibration cc;
     if (const toml::node* k = t->get("key"); k && k->is_array()) {
@@ -409,6 +447,10 @@ Campaign parse_campaign(std::string_view text, const std::string& path) {
     }
     for (const auto& k : cc.keys) split_dotted_key(k, file + ": key 'calibration.key'");
     cc.table1_sample = get_sample(*t, file, p);
+    if (const toml::node* a = t->get("angle")) {
+      if (!a->is_string()) throw bad(file, p + "angle", value_text(*a), "must be a string");
+      cc.angle = parse_angle_measure(a->as_string()->get(), file + ": key '" + p + "angle'");
+    }
     const auto target = get_number(*t, "target_deg", file, p);
     if (!target) throw bad(file, p + "target_deg", "", "missing (the measured angle in degrees)");
     cc.target.angle_deg = *target;

@@ -50,6 +50,8 @@
 //   seeds_per_point = 3                       # optional, as are first_seed (1), tolerance_deg
 //   max_simulations = 40                      # (0.5), bootstrap_replicates (2000), confirm
 //   table1_sample = 3                         # optional: the paper's Table 1 sample (reports)
+//   angle = "image"                           # optional: which simulated angle is matched
+//                                             # (image, image_flank, particles, slice; below)
 //   [[predict]]                               # optional, with [calibration]: other tests run at
 //   name = "sample4"                          # the calibrated mu_r (filesystem-safe, unique)
 //   scene = "s4.toml"                         # required: the other test's scene
@@ -62,6 +64,12 @@
 //                                             # of the calibrated mu_r's 95% interval
 //   table1_sample = 4                         # optional: the paper's Table 1 sample (reports)
 //   description = "..."                       # optional
+// `calibration.angle` names the simulated angle compared with the measured one (AngleMeasure):
+// "image" (default) is atan(2H/D) read by vision on the renders, as the lab photo is read;
+// "image_flank" is the flank-line angle vision fits on the same renders (a protractor laid on the
+// photo); "particles" and "slice" are atan(2H/D) and the protractor on centre slices from the
+// particle positions (the latter is EDEM's simulated angle in the paper). Matching a flank angle
+// to a lab atan(2H/D) assumes the lab pile is a full cone (its two angles equal): declare it.
 // `calibration.key` may also be a list of keys that all take the calibrated value (e.g. rock-rock
 // and rock-plate rolling friction); the first names the calibration runs.
 //
@@ -102,6 +110,25 @@ struct CaseSpec {
   std::string id() const;
 };
 
+/// Which simulated angle a calibration or a prediction compares with the measured one.
+enum class AngleMeasure {
+  kImage,       // vision on the renders: atan(2H/D), as the lab photo is read
+  kImageFlank,  // vision on the renders: mean flank-line angle over the views
+  kParticles,   // particle positions: atan(2H/D)
+  kSlice,       // particle positions: protractor on slices through the pile centre (EDEM's)
+};
+
+/// The file name of a measure ("image", "image_flank", "particles", "slice").
+std::string angle_measure_name(AngleMeasure m);
+/// A sentence saying how the measure is taken, for result files and reports.
+std::string angle_measure_method(AngleMeasure m);
+/// Parses a measure's name; std::invalid_argument naming `where` and the value otherwise.
+AngleMeasure parse_angle_measure(const std::string& name, const std::string& where);
+/// True when the measure is read from renders (the runs must be photographed).
+inline bool angle_measure_needs_images(AngleMeasure m) {
+  return m == AngleMeasure::kImage || m == AngleMeasure::kImageFlank;
+}
+
 /// The [calibration] table of a campaign file, for the calibrate command.
 struct CampaignCalibration {
   std::string key = "contacts.rock-rock.rolling_friction";  // dotted scene key that is varied
@@ -109,6 +136,7 @@ struct CampaignCalibration {
   Target target;                     // measured angle to match
   CalibrationSettings settings;      // mu_r range, seeds per point, tolerance, budget
   std::optional<int> table1_sample;  // the paper's Table 1 sample it calibrates on (reports)
+  AngleMeasure angle = AngleMeasure::kImage;  // the simulated angle matched to the target
 };
 
 /// One [[predict]] entry: another test, run at the calibrated mu_r with its own seeds.

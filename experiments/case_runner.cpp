@@ -41,7 +41,7 @@ CaseFn pile_case_fn(const CaseRunSettings& settings) {
   };
 }
 
-double case_angle_deg(const json& r, bool prefer_image) {
+double case_angle_deg(const json& r, AngleMeasure measure) {
   const json& res = r.contains("result") ? r.at("result") : r;
   if (res.contains("stop")) {
     const std::string reason = res.at("stop").value("reason", std::string());
@@ -51,8 +51,22 @@ double case_angle_deg(const json& r, bool prefer_image) {
                                "), so it has no angle; " + res.value("run_dir", std::string()));
   }
   if (res.at("pile").at("status") == "no pile") return 0.0;
-  if (prefer_image && res.contains("image")) return res.at("image").at("theta_deg");
-  return res.at("pile").at("theta_hd_deg");
+  switch (measure) {
+    case AngleMeasure::kImage:
+      if (res.contains("image")) return res.at("image").at("theta_deg");
+      return res.at("pile").at("theta_hd_deg");
+    case AngleMeasure::kImageFlank:
+      if (!res.contains("image"))
+        throw std::runtime_error("the image flank angle needs the run's photographs, and " +
+                                 res.value("run_dir", std::string("this run")) +
+                                 " has none (run without --no-images)");
+      return res.at("image").at("flank_deg");
+    case AngleMeasure::kParticles:
+      return res.at("pile").at("theta_hd_deg");
+    case AngleMeasure::kSlice:
+      return res.at("pile").at("slice_angle_mean_deg");
+  }
+  throw std::logic_error("case_angle_deg: unknown angle measure");
 }
 
 }  // namespace reposetwin::experiments

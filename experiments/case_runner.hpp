@@ -20,9 +20,11 @@ struct CaseRunSettings {
 
 CaseFn pile_case_fn(const CaseRunSettings& settings);
 
-/// The angle a calibration matches: the vision angle on the renders when present, otherwise
-/// atan(2H/D) from particle positions; 0 for "no pile". Throws if the result has neither, or if
-/// the run stopped on a physics failure (overlap, NaN, escape): such a run has no angle.
-double case_angle_deg(const nlohmann::json& case_result, bool prefer_image = true);
+/// The angle `measure` of a finished case [deg]; 0 for "no pile". kImage falls back to atan(2H/D)
+/// from particle positions when the run was not photographed (--no-images); kImageFlank needs the
+/// photographs and throws without them. Throws if the run stopped on a physics failure (overlap,
+/// NaN, escape): such a run has no angle.
+double case_angle_deg(const nlohmann::json& case_result,
+                      AngleMeasure measure = AngleMeasure::kImage);
 
 }  // namespace reposetwin::experiments

@@ -182,7 +182,8 @@ std::string comparison_html(const json& cmp, const std::string& plot_png) {
     if (r["angle_mean_deg"].is_number()) {
       angle = fmt(r["angle_mean_deg"].get<double>()) + " &plusmn; " +
               fmt_or_dash(r["angle_seed_sd_deg"]) + " <small>(" +
-              html_escape(r.value("angle_how", std::string())) + ")</small>";
+              html_escape(r.value("angle_how", std::string())) + "; angle: " +
+              html_escape(r.value("angle_measure", std::string("image"))) + ")</small>";
       if (r.contains("interval_effect_deg") && r["interval_effect_deg"].is_array())
         angle +=
             "<br><small>over the mu_r interval: " + fmt(r["interval_effect_deg"][0].get<double>()) +
@@ -429,6 +430,7 @@ json paper_comparison(const std::vector<std::string>& dirs, const std::string& p
         {"kind", "calibration"},
         {"source", dirs[i]},
         {"from", from},
+        {"angle_measure", cal.value("angle", std::string("image"))},
         {"status", cal.value("status", std::string())},
         {"mu_r", num_or_null(cal, "mu_r")},
         {"mu_r_interval", cal.value("mu_r_interval", json())},
@@ -468,6 +470,7 @@ json paper_comparison(const std::vector<std::string>& dirs, const std::string& p
         json q = {
             {"kind", "prediction"},
             {"name", p.value("name", std::string())},
+            {"angle_measure", cal.value("angle", std::string("image"))},
             {"source", dirs[i]},
             {"from", from},
             {"mu_r", num_or_null(p, "mu_r")},

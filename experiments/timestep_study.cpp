@@ -56,7 +56,7 @@ json run_timestep_study(const std::string& scene_path, const std::string& out_di
   for (const CaseSpec& run : campaign.runs) {
     const auto r = read_run_result(out_dir, run);
     if (!r) continue;
-    angles[run.case_name].push_back(case_angle_deg(*r, s.images));
+    angles[run.case_name].push_back(case_angle_deg(*r, s.images ? AngleMeasure::kImage : AngleMeasure::kParticles));
     dt_of[run.case_name] = r->at("result").at("provenance").at("time_step_s");
   }
   json points = json::array();

@@ -75,7 +75,7 @@ void add_campaign_command(CLI::App& app) {
 
 void add_calibrate_command(CLI::App& app) {
   auto a = std::make_shared<PoolArgs>();
-  auto angle = std::make_shared<std::string>("image");
+  auto angle = std::make_shared<std::string>();
   auto predict_only = std::make_shared<bool>(false);
   auto* cmd = app.add_subcommand(
       "calibrate",
@@ -83,9 +83,11 @@ void add_calibrate_command(CLI::App& app) {
       "its [[predict]] tests at the calibrated mu_r (exit code 5: the target cannot be reached)");
   add_pool_options(cmd, *a);
   cmd->add_option("--angle", *angle,
-                  "Angle matched: image (vision on renders, as the lab photo) or particles")
-      ->check(CLI::IsMember({"image", "particles"}))
-      ->capture_default_str();
+                  "Angle matched, instead of the campaign's calibration.angle (default image): "
+                  "image (atan(2H/D) by vision on renders, as the lab photo), image_flank "
+                  "(flank lines by vision on renders), particles (atan(2H/D) from positions) or "
+                  "slice (protractor on centre slices, EDEM's)")
+      ->check(CLI::IsMember({"image", "image_flank", "particles", "slice"}));
   cmd->add_flag("--predict-only", *predict_only,
                 "Reuse the finished OUT/calibration.json (never recalibrate) and run only the "
                 "[[predict]] tests");
@@ -96,14 +98,20 @@ void add_calibrate_command(CLI::App& app) {
     if (*predict_only && c.predictions.empty())
       throw std::invalid_argument(c.file + ": --predict-only but the file has no [[predict]]");
     const std::string out = a->out.empty() ? "runs/" + c.name + "_calibration" : a->out;
+    const experiments::AngleMeasure measure =
+        angle->empty() ? c.calibration->angle
+                       : experiments::parse_angle_measure(*angle, "--angle");
     PoolArgs pa = *a;
-    if (*angle == "particles") pa.no_images = true;
+    if (!experiments::angle_measure_needs_images(measure)) pa.no_images = true;
+    if (pa.no_images && experiments::angle_measure_needs_images(measure))
+      throw std::invalid_argument("--no-images: the angle '" +
+                                  experiments::angle_measure_name(measure) +
+                                  "' is measured on the renders, so the runs need them");
     const experiments::CaseFn fn = case_fn(pa);
     const experiments::RunnerSettings rs = runner(*a);
-    const bool prefer_image = *angle == "image";
     // A clogged run ("no pile", angle 0 in a Fig. 10 report) measures no pile angle: averaged
     // into a mu_r point it would drag the fit down, so the calibration stops on it and says so.
-    const experiments::AngleFn angle_of = [prefer_image](const nlohmann::json& r) {
+    const experiments::AngleFn angle_of = [measure](const nlohmann::json& r) {
       const nlohmann::json& res = r.contains("result") ? r.at("result") : r;
       if (res.contains("pile") && res["pile"].value("status", std::string()) == "no pile")
         throw std::runtime_error(
@@ -112,12 +120,12 @@ void add_calibrate_command(CLI::App& app) {
             "): it has no pile angle to fit (its folder: cases/calib_*/seed_*/ with "
             "result.pile.status \"no pile\"). Narrow mu_r_range below the mu_r that arches "
             "the outlet, or widen the outlet");
-      return experiments::case_angle_deg(r, prefer_image);
+      return experiments::case_angle_deg(r, measure);
     };
     experiments::CalibrateOptions opt;
-    opt.angle_method = prefer_image ? "vision on renders (atan(2H/D), perspective corrected)"
-                                    : "particle positions (atan(2H/D))";
-    opt.extra = {{"code_version", experiments::code_version()}};
+    opt.angle_method = experiments::angle_measure_method(measure);
+    opt.extra = {{"code_version", experiments::code_version()},
+                 {"angle", experiments::angle_measure_name(measure)}};
     const nlohmann::json cal = *predict_only
                                    ? experiments::read_calibration(c, out)
                                    : experiments::run_calibration(c, out, fn, angle_of, rs, opt);

@@ -175,6 +175,7 @@ target_sd_deg = 0.3
 mu_r_range = [0.02, 0.4]
 seeds_per_point = 2
 max_simulations = 20
+angle = "image_flank"
 )");
   const auto c = load_campaign(file.string());
   ASSERT_EQ(c.runs.size(), 9u);
@@ -189,6 +190,7 @@ max_simulations = 20
   EXPECT_DOUBLE_EQ(c.calibration->settings.mu_r_hi, 0.4);
   EXPECT_EQ(c.calibration->settings.seeds_per_point, 2);
   EXPECT_EQ(c.calibration->settings.max_simulations, 20);
+  EXPECT_EQ(c.calibration->angle, AngleMeasure::kImageFlank);
 }
 
 TEST(Campaign, MissingSceneIsAClearError) {
@@ -250,6 +252,8 @@ TEST(Campaign, BadKeysAndValuesAreRejected) {
        "nope.mu"},
       {head + "[calibration]\ntarget_deg = 30\nmu_r_range = [0.0, 0.3]\nspeed = 1\n",
        "calibration.speed"},
+      {head + "[calibration]\ntarget_deg = 30\nmu_r_range = [0.0, 0.3]\nangle = \"flank\"\n",
+       "calibration.angle' = \"flank\""},
       {head + "[[case]\nname = \"a\"\n", "campaign.toml:"},
   };
   for (const auto& b : cases) {

@@ -108,7 +108,7 @@ RunnerSettings quiet() {
   return r;
 }
 
-const AngleFn kAngle = [](const json& r) { return case_angle_deg(r, true); };
+const AngleFn kAngle = [](const json& r) { return case_angle_deg(r, AngleMeasure::kImage); };
 
 // Calibrates on test A (sample 3, measured 35 deg: mu_r 0.3 exactly) and predicts test B
 // (sample 4, offset +2 deg) with interval runs, B again without them, and A itself (a check).
