@@ -37,6 +37,72 @@ Eigen::MatrixXd columns(const Eigen::VectorXd& a, const Eigen::VectorXd* b) {
   return x;
 }
 
+// The fit of y = b s + c f (f optional) with b in [lo, hi] (see the design note): unconstrained
+// first; if b leaves the range, b is fixed on the violated bound and c refitted alone. Throws
+// std::invalid_argument as weighted_least_squares does.
+struct BoundedFit {
+  double b = 0.0, c = 0.0, c_se = 0.0, rmse = 0.0;
+  bool at_bound = false;
+};
+
+BoundedFit bounded_fit(const Eigen::VectorXd& s, const Eigen::VectorXd* f, const Eigen::VectorXd& y,
+                       const Eigen::VectorXd& sigma, double lo, double hi) {
+  BoundedFit out;
+  const WlsFit free = weighted_least_squares(columns(s, f), y, sigma);
+  out.b = free.beta[0];
+  if (f) {
+    out.c = free.beta[1];
+    out.c_se = free.se[1];
+  }
+  out.rmse = free.rmse;
+  if (out.b >= lo && out.b <= hi) return out;
+  out.at_bound = true;
+  out.b = out.b < lo ? lo : hi;
+  const Eigen::VectorXd rest = y - out.b * s;
+  if (f) {
+    const WlsFit g = weighted_least_squares(*f, rest, sigma);
+    out.c = g.beta[0];
+    out.c_se = g.se[0];
+    out.rmse = g.rmse;
+  } else {
+    out.rmse = std::sqrt(rest.squaredNorm() / static_cast<double>(rest.size()));
+  }
+  return out;
+}
+
+// Leave-one-out RMSE of the bounded fit.
+double bounded_loo_rmse(const Eigen::VectorXd& s, const Eigen::VectorXd* f,
+                        const Eigen::VectorXd& y, const Eigen::VectorXd& sigma, double lo,
+                        double hi) {
+  const Eigen::Index n = y.size();
+  const Eigen::Index k = f ? 2 : 1;
+  if (n < k + 2)
+    throw std::invalid_argument("leave-one-out: " + std::to_string(n) + " tests for " +
+                                std::to_string(k) + " coefficients (need at least " +
+                                std::to_string(k + 2) + ")");
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    Eigen::VectorXd si(n - 1), fi(n - 1), yi(n - 1), wi(n - 1);
+    for (Eigen::Index r = 0, q = 0; r < n; ++r) {
+      if (r == i) continue;
+      si[q] = s[r];
+      if (f) fi[q] = (*f)[r];
+      yi[q] = y[r];
+      wi[q] = sigma[r];
+      ++q;
+    }
+    double err = 0.0;
+    try {
+      const BoundedFit b = bounded_fit(si, f ? &fi : nullptr, yi, wi, lo, hi);
+      err = y[i] - b.b * s[i] - (f ? b.c * (*f)[i] : 0.0);
+    } catch (const std::invalid_argument&) {
+      err = y[i];  // as loo_rmse: without row i the columns are degenerate
+    }
+    sum += err * err;
+  }
+  return std::sqrt(sum / static_cast<double>(n));
+}
+
 }  // namespace
 
 WlsFit weighted_least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
@@ -101,11 +167,16 @@ NullScore score_null(const TraceProblem& p) {
     throw std::invalid_argument("trace: residual, sigma and mu_sensitivity differ in size");
   if (n < 3) throw std::invalid_argument("trace: at least 3 tests are needed, got " +
                                          std::to_string(n));
+  if (!(p.mu_shift_lo <= 0.0 && p.mu_shift_hi >= 0.0))
+    throw std::invalid_argument("trace: the mu_r shift bounds must include 0");
   NullScore s;
   s.rmse_before = std::sqrt(p.residual.squaredNorm() / static_cast<double>(n));
-  const Eigen::MatrixXd x = columns(p.mu_sensitivity, nullptr);
-  s.rmse_fit = weighted_least_squares(x, p.residual, p.sigma).rmse;
-  s.loo_rmse = loo_rmse(x, p.residual, p.sigma);
+  const BoundedFit f =
+      bounded_fit(p.mu_sensitivity, nullptr, p.residual, p.sigma, p.mu_shift_lo, p.mu_shift_hi);
+  s.mu_shift = f.b;
+  s.rmse_fit = f.rmse;
+  s.loo_rmse = bounded_loo_rmse(p.mu_sensitivity, nullptr, p.residual, p.sigma, p.mu_shift_lo,
+                                p.mu_shift_hi);
   return s;
 }
 
@@ -118,15 +189,17 @@ CandidateScore score_candidate(const TraceProblem& p, const std::string& name,
                                 std::to_string(p.residual.size()) + " tests");
   CandidateScore s;
   s.name = name;
-  const Eigen::MatrixXd x = columns(p.mu_sensitivity, &fp);
   try {
-    const WlsFit f = weighted_least_squares(x, p.residual, p.sigma);
-    s.mu_shift = f.beta[0];
-    s.coef = f.beta[1];
-    s.coef_se = f.se[1];
+    const BoundedFit f =
+        bounded_fit(p.mu_sensitivity, &fp, p.residual, p.sigma, p.mu_shift_lo, p.mu_shift_hi);
+    s.mu_shift = f.b;
+    s.mu_shift_at_bound = f.at_bound;
+    s.coef = f.c;
+    s.coef_se = f.c_se;
     s.t = std::abs(s.coef) / s.coef_se;
     s.rmse_fit = f.rmse;
-    s.loo_rmse = loo_rmse(x, p.residual, p.sigma);
+    s.loo_rmse = bounded_loo_rmse(p.mu_sensitivity, &fp, p.residual, p.sigma, p.mu_shift_lo,
+                                  p.mu_shift_hi);
   } catch (const std::invalid_argument& e) {
     s.why = std::string("not identifiable: ") + e.what();
     s.loo_rmse = null_score.loo_rmse;
@@ -160,14 +233,16 @@ int rank_candidates(std::vector<CandidateScore>& scores) {
 
 nlohmann::json to_json(const CandidateScore& s) {
   return {{"name", s.name},         {"coef", s.coef},         {"coef_se", s.coef_se},
-          {"t", s.t},               {"mu_shift", s.mu_shift}, {"rmse_fit_deg", s.rmse_fit},
+          {"t", s.t},               {"mu_shift", s.mu_shift},
+          {"mu_shift_at_bound", s.mu_shift_at_bound}, {"rmse_fit_deg", s.rmse_fit},
           {"loo_rmse_deg", s.loo_rmse}, {"loo_gain_deg", s.loo_gain},
           {"explained", s.explained}, {"significant", s.significant},
           {"predictive", s.predictive}, {"accepted", s.accepted}, {"why", s.why}};
 }
 
 nlohmann::json to_json(const NullScore& s) {
-  return {{"rmse_before_deg", s.rmse_before},
+  return {{"mu_shift", s.mu_shift},
+          {"rmse_before_deg", s.rmse_before},
           {"rmse_mu_only_deg", s.rmse_fit},
           {"loo_rmse_mu_only_deg", s.loo_rmse}};
 }

@@ -15,6 +15,14 @@
 // errors of b and c come from the weights, not from the residual scatter (with five or six tests
 // a scatter-based error is itself too noisy to gate on).
 //
+// The mu_r correction b is bounded: mu_r + b must stay inside the calibrated range (the loop's
+// mu_r grid). Within the range a constant offset is a mu_r change; beyond it (a residual of
+// -8 deg everywhere when mu_r already sits at the grid's low end) it is not, and an unbounded b
+// would absorb an effect's constant part into an impossible mu_r. The bounded fit is exact: the
+// least-squares problem is convex with one box-constrained coefficient, so when the unconstrained
+// b violates a bound the optimum has b on that bound and the other coefficients are refitted
+// with it fixed (their standard errors then come from that fit).
+//
 // Acceptance rule (both must hold):
 //   1. significance: |c| > min_t standard errors (default 3, a 0.3% false alarm per candidate
 //      under Gaussian seed noise, so six candidates on a null dataset alarm about 2% of the time);
@@ -28,6 +36,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -65,6 +74,8 @@ struct TraceProblem {
   Eigen::VectorXd sigma;           // (n) 1-sigma noise of each residual [deg]
   Eigen::VectorXd mu_sensitivity;  // (n) d angle / d mu_r at the baseline [deg per unit mu_r]
   double seed_noise_deg = 0.0;     // RMS standard error of the predicted angles [deg]
+  double mu_shift_lo = -std::numeric_limits<double>::infinity();  // smallest allowed b [-]
+  double mu_shift_hi = std::numeric_limits<double>::infinity();   // largest allowed b [-]
 };
 
 /// One candidate's fit to the residual.
@@ -74,6 +85,7 @@ struct CandidateScore {
   double coef_se = 0.0;      // its standard error [-]
   double t = 0.0;            // |c| / se(c) [-]
   double mu_shift = 0.0;     // b: the mu_r correction fitted with it [-]
+  bool mu_shift_at_bound = false;  // b sits on a bound of the calibrated range
   double rmse_fit = 0.0;     // in-sample RMSE with the effect [deg]
   double loo_rmse = 0.0;     // leave-one-out RMSE with the effect [deg]
   double loo_gain = 0.0;     // no-effect LOO RMSE - loo_rmse [deg]
@@ -86,6 +98,7 @@ struct CandidateScore {
 
 /// The no-effect model's scores (mu_r correction only): in-sample and leave-one-out RMSE.
 struct NullScore {
+  double mu_shift = 0.0;     // b of the best mu_r correction (bounded) [-]
   double rmse_before = 0.0;  // RMS of the residual as given [deg]
   double rmse_fit = 0.0;     // after the best mu_r correction [deg]
   double loo_rmse = 0.0;     // leave-one-out [deg]

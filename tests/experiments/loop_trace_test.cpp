@@ -128,5 +128,49 @@ TEST(LoopTrace, AConstantFingerprintIsAMuShiftNotAnEffect) {
   EXPECT_NE(s.why.find("not identifiable"), std::string::npos);
 }
 
+
+TEST(LoopTrace, AnOffsetBeyondTheMuRangeIsNotAMuShift) {
+  // The residual is -8 deg everywhere plus a small pattern q; the candidate's fingerprint is
+  // -6 + 2 q. With mu_r free to move anywhere, b absorbs most of the constant (exactly:
+  // c = 0.5, 40 b = -8 + 3, b = -0.125) and the fit is perfect; with mu_r already at the low end
+  // of its range (b >= 0), b stays at 0 and c is the one-column fit of the whole residual.
+  const int n = 8;
+  TraceProblem p;
+  p.residual.resize(n);
+  p.sigma = Eigen::VectorXd::Ones(n);
+  p.mu_sensitivity = Eigen::VectorXd::Constant(n, 40.0);
+  p.seed_noise_deg = 0.5;
+  Eigen::VectorXd f(n);
+  for (int i = 0; i < n; ++i) {
+    const double q = (i % 2 == 0) ? 0.3 : -0.3;
+    f[i] = -6.0 + 2.0 * q;
+    p.residual[i] = -8.0 + q;
+  }
+  const NullScore free_null = score_null(p);
+  EXPECT_NEAR(free_null.mu_shift, -0.2, 1e-9);
+  EXPECT_NEAR(free_null.rmse_fit, 0.3, 1e-9);
+  const CandidateScore free_score = score_candidate(p, "plate", f, free_null);
+  EXPECT_FALSE(free_score.mu_shift_at_bound);
+  EXPECT_NEAR(free_score.mu_shift, -0.125, 1e-9);
+  EXPECT_NEAR(free_score.coef, 0.5, 1e-9);
+
+  p.mu_shift_lo = 0.0;
+  p.mu_shift_hi = 0.25;
+  const NullScore bounded_null = score_null(p);
+  EXPECT_EQ(bounded_null.mu_shift, 0.0);
+  EXPECT_NEAR(bounded_null.rmse_fit, std::sqrt(64.09), 1e-9);  // nothing absorbed
+  EXPECT_NEAR(bounded_null.loo_rmse, bounded_null.rmse_fit, 1e-9);
+  const CandidateScore s = score_candidate(p, "plate", f, bounded_null);
+  EXPECT_TRUE(s.mu_shift_at_bound);
+  EXPECT_EQ(s.mu_shift, 0.0);
+  EXPECT_NEAR(s.coef, f.dot(p.residual) / f.dot(f), 1e-9);
+  EXPECT_NEAR(s.coef_se, 1.0 / f.norm(), 1e-9);  // unit sigmas, the column alone
+  EXPECT_TRUE(s.accepted);
+  EXPECT_LT(s.loo_rmse, 0.5 * bounded_null.loo_rmse);
+
+  p.mu_shift_lo = 0.01;  // the bounds must allow no shift
+  EXPECT_THROW(score_null(p), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace reposetwin::experiments
