@@ -88,7 +88,7 @@ const std::vector<CandidateEffect>& candidate_effects() {
        0.7, 0.2, 1.0, "x declared d_min",
        "Fines below the simulated cut-off d_min take part (d_min lowered by this factor).", {}},
       {"camera_height", EffectKind::kMeasurement, EffectApply::kImageHeight,
-       "image.camera_height_m", 0.0, false, 0.01, 0.0, 1.0, "m",
+       "image.camera_height_m", 0.0, false, 0.005, 0.0, 1.0, "m",
        "The photographs were taken from above plate level while measured as if level "
        "(perspective grows with height over distance).",
        {}},
@@ -163,6 +163,10 @@ std::string effect_unavailable(const LabTest& test, const CandidateEffect& e) {
         return "the plate is made of the sample's material (" + s.plate_material +
                "), so its friction cannot differ";
     }
+    // A factor on a declared value of 0 (no simulated cut-off d_min) changes nothing: its
+    // fingerprint would be zero and its simulations a waste.
+    if (e.apply == EffectApply::kFactorScene && scene_value(test, e.key) == 0.0)
+      return "the declared " + e.key + " is 0, so a factor on it changes nothing";
     const SimRequest r = make_request(test, "contacts.{sample}-{sample}.rolling_friction", 0.1, 1,
                                       {{&e, e.probe}}, ImageVariant{});
     (void)load_scene(test.scene_path, resolved_overrides(r));

@@ -65,9 +65,9 @@ SynthDesign read_synth_design(const std::string& path) {
   r.mark_used("test");
   const toml::array* tests = doc["test"].as_array();
   if (!tests || tests->empty()) r.fail("test", "at least one [[test]] table is required");
-  std::set<std::string> columns;
+  std::set<std::string> columns, text_columns;
   for (const auto& c : condition_columns())
-    if (c.factor != 0.0) columns.insert(c.column);
+    (c.factor != 0.0 ? columns : text_columns).insert(c.column);
   for (std::size_t i = 0; i < tests->size(); ++i) {
     const toml::table* t = (*tests)[i].as_table();
     if (!t) r.fail("test", "entry " + std::to_string(i) + " must be a table");
@@ -77,8 +77,14 @@ SynthDesign read_synth_design(const std::string& path) {
     st.role = tr.string("role", st.role);
     for (const std::string& k : tr.keys()) {
       if (k == "id" || k == "role") continue;
+      if (text_columns.count(k)) {
+        st.labels[k] = tr.string(k);
+        if (st.labels[k].empty() || st.labels[k].find_first_of(",\"\n") != std::string::npos)
+          tr.fail(k, "= \"" + st.labels[k] + "\" must be a non-empty name without , or \"");
+        continue;
+      }
       if (!columns.count(k) && k.rfind("set:", 0) != 0)
-        tr.fail(k, "is not a numeric condition column (docs/loop.md)");
+        tr.fail(k, "is not a condition column (docs/loop.md)");
       st.conditions[k] = tr.number(k);
     }
     tr.finish();
@@ -116,6 +122,13 @@ std::string make_synthetic_dataset(const SynthDesign& d, const std::string& out_
       t.overrides.emplace_back(key, num(factor * v));
       t.conditions[col] = v;
     }
+    for (const auto& [col, v] : st.labels) {
+      std::string key;
+      for (const auto& c : condition_columns())
+        if (col == c.column && c.factor == 0.0) key = c.key;
+      if (key.empty()) throw InputError("synthetic design: unknown text condition column " + col);
+      t.overrides.emplace_back(key, "\"" + v + "\"");
+    }
     tests.push_back(t);
   }
   std::vector<SimRequest> req;
@@ -129,15 +142,20 @@ std::string make_synthetic_dataset(const SynthDesign& d, const std::string& out_
     }
   const std::vector<SimOutcome> out = cache.run(req);
   // The CSV.
-  std::vector<std::string> cols;
-  for (const SynthTest& st : d.tests)
+  std::vector<std::string> cols, text_cols;
+  for (const SynthTest& st : d.tests) {
     for (const auto& [c, v] : st.conditions)
       if (std::find(cols.begin(), cols.end(), c) == cols.end()) cols.push_back(c);
+    for (const auto& [c, v] : st.labels)
+      if (std::find(text_cols.begin(), text_cols.end(), c) == text_cols.end())
+        text_cols.push_back(c);
+  }
   std::ostringstream csv;
   csv << "# Synthetic lab dataset made by reposetwin loop-synth: conditions, measured values and "
          "photographs only.\n";
   csv << "id,role,scene";
   for (const auto& c : cols) csv << "," << c;
+  for (const auto& c : text_cols) csv << "," << c;
   csv << ",repeats,H_mm,D_mm,angle_deg,photo\n";
   std::size_t q = 0;
   for (std::size_t i = 0; i < tests.size(); ++i) {
@@ -170,6 +188,8 @@ std::string make_synthetic_dataset(const SynthDesign& d, const std::string& out_
     csv << tests[i].id << "," << tests[i].role << ",scene.toml";
     for (const auto& c : cols)
       csv << "," << (d.tests[i].conditions.count(c) ? num(d.tests[i].conditions.at(c)) : "");
+    for (const auto& c : text_cols)
+      csv << "," << (d.tests[i].labels.count(c) ? d.tests[i].labels.at(c) : "");
     csv << "," << d.seeds.size() << "," << num(h / n) << "," << num(dd / n) << "," << num(a / n)
         << ",\"" << photos << "\"\n";
   }

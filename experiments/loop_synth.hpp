@@ -27,6 +27,7 @@
 //   role = "calibrate"
 //   mass_kg = 0.004
 //   W_mm = 20.0
+//   plate = "wood"                        # text columns (the plate material) as strings
 #pragma once
 
 #include <cstdint>
@@ -43,7 +44,8 @@ namespace reposetwin::experiments {
 struct SynthTest {
   std::string id;
   std::string role = "calibrate";
-  std::map<std::string, double> conditions;  // condition column (docs/loop.md) -> value
+  std::map<std::string, double> conditions;  // numeric condition column (docs/loop.md) -> value
+  std::map<std::string, std::string> labels;  // text condition column ("plate") -> value
 };
 
 /// A synthetic dataset's design, hidden settings included.
