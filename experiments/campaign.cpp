@@ -1171,6 +1171,39 @@ std::vector<Observation> observations_of(const nlohmann::json& cal, const std::s
   return obs;
 }
 
+// A finished calibration in OUT is a result: calibrating again with the same question rewrites it
+// with the same numbers (every run is reused), but a different question (target, range, keys or
+// angle) would silently replace it, so that needs --force.
+void refuse_to_replace_other_calibration(const Campaign& c, const std::string& out_dir,
+                                         const CalibrateOptions& options, bool force) {
+  const std::string file = (fs::path(out_dir) / kCalibrationFile).string();
+  if (force || !fs::exists(file)) return;
+  nlohmann::json old;
+  try {
+    old = nlohmann::json::parse(read_file(file));
+  } catch (const std::exception& e) {
+    throw std::runtime_error(file + ": a calibration file that cannot be read (" + e.what() +
+                             "); move it away or use --force");
+  }
+  const CampaignCalibration& cc = calibration_of(c);
+  const nlohmann::json now = {
+      {"target.angle_deg", cc.target.angle_deg},
+      {"mu_r_range", {cc.settings.mu_r_lo, cc.settings.mu_r_hi}},
+      {"keys", keys_of(cc)},
+      {"angle_method", options.angle_method}};
+  const nlohmann::json was = {
+      {"target.angle_deg", old.contains("target") ? old["target"].value("angle_deg", nlohmann::json())
+                                                  : nlohmann::json()},
+      {"mu_r_range", old.value("mu_r_range", nlohmann::json())},
+      {"keys", old.value("keys", nlohmann::json())},
+      {"angle_method", old.value("angle_method", nlohmann::json())}};
+  for (const auto& [k, v] : now.items())
+    if (was[k] != v)
+      throw std::runtime_error(file + ": a finished calibration with " + k + " = " +
+                               was[k].dump() + " is here, and this one asks for " + v.dump() +
+                               "; give another --out, move the file away, or use --force");
+}
+
 }  // namespace
 
 nlohmann::json run_calibration(const Campaign& c, const std::string& out_dir, const CaseFn& case_fn,
@@ -1178,6 +1211,7 @@ nlohmann::json run_calibration(const Campaign& c, const std::string& out_dir, co
                                const CalibrateOptions& options) {
   const CampaignCalibration& cc = calibration_of(c);
   if (!angle_of) throw std::invalid_argument("run_calibration: no angle function");
+  refuse_to_replace_other_calibration(c, out_dir, options, runner.force);
   auto simulate = [&](const std::vector<std::pair<double, std::uint64_t>>& points) {
     std::vector<CaseSpec> runs;
     for (const auto& [mu, seed] : points) runs.push_back(calibration_run(c, mu, seed));

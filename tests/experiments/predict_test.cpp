@@ -331,6 +331,40 @@ TEST(Predict, PredictOnlyReusesTheCalibrationAndNeverOverwrites) {
       std::runtime_error);
 }
 
+TEST(Predict, ASecondCalibrationNeverReplacesAnotherFinishedOneUnasked) {
+  const Scratch d("replace");
+  write_file_atomic((d.path / "c.toml").string(), calibration_campaign());
+  const fs::path out = d.path / "out", log = d.path / "log";
+  const Campaign c = load_campaign((d.path / "c.toml").string());
+  run_calibration(c, out.string(), synthetic_case(log), kAngle, quiet());
+  const std::string text = read_file((out / "calibration.json").string());
+  // The same question again: allowed (every run is reused, the numbers are the same).
+  EXPECT_NO_THROW(run_calibration(c, out.string(), synthetic_case(log), kAngle, quiet()));
+  // Another target, or the same target with another angle, in the same folder: refused, and the
+  // finished file is left as it was.
+  write_file_atomic((d.path / "c.toml").string(), calibration_campaign(3, 36.0));
+  const Campaign edited = load_campaign((d.path / "c.toml").string());
+  try {
+    run_calibration(edited, out.string(), synthetic_case(log), kAngle, quiet());
+    FAIL() << "a finished calibration was replaced unasked";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("calibration.json"), std::string::npos) << what;
+    EXPECT_NE(what.find("target.angle_deg"), std::string::npos) << what;
+    EXPECT_NE(what.find("--force"), std::string::npos) << what;
+  }
+  CalibrateOptions flank;
+  flank.angle_method = "flank";
+  EXPECT_THROW(run_calibration(c, out.string(), synthetic_case(log), kAngle, quiet(), flank),
+               std::runtime_error);
+  EXPECT_EQ(read_file((out / "calibration.json").string()), text);
+  // Asked (--force): replaced.
+  RunnerSettings forced = quiet();
+  forced.force = true;
+  const json again = run_calibration(edited, out.string(), synthetic_case(log), kAngle, forced);
+  EXPECT_DOUBLE_EQ(again["target"]["angle_deg"].get<double>(), 36.0);
+}
+
 // The paper's CSV read independently of the report's reader: sample -> field -> value.
 std::map<int, std::map<std::string, std::string>> independent_csv(const fs::path& p) {
   std::ifstream in(p);
