@@ -370,6 +370,22 @@ json Loop::run() {
         for (double x : da) v += (x - mean(da)) * (x - mean(da));
         f.angle_se.push_back(std::sqrt(v / (da.size() - 1) / da.size()));
       }
+      // An effect that moves the angle by less than the seed noise of a predicted angle at its
+      // probe cannot be traced: any residual would need an absurd strength (a lens whose
+      // distortion shifts the angle by 0.01 deg "explains" 5 deg with k1 = 100).
+      double ms = 0.0;
+      for (std::size_t i : cal_) ms += f.angle[i] * f.angle[i];
+      const double rms = std::sqrt(ms / static_cast<double>(cal_.size()));
+      if (rms < seed_se) {
+        char why[200];
+        std::snprintf(why, sizeof why,
+                      "its fingerprint at the probe (RMS %.3g deg over the calibration tests) "
+                      "is below the seed noise of a predicted angle (%.3g deg)",
+                      rms, seed_se);
+        unavailable.push_back({{"name", e->name}, {"why", why}});
+        say("candidate " + e->name + " not traceable: " + why);
+        continue;
+      }
       fps.push_back(std::move(f));
     }
   }
@@ -396,6 +412,8 @@ json Loop::run() {
     p.sigma.resize(n);
     p.mu_sensitivity.resize(n);
     p.seed_noise_deg = seed_se;
+    p.mu_shift_lo = s_.mu_grid.front() - fit.mu;
+    p.mu_shift_hi = s_.mu_grid.back() - fit.mu;
     const double span = s_.mu_grid.back() - s_.mu_grid.front();
     for (Eigen::Index k = 0; k < n; ++k) {
       const std::size_t i = cal_[k];
@@ -434,57 +452,145 @@ json Loop::run() {
     double p1 = std::clamp(off + sc.coef * (e.probe - off), e.lo, e.hi);
     say("iteration " + std::to_string(it) + ": " + e.name + " accepted (" + sc.why +
         "); linear estimate " + std::to_string(p1) + " " + e.units + ", simulating the grid");
-    // The linear estimate may overshoot into piles the measurement cannot see (a smooth plate
-    // spreads a small sample into a monolayer): then step back halfway towards off, twice at
-    // most; the joint fit may still extrapolate to t_max.
-    double p_sim = p1;
-    std::unique_ptr<Surface> surf;
+    // The fingerprint at the node (calibration tests): the unit of the response fraction.
+    const Fingerprint* fp = by_name.at(e.name);
+    const double mu_node = s_.mu_grid[node];
+    // One refit trial: the effect simulated at p on the whole grid and (mu_r, t) fitted jointly.
+    struct Trial {
+      double p = 0.0;         // simulated value
+      double fraction = 0.0;  // its response at the node, in units of the probe's fingerprint
+      const Surface* surf = nullptr;
+      MuFit joint;
+      double rmse = 0.0;      // calibration RMSE of the refitted model [deg]
+      Model model;
+    };
+    std::vector<Trial> trials;
     std::string refit_note;
-    for (int attempt = 0; attempt < 3 && !surf; ++attempt) {
-      std::vector<EffectSetting> with = effects;
-      with.push_back({&e, p_sim});
-      try {
-        surf = std::make_unique<Surface>(simulate_surface(with));
-      } catch (const std::exception& ex) {
-        refit_note += "at " + std::to_string(p_sim) + ": " + std::string(ex.what()).substr(0, 300) + "; ";
-        say("refit at " + std::to_string(p_sim) + " failed; stepping back halfway");
-        p_sim = off + 0.5 * (p_sim - off);
+    auto cal_rmse = [&](const Model& m, double mu) {
+      std::vector<double> r;
+      for (std::size_t i : cal_) r.push_back(data_.tests[i].angle_deg - m.angle(i, mu));
+      return rmse(r);
+    };
+    // The value may overshoot into piles the measurement cannot see (a smooth plate spreads a
+    // small sample into a monolayer): then step back halfway towards off, twice at most.
+    auto run_trial = [&](double p) -> bool {
+      std::unique_ptr<Surface> surf;
+      for (int attempt = 0; attempt < 3 && !surf; ++attempt) {
+        std::vector<EffectSetting> with = effects;
+        with.push_back({&e, p});
+        try {
+          surf = std::make_unique<Surface>(simulate_surface(with));
+        } catch (const std::exception& ex) {
+          refit_note += "at " + std::to_string(p) + ": " +
+                        std::string(ex.what()).substr(0, 300) + "; ";
+          say("refit at " + std::to_string(p) + " failed; stepping back halfway");
+          p = off + 0.5 * (p - off);
+        }
+      }
+      if (!surf) return false;
+      surfaces_.push_back(std::move(surf));
+      Trial tr;
+      tr.p = p;
+      tr.surf = surfaces_.back().get();
+      double num = 0.0, den = 0.0;
+      for (std::size_t i : cal_) {
+        num += (tr.surf->curve[i].at(mu_node) - model.angle(i, mu_node)) * fp->angle[i];
+        den += fp->angle[i] * fp->angle[i];
+      }
+      tr.fraction = den > 0.0 ? num / den : 0.0;
+      // t may extrapolate beyond the simulated value, but never past the effect's range.
+      const double bound = (p < off ? e.lo : e.hi) - off;
+      const double saved_t_max = s_.t_max;
+      if (p != off) s_.t_max = std::min(s_.t_max, std::max(1.0, bound / (p - off)));
+      tr.joint = fit_mu(model, tr.surf);
+      s_.t_max = saved_t_max;
+      for (const auto& [w, sf] : model.terms) tr.model.terms.push_back({(1.0 - tr.joint.t) * w, sf});
+      tr.model.terms.push_back({tr.joint.t, tr.surf});
+      tr.rmse = cal_rmse(tr.model, tr.joint.mu);
+      trials.push_back(tr);
+      return true;
+    };
+    // Secant refinement. The linear estimate assumes the response grows linearly from off to the
+    // probe; a threshold effect (a plate that starts to slide below some friction) breaks that.
+    // When the simulated response fraction misses the traced strength c by more than half, the
+    // next value interpolates c between the known responses (off: 0, probe: 1, and the trials),
+    // at most twice more.
+    const int kMaxRefinements = 2;
+    if (run_trial(p1)) {
+      for (int k = 0; k < kMaxRefinements; ++k) {
+        const Trial& last = trials.back();
+        if (std::abs(last.fraction - sc.coef) <= 0.5 * std::abs(sc.coef)) break;
+        std::vector<std::pair<double, double>> pts = {{off, 0.0}, {e.probe, 1.0}};
+        for (const Trial& tr : trials) pts.push_back({tr.p, tr.fraction});
+        std::sort(pts.begin(), pts.end());
+        double next = std::numeric_limits<double>::quiet_NaN();
+        for (std::size_t q = 0; q + 1 < pts.size(); ++q) {
+          const auto [pa, fa] = pts[q];
+          const auto [pb, fb] = pts[q + 1];
+          if (fa == fb || (sc.coef - fa) * (sc.coef - fb) > 0.0) continue;
+          next = pa + (sc.coef - fa) / (fb - fa) * (pb - pa);
+          // Prefer the bracket next to the last trial.
+          if (pa == last.p || pb == last.p) break;
+        }
+        if (!std::isfinite(next)) break;
+        next = std::clamp(next, e.lo, e.hi);
+        bool known = false;
+        for (const auto& [pp, ff] : pts)
+          known = known || std::abs(pp - next) <= 1e-3 * std::max(1.0, std::abs(pp));
+        if (known) break;
+        say(e.name + ": simulated response " + std::to_string(last.fraction) + " of the probe's at " +
+            std::to_string(last.p) + " (traced " + std::to_string(sc.coef) + "); refining at " +
+            std::to_string(next));
+        if (!run_trial(next)) break;
       }
     }
-    if (!surf) {
+    if (trials.empty()) {
       iter["chosen"] = {{"name", e.name}, {"refit_failed", refit_note}, {"linear_estimate", p1}};
       iterations.push_back(iter);
       break;
     }
+    std::size_t pick = 0;
+    for (std::size_t q = 1; q < trials.size(); ++q)
+      if (trials[q].rmse < trials[pick].rmse) pick = q;
+    json trial_log = json::array();
+    for (const Trial& tr : trials)
+      trial_log.push_back({{"simulated_at", tr.p},
+                           {"response_fraction", tr.fraction},
+                           {"t", tr.joint.t},
+                           {"mu_r", tr.joint.mu},
+                           {"rmse_calibrate_deg", tr.rmse}});
+    const Trial& best_trial = trials[pick];
     const double p1_requested = p1;
-    p1 = p_sim;
-    surfaces_.push_back(std::move(surf));
-    const Surface* extra = surfaces_.back().get();
-    // t may extrapolate beyond the simulated value, but never past the effect's range.
-    const double bound = (p1 < off ? e.lo : e.hi) - off;
-    const double saved_t_max = s_.t_max;
-    if (p1 != off) s_.t_max = std::min(s_.t_max, std::max(1.0, bound / (p1 - off)));
-    const MuFit joint = fit_mu(model, extra);
-    s_.t_max = saved_t_max;
+    p1 = best_trial.p;
+    const MuFit joint = best_trial.joint;
     const double value = off + joint.t * (p1 - off);
     const double value_se = joint.t_se * std::abs(p1 - off);
+    const Model next = best_trial.model;
+    const double rmse_now = cal_rmse(model, fit.mu), rmse_next = best_trial.rmse;
+    const double margin = s_.rule.loo_margin_factor * seed_se;
     // The simulated refit is the test of the linear tracing: when the joint fit puts the effect
-    // back at its off value (t = 0), the simulations do not confirm it and it is not chosen.
-    if (joint.t <= 0.0) {
+    // back at its off value (t = 0), or the simulated model does not lower the calibration error
+    // by more than the seed noise of a prediction, the simulations do not confirm it and it is
+    // not chosen.
+    std::string reason;
+    if (joint.t <= 0.0)
+      reason = "the joint refit of mu_r and the effect on simulated piles puts the effect at its "
+               "off value (t = 0)";
+    else if (rmse_next > rmse_now - margin)
+      reason = "the simulated refit lowers the calibration RMSE from " + std::to_string(rmse_now) +
+               " to " + std::to_string(rmse_next) + " deg, not by more than the seed noise " +
+               std::to_string(margin) + " deg";
+    if (!reason.empty()) {
       iter["chosen"] = nullptr;
-      iter["not_confirmed"] = {{"name", e.name},       {"linear_estimate", p1_requested},
-                               {"simulated_at", p1},   {"t", joint.t},
-                               {"refit_notes", refit_note},
-                               {"reason", "the joint refit of mu_r and the effect on simulated "
-                                          "piles puts the effect at its off value (t = 0)"}};
-      say(e.name + ": not confirmed by the simulated refit (t = 0); not chosen");
-      surfaces_.pop_back();
+      iter["not_confirmed"] = {{"name", e.name},     {"linear_estimate", p1_requested},
+                               {"simulated_at", p1}, {"t", joint.t},
+                               {"mu_r", joint.mu},   {"rmse_calibrate_deg", rmse_next},
+                               {"trials", trial_log},
+                               {"refit_notes", refit_note}, {"reason", reason}};
+      say(e.name + ": not confirmed by the simulated refit (" + reason + "); not chosen");
       iterations.push_back(iter);
       break;
     }
-    Model next;
-    for (const auto& [w, surf] : model.terms) next.terms.push_back({(1.0 - joint.t) * w, surf});
-    next.terms.push_back({joint.t, extra});
     model = next;
     fit = joint;
     effects.push_back({&e, value});
@@ -493,6 +599,7 @@ json Loop::run() {
               {"key", e.key},         {"units", e.units},
               {"off", off},           {"probe", e.probe},
               {"linear_estimate", p1_requested}, {"simulated_at", p1},
+              {"trials", trial_log},
               {"refit_notes", refit_note}, {"value", value},
               {"value_se", value_se}, {"t", joint.t},
               {"t_at_limit", joint.t <= 0.0 || joint.t >= s_.t_max},

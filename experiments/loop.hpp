@@ -16,9 +16,12 @@
 //    switched on at its probe value with the baseline's seeds; the fingerprint is the mean change
 //    of angle (and of H and D). Measurement candidates re-photograph the same piles. Fingerprints
 //    are computed once, on the baseline model, and reused in later iterations (first order): the
-//    residual after adding an effect is regressed on the same columns.
-//  * Selection: loop_trace.hpp (WLS with mu_r free, leave-one-test-out ranking, accept when
-//    |c| > 3 se and the LOO RMSE gain beats the seed noise).
+//    residual after adding an effect is regressed on the same columns. A candidate whose
+//    fingerprint (RMS over the calibration tests) is below the seed standard error of a
+//    predicted angle is not traceable and is listed as unavailable: it could "explain" any
+//    residual only with an absurd strength.
+//  * Selection: loop_trace.hpp (WLS with the mu_r correction bounded to the grid, leave-one-
+//    test-out ranking, accept when |c| > 3 se and the LOO RMSE gain beats the seed noise).
 //  * Refit by simulation. The chosen effect's linear estimate p1 = off + c (probe - off) (clamped
 //    to its range) is simulated on the whole mu_r grid. The model becomes
 //    twin(mu_r, p) = (1 - t) twin_before(mu_r) + t twin_p1(mu_r), t = (p - off) / (p1 - off),
@@ -27,6 +30,9 @@
 //    are recomputed from this simulated model, and the loop repeats until no candidate is
 //    accepted or max_effects are in. If the refit's simulations cannot be measured (a pile too
 //    flat to photograph), the simulated value steps back halfway towards off, twice at most.
+//    The simulations must confirm the tracing: an effect whose joint refit lands at t = 0, or
+//    whose simulated model does not lower the calibration RMSE by more than the seed standard
+//    error of a prediction, is not chosen (recorded under not_confirmed with the reason).
 //  * Caching and resuming: loop_sim.hpp. loop.json (atomic) is written last; an existing one is
 //    never overwritten without `force`.
 #pragma once
