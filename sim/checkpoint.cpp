@@ -131,8 +131,13 @@ void read_checkpoint(World& world, const std::string& path) {
     r.fail("has an inconsistent neighbor list");
   for (std::int32_t j : nl.second)
     if (j < 0 || static_cast<std::size_t>(j) >= n) r.fail("has a neighbor index out of range");
-  s.pair_force.assign(np, Vec3::Zero());
-  s.pair_torque_j.assign(np, Vec3::Zero());
+  if (nl.in_pairs.size() != np) r.fail("has an inconsistent neighbor list");
+  for (std::int32_t k : nl.in_pairs)
+    if (k < 0 || static_cast<std::size_t>(k) >= np) r.fail("has a pair index out of range");
+  index_incoming_slots(nl);
+  s.reaction_force.assign(np, Vec3::Zero());
+  s.reaction_torque.assign(np, Vec3::Zero());
+  s.pair_live.assign(np, 1);
   nl.parallel_min = static_cast<std::size_t>(world.model().settings.parallel_min_particles);
   world.state() = std::move(s);
 }

@@ -275,8 +275,9 @@ inline double rolling_size_factor(const ContactConstants& c, double contact_diam
 /// cap and the rolling torque then stay continuous and non-negative through every contact, as
 /// without cohesion; (3) with k_c = 0 the cap is unchanged by construction. Only the force on
 /// the bodies carries -F_c n.
-inline ContactOutput hertz_mindlin(const ContactConstants& c, const ContactInput& in, double dt,
-                                   ContactHistory& h) {
+[[gnu::always_inline]] inline ContactOutput hertz_mindlin(const ContactConstants& c,
+                                                         const ContactInput& in, double dt,
+                                                         ContactHistory& h) {
   ContactOutput out;
   const ContactStiffness k = contact_stiffness(c, in.delta, in.r_eff, in.m_eff);
   const double v_n = in.v_rel.dot(in.n);

@@ -88,6 +88,7 @@ void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) 
   list.history.clear();
   list.in_start.assign(n + 1, 0);
   list.in_pairs.clear();
+  list.in_slot.clear();
   list.x_at_build = p.x;
   if (n == 0) return;
 
@@ -182,9 +183,16 @@ void build_incoming(NeighborList& list, std::size_t n) {
   std::vector<std::int32_t> fill(list.in_start.begin(), list.in_start.end() - 1);
   for (std::size_t k = 0; k < list.second.size(); ++k)
     list.in_pairs[fill[list.second[k]]++] = static_cast<std::int32_t>(k);
+  index_incoming_slots(list);
 }
 
 }  // namespace
+
+void index_incoming_slots(NeighborList& list) {
+  list.in_slot.resize(list.in_pairs.size());
+  for (std::size_t q = 0; q < list.in_pairs.size(); ++q)
+    list.in_slot[list.in_pairs[q]] = static_cast<std::int32_t>(q);
+}
 
 void compact_neighbor_list(NeighborList& list, const std::vector<char>& keep) {
   const std::size_t n_old = keep.size();

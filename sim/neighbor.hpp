@@ -31,6 +31,8 @@ struct NeighborList {
   std::vector<ContactHistory> history;  // (pairs)
   std::vector<std::int32_t> in_start;   // (n + 1) CSR offsets of incoming pairs
   std::vector<std::int32_t> in_pairs;   // pair indices where the particle is second
+  std::vector<std::int32_t> in_slot;    // (pairs) position of each pair in in_pairs (derived
+                                        // from in_pairs, not saved in checkpoints)
   std::vector<Vec3> x_at_build;     // (n) positions at the last build [m]
   std::int64_t builds = 0;          // number of rebuilds so far
   std::size_t parallel_min = 2000;  // fewer particles build on one thread
@@ -43,6 +45,9 @@ struct NeighborList {
 /// Rebuilds the list; sorts `p` by cell first when `sort_particles` is set. Histories of pairs
 /// that persist are kept.
 void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles);
+
+/// Derives list.in_slot from list.in_pairs (in_slot[in_pairs[q]] = q).
+void index_incoming_slots(NeighborList& list);
 
 /// Drops the particles whose `keep` flag is false from a built list, keeping every surviving
 /// pair and its history (indices are renumbered as Particles::keep does).

@@ -2,6 +2,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -112,9 +113,10 @@ void World::update_neighbors() {
   }
   build_neighbor_list(state_.particles, state_.neighbors, /*sort_particles=*/true);
   const std::size_t np = state_.neighbors.pairs();
-  state_.pair_force.resize(np);
-  state_.pair_torque_j.resize(np);
+  state_.reaction_force.resize(np);
+  state_.reaction_torque.resize(np);
   state_.pair_overlap.resize(np);
+  state_.pair_live.assign(np, 1);  // unknown: the first force phase clears what does not touch
   build_wall_candidates();
 }
 
@@ -164,63 +166,107 @@ void World::build_wall_candidates() {
   state_.wall_candidates_valid = true;
 }
 
+namespace {
+
+/// The contact input of the touching pair (i, j): the geometry and the bodies' motion at the
+/// contact point.
+ContactInput pair_input(const Particles& p, const ContactConstants& c, std::size_t i,
+                        std::size_t j) {
+  const Vec3 d = p.x[i] - p.x[j];
+  const double ri = p.radius[i], rj = p.radius[j];
+  const double cut = ri + rj;
+  const double dist = std::sqrt(d.squaredNorm());
+  ContactInput in;
+  in.n = d / dist;
+  in.delta = cut - dist;
+  in.r_eff = ri * rj / cut;
+  in.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
+  // The rolling inertia is read only by the EPSD dashpot.
+  in.i_roll = c.rolling == RollingModel::kEpsd && c.eta_r > 0.0
+                  ? 1.0 / (1.0 / (p.inertia[i] + p.mass[i] * ri * ri) +
+                           1.0 / (p.inertia[j] + p.mass[j] * rj * rj))
+                  : 0.0;
+  in.a_i = ri - 0.5 * in.delta;
+  in.a_j = rj - 0.5 * in.delta;
+  in.w_i = p.w[i];
+  in.w_j = p.w[j];
+  in.v_rel = p.v[i] - p.v[j] - in.a_i * p.w[i].cross(in.n) - in.a_j * p.w[j].cross(in.n);
+  in.contact_diameter = 4.0 * in.r_eff;  // = d for equal spheres (size-dependent rolling)
+  return in;
+}
+
+}  // namespace
+
 void World::pair_forces() {
   PhaseTimer t(profile_.pair_forces);
-  Particles& p = state_.particles;
+  const Particles& p = state_.particles;
   NeighborList& nl = state_.neighbors;
   const PairTable& table = model_.table;
   const Vec3 g = model_.settings.gravity;
   const double dt = model_.dt;
   const std::size_t n = p.size();
   const std::size_t par_min = model_.settings.parallel_min_particles;
+  const std::size_t np = nl.pairs();
+  if (state_.pair_live.size() != np || state_.reaction_force.size() != np ||
+      nl.in_slot.size() != np) {  // a state assembled elsewhere: nothing is known to be zero
+    index_incoming_slots(nl);
+    state_.reaction_force.assign(np, Vec3::Zero());
+    state_.reaction_torque.assign(np, Vec3::Zero());
+    state_.pair_overlap.assign(np, 0.0);
+    state_.pair_live.assign(np, 1);
+  }
   // Each particle sums gravity and the pairs it owns here, in list order; gather_forces() then
   // adds the reactions of the pairs it is second in. The sum's order is the same on any number
-  // of threads, so results stay bit-identical.
+  // of threads, so results stay bit-identical. About half the listed pairs do not touch: such a
+  // pair costs a distance test and nothing more unless it separated since the last step
+  // (pair_live).
+  // Raw pointers: the stores below (some of them bytes) would otherwise make the compiler reload
+  // every vector's data pointer after each of them.
+  const Vec3* const x = p.x.data();
+  const double* const radius = p.radius.data();
+  const std::int32_t* const material = p.material.data();
+  Vec3* const force = state_.particles.force.data();
+  Vec3* const torque = state_.particles.torque.data();
+  const std::int32_t* const start = nl.start.data();
+  const std::int32_t* const second = nl.second.data();
+  const std::int32_t* const slot = nl.in_slot.data();
+  ContactHistory* const history = nl.history.data();
+  Vec3* const reaction_force = state_.reaction_force.data();
+  Vec3* const reaction_torque = state_.reaction_torque.data();
+  double* const overlap = state_.pair_overlap.data();
+  std::uint8_t* const live = state_.pair_live.data();
 #pragma omp parallel for schedule(dynamic, 512) if (n > par_min)
   for (std::size_t i = 0; i < n; ++i) {
     Vec3 f = p.mass[i] * g;
     Vec3 tq = Vec3::Zero();
-    const double ri = p.radius[i];
-    for (std::int32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
-      const std::int32_t j = nl.second[k];
-      const Vec3 d = p.x[i] - p.x[j];
-      const double rj = p.radius[j];
+    const Vec3 xi = x[i];
+    const double ri = radius[i];
+    for (std::int32_t k = start[i]; k < start[i + 1]; ++k) {
+      const std::int32_t j = second[k];
+      const double rj = radius[j];
       const double cut = ri + rj;
-      const double dist2 = d.squaredNorm();
-      if (dist2 >= cut * cut) {
-        nl.history[k] = ContactHistory{};
-        state_.pair_force[k].setZero();
-        state_.pair_torque_j[k].setZero();
-        state_.pair_overlap[k] = 0.0;
+      if ((xi - x[j]).squaredNorm() >= cut * cut) {
+        if (live[k] != 0) {  // separated since the last step
+          history[k] = ContactHistory{};
+          reaction_force[slot[k]].setZero();
+          reaction_torque[slot[k]].setZero();
+          overlap[k] = 0.0;
+          live[k] = 0;
+        }
         continue;
       }
-      const double dist = std::sqrt(dist2);
-      const ContactConstants& c = table.c(p.material[i], p.material[j]);
-      ContactInput in;
-      in.n = d / dist;
-      in.delta = cut - dist;
-      in.r_eff = ri * rj / cut;
-      in.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
-      // The rolling inertia is read only by the EPSD dashpot.
-      in.i_roll = c.rolling == RollingModel::kEpsd && c.eta_r > 0.0
-                      ? 1.0 / (1.0 / (p.inertia[i] + p.mass[i] * ri * ri) +
-                               1.0 / (p.inertia[j] + p.mass[j] * rj * rj))
-                      : 0.0;
-      in.a_i = ri - 0.5 * in.delta;
-      in.a_j = rj - 0.5 * in.delta;
-      in.w_i = p.w[i];
-      in.w_j = p.w[j];
-      in.v_rel = p.v[i] - p.v[j] - in.a_i * p.w[i].cross(in.n) - in.a_j * p.w[j].cross(in.n);
-      in.contact_diameter = 4.0 * in.r_eff;  // = d for equal spheres (size-dependent rolling)
-      const ContactOutput out = hertz_mindlin(c, in, dt, nl.history[k]);
+      const ContactConstants& c = table.c(material[i], material[j]);
+      const ContactInput in = pair_input(p, c, i, j);
+      const ContactOutput out = hertz_mindlin(c, in, dt, history[k]);
       f += out.force;
       tq += out.torque_i;
-      state_.pair_force[k] = out.force;
-      state_.pair_torque_j[k] = out.torque_j;
-      state_.pair_overlap[k] = in.delta / std::min(ri, rj);
+      reaction_force[slot[k]] = out.force;
+      reaction_torque[slot[k]] = out.torque_j;
+      overlap[k] = in.delta / std::min(ri, rj);
+      live[k] = 1;
     }
-    p.force[i] = f;
-    p.torque[i] = tq;
+    force[i] = f;
+    torque[i] = tq;
   }
 }
 
@@ -230,14 +276,14 @@ void World::gather_forces() {
   const NeighborList& nl = state_.neighbors;
   const std::size_t n = p.size();
   const std::size_t par_min = model_.settings.parallel_min_particles;
+  // The reactions are stored by incoming slot: each particle reads one contiguous range.
 #pragma omp parallel for schedule(static) if (n > par_min)
   for (std::size_t i = 0; i < n; ++i) {
     Vec3 f = p.force[i];
     Vec3 tq = p.torque[i];
     for (std::int32_t q = nl.in_start[i]; q < nl.in_start[i + 1]; ++q) {
-      const std::int32_t k = nl.in_pairs[q];
-      f -= state_.pair_force[k];
-      tq += state_.pair_torque_j[k];
+      f -= state_.reaction_force[q];
+      tq += state_.reaction_torque[q];
     }
     p.force[i] = f;
     p.torque[i] = tq;
@@ -355,9 +401,10 @@ std::size_t World::remove_particles(const std::vector<char>& remove) {
   state_.particles.keep(keep);
   compact_neighbor_list(state_.neighbors, keep);
   const std::size_t np = state_.neighbors.pairs();
-  state_.pair_force.assign(np, Vec3::Zero());
-  state_.pair_torque_j.assign(np, Vec3::Zero());
+  state_.reaction_force.assign(np, Vec3::Zero());
+  state_.reaction_torque.assign(np, Vec3::Zero());
   state_.pair_overlap.assign(np, 0.0);
+  state_.pair_live.assign(np, 1);
   state_.forces_valid = false;
   state_.wall_candidates_valid = false;
   return removed;

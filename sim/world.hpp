@@ -4,10 +4,11 @@
 //   1. kick_drift       v += dt/2 F/m, w += dt/2 T/I, x += dt v      (forces of the last step)
 //   2. move_walls       prescribed wall motion (the lift)
 //   3. update_neighbors rebuild the Verlet list if a particle moved more than skin/2
-//   4. pair_forces      Hertz-Mindlin + rolling kernel once per pair; the pair's first member
-//                       sums its own pairs (and gravity) at once, the reaction is stored per pair
+//   4. pair_forces      Hertz-Mindlin + rolling kernel once per touching pair; the pair's first
+//                       member sums its own pairs (and gravity) at once, the reaction is stored
+//                       in the second member's incoming slot
 //   5. gather_forces    each particle adds the stored reactions of the pairs it is second in,
-//                       in a fixed order (deterministic)
+//                       contiguous and in a fixed order (deterministic)
 //   6. wall_forces      the particles near an enabled wall (candidates listed at rebuild)
 //   7. kick             v += dt/2 F/m, w += dt/2 T/I
 //   8. diagnostics      energy, overlap, NaN and escape checks (every few steps)
@@ -61,9 +62,16 @@ struct State {
   std::int64_t step = 0;
   std::int64_t next_id = 0;         // id given to the next inserted particle
   bool forces_valid = false;        // particles.force holds the forces of the current positions
-  // Per-pair results of the last force phase (scratch, sized with the neighbor list).
-  std::vector<Vec3> pair_force, pair_torque_j;  // on the first member i, on j
-  std::vector<double> pair_overlap;  // overlap / smaller radius, 0 if not touching
+  // Per-pair results of the last force phase (scratch, sized with the neighbor list). The
+  // reactions are stored in the order of the incoming lists (slot neighbors.in_slot[k] for pair
+  // k), so gather_forces reads each particle's reactions contiguously.
+  std::vector<Vec3> reaction_force;   // (pairs, by slot) force of the pair on its first member [N]
+  std::vector<Vec3> reaction_torque;  // (pairs, by slot) torque on its second member [N m]
+  std::vector<double> pair_overlap;   // (pairs) overlap / smaller radius, 0 if not touching
+  // (pairs) 0 only if the pair's history, reactions and overlap are known to be zero; a pair
+  // that does not touch costs a distance test and nothing else unless it touched last step.
+  // Set to 1 for every pair when the list is rebuilt, compacted or read from a checkpoint.
+  std::vector<std::uint8_t> pair_live;
   // Wall candidates (scratch, rebuilt with the neighbor list, and alone when invalid or when a
   // wall has moved half a skin): the particles within 1.5 skins of an enabled wall, each with its
   // walls in increasing order (CSR). Only these are tested in wall_forces; every other particle

@@ -125,5 +125,50 @@ TEST(NeighborForces, EqualADirectPairLoop) {
   }
 }
 
+TEST(NeighborForces, PairsThatDoNotTouchCarryNoSpringOrReaction) {
+  // A pour in which contacts open and close: after every step, each listed pair that does not
+  // touch has zero springs, reaction and overlap (pair_live only skips clearing what is already
+  // clear), and each touching pair has its overlap; the reactions sit in the incoming slots.
+  // 20 g: the spheres reach each other and the plate, collide and rebound within 2,000 steps.
+  // Elastic contacts (e = 1): the normal force stays repulsive up to separation, so the caps do
+  // not zero the springs in a contact's last step and only the clearing does.
+  PairParams elastic;
+  elastic.restitution = 1.0;
+  World w = testing::funnel_pour(400, 2000, -20.0 * 9.81, elastic);
+  int separated = 0, touching = 0;
+  std::set<std::pair<std::int64_t, std::int64_t>> was_touching;  // by particle ids
+  for (int s = 0; s < 2000; ++s) {
+    w.step();
+    const State& st = w.state();
+    const Particles& p = st.particles;
+    const NeighborList& nl = st.neighbors;
+    ASSERT_EQ(nl.in_slot.size(), nl.pairs());
+    std::set<std::pair<std::int64_t, std::int64_t>> now;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      for (std::int32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
+        const std::int32_t j = nl.second[k];
+        ASSERT_EQ(nl.in_pairs[nl.in_slot[k]], k);
+        const bool touch = (p.x[i] - p.x[j]).norm() < p.radius[i] + p.radius[j];
+        const std::pair<std::int64_t, std::int64_t> ids{p.id[i], p.id[j]};
+        if (touch) {
+          now.insert(ids);
+          EXPECT_GT(st.pair_overlap[k], 0.0);
+          ++touching;
+        } else {
+          EXPECT_EQ(nl.history[k].tangential, Vec3::Zero());
+          EXPECT_EQ(nl.history[k].rolling, Vec3::Zero());
+          EXPECT_EQ(st.reaction_force[nl.in_slot[k]], Vec3::Zero());
+          EXPECT_EQ(st.reaction_torque[nl.in_slot[k]], Vec3::Zero());
+          EXPECT_EQ(st.pair_overlap[k], 0.0);
+          if (was_touching.count(ids) != 0) ++separated;
+        }
+      }
+    }
+    was_touching = now;
+  }
+  EXPECT_GT(touching, 10000);
+  EXPECT_GT(separated, 0) << "no contact opened: the test did not exercise the clearing";
+}
+
 }  // namespace
 }  // namespace reposetwin::sim

@@ -49,9 +49,10 @@ inline PairParams frictionless(double e) {
 }
 
 /// A small pour: polydisperse spheres (d 1-2 mm) on a lattice inside a conical funnel (wall 1,
-/// 10-30 mm across, 30 mm high) standing on a plate (wall 0), released under gravity_z.
-inline World funnel_pour(int n = 400, int parallel_min = 2000, double gravity_z = -9.81) {
-  PairParams pair;  // paper defaults: e 0.79, mu_s 0.466, EPSD mu_r 0.15
+/// 10-30 mm across, 30 mm high) standing on a plate (wall 0), released under gravity_z, every
+/// contact with `pair` (default: the paper's e 0.79, mu_s 0.466, EPSD mu_r 0.15).
+inline World funnel_pour(int n = 400, int parallel_min = 2000, double gravity_z = -9.81,
+                         const PairParams& pair = PairParams{}) {
   Model m = make_model(pair, 46.8e6, Vec3(0, 0, gravity_z));
   m.walls.push_back(plate());
   WallSpec funnel;
