@@ -20,9 +20,9 @@ namespace {
 
 // One test's simulated response on the mu_r grid (one model setting).
 struct Curve {
-  std::vector<double> mu;           // grid [-]
-  MonotoneFit fit;                  // angle against mu_r
-  std::vector<double> h, d, angle;  // seed means per grid point [mm, mm, deg]
+  std::vector<double> mu;                        // grid [-]
+  MonotoneFit fit;                               // angle against mu_r
+  std::vector<double> h, d, angle;               // seed means per grid point [mm, mm, deg]
   std::vector<std::vector<double>> angle_seeds;  // per grid point, per seed [deg]
   std::vector<std::vector<double>> h_seeds, d_seeds;
 
@@ -40,7 +40,7 @@ struct Curve {
 // The twin for every test at one setting of the effects: curves on the mu_r grid.
 struct Surface {
   std::vector<EffectSetting> effects;
-  std::vector<Curve> curve;  // per test
+  std::vector<Curve> curve;                               // per test
   std::vector<std::vector<std::vector<SimOutcome>>> raw;  // [test][grid][seed]
 };
 
@@ -262,8 +262,7 @@ json Loop::run() {
 
   // Baseline surface and pooled seed noise.
   say("baseline: " + std::to_string(data_.tests.size()) + " tests x " +
-      std::to_string(s_.mu_grid.size()) + " mu_r x " + std::to_string(s_.seeds.size()) +
-      " seeds");
+      std::to_string(s_.mu_grid.size()) + " mu_r x " + std::to_string(s_.seeds.size()) + " seeds");
   surfaces_.push_back(std::make_unique<Surface>(simulate_surface({})));
   const Surface& base = *surfaces_.back();
   {
@@ -328,10 +327,10 @@ json Loop::run() {
     for (const CandidateEffect* e : cands)
       for (const LabTest& t : data_.tests)
         for (std::uint64_t seed : s_.seeds)
-          req.push_back(make_request(t, s_.mu_key, s_.mu_grid[node], seed, {{e, e->probe}},
-                                     s_.image));
-    say("fingerprints: " + std::to_string(cands.size()) + " candidates at mu_r = " +
-        std::to_string(s_.mu_grid[node]));
+          req.push_back(
+              make_request(t, s_.mu_key, s_.mu_grid[node], seed, {{e, e->probe}}, s_.image));
+    say("fingerprints: " + std::to_string(cands.size()) +
+        " candidates at mu_r = " + std::to_string(s_.mu_grid[node]));
     // One batch per candidate, so that a candidate whose runs or photographs fail (a lens
     // model that folds, a pile vision cannot find from that camera) is reported, not fatal.
     std::vector<SimOutcome> on;
@@ -461,7 +460,7 @@ json Loop::run() {
       double fraction = 0.0;  // its response at the node, in units of the probe's fingerprint
       const Surface* surf = nullptr;
       MuFit joint;
-      double rmse = 0.0;      // calibration RMSE of the refitted model [deg]
+      double rmse = 0.0;  // calibration RMSE of the refitted model [deg]
       Model model;
     };
     std::vector<Trial> trials;
@@ -481,8 +480,8 @@ json Loop::run() {
         try {
           surf = std::make_unique<Surface>(simulate_surface(with));
         } catch (const std::exception& ex) {
-          refit_note += "at " + std::to_string(p) + ": " +
-                        std::string(ex.what()).substr(0, 300) + "; ";
+          refit_note +=
+              "at " + std::to_string(p) + ": " + std::string(ex.what()).substr(0, 300) + "; ";
           say("refit at " + std::to_string(p) + " failed; stepping back halfway");
           p = off + 0.5 * (p - off);
         }
@@ -504,7 +503,8 @@ json Loop::run() {
       if (p != off) s_.t_max = std::min(s_.t_max, std::max(1.0, bound / (p - off)));
       tr.joint = fit_mu(model, tr.surf);
       s_.t_max = saved_t_max;
-      for (const auto& [w, sf] : model.terms) tr.model.terms.push_back({(1.0 - tr.joint.t) * w, sf});
+      for (const auto& [w, sf] : model.terms)
+        tr.model.terms.push_back({(1.0 - tr.joint.t) * w, sf});
       tr.model.terms.push_back({tr.joint.t, tr.surf});
       tr.rmse = cal_rmse(tr.model, tr.joint.mu);
       trials.push_back(tr);
@@ -538,9 +538,9 @@ json Loop::run() {
         for (const auto& [pp, ff] : pts)
           known = known || std::abs(pp - next) <= 1e-3 * std::max(1.0, std::abs(pp));
         if (known) break;
-        say(e.name + ": simulated response " + std::to_string(last.fraction) + " of the probe's at " +
-            std::to_string(last.p) + " (traced " + std::to_string(sc.coef) + "); refining at " +
-            std::to_string(next));
+        say(e.name + ": simulated response " + std::to_string(last.fraction) +
+            " of the probe's at " + std::to_string(last.p) + " (traced " + std::to_string(sc.coef) +
+            "); refining at " + std::to_string(next));
         if (!run_trial(next)) break;
       }
     }
@@ -574,19 +574,20 @@ json Loop::run() {
     // not chosen.
     std::string reason;
     if (joint.t <= 0.0)
-      reason = "the joint refit of mu_r and the effect on simulated piles puts the effect at its "
-               "off value (t = 0)";
+      reason =
+          "the joint refit of mu_r and the effect on simulated piles puts the effect at its "
+          "off value (t = 0)";
     else if (rmse_next > rmse_now - margin)
       reason = "the simulated refit lowers the calibration RMSE from " + std::to_string(rmse_now) +
                " to " + std::to_string(rmse_next) + " deg, not by more than the seed noise " +
                std::to_string(margin) + " deg";
     if (!reason.empty()) {
       iter["chosen"] = nullptr;
-      iter["not_confirmed"] = {{"name", e.name},     {"linear_estimate", p1_requested},
-                               {"simulated_at", p1}, {"t", joint.t},
-                               {"mu_r", joint.mu},   {"rmse_calibrate_deg", rmse_next},
-                               {"trials", trial_log},
-                               {"refit_notes", refit_note}, {"reason", reason}};
+      iter["not_confirmed"] = {{"name", e.name},      {"linear_estimate", p1_requested},
+                               {"simulated_at", p1},  {"t", joint.t},
+                               {"mu_r", joint.mu},    {"rmse_calibrate_deg", rmse_next},
+                               {"trials", trial_log}, {"refit_notes", refit_note},
+                               {"reason", reason}};
       say(e.name + ": not confirmed by the simulated refit (" + reason + "); not chosen");
       iterations.push_back(iter);
       break;
@@ -595,29 +596,32 @@ json Loop::run() {
     fit = joint;
     effects.push_back({&e, value});
     used.insert(e.name);
-    json c = {{"name", e.name},       {"kind", e.kind == EffectKind::kPhysics ? "physics" : "measurement"},
-              {"key", e.key},         {"units", e.units},
-              {"off", off},           {"probe", e.probe},
-              {"linear_estimate", p1_requested}, {"simulated_at", p1},
+    json c = {{"name", e.name},
+              {"kind", e.kind == EffectKind::kPhysics ? "physics" : "measurement"},
+              {"key", e.key},
+              {"units", e.units},
+              {"off", off},
+              {"probe", e.probe},
+              {"linear_estimate", p1_requested},
+              {"simulated_at", p1},
               {"trials", trial_log},
-              {"refit_notes", refit_note}, {"value", value},
-              {"value_se", value_se}, {"t", joint.t},
+              {"refit_notes", refit_note},
+              {"value", value},
+              {"value_se", value_se},
+              {"t", joint.t},
               {"t_at_limit", joint.t <= 0.0 || joint.t >= s_.t_max},
-              {"mu_r", joint.mu},     {"mu_r_se", joint.mu_se}};
+              {"mu_r", joint.mu},
+              {"mu_r_se", joint.mu_se}};
     iter["chosen"] = c;
     chosen.push_back(c);
     iterations.push_back(iter);
   }
 
   const json rows_after = residual_table(model, fit.mu);
-  json provenance = {{"code_version", code_version()},
-                     {"data", data_.file},
-                     {"seeds", s_.seeds},
-                     {"mu_grid", s_.mu_grid},
-                     {"mu_key", s_.mu_key},
-                     {"image", s_.image.key()},
-                     {"cache", cache_.dir()},
-                     {"finished", utc_now()}};
+  json provenance = {
+      {"code_version", code_version()}, {"data", data_.file},   {"seeds", s_.seeds},
+      {"mu_grid", s_.mu_grid},          {"mu_key", s_.mu_key},  {"image", s_.image.key()},
+      {"cache", cache_.dir()},          {"finished", utc_now()}};
   if (!base.raw.empty() && !base.raw[0].empty() && !base.raw[0][0].empty())
     provenance["run"] = base.raw[0][0][0].provenance;
   std::set<std::string> scenes;
@@ -632,39 +636,42 @@ json Loop::run() {
                       {"effects", chosen},
                       {"residuals", rows_after},
                       {"rmse", rmse_by_role(rows_after)}};
-  const double before = baseline["rmse"]["calibrate_deg"], after = final_block["rmse"]["calibrate_deg"];
-  json loop = {{"tests", tests},
-               {"candidate_registry", registry},
-               {"unavailable_candidates", unavailable},
-               {"rule",
-                {{"min_t", s_.rule.min_t},
-                 {"loo_margin_deg", s_.rule.loo_margin_factor * seed_se},
-                 {"text", "accept the best-ranked candidate with |c|/se > min_t and a leave-one-"
-                          "test-out RMSE below the mu_r-only LOO RMSE by more than the seed "
-                          "standard error of a predicted angle"}}},
-               {"baseline", baseline},
-               {"fingerprints", fingerprints},
-               {"iterations", iterations},
-               {"final", final_block},
-               {"summary",
-                {{"chosen", chosen.empty() ? json() : json(chosen.back()["name"])},
-                 {"effects", [&] {
-                    json names = json::array();
-                    for (const auto& c : chosen) names.push_back(c["name"]);
-                    return names;
-                  }()},
-                 {"rmse_calibrate_before_deg", before},
-                 {"rmse_calibrate_after_deg", after},
-                 {"rmse_validate_before_deg", baseline["rmse"]["validate_deg"]},
-                 {"rmse_validate_after_deg", final_block["rmse"]["validate_deg"]},
-                 {"reduction", before > 0.0 ? 1.0 - after / before : 0.0}}},
-               {"simulations",
-                {{"pile_runs_started", cache_.simulations_started()},
-                 {"photos_started", cache_.photos_started()},
-                 {"wall_s", std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                                          t_start)
-                                .count()}}},
-               {"provenance", provenance}};
+  const double before = baseline["rmse"]["calibrate_deg"],
+               after = final_block["rmse"]["calibrate_deg"];
+  json loop = {
+      {"tests", tests},
+      {"candidate_registry", registry},
+      {"unavailable_candidates", unavailable},
+      {"rule",
+       {{"min_t", s_.rule.min_t},
+        {"loo_margin_deg", s_.rule.loo_margin_factor * seed_se},
+        {"text",
+         "accept the best-ranked candidate with |c|/se > min_t and a leave-one-"
+         "test-out RMSE below the mu_r-only LOO RMSE by more than the seed "
+         "standard error of a predicted angle"}}},
+      {"baseline", baseline},
+      {"fingerprints", fingerprints},
+      {"iterations", iterations},
+      {"final", final_block},
+      {"summary",
+       {{"chosen", chosen.empty() ? json() : json(chosen.back()["name"])},
+        {"effects",
+         [&] {
+           json names = json::array();
+           for (const auto& c : chosen) names.push_back(c["name"]);
+           return names;
+         }()},
+        {"rmse_calibrate_before_deg", before},
+        {"rmse_calibrate_after_deg", after},
+        {"rmse_validate_before_deg", baseline["rmse"]["validate_deg"]},
+        {"rmse_validate_after_deg", final_block["rmse"]["validate_deg"]},
+        {"reduction", before > 0.0 ? 1.0 - after / before : 0.0}}},
+      {"simulations",
+       {{"pile_runs_started", cache_.simulations_started()},
+        {"photos_started", cache_.photos_started()},
+        {"wall_s",
+         std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count()}}},
+      {"provenance", provenance}};
   fs::create_directories(out_);
   if (s_.html) write_loop_html(loop, out_);
   write_json_atomic(loop_json.string(), loop);

@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <set>
 #include <cstdio>
 #include <filesystem>
+#include <set>
 #include <sstream>
 
 #include "experiments/loop_effects.hpp"
@@ -176,8 +176,7 @@ std::string make_synthetic_dataset(const SynthDesign& d, const std::string& out_
       for (const fs::path& file : files) {
         const std::string name = file.filename().string();
         if (name.rfind("side_az", 0) != 0) continue;
-        const std::string to =
-            tests[i].id + "_pile" + std::to_string(k + 1) + "_" + name;
+        const std::string to = tests[i].id + "_pile" + std::to_string(k + 1) + "_" + name;
         fs::copy_file(file, fs::path(out_dir) / "photos" / to,
                       fs::copy_options::overwrite_existing);
         if (file.extension() == ".png")

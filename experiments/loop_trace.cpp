@@ -165,8 +165,8 @@ NullScore score_null(const TraceProblem& p) {
   const Eigen::Index n = p.residual.size();
   if (p.sigma.size() != n || p.mu_sensitivity.size() != n)
     throw std::invalid_argument("trace: residual, sigma and mu_sensitivity differ in size");
-  if (n < 3) throw std::invalid_argument("trace: at least 3 tests are needed, got " +
-                                         std::to_string(n));
+  if (n < 3)
+    throw std::invalid_argument("trace: at least 3 tests are needed, got " + std::to_string(n));
   if (!(p.mu_shift_lo <= 0.0 && p.mu_shift_hi >= 0.0))
     throw std::invalid_argument("trace: the mu_r shift bounds must include 0");
   NullScore s;
@@ -198,8 +198,8 @@ CandidateScore score_candidate(const TraceProblem& p, const std::string& name,
     s.coef_se = f.c_se;
     s.t = std::abs(s.coef) / s.coef_se;
     s.rmse_fit = f.rmse;
-    s.loo_rmse = bounded_loo_rmse(p.mu_sensitivity, &fp, p.residual, p.sigma, p.mu_shift_lo,
-                                  p.mu_shift_hi);
+    s.loo_rmse =
+        bounded_loo_rmse(p.mu_sensitivity, &fp, p.residual, p.sigma, p.mu_shift_lo, p.mu_shift_hi);
   } catch (const std::invalid_argument& e) {
     s.why = std::string("not identifiable: ") + e.what();
     s.loo_rmse = null_score.loo_rmse;
@@ -207,10 +207,10 @@ CandidateScore score_candidate(const TraceProblem& p, const std::string& name,
     return s;
   }
   s.loo_gain = null_score.loo_rmse - s.loo_rmse;
-  s.explained = null_score.rmse_before > 0.0
-                    ? 1.0 - (s.rmse_fit * s.rmse_fit) /
-                                (null_score.rmse_before * null_score.rmse_before)
-                    : 0.0;
+  s.explained =
+      null_score.rmse_before > 0.0
+          ? 1.0 - (s.rmse_fit * s.rmse_fit) / (null_score.rmse_before * null_score.rmse_before)
+          : 0.0;
   const double margin = rule.loo_margin_factor * p.seed_noise_deg;
   s.significant = s.t > rule.min_t;
   s.predictive = s.loo_gain > margin;
@@ -222,22 +222,29 @@ CandidateScore score_candidate(const TraceProblem& p, const std::string& name,
 }
 
 int rank_candidates(std::vector<CandidateScore>& scores) {
-  std::stable_sort(scores.begin(), scores.end(),
-                   [](const CandidateScore& a, const CandidateScore& b) {
-                     return a.loo_rmse < b.loo_rmse;
-                   });
+  std::stable_sort(
+      scores.begin(), scores.end(),
+      [](const CandidateScore& a, const CandidateScore& b) { return a.loo_rmse < b.loo_rmse; });
   for (std::size_t i = 0; i < scores.size(); ++i)
     if (scores[i].accepted) return static_cast<int>(i);
   return -1;
 }
 
 nlohmann::json to_json(const CandidateScore& s) {
-  return {{"name", s.name},         {"coef", s.coef},         {"coef_se", s.coef_se},
-          {"t", s.t},               {"mu_shift", s.mu_shift},
-          {"mu_shift_at_bound", s.mu_shift_at_bound}, {"rmse_fit_deg", s.rmse_fit},
-          {"loo_rmse_deg", s.loo_rmse}, {"loo_gain_deg", s.loo_gain},
-          {"explained", s.explained}, {"significant", s.significant},
-          {"predictive", s.predictive}, {"accepted", s.accepted}, {"why", s.why}};
+  return {{"name", s.name},
+          {"coef", s.coef},
+          {"coef_se", s.coef_se},
+          {"t", s.t},
+          {"mu_shift", s.mu_shift},
+          {"mu_shift_at_bound", s.mu_shift_at_bound},
+          {"rmse_fit_deg", s.rmse_fit},
+          {"loo_rmse_deg", s.loo_rmse},
+          {"loo_gain_deg", s.loo_gain},
+          {"explained", s.explained},
+          {"significant", s.significant},
+          {"predictive", s.predictive},
+          {"accepted", s.accepted},
+          {"why", s.why}};
 }
 
 nlohmann::json to_json(const NullScore& s) {

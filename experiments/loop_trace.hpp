@@ -45,10 +45,10 @@ namespace reposetwin::experiments {
 
 /// A weighted least-squares fit y = X beta with known noise sigma per row.
 struct WlsFit {
-  Eigen::VectorXd beta;    // (k) coefficients
-  Eigen::VectorXd se;      // (k) standard errors from the known sigmas
-  double chi2 = 0.0;       // sum of squared standardised residuals [-]
-  double rmse = 0.0;       // unweighted RMS of the residuals y - X beta [units of y]
+  Eigen::VectorXd beta;  // (k) coefficients
+  Eigen::VectorXd se;    // (k) standard errors from the known sigmas
+  double chi2 = 0.0;     // sum of squared standardised residuals [-]
+  double rmse = 0.0;     // unweighted RMS of the residuals y - X beta [units of y]
 };
 
 /// Fits y = X beta by weighted least squares with weights 1 / sigma^2. Throws
@@ -64,7 +64,7 @@ double loo_rmse(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const Eigen:
 
 /// The acceptance rule's thresholds (see the design note).
 struct AcceptanceRule {
-  double min_t = 3.0;            // |c| / se(c) must exceed this [-]
+  double min_t = 3.0;              // |c| / se(c) must exceed this [-]
   double loo_margin_factor = 1.0;  // LOO gain must exceed this x the seed noise [-]
 };
 
@@ -81,14 +81,14 @@ struct TraceProblem {
 /// One candidate's fit to the residual.
 struct CandidateScore {
   std::string name;
-  double coef = 0.0;         // c: the effect's strength in units of its probe [-]
-  double coef_se = 0.0;      // its standard error [-]
-  double t = 0.0;            // |c| / se(c) [-]
-  double mu_shift = 0.0;     // b: the mu_r correction fitted with it [-]
+  double coef = 0.0;               // c: the effect's strength in units of its probe [-]
+  double coef_se = 0.0;            // its standard error [-]
+  double t = 0.0;                  // |c| / se(c) [-]
+  double mu_shift = 0.0;           // b: the mu_r correction fitted with it [-]
   bool mu_shift_at_bound = false;  // b sits on a bound of the calibrated range
-  double rmse_fit = 0.0;     // in-sample RMSE with the effect [deg]
-  double loo_rmse = 0.0;     // leave-one-out RMSE with the effect [deg]
-  double loo_gain = 0.0;     // no-effect LOO RMSE - loo_rmse [deg]
+  double rmse_fit = 0.0;           // in-sample RMSE with the effect [deg]
+  double loo_rmse = 0.0;           // leave-one-out RMSE with the effect [deg]
+  double loo_gain = 0.0;           // no-effect LOO RMSE - loo_rmse [deg]
   double explained = 0.0;    // 1 - rmse_fit^2 / rmse_before^2: share of the residual's variance
   bool significant = false;  // rule 1
   bool predictive = false;   // rule 2

@@ -15,12 +15,13 @@
 //    more; a raised camera changes small piles more (its elevation grows as the pile shrinks).
 //  * The lab is the twin with hidden mu_r 0.25 (between grid points), other seeds, a different
 //    camera (14 instead of 12 pile radii away, three views instead of two, image noise).
+#include "experiments/loop_synth.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
 
 #include "experiments/loop.hpp"
-#include "experiments/loop_synth.hpp"
 #include "experiments/provenance.hpp"
 
 namespace reposetwin::experiments {

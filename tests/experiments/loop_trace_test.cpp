@@ -1,10 +1,10 @@
 // The loop's statistics on synthetic numbers with known answers: WLS against the closed form,
 // leave-one-out against a direct refit, the acceptance rule on a planted effect and on noise.
+#include "experiments/loop_trace.hpp"
+
 #include <gtest/gtest.h>
 
 #include <random>
-
-#include "experiments/loop_trace.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -67,7 +67,8 @@ TEST(LoopTrace, BadInputIsRejected) {
 
 // Eight tests with a mu_r sensitivity and two candidate fingerprints; the residual carries
 // `strength` x candidate A plus a mu_r offset plus Gaussian noise of sd 1.
-TraceProblem planted(double strength, std::uint64_t seed, Eigen::VectorXd& fa, Eigen::VectorXd& fb) {
+TraceProblem planted(double strength, std::uint64_t seed, Eigen::VectorXd& fa,
+                     Eigen::VectorXd& fb) {
   const int n = 8;
   TraceProblem p;
   p.residual.resize(n);
@@ -79,8 +80,8 @@ TraceProblem planted(double strength, std::uint64_t seed, Eigen::VectorXd& fa, E
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> noise(0.0, 1.0);
   for (int i = 0; i < n; ++i) {
-    p.mu_sensitivity[i] = 40.0 + 3.0 * i;            // deg per unit mu_r
-    fa[i] = (i % 2 == 0) ? -4.0 : -1.0 + 0.2 * i;   // condition-dependent
+    p.mu_sensitivity[i] = 40.0 + 3.0 * i;          // deg per unit mu_r
+    fa[i] = (i % 2 == 0) ? -4.0 : -1.0 + 0.2 * i;  // condition-dependent
     fb[i] = 0.5 * i - 2.0;
     p.residual[i] = strength * fa[i] + 0.02 * p.mu_sensitivity[i] + noise(rng);
   }
@@ -127,7 +128,6 @@ TEST(LoopTrace, AConstantFingerprintIsAMuShiftNotAnEffect) {
   EXPECT_FALSE(s.accepted);
   EXPECT_NE(s.why.find("not identifiable"), std::string::npos);
 }
-
 
 TEST(LoopTrace, AnOffsetBeyondTheMuRangeIsNotAMuShift) {
   // The residual is -8 deg everywhere plus a small pattern q; the candidate's fingerprint is
