@@ -27,7 +27,7 @@
 //
 // Usage: bench_sim [--quick] [--particles N] [--steps N] [--threads 1,2] [--rolling epsd|cdt]
 //                  [--rolling-damping ETA] [--settle N] [--relax N] [--settle-gravity G]
-//                  [--settle-threads N] [--write-liggghts DIR] [--seed S]
+//                  [--settle-threads N] [--write-liggghts DIR] [--seed S] [--heap FILE]
 #include <omp.h>
 #include <time.h>
 
@@ -46,6 +46,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/checkpoint.hpp"
 #include "sim/model.hpp"
 #include "sim/random.hpp"
 #include "sim/world.hpp"
@@ -90,6 +91,7 @@ struct Options {
   std::string rolling = "epsd";
   double rolling_damping = 0.0;  // LIGGGHTS epsd2 has no rolling dashpot
   std::string liggghts_dir;
+  std::string heap_file;  // settled heap checkpoint: read if it exists, else written after settling
   std::uint64_t seed = 2024;
 };
 
@@ -385,7 +387,7 @@ RunResult timed_run(const World& settled, int steps, int threads) {
             << " plate; " << w.state().neighbors.builds - builds0 << " neighbor rebuilds; "
             << w.state().neighbors.pairs() << " listed pairs; KE " << std::setprecision(4)
             << diag.kinetic_energy << " J; status " << reposetwin::sim::status_name(diag.status)
-            << "\n";
+            << "; state hash 0x" << std::hex << r.hash << std::dec << "\n";
   print_profile(w.profile(), static_cast<double>(n) * steps);
   return r;
 }
@@ -425,6 +427,10 @@ int main(int argc, char** argv) {
   app.add_option("--write-liggghts", o.liggghts_dir,
                  "write the settled heap and the matching LIGGGHTS input to this folder");
   app.add_option("--seed", o.seed, "seed of the sizes and jitter");
+  app.add_option("--heap", o.heap_file,
+                 "checkpoint of the settled heap: read instead of settling if the file exists, "
+                 "else written after the settle (the same start for several builds; use one file per "
+                 "--particles, --seed and --rolling)");
   CLI11_PARSE(app, argc, argv);
   if (quick) {
     if (app.count("--particles") == 0) o.particles = 5000;
@@ -462,7 +468,15 @@ int main(int argc, char** argv) {
         throw std::runtime_error(std::string("settle failed: ") + d.detail);
     };
     const int report_every = std::max(1, (o.settle + o.relax) / 8);
-    if (o.settle > 0) {
+    const bool reuse = !o.heap_file.empty() && std::filesystem::exists(o.heap_file);
+    if (reuse) {
+      reposetwin::sim::read_checkpoint(world, o.heap_file);
+      std::cout << "read the settled heap from " << o.heap_file << " (no settle)\n";
+      if (world.state().particles.size() != static_cast<std::size_t>(o.particles))
+        throw std::runtime_error(o.heap_file + ": holds " +
+                                 std::to_string(world.state().particles.size()) +
+                                 " spheres, not --particles " + std::to_string(o.particles));
+    } else if (o.settle > 0) {
       Model heavy_model = make_model(o, o.settle_gravity);
       // The collapse of the lattice under settle_gravity g may overlap more than the 1 g heap.
       heavy_model.settings.max_overlap_ratio = 0.15;
@@ -476,7 +490,7 @@ int main(int argc, char** argv) {
     }
     // The relax damps every velocity by a factor (1 - kRelaxDamping) per step, so the springs
     // loaded under settle_gravity unload without throwing the heap apart.
-    for (int s = 0; s < o.relax; ++s) {
+    for (int s = 0; s < (reuse ? 0 : o.relax); ++s) {
       world.step();
       auto& p = world.state().particles;
       for (std::size_t i = 0; i < p.size(); ++i) {
@@ -495,6 +509,10 @@ int main(int argc, char** argv) {
               << 2.0 * c.pairs / o.particles << " per sphere)\n";
     if (diag.status != reposetwin::sim::Status::kOk)
       throw std::runtime_error("settle failed: " + diag.detail);
+    if (!o.heap_file.empty() && !reuse) {
+      reposetwin::sim::write_checkpoint(world, o.heap_file);
+      std::cout << "wrote the settled heap to " << o.heap_file << "\n";
+    }
     if (!o.liggghts_dir.empty()) {
       write_liggghts(world, o, o.liggghts_dir);
       std::cout << "wrote " << o.liggghts_dir << "/heap.data and " << o.liggghts_dir
