@@ -429,8 +429,8 @@ int main(int argc, char** argv) {
   app.add_option("--seed", o.seed, "seed of the sizes and jitter");
   app.add_option("--heap", o.heap_file,
                  "checkpoint of the settled heap: read instead of settling if the file exists, "
-                 "else written after the settle (the same start for several builds; use one file per "
-                 "--particles, --seed and --rolling)");
+                 "else written after the settle (the same start for several builds; one file "
+                 "per --particles, --seed and --rolling)");
   CLI11_PARSE(app, argc, argv);
   if (quick) {
     if (app.count("--particles") == 0) o.particles = 5000;
