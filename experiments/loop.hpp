@@ -30,6 +30,10 @@
 //    are recomputed from this simulated model, and the loop repeats until no candidate is
 //    accepted or max_effects are in. If the refit's simulations cannot be measured (a pile too
 //    flat to photograph), the simulated value steps back halfway towards off, twice at most.
+//    A threshold effect (a plate that slides only below some friction) breaks the linear
+//    estimate: when the simulated response at the fingerprint's grid point misses the traced
+//    strength by more than half, the value is refined by secant steps between the known responses
+//    (off, probe, trials), twice at most, and the trial with the lowest calibration RMSE is kept.
 //    The simulations must confirm the tracing: an effect whose joint refit lands at t = 0, or
 //    whose simulated model does not lower the calibration RMSE by more than the seed standard
 //    error of a prediction, is not chosen (recorded under not_confirmed with the reason).
