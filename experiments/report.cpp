@@ -69,7 +69,7 @@ struct CaseRows {
   std::string name;
   std::string scene;  // the scene file of its runs ("" for a single run)
   json overrides;
-  std::vector<double> image_deg, particle_deg, slice_deg;
+  std::vector<double> image_deg, flank_deg, particle_deg, slice_deg;
   std::vector<std::string> stops;
   std::vector<std::string> run_dirs;  // relative to the report's source folder
   json provenance;
@@ -587,7 +587,11 @@ json build_report(const std::string& dir_in, const ReportSettings& settings) {
     const json& pile = r.at("pile");
     c.particle_deg.push_back(pile.value("theta_hd_deg", 0.0));
     c.slice_deg.push_back(pile.value("slice_angle_mean_deg", 0.0));
-    if (r.contains("image")) c.image_deg.push_back(r["image"].at("theta_deg").get<double>());
+    if (r.contains("image")) {
+      c.image_deg.push_back(r["image"].at("theta_deg").get<double>());
+      if (r["image"].contains("flank_deg"))
+        c.flank_deg.push_back(r["image"]["flank_deg"].get<double>());
+    }
   };
 
   if (fs::exists(dir / "result.json") && !fs::exists(dir / "campaign.json")) {  // one run
@@ -596,7 +600,7 @@ json build_report(const std::string& dir_in, const ReportSettings& settings) {
     json rr = r;
     if (fs::exists(dir / "images" / "measurement.json")) {
       const json m = json::parse(read_file((dir / "images" / "measurement.json").string()));
-      rr["image"] = {{"theta_deg", m.at("theta_deg")}};
+      rr["image"] = {{"theta_deg", m.at("theta_deg")}, {"flank_deg", m.at("flank_deg")}};
     }
     add_result(r["provenance"].value("scene_name", "run"), json::object(), rr, ".");
     if (title.empty()) title = r["provenance"].value("scene_name", "run");
@@ -634,17 +638,19 @@ json build_report(const std::string& dir_in, const ReportSettings& settings) {
   for (const std::string& name : order) {
     const CaseRows& c = cases[name];
     const SampleStats im = sample_stats(c.image_deg), pa = sample_stats(c.particle_deg),
-                      sl = sample_stats(c.slice_deg);
+                      sl = sample_stats(c.slice_deg), fl = sample_stats(c.flank_deg);
     summary["cases"].push_back({{"case", name},
                                 {"runs", c.run_dirs.size()},
                                 {"image_theta_mean_deg", im.mean},
                                 {"image_theta_sd_deg", im.sd},
+                                {"image_flank_mean_deg", fl.n ? json(fl.mean) : json()},
+                                {"image_flank_sd_deg", fl.n ? json(fl.sd) : json()},
                                 {"particle_theta_mean_deg", pa.mean},
                                 {"particle_theta_sd_deg", pa.sd},
                                 {"slice_angle_mean_deg", sl.mean},
                                 {"overrides", c.overrides}});
     data << k++ << " " << im.mean << " " << im.sd << " " << pa.mean << " " << pa.sd << " \"" << name
-         << "\"\n";
+         << "\" " << (fl.n ? fl.mean : NAN) << " " << (fl.n ? fl.sd : NAN) << "\n";
   }
   bool plotted = false;
   if (!order.empty()) {
@@ -657,7 +663,8 @@ json build_report(const std::string& dir_in, const ReportSettings& settings) {
                     (out / "angles.dat").string() +
                     "' using 1:2:3:xtic(6) with yerrorbars pt 7 title 'image atan(2H/D) "
                     "(vision on renders)', '' using ($1+0.1):4:5 with yerrorbars pt 5 "
-                    "title 'particles atan(2H/D)'\n");
+                    "title 'particles atan(2H/D)', '' using ($1+0.2):7:8 with yerrorbars pt 9 "
+                    "title 'image flank angle (vision on renders)'\n");
   }
   bool calib_plot = false;
   if (!calibration.is_null() && calibration.contains("observations")) {
@@ -740,13 +747,14 @@ json build_report(const std::string& dir_in, const ReportSettings& settings) {
     h << "<p>(gnuplot not available: no plot)</p>\n";
   if (!order.empty()) {
     h << "<h2>Cases</h2><table><tr><th>case</th><th>inputs (overrides)</th><th>runs</th>"
-         "<th>image angle [deg] mean &plusmn; sd (runs stopped by a physics failure left out)</th><th>particle atan(2H/D) [deg]</th>"
+         "<th>image angle [deg] mean &plusmn; sd (runs stopped by a physics failure left out)</th>"
+         "<th>image flank angle [deg]</th><th>particle atan(2H/D) [deg]</th>"
          "<th>slice (protractor) [deg]</th><th>stop reasons</th><th>provenance</th>"
          "<th>files</th></tr>\n";
     for (const std::string& name : order) {
       const CaseRows& c = cases[name];
       const SampleStats im = sample_stats(c.image_deg), pa = sample_stats(c.particle_deg),
-                      sl = sample_stats(c.slice_deg);
+                        sl = sample_stats(c.slice_deg), fl = sample_stats(c.flank_deg);
       std::map<std::string, int> stops;
       for (const auto& s : c.stops) ++stops[s];
       std::string stop_text;
@@ -757,6 +765,7 @@ json build_report(const std::string& dir_in, const ReportSettings& settings) {
       h << "<tr><td>" << html_escape(name) << "</td><td><code>" << html_escape(c.overrides.dump())
         << "</code></td><td>" << c.run_dirs.size() << "</td><td>"
         << (im.n ? fmt(im.mean) + " &plusmn; " + fmt(im.sd) : "-") << "</td><td>"
+        << (fl.n ? fmt(fl.mean) + " &plusmn; " + fmt(fl.sd) : "-") << "</td><td>"
         << fmt(pa.mean) + " &plusmn; " + fmt(pa.sd) << "</td><td>" << fmt(sl.mean) << "</td><td>"
         << html_escape(stop_text) << "</td><td>dt " << p.value("time_step_s", 0.0) << " s, E "
         << p.value("softened_youngs_modulus_pa", json(0.0)).dump() << " Pa, "

@@ -69,6 +69,9 @@ struct Scratch {
   fs::path path;
 };
 
+// The synthetic runs' vision flank angle lies this far above their image atan(2H/D) [deg].
+constexpr double kFlankAboveImage = 4.0;
+
 // A case result shaped like pile_case_fn's (so the real case_angle_deg and the report read it),
 // with a render overlay when `overlay` is set. Each start is logged (one line per run id).
 CaseFn synthetic_case(const fs::path& log, bool overlay = false) {
@@ -88,7 +91,7 @@ CaseFn synthetic_case(const fs::path& log, bool overlay = false) {
     return json{{"stop", {{"reason", "settled"}}},
                 {"pile", {{"status", "ok"}, {"theta_hd_deg", a}, {"slice_angle_mean_deg", a}}},
                 {"provenance", {{"time_step_s", 1e-6}, {"code_version", "test"}}},
-                {"image", {{"theta_deg", a}}},
+                {"image", {{"theta_deg", a}, {"flank_deg", a + kFlankAboveImage}}},
                 {"run_dir", "run"}};
   };
 }
@@ -524,6 +527,13 @@ TEST(Report, LabPhotoBesideTheRenderForCalibrationAndCampaign) {
   EXPECT_NEAR(t["lab_photo"]["theta_deg"].get<double>(), theta, 0.3);
   EXPECT_NE(t["lab_photo_render"].get<std::string>().find("low"), std::string::npos);
   EXPECT_TRUE(fs::exists(d.path / "camp" / "report" / "render_beside_lab.png"));
+  // Every case shows its vision flank angle beside its image atan(2H/D).
+  ASSERT_EQ(t["cases"].size(), 1u);
+  EXPECT_DOUBLE_EQ(t["cases"][0]["image_flank_mean_deg"].get<double>(),
+                   t["cases"][0]["image_theta_mean_deg"].get<double>() + kFlankAboveImage);
+  EXPECT_NE(read_file((d.path / "camp" / "report" / "index.html").string())
+                .find("image flank angle"),
+            std::string::npos);
   // A photo that is not an image is a clear error naming it.
   write_file_atomic((d.path / "bad.png").string(), "not a png");
   rs.lab_photo = (d.path / "bad.png").string();
