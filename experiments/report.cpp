@@ -182,8 +182,9 @@ std::string comparison_html(const json& cmp, const std::string& plot_png) {
     if (r["angle_mean_deg"].is_number()) {
       angle = fmt(r["angle_mean_deg"].get<double>()) + " &plusmn; " +
               fmt_or_dash(r["angle_seed_sd_deg"]) + " <small>(" +
-              html_escape(r.value("angle_how", std::string())) + "; angle: " +
-              html_escape(r.value("angle_measure", std::string("image"))) + ")</small>";
+              html_escape(r.value("angle_how", std::string())) +
+              "; angle: " + html_escape(r.value("angle_measure", std::string("image"))) +
+              ")</small>";
       if (r.contains("interval_effect_deg") && r["interval_effect_deg"].is_array())
         angle +=
             "<br><small>over the mu_r interval: " + fmt(r["interval_effect_deg"][0].get<double>()) +
@@ -657,7 +658,8 @@ json build_report(const std::string& dir_in, const ReportSettings& settings) {
     write_file_atomic((out / "angles.dat").string(), data.str());
     plotted =
         gnuplot((out / "angles.gp").string(),
-                "set terminal pngcairo size 900,500\nset output '" + (out / "angles.png").string() +
+                "set terminal pngcairo size 900,500 noenhanced\nset output '" +
+                    (out / "angles.png").string() +
                     "'\nset ylabel 'angle of repose [deg]'\nset xtics rotate by -30\n"
                     "set key top left\nset offsets 0.5,0.5,2,2\nplot '" +
                     (out / "angles.dat").string() +
