@@ -1206,6 +1206,22 @@ void refuse_to_replace_other_calibration(const Campaign& c, const std::string& o
 
 }  // namespace
 
+void keep_only_predictions(Campaign& c, const std::vector<std::string>& names) {
+  std::vector<PredictionCase> kept;
+  for (const std::string& name : names) {
+    auto it = std::find_if(c.predictions.begin(), c.predictions.end(),
+                           [&](const PredictionCase& p) { return p.name == name; });
+    if (it == c.predictions.end()) {
+      std::string list;
+      for (const auto& p : c.predictions) list += (list.empty() ? "" : ", ") + p.name;
+      throw std::invalid_argument(c.file + ": no [[predict]] named '" + name + "' (" +
+                                  (list.empty() ? std::string("there are none") : list) + ")");
+    }
+    kept.push_back(*it);
+  }
+  c.predictions = std::move(kept);
+}
+
 nlohmann::json run_calibration(const Campaign& c, const std::string& out_dir, const CaseFn& case_fn,
                                const AngleFn& angle_of, const RunnerSettings& runner,
                                const CalibrateOptions& options) {

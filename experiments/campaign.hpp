@@ -267,6 +267,10 @@ struct CalibrateOptions {
   nlohmann::json extra;      // more fields for calibration.json (e.g. code version)
 };
 
+/// Keeps only the [[predict]] tests named in `names`, in that order; std::invalid_argument naming
+/// the campaign file, the unknown name and the names there are otherwise.
+void keep_only_predictions(Campaign& c, const std::vector<std::string>& names);
+
 /// Calibrates the campaign's [calibration] through run_batch (resumable: finished runs are
 /// reused) and writes OUT/calibration.json atomically; returns its content. Besides to_json of the
 /// result it records the campaign (file, name), the keys, the mu_r range, table1_sample, the

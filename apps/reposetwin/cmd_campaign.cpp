@@ -77,6 +77,7 @@ void add_calibrate_command(CLI::App& app) {
   auto a = std::make_shared<PoolArgs>();
   auto angle = std::make_shared<std::string>();
   auto predict_only = std::make_shared<bool>(false);
+  auto only = std::make_shared<std::vector<std::string>>();
   auto* cmd = app.add_subcommand(
       "calibrate",
       "Find mu_r so the simulated angle matches the campaign's [calibration] target, then run "
@@ -91,8 +92,13 @@ void add_calibrate_command(CLI::App& app) {
   cmd->add_flag("--predict-only", *predict_only,
                 "Reuse the finished OUT/calibration.json (never recalibrate) and run only the "
                 "[[predict]] tests");
-  cmd->callback([a, angle, predict_only]() {
-    const experiments::Campaign c = experiments::load_campaign(a->file);
+  cmd->add_option("--only", *only,
+                  "Run only these [[predict]] tests (by name); predictions.json then lists "
+                  "them alone, and a later call without --only adds the others")
+      ->delimiter(',');
+  cmd->callback([a, angle, predict_only, only]() {
+    experiments::Campaign c = experiments::load_campaign(a->file);
+    if (!only->empty()) experiments::keep_only_predictions(c, *only);
     if (!c.calibration)
       throw std::invalid_argument(c.file + ": [calibration] is missing (target_deg, mu_r_range)");
     if (*predict_only && c.predictions.empty())

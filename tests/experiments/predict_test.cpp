@@ -334,6 +334,25 @@ TEST(Predict, PredictOnlyReusesTheCalibrationAndNeverOverwrites) {
       std::runtime_error);
 }
 
+TEST(Predict, OnlyTheNamedPredictionsAreKept) {
+  const Scratch d("only");
+  write_file_atomic((d.path / "c.toml").string(), calibration_campaign());
+  Campaign c = load_campaign((d.path / "c.toml").string());
+  keep_only_predictions(c, {"self", "sample4"});
+  ASSERT_EQ(c.predictions.size(), 2u);
+  EXPECT_EQ(c.predictions[0].name, "self");
+  EXPECT_EQ(c.predictions[1].name, "sample4");
+  try {
+    keep_only_predictions(c, {"sample5"});
+    FAIL() << "an unknown prediction name was accepted";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("c.toml"), std::string::npos) << what;
+    EXPECT_NE(what.find("sample5"), std::string::npos) << what;
+    EXPECT_NE(what.find("self, sample4"), std::string::npos) << what;
+  }
+}
+
 TEST(Predict, ASecondCalibrationNeverReplacesAnotherFinishedOneUnasked) {
   const Scratch d("replace");
   write_file_atomic((d.path / "c.toml").string(), calibration_campaign());
