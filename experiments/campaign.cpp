@@ -1326,6 +1326,10 @@ nlohmann::json run_predictions(const Campaign& c, const nlohmann::json& cal,
     const auto results = run_batch(c, runs, out_dir, case_fn, runner);
     for (std::size_t i = 0; i < runs.size(); ++i) {
       const double a = angle_of(results[i]);
+      if (std::isnan(a)) {  // no pile (a clogged outlet): an outcome, not an angle
+        angle[runs[i].id()] = a;
+        continue;
+      }
       if (!std::isfinite(a) || a < 0.0 || a > 90.0)
         throw std::runtime_error("prediction run " + runs[i].id() + " returned angle " +
                                  std::to_string(a) + " outside [0, 90] deg");
@@ -1335,26 +1339,35 @@ nlohmann::json run_predictions(const Campaign& c, const nlohmann::json& cal,
   auto at = [&](const PredictionCase& p, double m) {
     nlohmann::json angles = nlohmann::json::array(), dirs = nlohmann::json::array();
     std::vector<double> v;
+    int no_pile = 0;
     for (auto seed : p.seeds) {
       const CaseSpec s = prediction_run(c, p, m, seed);
-      v.push_back(angle.at(s.id()));
-      angles.push_back(v.back());
+      const double a = angle.at(s.id());
+      if (std::isnan(a)) {
+        ++no_pile;
+        angles.push_back(nullptr);
+      } else {
+        v.push_back(a);
+        angles.push_back(a);
+      }
       dirs.push_back(s.relative_dir());
     }
     const SampleStats st = sample_stats(v);
+    const auto or_null = [&](double x) { return st.n > 0 ? nlohmann::json(x) : nlohmann::json(); };
     return nlohmann::json{{"mu_r", m},
                           {"angles_deg", angles},
                           {"runs", dirs},
                           {"n", st.n},
-                          {"mean_deg", st.mean},
-                          {"seed_sd_deg", st.sd},
-                          {"sem_deg", st.n > 0 ? st.sd / std::sqrt(st.n) : 0.0}};
+                          {"no_pile", no_pile},
+                          {"mean_deg", or_null(st.mean)},
+                          {"seed_sd_deg", or_null(st.sd)},
+                          {"sem_deg", or_null(st.n > 0 ? st.sd / std::sqrt(st.n) : 0.0)}};
   };
 
   nlohmann::json list = nlohmann::json::array();
   for (const auto& p : c.predictions) {
     nlohmann::json j = at(p, mu);
-    const double mean = j["mean_deg"].get<double>();
+    const double mean = j["mean_deg"].is_number() ? j["mean_deg"].get<double>() : NAN;
     nlohmann::json seeds = nlohmann::json::array();
     for (auto s : p.seeds) seeds.push_back(s);
     j["name"] = p.name;
@@ -1365,18 +1378,24 @@ nlohmann::json run_predictions(const Campaign& c, const nlohmann::json& cal,
     j["measured_deg"] = p.measured.angle_deg;
     j["measured_sd_deg"] = p.measured.sd_deg;
     j["seeds"] = seeds;
-    j["error_deg"] = mean - p.measured.angle_deg;
-    j["abs_error_deg"] = std::abs(mean - p.measured.angle_deg);
+    const auto finite_or_null = [](double x) {
+      return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json();
+    };
+    j["error_deg"] = finite_or_null(mean - p.measured.angle_deg);
+    j["abs_error_deg"] = finite_or_null(std::abs(mean - p.measured.angle_deg));
     j["mu_r_interval"] = {lo, hi};
     nlohmann::json effect;
     if (p.interval_ends) {
       const nlohmann::json a = at(p, lo), b = at(p, hi);
-      const double x = a["mean_deg"].get<double>(), y = b["mean_deg"].get<double>();
       effect = {{"method", "runs"},
                 {"note", "the test run with the same seeds at both ends of the 95% mu_r interval"},
                 {"at_low", a},
                 {"at_high", b},
-                {"angle_range_deg", {std::min(x, y), std::max(x, y)}}};
+                {"angle_range_deg", nullptr}};
+      if (a["mean_deg"].is_number() && b["mean_deg"].is_number()) {
+        const double x = a["mean_deg"].get<double>(), y = b["mean_deg"].get<double>();
+        effect["angle_range_deg"] = {std::min(x, y), std::max(x, y)};
+      }
     } else {
       const double f0 = evaluate(fit, mu);
       const double dl =

@@ -259,6 +259,8 @@ std::optional<nlohmann::json> read_run_result(const std::string& out_dir, const 
 nlohmann::json campaign_manifest(const Campaign& campaign, const std::string& out_dir);
 
 /// The angle a calibration or prediction uses from one run's result (the case function's JSON).
+/// For a prediction it may return NaN for a run that made no pile (a clogged outlet): such runs
+/// are listed and counted (no_pile), never averaged.
 using AngleFn = std::function<double(const nlohmann::json& case_result)>;
 
 /// What the calibrate command records beside the numbers.

@@ -1,4 +1,5 @@
 #include <iostream>
+#include <limits>
 #include <memory>
 
 #include "apps/reposetwin/commands.hpp"
@@ -143,7 +144,15 @@ void add_calibrate_command(CLI::App& app) {
       return;
     }
     if (c.predictions.empty()) return;
-    const nlohmann::json p = experiments::run_predictions(c, cal, out, fn, angle_of, rs, opt);
+    // In a prediction a clogged outlet is an outcome to report (no_pile), not a reason to stop.
+    const experiments::AngleFn prediction_angle = [measure](const nlohmann::json& r) {
+      const nlohmann::json& res = r.contains("result") ? r.at("result") : r;
+      if (res.contains("pile") && res["pile"].value("status", std::string()) == "no pile")
+        return std::numeric_limits<double>::quiet_NaN();
+      return experiments::case_angle_deg(r, measure);
+    };
+    const nlohmann::json p =
+        experiments::run_predictions(c, cal, out, fn, prediction_angle, rs, opt);
     nlohmann::json brief = nlohmann::json::array();
     for (const auto& q : p["predictions"])
       brief.push_back({{"name", q["name"]},

@@ -6,6 +6,8 @@
 // angle = 20 + 50 mu_r + offset [deg], where the offset is read from the run's scene
 // (sample.mass_kg, so another scene is another test) and +-0.1 deg alternates with the seed.
 #include <gtest/gtest.h>
+
+#include <limits>
 #include <unistd.h>
 
 #include <cmath>
@@ -332,6 +334,37 @@ TEST(Predict, PredictOnlyReusesTheCalibrationAndNeverOverwrites) {
   EXPECT_THROW(
       run_predictions(unreachable, none, out2.string(), synthetic_case(log), kAngle, quiet()),
       std::runtime_error);
+}
+
+TEST(Predict, AClogIsCountedNeverAveraged) {
+  const Scratch d("clog");
+  write_file_atomic((d.path / "c.toml").string(), calibration_campaign());
+  const Campaign c = load_campaign((d.path / "c.toml").string());
+  const fs::path out = d.path / "out", log = d.path / "log";
+  const json cal = run_calibration(c, out.string(), synthetic_case(log), kAngle, quiet());
+  const double hi = cal["mu_r_interval"][1].get<double>();
+  // Test B's seed 2 arches the outlet at the high end of the interval: no pile there.
+  const CaseSpec clogged = prediction_run(c, c.predictions[0], hi, 2);
+  const CaseFn base = synthetic_case(log);
+  const CaseFn fn = [&](const CaseSpec& s, const std::string& dir) {
+    json r = base(s, dir);
+    if (s.id() == clogged.id()) r["pile"]["status"] = "no pile";
+    return r;
+  };
+  const AngleFn angle = [](const json& r) {
+    const json& res = r.contains("result") ? r.at("result") : r;
+    return res["pile"]["status"] == "no pile" ? std::numeric_limits<double>::quiet_NaN()
+                                              : case_angle_deg(r, AngleMeasure::kImage);
+  };
+  const json pj = run_predictions(c, cal, out.string(), fn, angle, quiet());
+  const json& high = pj["predictions"][0]["interval_effect"]["at_high"];
+  EXPECT_EQ(high["no_pile"], 1);
+  EXPECT_EQ(high["n"], 2);
+  EXPECT_TRUE(high["angles_deg"][1].is_null());
+  // The mean is over the two piles that formed (seeds 1 and 3: both +0.1 deg).
+  EXPECT_NEAR(high["mean_deg"].get<double>(), 20.0 + 50.0 * hi + 2.0 + 0.1, 1e-9);
+  EXPECT_EQ(pj["predictions"][0]["no_pile"], 0);
+  EXPECT_TRUE(fs::exists(out / "predictions.json"));
 }
 
 TEST(Predict, OnlyTheNamedPredictionsAreKept) {
