@@ -41,6 +41,11 @@ CaseFn pile_case_fn(const CaseRunSettings& settings) {
   };
 }
 
+bool case_made_no_pile(const json& r) {
+  const json& res = r.contains("result") ? r.at("result") : r;
+  return res.contains("pile") && res["pile"].value("status", std::string()) == "no pile";
+}
+
 double case_angle_deg(const json& r, AngleMeasure measure) {
   const json& res = r.contains("result") ? r.at("result") : r;
   if (res.contains("stop")) {
@@ -50,7 +55,7 @@ double case_angle_deg(const json& r, AngleMeasure measure) {
                                res.at("stop").value("detail", std::string()) +
                                "), so it has no angle; " + res.value("run_dir", std::string()));
   }
-  if (res.at("pile").at("status") == "no pile") return 0.0;
+  if (case_made_no_pile(res)) return 0.0;
   switch (measure) {
     case AngleMeasure::kImage:
       if (res.contains("image")) return res.at("image").at("theta_deg");

@@ -20,6 +20,9 @@ struct CaseRunSettings {
 
 CaseFn pile_case_fn(const CaseRunSettings& settings);
 
+/// True when the case made no pile (a clogged outlet: every particle lodged in the container).
+bool case_made_no_pile(const nlohmann::json& case_result);
+
 /// The angle `measure` of a finished case [deg]; 0 for "no pile". kImage falls back to atan(2H/D)
 /// from particle positions when the run was not photographed (--no-images); kImageFlank needs the
 /// photographs and throws without them. Throws if the run stopped on a physics failure (overlap,

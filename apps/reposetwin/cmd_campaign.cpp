@@ -120,7 +120,7 @@ void add_calibrate_command(CLI::App& app) {
     // into a mu_r point it would drag the fit down, so the calibration stops on it and says so.
     const experiments::AngleFn angle_of = [measure](const nlohmann::json& r) {
       const nlohmann::json& res = r.contains("result") ? r.at("result") : r;
-      if (res.contains("pile") && res["pile"].value("status", std::string()) == "no pile")
+      if (experiments::case_made_no_pile(res))
         throw std::runtime_error(
             "a calibration run clogged the outlet (" +
             res.value("stop", nlohmann::json::object()).value("detail", std::string("lodged")) +
@@ -146,9 +146,7 @@ void add_calibrate_command(CLI::App& app) {
     if (c.predictions.empty()) return;
     // In a prediction a clogged outlet is an outcome to report (no_pile), not a reason to stop.
     const experiments::AngleFn prediction_angle = [measure](const nlohmann::json& r) {
-      const nlohmann::json& res = r.contains("result") ? r.at("result") : r;
-      if (res.contains("pile") && res["pile"].value("status", std::string()) == "no pile")
-        return std::numeric_limits<double>::quiet_NaN();
+      if (experiments::case_made_no_pile(r)) return std::numeric_limits<double>::quiet_NaN();
       return experiments::case_angle_deg(r, measure);
     };
     const nlohmann::json p =

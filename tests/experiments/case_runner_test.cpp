@@ -23,6 +23,9 @@ TEST(CaseAngle, ImageFirstThenParticlesAndZeroForNoPile) {
   EXPECT_DOUBLE_EQ(case_angle_deg(run_result("settled", "ok")), 24.25);
   EXPECT_DOUBLE_EQ(case_angle_deg(run_result("settled", "ok"), AngleMeasure::kParticles), 27.5);
   EXPECT_DOUBLE_EQ(case_angle_deg(run_result("clogged", "no pile")), 0.0);
+  EXPECT_TRUE(case_made_no_pile(run_result("clogged", "no pile")));
+  EXPECT_TRUE(case_made_no_pile(run_result("clogged", "no pile")["result"]));
+  EXPECT_FALSE(case_made_no_pile(run_result("settled", "ok")));
 }
 
 TEST(CaseAngle, EachMeasureReadsItsOwnField) {
