@@ -1171,6 +1171,31 @@ std::vector<Observation> observations_of(const nlohmann::json& cal, const std::s
   return obs;
 }
 
+// The first field in which a stored calibration.json answered another question than campaign `c`
+// asks now ({field, stored, now}), or none. The angle is compared only when one is given.
+struct FieldDifference {
+  std::string field;
+  nlohmann::json stored, now;
+};
+std::optional<FieldDifference> calibration_difference(const nlohmann::json& j, const Campaign& c,
+                                                      const std::string& angle_method) {
+  const CampaignCalibration& cc = calibration_of(c);
+  const nlohmann::json target =
+      j.contains("target") ? j["target"].value("angle_deg", nlohmann::json()) : nlohmann::json();
+  const nlohmann::json stored_angle = j.value("angle_method", nlohmann::json());
+  const std::vector<FieldDifference> fields = {
+      {"campaign_name", j.value("campaign_name", nlohmann::json()), c.name},
+      {"keys", j.value("keys", nlohmann::json()), keys_of(cc)},
+      {"target.angle_deg", target, cc.target.angle_deg},
+      {"mu_r_range", j.value("mu_r_range", nlohmann::json()),
+       nlohmann::json{cc.settings.mu_r_lo, cc.settings.mu_r_hi}},
+      {"angle_method", stored_angle,
+       angle_method.empty() ? stored_angle : nlohmann::json(angle_method)}};
+  for (const FieldDifference& f : fields)
+    if (f.stored != f.now) return f;
+  return std::nullopt;
+}
+
 // A finished calibration in OUT is a result: calibrating again with the same question rewrites it
 // with the same numbers (every run is reused), but a different question (target, range, keys or
 // angle) would silently replace it, so that needs --force.
@@ -1185,23 +1210,11 @@ void refuse_to_replace_other_calibration(const Campaign& c, const std::string& o
     throw std::runtime_error(file + ": a calibration file that cannot be read (" + e.what() +
                              "); move it away or use --force");
   }
-  const CampaignCalibration& cc = calibration_of(c);
-  const nlohmann::json now = {
-      {"target.angle_deg", cc.target.angle_deg},
-      {"mu_r_range", {cc.settings.mu_r_lo, cc.settings.mu_r_hi}},
-      {"keys", keys_of(cc)},
-      {"angle_method", options.angle_method}};
-  const nlohmann::json was = {
-      {"target.angle_deg", old.contains("target") ? old["target"].value("angle_deg", nlohmann::json())
-                                                  : nlohmann::json()},
-      {"mu_r_range", old.value("mu_r_range", nlohmann::json())},
-      {"keys", old.value("keys", nlohmann::json())},
-      {"angle_method", old.value("angle_method", nlohmann::json())}};
-  for (const auto& [k, v] : now.items())
-    if (was[k] != v)
-      throw std::runtime_error(file + ": a finished calibration with " + k + " = " +
-                               was[k].dump() + " is here, and this one asks for " + v.dump() +
-                               "; give another --out, move the file away, or use --force");
+  if (const auto d = calibration_difference(old, c, options.angle_method))
+    throw std::runtime_error(file + ": a finished calibration with " + d->field + " = " +
+                             d->stored.dump() + " is here, and this one asks for " +
+                             d->now.dump() +
+                             "; give another --out, move the file away, or use --force");
 }
 
 }  // namespace
@@ -1259,8 +1272,9 @@ nlohmann::json run_calibration(const Campaign& c, const std::string& out_dir, co
   return j;
 }
 
-nlohmann::json read_calibration(const Campaign& c, const std::string& out_dir) {
-  const CampaignCalibration& cc = calibration_of(c);
+nlohmann::json read_calibration(const Campaign& c, const std::string& out_dir,
+                                const std::string& angle_method) {
+  calibration_of(c);
   const std::string file = (fs::path(out_dir) / kCalibrationFile).string();
   std::error_code ec;
   if (!fs::is_regular_file(file, ec))
@@ -1272,23 +1286,10 @@ nlohmann::json read_calibration(const Campaign& c, const std::string& out_dir) {
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error(file + ": not a calibration file (" + e.what() + ")");
   }
-  auto differs = [&](const std::string& field, const nlohmann::json& stored,
-                     const nlohmann::json& now) {
-    return std::runtime_error(file + ": field '" + field + "' = " + stored.dump() +
-                              " differs from the campaign file's " + now.dump() + " (" + c.file +
-                              "): this calibration was made from other inputs");
-  };
-  const nlohmann::json name = j.value("campaign_name", nlohmann::json());
-  if (name != nlohmann::json(c.name)) throw differs("campaign_name", name, c.name);
-  const nlohmann::json keys = j.value("keys", nlohmann::json());
-  if (keys != nlohmann::json(keys_of(cc))) throw differs("keys", keys, keys_of(cc));
-  const nlohmann::json target =
-      j.contains("target") ? j["target"].value("angle_deg", nlohmann::json()) : nlohmann::json();
-  if (target != nlohmann::json(cc.target.angle_deg))
-    throw differs("target.angle_deg", target, cc.target.angle_deg);
-  const nlohmann::json range = j.value("mu_r_range", nlohmann::json());
-  const nlohmann::json range_now = {cc.settings.mu_r_lo, cc.settings.mu_r_hi};
-  if (range != range_now) throw differs("mu_r_range", range, range_now);
+  if (const auto d = calibration_difference(j, c, angle_method))
+    throw std::runtime_error(file + ": field '" + d->field + "' = " + d->stored.dump() +
+                             " differs from the campaign file's " + d->now.dump() + " (" + c.file +
+                             "): this calibration was made from other inputs");
   return j;
 }
 

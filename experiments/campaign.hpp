@@ -284,9 +284,10 @@ nlohmann::json run_calibration(const Campaign& campaign, const std::string& out_
                                const CalibrateOptions& options = {});
 
 /// Reads OUT/calibration.json and checks that it is this campaign's finished calibration (same
-/// campaign name, keys, target and mu_r range). Throws std::runtime_error naming the file and the
-/// field that differs or is missing.
-nlohmann::json read_calibration(const Campaign& campaign, const std::string& out_dir);
+/// campaign name, keys, target and mu_r range, and the angle method when `angle_method` is given).
+/// Throws std::runtime_error naming the file and the field that differs or is missing.
+nlohmann::json read_calibration(const Campaign& campaign, const std::string& out_dir,
+                                const std::string& angle_method = "");
 
 /// Runs every [[predict]] test at the calibration's mu_r (and at its interval ends unless the
 /// entry says interval_ends = false) through run_batch, and writes OUT/predictions.json
