@@ -134,7 +134,7 @@ void add_calibrate_command(CLI::App& app) {
     opt.extra = {{"code_version", experiments::code_version()},
                  {"angle", experiments::angle_measure_name(measure)}};
     const nlohmann::json cal = *predict_only
-                                   ? experiments::read_calibration(c, out)
+                                   ? experiments::read_calibration(c, out, opt.angle_method)
                                    : experiments::run_calibration(c, out, fn, angle_of, rs, opt);
     if (!*predict_only) std::cout << cal.dump(2) << "\n";
     if (!cal.contains("mu_r") || !cal["mu_r"].is_number()) {  // cannot reach: exit code 5

@@ -315,6 +315,13 @@ TEST(Predict, PredictOnlyReusesTheCalibrationAndNeverOverwrites) {
     }
   }
 
+  // Nor does a prediction that matches another angle than the calibration did.
+  try {
+    read_calibration(c, out.string(), "vision flank angle");
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("angle_method"), std::string::npos) << e.what();
+  }
   // An edited campaign (another target) does not reuse this calibration.
   write_file_atomic((d.path / "c.toml").string(), calibration_campaign(3, 36.0));
   const Campaign edited = load_campaign((d.path / "c.toml").string());
