@@ -14,6 +14,10 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kRadToDeg = 180.0 / kPi;
 // Standard deviation of a uniform error over one pixel [px].
 const double kQuantisationPx = 1.0 / std::sqrt(12.0);
+// A plate edge pixel has the backdrop this many rows above it [px].
+constexpr int kCleanGapPx = 4;
+// Long edges at least this fraction of the strongest are plate-line candidates [-].
+constexpr double kPlateCandidateFraction = 0.2;
 
 std::string str(double v) {
   std::ostringstream os;
@@ -59,18 +63,30 @@ double parabola_peak(double em, double e0, double ep) {
   return std::clamp(0.5 * (em - ep) / den, -0.5, 0.5);
 }
 
-// Robust straight line v = a + b u through samples: Theil-Sen (median of pairwise slopes).
-void theil_sen(const std::vector<cv::Point2d>& p, double& a, double& b) {
+// The points of a flank's silhouette that lie near one straight line: a Theil-Sen line
+// x = x0 + k y (median of pairwise slopes, then median intercept) and the points within
+// max(1.5 px, 3 robust sigmas) of it. All points when fewer than half (or 3) would remain.
+std::vector<cv::Point2d> flank_inliers(const std::vector<cv::Point2d>& p) {
   std::vector<double> slopes;
-  const size_t step = std::max<size_t>(1, p.size() / 400);
+  const size_t step = std::max<size_t>(1, p.size() / 200);
   for (size_t i = 0; i < p.size(); i += step)
     for (size_t j = i + step; j < p.size(); j += step)
-      if (p[j].x != p[i].x) slopes.push_back((p[j].y - p[i].y) / (p[j].x - p[i].x));
-  b = slopes.empty() ? 0.0 : median(slopes);
+      if (p[j].y != p[i].y) slopes.push_back((p[j].x - p[i].x) / (p[j].y - p[i].y));
+  if (slopes.empty()) return p;
+  const double k = median(slopes);
   std::vector<double> icpt;
   icpt.reserve(p.size());
-  for (const auto& q : p) icpt.push_back(q.y - b * q.x);
-  a = median(icpt);
+  for (const auto& q : p) icpt.push_back(q.x - k * q.y);
+  const double x0 = median(icpt);
+  const double norm = std::sqrt(1.0 + k * k);
+  std::vector<double> dev;
+  dev.reserve(p.size());
+  for (const auto& q : p) dev.push_back(std::abs(q.x - x0 - k * q.y) / norm);
+  const double cut = std::max(1.5, 3.0 * 1.4826 * median(dev));
+  std::vector<cv::Point2d> kept;
+  for (size_t i = 0; i < p.size(); ++i)
+    if (dev[i] <= cut) kept.push_back(p[i]);
+  return kept.size() >= std::max<size_t>(3, p.size() / 2) ? kept : p;
 }
 
 // Mean of row `r` of a CV_32F image over columns [c0, c1] (clamped); NaN if empty.
@@ -98,6 +114,7 @@ double col_mean(const cv::Mat& img, int c, int r0, int r1) {
 struct InterceptFit {
   double alpha = 0.0, beta = 0.0, sigma_alpha = 0.0;
   int n = 0;
+  bool clamped = false;  // the toe is the band's reach, not its flank-carried offset
 };
 
 // The toe from the low band's silhouette points (heights h above the plate line, columns x) and
@@ -132,6 +149,22 @@ InterceptFit toe_intercept(const std::vector<double>& h, const std::vector<doubl
       ++f.n;
     }
   f.alpha = sum / f.n;
+  // Never beyond the band's own reach carried down from its lowest row: where the band is the
+  // near-vertical side of one layer of grains (a flat pile, or a monolayer of grains around it),
+  // carrying every row along the flank would move the toe outwards by up to the band's height
+  // times the flank's cotangent; the grains' reach is the toe. On a smooth cone the two agree.
+  const double outward = f.beta > 0.0 ? -1.0 : 1.0;
+  double reach = -std::numeric_limits<double>::infinity();
+  double h_low = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < h.size(); ++i) {
+    reach = std::max(reach, outward * x[i]);
+    h_low = std::min(h_low, h[i]);
+  }
+  const double limit = reach + std::abs(f.beta) * h_low;
+  if (outward * f.alpha > limit) {
+    f.alpha = outward * limit;
+    f.clamped = true;
+  }
   const double hm = hsum / f.n;
   double ss = 0.0;
   for (double o : off)
@@ -165,37 +198,92 @@ PlateLine find_plate_line(const cv::Mat& flat, const SideSettings& s, const std:
                                 str(flat.cols) + "x" + str(flat.rows) + " px)");
   cv::Mat gy;
   cv::Sobel(flat, gy, CV_32F, 0, 1, 3, s.plate_darker_than_backdrop ? -0.125 : 0.125);
-  // Signed row sums: a long horizontal edge adds up, noise and sloping flanks do not.
-  cv::Mat profile;
-  cv::reduce(gy, profile, 1, cv::REDUCE_SUM, CV_64F);
-  int v0 = 1;
-  double best = -std::numeric_limits<double>::infinity();
-  for (int r = 1; r < flat.rows - 1; ++r) {
-    const double p = profile.at<double>(r);
-    if (p > best) {
-      best = p;
-      v0 = r;
+  // The plate's edge against the backdrop: a step with the backdrop directly above it. Inside the
+  // pile (and under a monolayer of grains on the plate) the plate line has pile above it instead;
+  // those columns cannot tell the plate's edge from the grains' own top edge, so they are left out.
+  auto backdrop_like = [](float v) { return v > 0.75f && v < 1.33f; };
+  const int rows = flat.rows, ncols = flat.cols;
+  cv::Mat clean(gy.size(), CV_32F, cv::Scalar(0));
+  for (int r = kCleanGapPx; r < rows; ++r) {
+    const float* g = gy.ptr<float>(r);
+    const float* up = flat.ptr<float>(r - kCleanGapPx);
+    float* o = clean.ptr<float>(r);
+    for (int c = 0; c < ncols; ++c)
+      if (g[c] > 0.0f && backdrop_like(up[c])) o[c] = g[c];
+  }
+  // Row sums along lines of every tilt up to plate_max_tilt_deg (strips of columns, one step of
+  // slope per pixel of drift across the image): a long straight edge adds up, noise, texture
+  // and sloping flanks do not.
+  const int n_strips = std::clamp(ncols / 8, 4, 64);
+  std::vector<double> strip_u(n_strips);
+  cv::Mat strip_sum(rows, n_strips, CV_64F, cv::Scalar(0));
+  for (int k = 0; k < n_strips; ++k) {
+    const int c0 = k * ncols / n_strips, c1 = (k + 1) * ncols / n_strips;
+    strip_u[k] = 0.5 * (c0 + c1 - 1);
+    for (int r = 0; r < rows; ++r) {
+      const float* o = clean.ptr<float>(r);
+      double sum = 0.0;
+      for (int c = c0; c < c1; ++c) sum += o[c];
+      strip_sum.at<double>(r, k) = sum;
     }
   }
+  const double u_mid = 0.5 * (ncols - 1);
+  const double tilt = std::tan(s.plate_max_tilt_deg / kRadToDeg);
+  const int n_slopes = static_cast<int>(std::ceil(tilt * ncols * 0.5));
+  auto sheared_profile = [&](double slope) {
+    std::vector<double> prof(rows, 0.0);
+    for (int k = 0; k < n_strips; ++k) {
+      const double dv = slope * (strip_u[k] - u_mid);
+      for (int r = 0; r < rows; ++r) {
+        const double v = r + dv;
+        const int i = static_cast<int>(std::floor(v));
+        if (i < 0 || i + 1 >= rows) continue;
+        const double t = v - i;
+        prof[r] += (1.0 - t) * strip_sum.at<double>(i, k) + t * strip_sum.at<double>(i + 1, k);
+      }
+    }
+    return prof;
+  };
+  double b = 0.0, best = -1.0;
+  for (int j = -n_slopes; j <= n_slopes; ++j) {
+    const double slope = n_slopes > 0 ? tilt * j / n_slopes : 0.0;
+    const std::vector<double> prof = sheared_profile(slope);
+    for (int r = 1; r < rows - 1; ++r)
+      if (prof[r] > best) {
+        best = prof[r];
+        b = slope;
+      }
+  }
   // An average step of 0.02 of the backdrop level over the whole width, at the least.
-  if (!(best > 0.02 * 0.5 * flat.cols))
+  if (!(best > 0.02 * 0.5 * ncols))
     throw std::runtime_error(
         where + ": no plate line found (no long horizontal " +
         std::string(s.plate_darker_than_backdrop ? "bright-to-dark" : "dark-to-bright") +
-        " edge; strongest row " + str(v0) + ")");
-
-  // Columns whose backdrop is visible above the search window carry the plate edge cleanly
-  // (inside the pile the plate edge is weak and the pile's texture is not).
-  const double tilt = std::tan(s.plate_max_tilt_deg / kRadToDeg);
-  const int m1 = static_cast<int>(std::ceil(tilt * flat.cols * 0.5)) + 4;
-  std::vector<int> cols;
-  const int probe = std::max(0, v0 - m1 - 3);
-  for (int c = 0; c < flat.cols; ++c)
-    if (flat.at<float>(probe, c) > 0.75f) cols.push_back(c);
-  if (static_cast<int>(cols.size()) < flat.cols / 10) {
-    cols.clear();
-    for (int c = 0; c < flat.cols; ++c) cols.push_back(c);
+        " edge below the backdrop)");
+  // Several long edges may qualify: the plate's, and the top edge of a layer of grains lying on
+  // the plate (a sparse pile edge), which is longer than the plate's visible ends beside the
+  // pile. The plate is the lowest of them (grains lie on the plate, not under it).
+  const std::vector<double> prof = sheared_profile(b);
+  int v0 = -1;
+  for (int r = rows - 3; r >= 2 && v0 < 0; --r) {
+    const double p = prof[r];
+    if (p >= kPlateCandidateFraction * best && p >= prof[r - 1] && p >= prof[r - 2] &&
+        p >= prof[r + 1] && p >= prof[r + 2])
+      v0 = r;
   }
+  if (v0 < 0) v0 = 1;
+  double a = v0 - b * u_mid;
+
+  // Columns whose backdrop is directly above the line carry the plate edge cleanly.
+  std::vector<int> cols;
+  for (int c = 0; c < ncols; ++c) {
+    const int r = static_cast<int>(std::lround(a + b * c)) - kCleanGapPx;
+    if (r >= 0 && r < rows && backdrop_like(flat.at<float>(r, c))) cols.push_back(c);
+  }
+  if (static_cast<int>(cols.size()) < std::max(8, ncols / 40))
+    throw std::runtime_error(where + ": no plate line found (the edge near row " + str(v0) +
+                             " shows backdrop above it in only " +
+                             str(static_cast<double>(cols.size())) + " columns)");
 
   auto column_peaks = [&](double a, double b, int m, std::vector<cv::Point2d>& pts,
                           std::vector<double>& strength) {
@@ -224,20 +312,11 @@ PlateLine find_plate_line(const cv::Mat& flat, const SideSettings& s, const std:
 
   std::vector<cv::Point2d> pts;
   std::vector<double> strength;
-  column_peaks(v0, 0.0, m1, pts, strength);
-  if (pts.size() < 8)
-    throw std::runtime_error(where + ": no plate line found (too few edge columns near row " +
-                             str(v0) + ")");
-  double a = v0, b = 0.0;
-  theil_sen(pts, a, b);
-  if (std::abs(b) > tilt + 1e-9) b = std::clamp(b, -tilt, tilt);
-
   PlateLine line;
   for (int pass = 0; pass < 2; ++pass) {
     column_peaks(a, b, 3, pts, strength);
     const double strong = 0.3 * median(strength);
     std::vector<cv::Point2f> kept;
-    const double u_mid = 0.5 * (flat.cols - 1);
     for (size_t i = 0; i < pts.size(); ++i)
       if (strength[i] >= strong)
         kept.emplace_back(static_cast<float>(pts[i].x - u_mid), static_cast<float>(pts[i].y - a));
@@ -273,12 +352,17 @@ FlankFit fit_flank(const std::vector<cv::Point2d>& points, const PlateLine& plat
   if (points.size() < 3)
     throw std::runtime_error(what + ": too few silhouette points for a flank fit (" +
                              str(static_cast<double>(points.size())) + ")");
+  // Rows that belong to something else than the flank (a layer of grains on the plate reaching
+  // into the band, a grain stuck out of the surface) lie far off the flank and would pull even a
+  // Huber fit: a Theil-Sen line (column against row, never horizontal for a flank) sets aside
+  // points farther from it than max(1.5 px, 3 robust sigmas) before the fit.
+  const std::vector<cv::Point2d> inliers = flank_inliers(points);
   cv::Point2d mean(0, 0);
-  for (const auto& p : points) mean += p;
-  mean *= 1.0 / points.size();
+  for (const auto& p : inliers) mean += p;
+  mean *= 1.0 / inliers.size();
   std::vector<cv::Point2f> centred;
-  centred.reserve(points.size());
-  for (const auto& p : points)
+  centred.reserve(inliers.size());
+  for (const auto& p : inliers)
     centred.emplace_back(static_cast<float>(p.x - mean.x), static_cast<float>(p.y - mean.y));
   cv::Vec4f fl;
   cv::fitLine(centred, fl, cv::DIST_HUBER, 0, 0.01, 0.01);
