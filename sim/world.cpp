@@ -7,6 +7,9 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <vector>
+
+#include "sim/pair_simd.hpp"
 
 namespace reposetwin::sim {
 namespace {
@@ -166,37 +169,6 @@ void World::build_wall_candidates() {
   state_.wall_candidates_valid = true;
 }
 
-namespace {
-
-/// The contact input of the touching pair (i, j): the geometry and the bodies' motion at the
-/// contact point.
-ContactInput pair_input(const Particles& p, const ContactConstants& c, std::size_t i,
-                        std::size_t j) {
-  const Vec3 d = p.x[i] - p.x[j];
-  const double ri = p.radius[i], rj = p.radius[j];
-  const double cut = ri + rj;
-  const double dist = std::sqrt(d.squaredNorm());
-  ContactInput in;
-  in.n = d / dist;
-  in.delta = cut - dist;
-  in.r_eff = ri * rj / cut;
-  in.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
-  // The rolling inertia is read only by the EPSD dashpot.
-  in.i_roll = c.rolling == RollingModel::kEpsd && c.eta_r > 0.0
-                  ? 1.0 / (1.0 / (p.inertia[i] + p.mass[i] * ri * ri) +
-                           1.0 / (p.inertia[j] + p.mass[j] * rj * rj))
-                  : 0.0;
-  in.a_i = ri - 0.5 * in.delta;
-  in.a_j = rj - 0.5 * in.delta;
-  in.w_i = p.w[i];
-  in.w_j = p.w[j];
-  in.v_rel = p.v[i] - p.v[j] - in.a_i * p.w[i].cross(in.n) - in.a_j * p.w[j].cross(in.n);
-  in.contact_diameter = 4.0 * in.r_eff;  // = d for equal spheres (size-dependent rolling)
-  return in;
-}
-
-}  // namespace
-
 void World::pair_forces() {
   PhaseTimer t(profile_.pair_forces);
   const Particles& p = state_.particles;
@@ -215,15 +187,20 @@ void World::pair_forces() {
     state_.pair_overlap.assign(np, 0.0);
     state_.pair_live.assign(np, 1);
   }
-  // Each particle sums gravity and the pairs it owns here, in list order; gather_forces() then
-  // adds the reactions of the pairs it is second in. The sum's order is the same on any number
-  // of threads, so results stay bit-identical. About half the listed pairs do not touch: such a
-  // pair costs a distance test and nothing more unless it separated since the last step
-  // (pair_live).
+  // The particles are taken in blocks of kBlock. For each block: (1) its listed pairs are tested
+  // in list order; about half of them do not touch, and such a pair costs a distance test and
+  // nothing more unless it separated since the last step (pair_live); the touching ones are
+  // queued. (2) The kernel runs on the queue several contacts at a time (sim/pair_simd.hpp),
+  // which stores each pair's springs, reactions and overlap and each contact's force and torque
+  // on its first member. (3) Each particle sums gravity and the contacts it owns in list order;
+  // gather_forces() then adds the reactions of the pairs it is second in (stored in the second
+  // member's incoming slot). The sums' order is that of a one-contact-at-a-time loop and the
+  // same on any number of threads, so results stay bit-identical.
   // Raw pointers: the stores below (some of them bytes) would otherwise make the compiler reload
   // every vector's data pointer after each of them.
   const Vec3* const x = p.x.data();
   const double* const radius = p.radius.data();
+  const double* const mass = p.mass.data();
   const std::int32_t* const material = p.material.data();
   Vec3* const force = state_.particles.force.data();
   Vec3* const torque = state_.particles.torque.data();
@@ -235,38 +212,66 @@ void World::pair_forces() {
   Vec3* const reaction_torque = state_.reaction_torque.data();
   double* const overlap = state_.pair_overlap.data();
   std::uint8_t* const live = state_.pair_live.data();
-#pragma omp parallel for schedule(dynamic, 512) if (n > par_min)
-  for (std::size_t i = 0; i < n; ++i) {
-    Vec3 f = p.mass[i] * g;
-    Vec3 tq = Vec3::Zero();
-    const Vec3 xi = x[i];
-    const double ri = radius[i];
-    for (std::int32_t k = start[i]; k < start[i + 1]; ++k) {
-      const std::int32_t j = second[k];
-      const double rj = radius[j];
-      const double cut = ri + rj;
-      if ((xi - x[j]).squaredNorm() >= cut * cut) {
-        if (live[k] != 0) {  // separated since the last step
-          history[k] = ContactHistory{};
-          reaction_force[slot[k]].setZero();
-          reaction_torque[slot[k]].setZero();
-          overlap[k] = 0.0;
-          live[k] = 0;
-        }
-        continue;
+  static const PairIsa isa = best_pair_isa();
+  constexpr std::size_t kBlock = 64;  // particles: about 100 touching pairs on a settled heap
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+#pragma omp parallel if (n > par_min)
+  {
+    std::vector<QueuedContact> queue;
+    std::vector<Vec3> queue_force, queue_torque;
+#pragma omp for schedule(dynamic, 8)
+    for (std::size_t b = 0; b < blocks; ++b) {
+      const std::size_t i0 = b * kBlock, i1 = std::min(n, i0 + kBlock);
+      const std::size_t listed = static_cast<std::size_t>(start[i1] - start[i0]);
+      if (queue.size() < listed) {
+        queue.resize(listed);
+        queue_force.resize(listed);
+        queue_torque.resize(listed);
       }
-      const ContactConstants& c = table.c(material[i], material[j]);
-      const ContactInput in = pair_input(p, c, i, j);
-      const ContactOutput out = hertz_mindlin(c, in, dt, history[k]);
-      f += out.force;
-      tq += out.torque_i;
-      reaction_force[slot[k]] = out.force;
-      reaction_torque[slot[k]] = out.torque_j;
-      overlap[k] = in.delta / std::min(ri, rj);
-      live[k] = 1;
+      std::size_t queued = 0;
+      for (std::size_t i = i0; i < i1; ++i) {
+        const Vec3 xi = x[i];
+        const double ri = radius[i];
+        for (std::int32_t k = start[i]; k < start[i + 1]; ++k) {
+          const std::int32_t j = second[k];
+          const double rj = radius[j];
+          const double cut = ri + rj;
+          if ((xi - x[j]).squaredNorm() >= cut * cut) {
+            if (live[k] != 0) {  // separated since the last step
+              history[k] = ContactHistory{};
+              reaction_force[slot[k]].setZero();
+              reaction_torque[slot[k]].setZero();
+              overlap[k] = 0.0;
+              live[k] = 0;
+            }
+            continue;
+          }
+          live[k] = 1;
+          queue[queued++] = QueuedContact{k, static_cast<std::int32_t>(i), j,
+                                          &table.c(material[i], material[j])};
+        }
+      }
+      PairOutputs out;
+      out.history = history;
+      out.slot = slot;
+      out.reaction_force = reaction_force;
+      out.reaction_torque = reaction_torque;
+      out.overlap = overlap;
+      out.force_i = queue_force.data();
+      out.torque_i = queue_torque.data();
+      compute_queued_contacts(isa, p, queue.data(), queued, dt, out);
+      std::size_t q = 0;
+      for (std::size_t i = i0; i < i1; ++i) {
+        Vec3 f = mass[i] * g;
+        Vec3 tq = Vec3::Zero();
+        for (; q < queued && static_cast<std::size_t>(queue[q].i) == i; ++q) {
+          f += queue_force[q];
+          tq += queue_torque[q];
+        }
+        force[i] = f;
+        torque[i] = tq;
+      }
     }
-    force[i] = f;
-    torque[i] = tq;
   }
 }
 

@@ -1,0 +1,227 @@
+#include "sim/pair_simd.hpp"
+
+#include <immintrin.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace reposetwin::sim {
+namespace {
+
+static_assert(sizeof(Vec3) == 3 * sizeof(double), "the lanes read a Vec3 as 3 doubles");
+static_assert(sizeof(ContactHistory) == 6 * sizeof(double),
+              "the lanes read a ContactHistory as tangential then rolling, 3 doubles each");
+
+/// The arrays the lanes read and write, as raw pointers (3 doubles per Vec3, 6 per history).
+struct LaneArrays {
+  const double* x = nullptr;        // (particles x 3) [m]
+  const double* v = nullptr;        // (particles x 3) [m/s]
+  const double* w = nullptr;        // (particles x 3) [rad/s]
+  const double* radius = nullptr;   // (particles) [m]
+  const double* mass = nullptr;     // (particles) [kg]
+  const double* inertia = nullptr;  // (particles) [kg m^2]
+  double* history = nullptr;        // (pairs x 6) tangential [m], rolling [N m]
+  const std::int32_t* slot = nullptr;  // (pairs)
+  double* reaction_force = nullptr;    // (slots x 3) [N]
+  double* reaction_torque = nullptr;   // (slots x 3) [N m]
+  double* overlap = nullptr;           // (pairs) [-]
+  double* force_i = nullptr;           // (queued x 3) [N]
+  double* torque_i = nullptr;          // (queued x 3) [N m]
+};
+
+LaneArrays lane_arrays(const Particles& p, const PairOutputs& out) {
+  LaneArrays a;
+  a.x = p.x.data()->data();
+  a.v = p.v.data()->data();
+  a.w = p.w.data()->data();
+  a.radius = p.radius.data();
+  a.mass = p.mass.data();
+  a.inertia = p.inertia.data();
+  a.history = reinterpret_cast<double*>(out.history);
+  a.slot = out.slot;
+  a.reaction_force = out.reaction_force->data();
+  a.reaction_torque = out.reaction_torque->data();
+  a.overlap = out.overlap;
+  a.force_i = out.force_i->data();
+  a.torque_i = out.torque_i->data();
+  return a;
+}
+
+/// The scalar kernel on queued contact q, with the stores of the pair loop.
+[[gnu::noinline]] void scalar_contact(const Particles& p, const QueuedContact* contacts,
+                                      std::size_t q, double dt, const PairOutputs& out) {
+  const QueuedContact& e = contacts[q];
+  const ContactInput in = pair_input(p, *e.c, e.i, e.j);
+  const ContactOutput o = hertz_mindlin(*e.c, in, dt, out.history[e.k]);
+  out.force_i[q] = o.force;
+  out.torque_i[q] = o.torque_i;
+  out.reaction_force[out.slot[e.k]] = o.force;
+  out.reaction_torque[out.slot[e.k]] = o.torque_j;
+  out.overlap[e.k] = in.delta / std::min(p.radius[e.i], p.radius[e.j]);
+}
+
+// The same lane operations for each instruction set. Only IEEE add, subtract, multiply,
+// divide and square root, never a fused multiply-add (neither target enables FMA).
+
+namespace sse2 {
+
+constexpr int kLanes = 2;
+struct V {
+  __m128d v;
+};
+struct M {
+  __m128d v;
+};
+inline V operator+(V a, V b) { return {_mm_add_pd(a.v, b.v)}; }
+inline V operator-(V a, V b) { return {_mm_sub_pd(a.v, b.v)}; }
+inline V operator*(V a, V b) { return {_mm_mul_pd(a.v, b.v)}; }
+inline V operator/(V a, V b) { return {_mm_div_pd(a.v, b.v)}; }
+inline V operator-(V a) { return {_mm_xor_pd(a.v, _mm_set1_pd(-0.0))}; }  // as scalar negation
+inline V vsqrt(V a) { return {_mm_sqrt_pd(a.v)}; }
+inline V bcast(double s) { return {_mm_set1_pd(s)}; }
+inline M operator>(V a, V b) { return {_mm_cmpgt_pd(a.v, b.v)}; }
+inline M operator>=(V a, V b) { return {_mm_cmpge_pd(a.v, b.v)}; }
+inline M operator!=(V a, V b) { return {_mm_cmpneq_pd(a.v, b.v)}; }  // true if unordered
+/// m ? a : b, lane by lane.
+inline V select(M m, V a, V b) { return {_mm_or_pd(_mm_and_pd(m.v, a.v), _mm_andnot_pd(m.v, b.v))}; }
+inline bool any(M m) { return _mm_movemask_pd(m.v) != 0; }
+/// std::max(f, 0.0) = (f < 0) ? 0 : f; maxpd(a, b) = (a > b) ? a : b.
+inline V max0(V f) { return {_mm_max_pd(_mm_setzero_pd(), f.v)}; }
+/// (a < b) ? a : b.
+inline V vmin(V a, V b) { return {_mm_min_pd(a.v, b.v)}; }
+inline V load1(const double* const* p) { return {_mm_loadh_pd(_mm_load_sd(p[0]), p[1])}; }
+inline void load3(const double* const* p, V& x, V& y, V& z) {
+  const __m128d a = _mm_loadu_pd(p[0]), b = _mm_loadu_pd(p[1]);
+  x.v = _mm_unpacklo_pd(a, b);
+  y.v = _mm_unpackhi_pd(a, b);
+  z.v = _mm_loadh_pd(_mm_load_sd(p[0] + 2), p[1] + 2);
+}
+inline void store1(double* const* p, int valid, V a) {
+  _mm_store_sd(p[0], a.v);
+  if (valid > 1) _mm_storeh_pd(p[1], a.v);
+}
+inline void store3(double* const* p, int valid, V x, V y, V z) {
+  _mm_storeu_pd(p[0], _mm_unpacklo_pd(x.v, y.v));
+  _mm_store_sd(p[0] + 2, z.v);
+  if (valid > 1) {
+    _mm_storeu_pd(p[1], _mm_unpackhi_pd(x.v, y.v));
+    _mm_storeh_pd(p[1] + 2, z.v);
+  }
+}
+
+#include "sim/pair_lanes.inc"
+
+}  // namespace sse2
+
+#pragma GCC push_options
+#pragma GCC target("avx")
+
+namespace avx {
+
+constexpr int kLanes = 4;
+struct V {
+  __m256d v;
+};
+struct M {
+  __m256d v;
+};
+inline V operator+(V a, V b) { return {_mm256_add_pd(a.v, b.v)}; }
+inline V operator-(V a, V b) { return {_mm256_sub_pd(a.v, b.v)}; }
+inline V operator*(V a, V b) { return {_mm256_mul_pd(a.v, b.v)}; }
+inline V operator/(V a, V b) { return {_mm256_div_pd(a.v, b.v)}; }
+inline V operator-(V a) { return {_mm256_xor_pd(a.v, _mm256_set1_pd(-0.0))}; }
+inline V vsqrt(V a) { return {_mm256_sqrt_pd(a.v)}; }
+inline V bcast(double s) { return {_mm256_set1_pd(s)}; }
+// The predicates of the scalar operators: > and >= are false if unordered, != is true.
+inline M operator>(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_GT_OQ)}; }
+inline M operator>=(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_GE_OQ)}; }
+inline M operator!=(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_NEQ_UQ)}; }
+inline V select(M m, V a, V b) { return {_mm256_blendv_pd(b.v, a.v, m.v)}; }
+inline bool any(M m) { return _mm256_movemask_pd(m.v) != 0; }
+inline V max0(V f) { return {_mm256_max_pd(_mm256_setzero_pd(), f.v)}; }
+inline V vmin(V a, V b) { return {_mm256_min_pd(a.v, b.v)}; }
+inline __m128d pair_of(const double* a, const double* b) {
+  return _mm_loadh_pd(_mm_load_sd(a), b);
+}
+inline V load1(const double* const* p) {
+  return {_mm256_insertf128_pd(_mm256_castpd128_pd256(pair_of(p[0], p[1])), pair_of(p[2], p[3]),
+                               1)};
+}
+inline void load3(const double* const* p, V& x, V& y, V& z) {
+  // lo = (x0, y0, x2, y2), hi = (x1, y1, x3, y3).
+  const __m256d lo =
+      _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p[0])), _mm_loadu_pd(p[2]), 1);
+  const __m256d hi =
+      _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p[1])), _mm_loadu_pd(p[3]), 1);
+  x.v = _mm256_unpacklo_pd(lo, hi);
+  y.v = _mm256_unpackhi_pd(lo, hi);
+  const double* const pz[4] = {p[0] + 2, p[1] + 2, p[2] + 2, p[3] + 2};
+  z = load1(pz);
+}
+inline void store1(double* const* p, int valid, V a) {
+  const __m128d lo = _mm256_castpd256_pd128(a.v), hi = _mm256_extractf128_pd(a.v, 1);
+  _mm_store_sd(p[0], lo);
+  if (valid > 1) _mm_storeh_pd(p[1], lo);
+  if (valid > 2) _mm_store_sd(p[2], hi);
+  if (valid > 3) _mm_storeh_pd(p[3], hi);
+}
+inline void store3(double* const* p, int valid, V x, V y, V z) {
+  const __m256d lo = _mm256_unpacklo_pd(x.v, y.v);  // (x0, y0, x2, y2)
+  const __m256d hi = _mm256_unpackhi_pd(x.v, y.v);  // (x1, y1, x3, y3)
+  const __m128d z01 = _mm256_castpd256_pd128(z.v), z23 = _mm256_extractf128_pd(z.v, 1);
+  _mm_storeu_pd(p[0], _mm256_castpd256_pd128(lo));
+  _mm_store_sd(p[0] + 2, z01);
+  if (valid > 1) {
+    _mm_storeu_pd(p[1], _mm256_castpd256_pd128(hi));
+    _mm_storeh_pd(p[1] + 2, z01);
+  }
+  if (valid > 2) {
+    _mm_storeu_pd(p[2], _mm256_extractf128_pd(lo, 1));
+    _mm_store_sd(p[2] + 2, z23);
+  }
+  if (valid > 3) {
+    _mm_storeu_pd(p[3], _mm256_extractf128_pd(hi, 1));
+    _mm_storeh_pd(p[3] + 2, z23);
+  }
+}
+
+#include "sim/pair_lanes.inc"
+
+}  // namespace avx
+
+#pragma GCC pop_options
+
+bool cpu_has_avx() {
+  static const bool has = __builtin_cpu_supports("avx");
+  return has;
+}
+
+}  // namespace
+
+bool pair_isa_available(PairIsa isa) {
+  return isa != PairIsa::kAvx || cpu_has_avx();
+}
+
+PairIsa best_pair_isa() { return cpu_has_avx() ? PairIsa::kAvx : PairIsa::kSse2; }
+
+void compute_queued_contacts(PairIsa isa, const Particles& p, const QueuedContact* contacts,
+                             std::size_t count, double dt, const PairOutputs& out) {
+  if (count == 0) return;
+  switch (isa) {
+    case PairIsa::kScalar:
+      for (std::size_t q = 0; q < count; ++q) scalar_contact(p, contacts, q, dt, out);
+      return;
+    case PairIsa::kSse2:
+      sse2::run_queue(lane_arrays(p, out), p, contacts, count, dt, out);
+      return;
+    case PairIsa::kAvx:
+      if (!cpu_has_avx())
+        throw std::invalid_argument("compute_queued_contacts: isa kAvx, but this CPU has no AVX");
+      avx::run_queue(lane_arrays(p, out), p, contacts, count, dt, out);
+      return;
+  }
+}
+
+}  // namespace reposetwin::sim

@@ -1,0 +1,109 @@
+// The touching pairs of the neighbor list through the contact kernel, several at a time.
+//
+// Design note. The scalar kernel (sim/contact.hpp, hertz_mindlin, with the pair's geometry from
+// pair_input below) is one long dependency chain per contact: a square root for the distance, a
+// division for the normal, two square roots for the stiffnesses and dampings, one square root
+// and one division to rotate each spring, the Coulomb and rolling caps. A pair loop that runs
+// one contact after the other waits on these latencies. compute_queued_contacts() runs the same
+// arithmetic on 2 (SSE2, the build's baseline) or 4 (AVX, chosen at run time if the CPU has it)
+// contacts at once, one contact per lane: the particles' data are gathered straight into the
+// lanes, every branch of the kernel is a select, and the results are scattered back. Each lane
+// performs the scalar kernel's IEEE operations (+, -, *, /, sqrt, no fused multiply-add) in the
+// scalar kernel's order, Eigen's three-term sums included ((a0 + a1) + a2), so a lane gives the
+// bits of the scalar kernel exactly; tests/sim/pair_simd_test.cpp checks this contact by contact,
+// and the pinned determinism hash checks it for whole runs.
+//
+// Scope of the lanes: material pairs with EPSD rolling and neither cohesion nor size-dependent
+// rolling (lanes_eligible), which is the standard heap's and the paper's physics; a contact of
+// any other material pair (CDT or no rolling, cohesion, size-dependent rolling) goes through the
+// scalar kernel at its place in the queue. The lanes gather each pair's constants per lane, so a
+// group may mix material pairs.
+//
+// The force and torque of each contact on its first member are written per queued contact, not
+// summed here: the caller sums them per particle in list order, which keeps the sums, and so the
+// results, those of the one-contact-at-a-time loop.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "sim/contact.hpp"
+#include "sim/particles.hpp"
+
+namespace reposetwin::sim {
+
+/// The contact input of the touching pair (i, j): the geometry and the bodies' motion at the
+/// contact point (the scalar reference the lanes reproduce).
+inline ContactInput pair_input(const Particles& p, const ContactConstants& c, std::size_t i,
+                               std::size_t j) {
+  const Vec3 d = p.x[i] - p.x[j];
+  const double ri = p.radius[i], rj = p.radius[j];
+  const double cut = ri + rj;
+  const double dist = std::sqrt(d.squaredNorm());
+  ContactInput in;
+  in.n = d / dist;
+  in.delta = cut - dist;
+  in.r_eff = ri * rj / cut;
+  in.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
+  // The rolling inertia is read only by the EPSD dashpot.
+  in.i_roll = c.rolling == RollingModel::kEpsd && c.eta_r > 0.0
+                  ? 1.0 / (1.0 / (p.inertia[i] + p.mass[i] * ri * ri) +
+                           1.0 / (p.inertia[j] + p.mass[j] * rj * rj))
+                  : 0.0;
+  in.a_i = ri - 0.5 * in.delta;
+  in.a_j = rj - 0.5 * in.delta;
+  in.w_i = p.w[i];
+  in.w_j = p.w[j];
+  in.v_rel = p.v[i] - p.v[j] - in.a_i * p.w[i].cross(in.n) - in.a_j * p.w[j].cross(in.n);
+  in.contact_diameter = 4.0 * in.r_eff;  // = d for equal spheres (size-dependent rolling)
+  return in;
+}
+
+/// A touching pair queued for the kernel: pair k of the neighbor list, between its first
+/// member i and its second member j, with the constants of their material pair.
+struct QueuedContact {
+  std::int32_t k = 0;
+  std::int32_t i = 0;
+  std::int32_t j = 0;
+  const ContactConstants* c = nullptr;
+};
+
+/// Where the results of the queued contacts go, laid out as World::pair_forces keeps them.
+struct PairOutputs {
+  ContactHistory* history = nullptr;  // (pairs) springs of pair k, updated in place
+  const std::int32_t* slot = nullptr; // (pairs) incoming slot of pair k
+  Vec3* reaction_force = nullptr;     // (pairs, by slot) force of the pair on i [N]
+  Vec3* reaction_torque = nullptr;    // (pairs, by slot) torque of the pair on j [N m]
+  double* overlap = nullptr;          // (pairs) overlap / smaller radius [-]
+  Vec3* force_i = nullptr;            // (queued) force of each queued contact on i [N]
+  Vec3* torque_i = nullptr;           // (queued) torque of each queued contact on i [N m]
+};
+
+/// The instruction sets compute_queued_contacts() can use.
+enum class PairIsa {
+  kScalar,  // one contact at a time (pair_input + hertz_mindlin): the reference
+  kSse2,    // 2 contacts per instruction (the x86-64 baseline)
+  kAvx,     // 4 contacts per instruction (only if the CPU has AVX)
+};
+
+/// Whether this CPU can run `isa`.
+bool pair_isa_available(PairIsa isa);
+
+/// The widest instruction set this CPU can run (kAvx or kSse2).
+PairIsa best_pair_isa();
+
+/// Whether contacts of the material pair with constants `c` run in the lanes (EPSD rolling, no
+/// cohesion, no size-dependent rolling); the others take the scalar kernel.
+inline bool lanes_eligible(const ContactConstants& c) {
+  return c.rolling == RollingModel::kEpsd && !c.cohesive && !c.size_dependent_rolling;
+}
+
+/// Runs the contact kernel on the `count` touching pairs `contacts` (distinct pair indices k)
+/// of the particles `p` with time step dt [s]: updates each pair's springs, stores its
+/// reactions and overlap, and writes the force and torque on its first member to
+/// out.force_i[q] and out.torque_i[q] for queued contact q. Every instruction set gives the
+/// same bits. Throws std::invalid_argument if `isa` is not available on this CPU.
+void compute_queued_contacts(PairIsa isa, const Particles& p, const QueuedContact* contacts,
+                             std::size_t count, double dt, const PairOutputs& out);
+
+}  // namespace reposetwin::sim
