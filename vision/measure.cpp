@@ -232,9 +232,14 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
   if (!apex) throw std::runtime_error(where + ": the apex ray misses the pile's axis plane");
   const auto plate_at_axis = camera::pixel_on_plane(
       cam, Eigen::Vector2d(p.apex.x, p.plate.v_at(p.apex.x)), plane_point, plane_normal);
+  if (!plate_at_axis)
+    throw std::runtime_error(where + ": the plate line's ray misses the pile's axis plane");
   m.base_center_m = plane_point;
-  m.plate_line_z_m = plate_at_axis ? plate_at_axis->z() : std::nan("");
-  m.height_m = apex->z() - scale.axis_foot.z();
+  m.plate_line_z_m = plate_at_axis->z();
+  // H from the line the pile stands on, as the lab reads its photo: with the camera's true pose
+  // the plate line maps to the plate (z = 0) and this is the apex's height; with a camera that
+  // stands higher than declared, the whole picture is shifted and only the difference holds.
+  m.height_m = apex->z() - m.plate_line_z_m;
   m.diameter_m = 2.0 * radius;
   if (!(m.height_m > 0.0))
     throw std::runtime_error(where + ": the apex maps below the plate (H = " + str(m.height_m) +

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -178,6 +179,127 @@ InterceptFit toe_intercept(const std::vector<double>& h, const std::vector<doubl
   return f;
 }
 
+
+// A camera above the plate sees the plate's top face as a band below its far edge (the edge
+// find_plate_line finds: the lowest with backdrop above it), and the pile stands inside that
+// band: its lower part is seen against the plate, not the backdrop, and its toes are below the
+// far edge. Given the pile's blob above `edge` (CV_8U, image size), this grows the blob into the
+// band (pixels that differ from the plate's level there, connected to the blob) and, when the
+// pile reaches more than a few pixels below the edge, returns the line it stands on. The pile's
+// lowest pixels in each column trace the front half of its base, an ellipse through the two
+// toes: v(u) = A + b u + C sqrt(1 - ((u - u0) / a)^2), with u0 and a the pile's extreme columns in
+// the band and b the edge's slope (lines on the plate stay parallel for a camera that does not
+// roll). A and C are a linear least-squares fit to the lower envelope (the lowest pixel in each of
+// 24 bins: grains touch the plate at their lowest point, and gaps between them only rise), and
+// v = A + b u is the toe line. Returns std::nullopt when the pile ends at the edge (a level
+// camera: the edge is the plate line) or the band cannot be read.
+struct TopFace {
+  PlateLine toe_line;
+  cv::Mat pile;  // the blob grown into the band (CV_8U, image size)
+};
+
+std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob,
+                                        const PlateLine& edge, int morph_radius_px) {
+  const cv::Rect box = cv::boundingRect(blob);
+  if (box.empty()) return std::nullopt;
+  const double h_above = edge.v_at(box.x + 0.5 * box.width) - box.y;
+  if (!(h_above > 4.0)) return std::nullopt;
+  // The plate's level, row by row, from the outer tenth of the image on each side (a pile
+  // reaching there is refused later anyway), interpolated across: the flat field is fitted to
+  // the backdrop above and may drift over the band.
+  const int outer = std::max(4, flat.cols / 10);
+  const int r_top = std::max(0, static_cast<int>(std::floor(std::min(edge.v_at(0), edge.v_at(flat.cols - 1)) - 0.5)) + 1);
+  const int r_bot = std::min(flat.rows - 1, static_cast<int>(std::max(edge.v_at(0), edge.v_at(flat.cols - 1)) + h_above));
+  std::vector<double> level_left(flat.rows, std::nan("")), level_right(flat.rows, std::nan(""));
+  std::vector<double> spread;
+  for (int r = r_top; r <= r_bot; ++r) {
+    std::vector<double> lv, rv;
+    for (int c = 0; c < outer; ++c) {
+      if (r > edge.v_at(c) + 2.0 && !blob.at<uchar>(r, c)) lv.push_back(flat.at<float>(r, c));
+      const int cr = flat.cols - 1 - c;
+      if (r > edge.v_at(cr) + 2.0 && !blob.at<uchar>(r, cr)) rv.push_back(flat.at<float>(r, cr));
+    }
+    if (lv.size() >= 3) level_left[r] = median(lv);
+    if (rv.size() >= 3) level_right[r] = median(rv);
+    for (double v : lv) spread.push_back(std::abs(v - level_left[r]));
+    for (double v : rv) spread.push_back(std::abs(v - level_right[r]));
+  }
+  if (spread.size() < 30) return std::nullopt;
+  const double tol = std::max(0.03, 4.0 * 1.4826 * median(spread));
+  auto plate_level = [&](int r, int c) {
+    const double l = level_left[r], rr = level_right[r];
+    if (std::isnan(l)) return rr;
+    if (std::isnan(rr)) return l;
+    return l + (rr - l) * c / std::max(1, flat.cols - 1);
+  };
+  // The band below the edge, as deep as the pile is tall above it; the pile widens downwards,
+  // so every column is searched and connectivity to the blob decides.
+  cv::Mat grown = blob.clone();
+  for (int c = 0; c < flat.cols; ++c) {
+    const int r0 = static_cast<int>(std::floor(edge.v_at(c) - 0.5)) + 1;
+    const int r1 = std::min(r_bot, static_cast<int>(edge.v_at(c) + h_above));
+    for (int r = std::max(r0, 0); r <= r1; ++r) {
+      const double level = plate_level(r, c);
+      if (!std::isnan(level) && std::abs(flat.at<float>(r, c) - level) > tol)
+        grown.at<uchar>(r, c) = 255;
+    }
+  }
+  if (morph_radius_px > 0) {
+    const int k = 2 * morph_radius_px + 1;
+    cv::morphologyEx(grown, grown, cv::MORPH_CLOSE,
+                     cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+  }
+  cv::Mat labels;
+  cv::connectedComponents(grown, labels, 8, CV_32S);
+  // The component holding most of the blob.
+  std::vector<int> overlap;
+  for (int r = box.y; r < box.y + box.height; ++r)
+    for (int c = box.x; c < box.x + box.width; ++c)
+      if (blob.at<uchar>(r, c)) {
+        const int l = labels.at<int>(r, c);
+        if (l >= static_cast<int>(overlap.size())) overlap.resize(l + 1, 0);
+        ++overlap[l];
+      }
+  if (overlap.size() < 2) return std::nullopt;
+  const int label = static_cast<int>(std::max_element(overlap.begin() + 1, overlap.end()) -
+                                     overlap.begin());
+  cv::Mat pile = labels == label;
+  // Lowest pixel of the pile in each column, as a depth below the edge.
+  std::vector<int> low(flat.cols, -1);
+  int e0 = flat.cols, e1 = -1;
+  double deepest = 0.0;
+  for (int c = 0; c < flat.cols; ++c) {
+    for (int r = flat.rows - 1; r >= 0; --r)
+      if (pile.at<uchar>(r, c)) {
+        low[c] = r;
+        break;
+      }
+    if (low[c] < 0 || low[c] + 0.5 <= edge.v_at(c)) continue;
+    e0 = std::min(e0, c);
+    e1 = std::max(e1, c);
+    deepest = std::max(deepest, low[c] + 0.5 - edge.v_at(c));
+  }
+  if (e1 - e0 < 8 || deepest <= std::max(5.0, 0.08 * h_above)) return std::nullopt;
+  // Each toe: the lowest pixel near that end of the pile (detilted), i.e. the bottom of the
+  // outermost grain on the plate, or the end of a smooth base ellipse.
+  const int w = std::max(4, static_cast<int>(std::lround(0.05 * (e1 - e0))));
+  auto lowest = [&](int from, int to) {
+    double y = -1e300;
+    for (int c = from; c <= to; ++c)
+      if (low[c] >= 0) y = std::max(y, low[c] + 0.5 - edge.b * c);
+    return y;
+  };
+  const double y_left = lowest(e0, e0 + w), y_right = lowest(e1 - w, e1);
+  TopFace out;
+  out.toe_line.b = edge.b;
+  // The toe line is never above the far edge it was found under.
+  out.toe_line.a = std::max(0.5 * (y_left + y_right), edge.a);
+  out.toe_line.residual_px = 0.5 * std::abs(y_left - y_right);
+  out.toe_line.support = 2;
+  out.toe_line.sigma_px = std::hypot(out.toe_line.residual_px, kQuantisationPx);
+  out.pile = pile;
+  return out;
+}
 }  // namespace
 
 double PlateLine::height_above(const cv::Point2d& p) const {
@@ -506,17 +628,37 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
     throw std::runtime_error(where + ": no pile found (no dark blob of at least " +
                              str(std::round(min_area)) + " px resting on the plate line at row " +
                              str(std::round(plate.v_at(0.5 * flat.cols) + roi.y)) + ")");
-  cv::Mat blob = labels == best;
-  {
+  // The blob, holes filled, strictly above `line` (image size).
+  auto fill_above = [&](const cv::Mat& mask, const PlateLine& line) {
+    cv::Mat filled(flat.size(), CV_8U, cv::Scalar(0));
     std::vector<std::vector<cv::Point>> contours;
-    cv::findContours(blob, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
-    blob.setTo(0);
-    cv::drawContours(blob, contours, -1, cv::Scalar(255), cv::FILLED);
-    blob &= above;
+    cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+    cv::drawContours(filled, contours, -1, cv::Scalar(255), cv::FILLED);
+    for (int r = 0; r < filled.rows; ++r) {
+      uchar* m = filled.ptr<uchar>(r);
+      for (int c = 0; c < filled.cols; ++c)
+        if (r > std::floor(line.v_at(c) - 0.5)) m[c] = 0;
+    }
+    return filled;
+  };
+  cv::Mat blob;
+  {
+    cv::Mat full(flat.size(), CV_8U, cv::Scalar(0));
+    cv::Mat(labels == best).copyTo(full.rowRange(0, rows_above));
+    blob = fill_above(full, plate) & [&] {
+      cv::Mat a(flat.size(), CV_8U, cv::Scalar(0));
+      above.copyTo(a.rowRange(0, rows_above));
+      return a;
+    }();
   }
-  const cv::Rect box(stats.at<int>(best, cv::CC_STAT_LEFT), stats.at<int>(best, cv::CC_STAT_TOP),
-                     stats.at<int>(best, cv::CC_STAT_WIDTH),
-                     stats.at<int>(best, cv::CC_STAT_HEIGHT));
+  // A camera above the plate: the pile stands on the plate's top face, below its far edge.
+  std::optional<PlateLine> far_edge;
+  if (auto face = pile_on_top_face(flat, blob, plate, s.morph_radius_px)) {
+    far_edge = plate;
+    plate = face->toe_line;
+    blob = fill_above(face->pile, plate);
+  }
+  const cv::Rect box = cv::boundingRect(blob);
 
   if (box.y == 0 || box.x == 0 || box.x + box.width >= flat.cols)
     throw std::runtime_error(where + ": the pile is cut by the " +
@@ -552,6 +694,9 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
     for (int c = c0; c <= c1; ++c) sum += (back - f[c]) / (back - pile_level);
     return sum;
   };
+  // Rows seen against the plate's top face (below its far edge) have no backdrop to measure
+  // coverage against: their edge is the blob's pixel boundary.
+  auto against_face = [&](int r, int c) { return far_edge && r + 0.5 > far_edge->v_at(c); };
   std::vector<cv::Point2d> left, right;
   for (int r = box.y; r < box.y + box.height; ++r) {
     const uchar* m = blob.ptr<uchar>(r);
@@ -573,18 +718,26 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
       const int c0 = ul - w, c1 = std::min(ul + w, mid);
       if (c0 >= 1 && c1 - ul >= 2) {
         double back = row_mean(flat, r, c0 - 4, c0 - 1);
-        if (!(back > pile_level + 0.05)) back = 1.0;
-        const double x = c1 + 0.5 - coverage_sum(r, c0, c1, back);
-        if (x > c0 - 0.5 && x < c1 + 0.5) left.emplace_back(x, r);
+        if (against_face(r, c0)) {
+          left.emplace_back(ul - 0.5, r);
+        } else {
+          if (!(back > pile_level + 0.05)) back = 1.0;
+          const double x = c1 + 0.5 - coverage_sum(r, c0, c1, back);
+          if (x > c0 - 0.5 && x < c1 + 0.5) left.emplace_back(x, r);
+        }
       }
     }
     {
       const int c1 = ur + w, c0 = std::max(ur - w, mid + 1);
       if (c1 <= flat.cols - 2 && ur - c0 >= 2) {
         double back = row_mean(flat, r, c1 + 1, c1 + 4);
-        if (!(back > pile_level + 0.05)) back = 1.0;
-        const double x = c0 - 0.5 + coverage_sum(r, c0, c1, back);
-        if (x > c0 - 0.5 && x < c1 + 0.5) right.emplace_back(x, r);
+        if (against_face(r, c1)) {
+          right.emplace_back(ur + 0.5, r);
+        } else {
+          if (!(back > pile_level + 0.05)) back = 1.0;
+          const double x = c0 - 0.5 + coverage_sum(r, c0, c1, back);
+          if (x > c0 - 0.5 && x < c1 + 0.5) right.emplace_back(x, r);
+        }
       }
     }
   }
