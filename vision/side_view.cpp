@@ -2,9 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
-#include <optional>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -19,6 +20,8 @@ const double kQuantisationPx = 1.0 / std::sqrt(12.0);
 constexpr int kCleanGapPx = 4;
 // Long edges at least this fraction of the strongest are plate-line candidates [-].
 constexpr double kPlateCandidateFraction = 0.2;
+// A grain's silhouette fills at most this fraction of its bounding box [-].
+constexpr double kGrainMaxFill = 0.9;
 
 std::string str(double v) {
   std::ostringstream os;
@@ -110,6 +113,47 @@ double col_mean(const cv::Mat& img, int c, int r0, int r1) {
   return s / (r1 - r0 + 1);
 }
 
+// Grains lying on the plate beside the pile, apart from it in the picture (the sparse outer edge
+// of a flat pile), are part of it. Given connected components (`stats` of
+// cv::connectedComponentsWithStats, `n` labels) and the pile's label `seed`, returns a flag per
+// label: the pile, and every component that `rests` on the plate, no taller than half the pile,
+// at least `min_height` px tall (a grain, not a speck), at most 4 times as wide as tall (a grain
+// or a few, not a band of the scene) and round (filling at most kGrainMaxFill of its bounding
+// box: a disc fills 0.79, the scale bar's bottom band standing on the plate fills it all), whose
+// gap to the pile is at most its
+// own size (about one grain diameter), repeatedly, outwards. A loose grain farther out stays
+// apart.
+std::vector<uchar> with_nearby_grains(const cv::Mat& stats, int n, int seed, int min_height,
+                                      const std::function<bool(const cv::Rect&)>& rests) {
+  auto rect = [&](int i) {
+    return cv::Rect(stats.at<int>(i, cv::CC_STAT_LEFT), stats.at<int>(i, cv::CC_STAT_TOP),
+                    stats.at<int>(i, cv::CC_STAT_WIDTH), stats.at<int>(i, cv::CC_STAT_HEIGHT));
+  };
+  std::vector<uchar> member(n, 0);
+  member[seed] = 1;
+  cv::Rect merged = rect(seed);
+  const int pile_h = merged.height;
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (int i = 1; i < n; ++i) {
+      if (member[i]) continue;
+      const cv::Rect r = rect(i);
+      const double fill = stats.at<int>(i, cv::CC_STAT_AREA) / std::max(1.0, r.area() * 1.0);
+      if (r.height > pile_h / 2 || r.height < min_height || r.width > 4 * r.height ||
+          fill > kGrainMaxFill || !rests(r))
+        continue;
+      // The grain's size: its height, or its width when the picture cuts it (a grain seen
+      // partly against the backdrop, partly against the plate's top face).
+      const int gap = std::max(r.x - (merged.x + merged.width), merged.x - (r.x + r.width));
+      if (gap > std::min(r.width, 2 * r.height)) continue;
+      member[i] = 1;
+      merged |= r;
+      grew = true;
+    }
+  }
+  return member;
+}
+
 // The toe on one side: the column alpha where the silhouette's low band meets the plate
 // (h = 0), with its standard error. beta = dx/dh is the fixed slope used to carry the band down.
 struct InterceptFit {
@@ -179,7 +223,6 @@ InterceptFit toe_intercept(const std::vector<double>& h, const std::vector<doubl
   return f;
 }
 
-
 // A camera above the plate sees the plate's top face as a band below its far edge (the edge
 // find_plate_line finds: the lowest with backdrop above it), and the pile stands inside that
 // band: its lower part is seen against the plate, not the backdrop, and its toes are below the
@@ -208,24 +251,42 @@ std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob
   // reaching there is refused later anyway), interpolated across: the flat field is fitted to
   // the backdrop above and may drift over the band.
   const int outer = std::max(4, flat.cols / 10);
-  const int r_top = std::max(0, static_cast<int>(std::floor(std::min(edge.v_at(0), edge.v_at(flat.cols - 1)) - 0.5)) + 1);
-  const int r_bot = std::min(flat.rows - 1, static_cast<int>(std::max(edge.v_at(0), edge.v_at(flat.cols - 1)) + h_above));
+  auto first_row = [&](int c) { return static_cast<int>(std::floor(edge.v_at(c) - 0.5)) + 1; };
+  const int r_top = std::max(0, std::min(first_row(0), first_row(flat.cols - 1)) + kCleanGapPx);
+  int r_bot = std::min(
+      flat.rows - 1, static_cast<int>(std::max(edge.v_at(0), edge.v_at(flat.cols - 1)) + h_above));
+  if (r_bot - r_top < 4) return std::nullopt;
   std::vector<double> level_left(flat.rows, std::nan("")), level_right(flat.rows, std::nan(""));
   std::vector<double> spread;
   for (int r = r_top; r <= r_bot; ++r) {
     std::vector<double> lv, rv;
     for (int c = 0; c < outer; ++c) {
-      if (r > edge.v_at(c) + 2.0 && !blob.at<uchar>(r, c)) lv.push_back(flat.at<float>(r, c));
+      if (r >= first_row(c) + kCleanGapPx && !blob.at<uchar>(r, c))
+        lv.push_back(flat.at<float>(r, c));
       const int cr = flat.cols - 1 - c;
-      if (r > edge.v_at(cr) + 2.0 && !blob.at<uchar>(r, cr)) rv.push_back(flat.at<float>(r, cr));
+      if (r >= first_row(cr) + kCleanGapPx && !blob.at<uchar>(r, cr))
+        rv.push_back(flat.at<float>(r, cr));
     }
     if (lv.size() >= 3) level_left[r] = median(lv);
     if (rv.size() >= 3) level_right[r] = median(rv);
-    for (double v : lv) spread.push_back(std::abs(v - level_left[r]));
-    for (double v : rv) spread.push_back(std::abs(v - level_right[r]));
+    if (r < r_top + 6) {
+      for (double v : lv) spread.push_back(std::abs(v - level_left[r]));
+      for (double v : rv) spread.push_back(std::abs(v - level_right[r]));
+    }
   }
   if (spread.size() < 30) return std::nullopt;
   const double tol = std::max(0.03, 4.0 * 1.4826 * median(spread));
+  // The plate ends where its level steps (its near edge, its front face, the backdrop below):
+  // the band is searched down to there only.
+  for (int r = r_top + 1; r <= r_bot; ++r) {
+    auto step = [&](const std::vector<double>& lv) {
+      return std::isnan(lv[r]) || std::isnan(lv[r - 1]) ? false : std::abs(lv[r] - lv[r - 1]) > tol;
+    };
+    if (step(level_left) || step(level_right)) {
+      r_bot = r - 1;
+      break;
+    }
+  }
   auto plate_level = [&](int r, int c) {
     const double l = level_left[r], rr = level_right[r];
     if (std::isnan(l)) return rr;
@@ -233,24 +294,28 @@ std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob
     return l + (rr - l) * c / std::max(1, flat.cols - 1);
   };
   // The band below the edge, as deep as the pile is tall above it; the pile widens downwards,
-  // so every column is searched and connectivity to the blob decides.
+  // so every column is searched and connectivity to the blob decides. The first rows below the
+  // edge are its blurred transition: they join the pile only in columns where the pile is on
+  // both sides of them.
   cv::Mat grown = blob.clone();
   for (int c = 0; c < flat.cols; ++c) {
-    const int r0 = static_cast<int>(std::floor(edge.v_at(c) - 0.5)) + 1;
-    const int r1 = std::min(r_bot, static_cast<int>(edge.v_at(c) + h_above));
-    for (int r = std::max(r0, 0); r <= r1; ++r) {
+    const int r0 = first_row(c) + kCleanGapPx;
+    for (int r = std::max(r0, 0); r <= r_bot; ++r) {
       const double level = plate_level(r, c);
       if (!std::isnan(level) && std::abs(flat.at<float>(r, c) - level) > tol)
         grown.at<uchar>(r, c) = 255;
     }
+    const int last_above = first_row(c) - 1;
+    if (last_above >= 0 && r0 <= r_bot && blob.at<uchar>(last_above, c) && grown.at<uchar>(r0, c))
+      for (int r = last_above + 1; r < r0; ++r) grown.at<uchar>(r, c) = 255;
   }
   if (morph_radius_px > 0) {
     const int k = 2 * morph_radius_px + 1;
     cv::morphologyEx(grown, grown, cv::MORPH_CLOSE,
                      cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
   }
-  cv::Mat labels;
-  cv::connectedComponents(grown, labels, 8, CV_32S);
+  cv::Mat labels, stats, centroids;
+  const int n_labels = cv::connectedComponentsWithStats(grown, labels, stats, centroids, 8, CV_32S);
   // The component holding most of the blob.
   std::vector<int> overlap;
   for (int r = box.y; r < box.y + box.height; ++r)
@@ -261,9 +326,19 @@ std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob
         ++overlap[l];
       }
   if (overlap.size() < 2) return std::nullopt;
-  const int label = static_cast<int>(std::max_element(overlap.begin() + 1, overlap.end()) -
-                                     overlap.begin());
-  cv::Mat pile = labels == label;
+  const int label =
+      static_cast<int>(std::max_element(overlap.begin() + 1, overlap.end()) - overlap.begin());
+  const std::vector<uchar> member =
+      with_nearby_grains(stats, n_labels, label, 2 * morph_radius_px + 1, [&](const cv::Rect& r) {
+        return r.y + r.height - 0.5 > std::min(edge.v_at(r.x), edge.v_at(r.x + r.width - 1));
+      });
+  cv::Mat pile(flat.size(), CV_8U, cv::Scalar(0));
+  for (int r = 0; r < flat.rows; ++r) {
+    const int* l = labels.ptr<int>(r);
+    uchar* m = pile.ptr<uchar>(r);
+    for (int c = 0; c < flat.cols; ++c)
+      if (member[l[c]]) m[c] = 255;
+  }
   // Lowest pixel of the pile in each column, as a depth below the edge.
   std::vector<int> low(flat.cols, -1);
   int e0 = flat.cols, e1 = -1;
@@ -628,6 +703,11 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
     throw std::runtime_error(where + ": no pile found (no dark blob of at least " +
                              str(std::round(min_area)) + " px resting on the plate line at row " +
                              str(std::round(plate.v_at(0.5 * flat.cols) + roi.y)) + ")");
+  const std::vector<uchar> member =
+      with_nearby_grains(stats, n_labels, best, 2 * s.morph_radius_px + 1, [&](const cv::Rect& r) {
+        const double line_v = std::min(plate.v_at(r.x), plate.v_at(r.x + r.width - 1));
+        return r.y + r.height - 1 >= std::floor(line_v - 0.5) - (s.morph_radius_px + 3);
+      });
   // The blob, holes filled, strictly above `line` (image size).
   auto fill_above = [&](const cv::Mat& mask, const PlateLine& line) {
     cv::Mat filled(flat.size(), CV_8U, cv::Scalar(0));
@@ -644,7 +724,13 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
   cv::Mat blob;
   {
     cv::Mat full(flat.size(), CV_8U, cv::Scalar(0));
-    cv::Mat(labels == best).copyTo(full.rowRange(0, rows_above));
+    cv::Mat part = full.rowRange(0, rows_above);
+    for (int r = 0; r < rows_above; ++r) {
+      const int* l = labels.ptr<int>(r);
+      uchar* m = part.ptr<uchar>(r);
+      for (int c = 0; c < flat.cols; ++c)
+        if (member[l[c]]) m[c] = 255;
+    }
     blob = fill_above(full, plate) & [&] {
       cv::Mat a(flat.size(), CV_8U, cv::Scalar(0));
       above.copyTo(a.rowRange(0, rows_above));
