@@ -24,6 +24,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "experiments/lab_photos.hpp"
 #include "experiments/overrides.hpp"
 #include "experiments/provenance.hpp"
 #include "sim/contact.hpp"
@@ -94,6 +95,53 @@ std::string resolve_scene(const std::string& file, const std::string& key,
     throw bad(file, key, "\"" + scene + "\"",
               "scene file not found (looked for " + p.string() + ")");
   return fs::absolute(p).lexically_normal().string();
+}
+
+// The calibration target measured on the lab's side photos (calibration.target_photos, a path or
+// a list, relative to the campaign file) with vision/, as the renders are measured: the mean
+// atan(2H/D) when the simulated angle is an atan(2H/D) (image, particles), the mean flank angle
+// when it is a protractor-like angle (image_flank, slice), so both sides are read alike. The
+// target's sd is the measurement's uncertainty of the mean (spread over the photos and their own
+// errors); target_sd_deg, when given, replaces it. `record` receives the measurement.
+Target target_from_photos(const toml::table& t, AngleMeasure angle, const std::string& file,
+                          const std::string& prefix, nlohmann::json* record) {
+  const toml::node* n = t.get("target_photos");
+  std::vector<std::string> photos;
+  auto add = [&](const toml::node& e) {
+    if (!e.is_string() || e.as_string()->get().empty())
+      throw bad(file, prefix + "target_photos", value_text(*n),
+                "must be a path or a list of paths (the lab's side photos)");
+    fs::path path(e.as_string()->get());
+    if (path.is_relative()) path = fs::path(file).parent_path() / path;
+    photos.push_back(fs::absolute(path).lexically_normal().string());
+  };
+  if (const toml::array* a = n->as_array()) {
+    for (const auto& e : *a) add(e);
+  } else {
+    add(*n);
+  }
+  if (photos.empty())
+    throw bad(file, prefix + "target_photos", "[]", "needs at least one photo");
+  LabPhotoScale scale;
+  std::string camera = get_string(t, "target_photo_camera", file, prefix, false);
+  if (!camera.empty()) {
+    fs::path path(camera);
+    if (path.is_relative()) path = fs::path(file).parent_path() / path;
+    scale.camera_json = path.lexically_normal().string();
+  }
+  scale.mm_per_px = get_number(t, "target_mm_per_px", file, prefix);
+  const std::string at = file + ": key '" + prefix;
+  const LabPhotoMeasurement m = measure_lab_photos(
+      photos, scale,
+      {at + "target_photos'", at + "target_photo_camera'", at + "target_mm_per_px'",
+       prefix + "target_photo_camera", prefix + "target_mm_per_px"});
+  const bool flank = angle == AngleMeasure::kImageFlank || angle == AngleMeasure::kSlice;
+  const vision::Spread& s = flank ? m.summary.flank_deg : m.summary.theta_deg;
+  *record = m.record;
+  (*record)["photos"] = photos;
+  (*record)["target_from"] = flank ? "flank_deg (mean flank angle over the photos)"
+                                   : "theta_deg (atan(2H/D), mean over the photos)";
+  return Target{s.mean, s.sigma_mean};
 }
 
 // Flattens an overrides table into dotted keys: { "a.b" = 1 } and { a.b = 1 } (a nested table in
@@ -427,8 +475,9 @@ Campaign parse_campaign(std::string_view text, const std::string& path) {
     const std::string p = "calibration.";
     check_keys(
         *t,
-        {"key", "target_deg", "target_sd_deg", "mu_r_range", "seeds_per_point", "first_seed",
-         "tolerance_deg", "max_simulations", "bootstrap_replicates", "confirm", "table1_sample", "angle"},
+        {"key", "target_deg", "target_sd_deg", "target_photos", "target_photo_camera",
+         "target_mm_per_px", "mu_r_range", "seeds_per_point", "first_seed", "tolerance_deg",
+         "max_simulations", "bootstrap_replicates", "confirm", "table1_sample", "angle"},
         file, p);
     CampaignCalibration cc;
     if (const toml::node* k = t->get("key"); k && k->is_array()) {
@@ -452,13 +501,30 @@ Campaign parse_campaign(std::string_view text, const std::string& path) {
       cc.angle = parse_angle_measure(a->as_string()->get(), file + ": key '" + p + "angle'");
     }
     const auto target = get_number(*t, "target_deg", file, p);
-    if (!target) throw bad(file, p + "target_deg", "", "missing (the measured angle in degrees)");
-    cc.target.angle_deg = *target;
-    cc.target.sd_deg = get_number(*t, "target_sd_deg", file, p).value_or(0.0);
+    const toml::node* photos = t->get("target_photos");
+    if (target && photos)
+      throw bad(file, p + "target_photos", value_text(*photos),
+                "give either target_deg or target_photos, not both");
+    if (!target && !photos)
+      throw bad(file, p + "target_deg", "",
+                "missing (the measured angle in degrees, or target_photos: the lab's side "
+                "photos of the pile)");
+    for (const char* k : {"target_photo_camera", "target_mm_per_px"})
+      if (!photos && t->get(k))
+        throw bad(file, p + k, value_text(*t->get(k)), "only with target_photos");
+    if (photos) {
+      cc.target = target_from_photos(*t, cc.angle, file, p, &cc.target_photos);
+    } else {
+      cc.target.angle_deg = *target;
+    }
+    if (auto sd = get_number(*t, "target_sd_deg", file, p)) cc.target.sd_deg = *sd;
+    const std::string target_key = photos ? "target_photos" : "target_deg";
     try {
       validate_target(cc.target);
     } catch (const std::invalid_argument& e) {
-      throw bad(file, p + "target_deg", value_text(*t->get("target_deg")), e.what());
+      const std::string shown = photos ? "measured " + std::to_string(cc.target.angle_deg) + " deg"
+                                       : value_text(*t->get("target_deg"));
+      throw bad(file, p + target_key, shown, e.what());
     }
     const toml::node* range = t->get("mu_r_range");
     const toml::array* ra = range ? range->as_array() : nullptr;
@@ -1262,6 +1328,7 @@ nlohmann::json run_calibration(const Campaign& c, const std::string& out_dir, co
   j["scene"] = c.scene_path;
   j["rolling_model"] = rolling_model_of(c);
   j["angle_method"] = options.angle_method;
+  if (!cc.target_photos.is_null()) j["target_photos"] = cc.target_photos;
   j["created_utc"] = utc_now();
   if (options.extra.is_object())
     for (const auto& [k, v] : options.extra.items()) j[k] = v;

@@ -45,6 +45,13 @@
 //   [calibration]                             # optional, for the calibrate command
 //   target_deg = 33.47                        # measured angle, in (0, 90)
 //   target_sd_deg = 0.3                       # optional, its 1-sigma uncertainty
+//   # or, instead of target_deg, the lab's side photos of the pile, measured with vision/ as the
+//   # renders are (atan(2H/D) for image/particles, the flank angle for image_flank/slice; sd:
+//   # the measurement's uncertainty of the mean unless target_sd_deg is given):
+//   # target_photos = ["lab/side_0.png", "lab/side_90.png"]
+//   # target_photo_camera = "lab/camera.json"  # optional scale: a camera sidecar, or
+//   # target_mm_per_px = 0.21                  # mm per pixel at the pile axis, or STEM.json
+//   #                                          # beside each photo, or the scale reference
 //   mu_r_range = [0.02, 0.4]
 //   key = "contacts.rock-rock.rolling_friction"  # optional (this is the default)
 //   seeds_per_point = 3                       # optional, as are first_seed (1), tolerance_deg
@@ -137,6 +144,8 @@ struct CampaignCalibration {
   CalibrationSettings settings;      // mu_r range, seeds per point, tolerance, budget
   std::optional<int> table1_sample;  // the paper's Table 1 sample it calibrates on (reports)
   AngleMeasure angle = AngleMeasure::kImage;  // the simulated angle matched to the target
+  nlohmann::json target_photos;      // the lab photos' measurement when the target came from
+                                     // target_photos (null: target_deg typed in)
 };
 
 /// One [[predict]] entry: another test, run at the calibrated mu_r with its own seeds.

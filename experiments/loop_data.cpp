@@ -3,15 +3,13 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <sstream>
 
 #include "experiments/campaign.hpp"
+#include "experiments/lab_photos.hpp"
 #include "experiments/scene_overrides.hpp"
 #include "experiments/toml_reader.hpp"
-#include "vision/measure.hpp"
 
 namespace reposetwin::experiments {
 namespace fs = std::filesystem;
@@ -71,79 +69,6 @@ std::string toml_number(double v) {
       t.find("nan") == std::string::npos)
     t += ".0";
   return t;
-}
-
-// Measures the side photos of one test with vision/ (no OpenCV worker threads, so that the
-// campaign pool may fork afterwards).
-json measure_photos(LabTest& t, const std::string& camera_json, std::optional<double> mm_per_px,
-                    const Where& w) {
-  vision::ScaleSpec scale;
-  if (!camera_json.empty()) {
-    try {
-      scale = vision::scale_from_sidecar(camera_json);
-    } catch (const std::exception& e) {
-      throw InputError(w.at("photo_camera") + ": " + e.what());
-    }
-    scale.search_marker = false;
-  } else if (mm_per_px) {
-    if (!(*mm_per_px > 0.0))
-      throw InputError(w.at("mm_per_px") + ": " + toml_number(*mm_per_px) + " must be positive");
-    scale.mm_per_px = *mm_per_px;
-    scale.search_marker = false;
-  }
-  const int old_threads = cv::getNumThreads();
-  cv::setNumThreads(1);
-  std::vector<vision::SideMeasurement> views;
-  std::string error;
-  json failures = json::array();
-  for (const std::string& p : t.photos) {
-    const cv::Mat image = cv::imread(p, cv::IMREAD_COLOR);
-    if (image.empty()) {
-      error = w.at("photo") + ": \"" + p + "\" cannot be read as an image";
-      break;
-    }
-    vision::ScaleSpec this_scale = scale;
-    const fs::path sidecar = fs::path(p).replace_extension(".json");
-    const bool own_sidecar = camera_json.empty() && !mm_per_px && fs::exists(sidecar);
-    if (own_sidecar) {
-      // A render-style sidecar next to the photo gives its camera.
-      try {
-        this_scale = vision::scale_from_sidecar(sidecar.string());
-        this_scale.search_marker = false;
-      } catch (const std::exception& e) {
-        error = w.at("photo") + ": sidecar " + e.what();
-        break;
-      }
-    }
-    try {
-      views.push_back(vision::measure_side(image, this_scale, {}, p));
-    } catch (const std::exception& e) {
-      // Several photos of a test: one that cannot be measured is recorded and skipped; a photo
-      // without any scale source is an error at once.
-      const bool no_scale = camera_json.empty() && !mm_per_px && !own_sidecar;
-      if (no_scale || t.photos.size() == 1) {
-        error = w.at("photo") + ": " + e.what() +
-                (no_scale ? " (give the photo's scale: a photo_camera sidecar JSON or mm_per_px)"
-                          : "");
-        break;
-      }
-      failures.push_back({{"photo", p}, {"error", e.what()}});
-    }
-  }
-  if (error.empty() && views.empty())
-    error = w.at("photo") + ": none of the " + std::to_string(t.photos.size()) +
-            " photos could be measured (" + failures[0]["error"].get<std::string>() + ")";
-  cv::setNumThreads(old_threads);
-  if (!error.empty()) throw InputError(error);
-  const vision::SideSummary s = vision::combine_sides(views);
-  json j = vision::to_json(s);
-  j["views"] = json::array();
-  j["unmeasured"] = failures;
-  for (const auto& v : views) j["views"].push_back(vision::to_json(v));
-  t.angle_deg = s.theta_deg.mean;
-  t.height_mm = 1e3 * s.height_m.mean;
-  t.diameter_mm = 1e3 * s.diameter_m.mean;
-  return j;
 }
 
 }  // namespace
@@ -340,7 +265,14 @@ LabData read_lab_csv(const std::string& path) {
       std::optional<double> mmpx;
       if (!get("mm_per_px").empty()) mmpx = parse_number(get("mm_per_px"), w, "mm_per_px");
       json declared = {{"angle_deg", have_angle ? json(test.angle_deg) : json()}};
-      test.photo_measurement = measure_photos(test, cam, mmpx, w);
+      const LabPhotoMeasurement m =
+          measure_lab_photos(test.photos, {cam, mmpx},
+                             {w.at("photo"), w.at("photo_camera"), w.at("mm_per_px"),
+                              "photo_camera", "mm_per_px"});
+      test.angle_deg = m.summary.theta_deg.mean;
+      test.height_mm = 1e3 * m.summary.height_m.mean;
+      test.diameter_mm = 1e3 * m.summary.diameter_m.mean;
+      test.photo_measurement = m.record;
       test.photo_measurement["declared_in_csv"] = declared;
       have_angle = true;
     }

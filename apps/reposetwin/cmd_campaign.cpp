@@ -21,7 +21,7 @@ struct PoolArgs {
   int views = 4;
 };
 
-void add_pool_options(CLI::App* cmd, PoolArgs& a) {
+void add_pool_options(CLI::App* cmd, PoolArgs& a, const char* force_help) {
   cmd->add_option("campaign", a.file, "Campaign file (TOML)")->required();
   cmd->add_option("--out,-o", a.out, "Output folder (default: runs/<campaign name>)");
   cmd->add_option("--workers", a.workers, "Runs side by side on this machine")
@@ -29,7 +29,7 @@ void add_pool_options(CLI::App* cmd, PoolArgs& a) {
   cmd->add_option("--mode", a.mode, "Local pool: processes or threads")
       ->check(CLI::IsMember({"processes", "threads"}))
       ->capture_default_str();
-  cmd->add_flag("--force", a.force, "Redo finished runs too");
+  cmd->add_flag("--force", a.force, force_help);
   cmd->add_flag("--no-images", a.no_images, "Skip renders and vision (particle angles only)");
   cmd->add_option("--views", a.views, "Side views per pile for the image angle")
       ->capture_default_str();
@@ -58,7 +58,7 @@ void add_campaign_command(CLI::App& app) {
   auto a = std::make_shared<PoolArgs>();
   auto* cmd = app.add_subcommand(
       "campaign", "Run every case x seed of a campaign file (resumable; spreads over MPI ranks)");
-  add_pool_options(cmd, *a);
+  add_pool_options(cmd, *a, "Redo finished runs too");
   cmd->callback([a]() {
     const experiments::Campaign c = experiments::load_campaign(a->file);
     const std::string out = a->out.empty() ? "runs/" + c.name : a->out;
@@ -83,7 +83,9 @@ void add_calibrate_command(CLI::App& app) {
       "calibrate",
       "Find mu_r so the simulated angle matches the campaign's [calibration] target, then run "
       "its [[predict]] tests at the calibrated mu_r (exit code 5: the target cannot be reached)");
-  add_pool_options(cmd, *a);
+  add_pool_options(cmd, *a,
+                   "Redo finished runs too, and replace a finished OUT/calibration.json made for "
+                   "another question (target, mu_r range, keys or angle)");
   cmd->add_option("--angle", *angle,
                   "Angle matched, instead of the campaign's calibration.angle (default image): "
                   "image (atan(2H/D) by vision on renders, as the lab photo), image_flank "

@@ -11,9 +11,11 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <thread>
 
+#include "../vision/synthetic.hpp"
 #include "experiments/provenance.hpp"
 
 namespace reposetwin::experiments {
@@ -191,6 +193,64 @@ angle = "image_flank"
   EXPECT_EQ(c.calibration->settings.seeds_per_point, 2);
   EXPECT_EQ(c.calibration->settings.max_simulations, 20);
   EXPECT_EQ(c.calibration->angle, AngleMeasure::kImageFlank);
+}
+
+// The lab's photos as the calibration target, measured as the renders are: atan(2H/D) for the
+// image angle, the flank angle for image_flank. Two cones drawn from their geometry (60 mm high,
+// 200 mm wide: flanks atan(0.6) = 30.96 deg), one with its apex rounded by a 30 mm arc tangent to
+// the flanks (its top 60 - 30 (1/cos 30.96 - 1) = 55.0 mm high: atan(2H/D) 28.81 deg, flanks
+// unchanged); the truth is the geometry, not the code.
+TEST(Campaign, CalibrationTargetFromLabPhotos) {
+  const ScratchDir scratch("target_photos");
+  const fs::path& dir = scratch.path;
+  fs::create_directories(dir / "lab");
+  vision::synthetic::SideScene cone;
+  cone.look.noise_sigma = 2.0;
+  cv::imwrite((dir / "lab" / "sharp.png").string(), vision::synthetic::draw_side(cone));
+  cone.apex_radius_mm = 30.0;
+  cv::imwrite((dir / "lab" / "rounded.png").string(), vision::synthetic::draw_side(cone));
+  const double flank = std::atan(0.6) * 180.0 / M_PI;
+  const double rounded_h = 60.0 - 30.0 * (1.0 / std::cos(std::atan(0.6)) - 1.0);
+  const double theta = 0.5 * (flank + std::atan(2.0 * rounded_h / 200.0) * 180.0 / M_PI);
+  auto campaign = [&](const std::string& calibration_keys) {
+    return write_campaign(dir, "name = \"photo_target\"\nscene = \"scene.toml\"\nseeds = 1\n"
+                               "[calibration]\nmu_r_range = [0.05, 0.5]\n" +
+                                   calibration_keys);
+  };
+  const std::string photos =
+      "target_photos = [\"lab/sharp.png\", \"lab/rounded.png\"]\ntarget_mm_per_px = 0.25\n";
+
+  Campaign c = load_campaign(campaign(photos).string());
+  ASSERT_TRUE(c.calibration.has_value());
+  EXPECT_NEAR(c.calibration->target.angle_deg, theta, 0.3);
+  EXPECT_GT(c.calibration->target.sd_deg, 0.5);  // the two photos differ by 2.2 deg
+  EXPECT_LT(c.calibration->target.sd_deg, 2.0);
+  EXPECT_EQ(c.calibration->target_photos["views"].size(), 2u);
+  EXPECT_EQ(c.calibration->target_photos["photos"][0], (dir / "lab" / "sharp.png").string());
+
+  c = load_campaign(campaign(photos + "angle = \"image_flank\"\ntarget_sd_deg = 0.4\n").string());
+  EXPECT_NEAR(c.calibration->target.angle_deg, flank, 0.3);
+  EXPECT_DOUBLE_EQ(c.calibration->target.sd_deg, 0.4);  // given: it replaces the measurement's
+
+  // Bad input names the key and the value.
+  std::string e = load_error(campaign(photos + "target_deg = 30.0\n"));
+  EXPECT_NE(e.find("calibration.target_photos"), std::string::npos) << e;
+  EXPECT_NE(e.find("either target_deg or target_photos"), std::string::npos) << e;
+  e = load_error(campaign("target_photos = \"lab/missing.png\"\ntarget_mm_per_px = 0.25\n"));
+  EXPECT_NE(e.find("calibration.target_photos"), std::string::npos) << e;
+  EXPECT_NE(e.find("missing.png"), std::string::npos) << e;
+  e = load_error(campaign("target_photos = \"lab/sharp.png\"\ntarget_mm_per_px = -1\n"));
+  EXPECT_NE(e.find("calibration.target_mm_per_px"), std::string::npos) << e;
+  e = load_error(campaign("target_deg = 30.0\ntarget_mm_per_px = 0.25\n"));
+  EXPECT_NE(e.find("only with target_photos"), std::string::npos) << e;
+  e = load_error(campaign("target_photos = []\n"));
+  EXPECT_NE(e.find("needs at least one photo"), std::string::npos) << e;
+  // A photo with no scale source (no marker drawn, none declared) says how to give one.
+  cone.scale_bar = false;
+  cv::imwrite((dir / "lab" / "no_scale.png").string(), vision::synthetic::draw_side(cone));
+  e = load_error(campaign("target_photos = \"lab/no_scale.png\"\n"));
+  EXPECT_NE(e.find("calibration.target_photos"), std::string::npos) << e;
+  EXPECT_NE(e.find("target_mm_per_px"), std::string::npos) << e;
 }
 
 TEST(Campaign, MissingSceneIsAClearError) {
