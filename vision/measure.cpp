@@ -166,7 +166,8 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
       m.warnings.push_back(
           "the camera puts the axis foot " + fixed(p.plate.v_at(foot->x()) - foot->y(), 1) +
           " px from the detected plate line (camera above the plate, or the camera does not "
-          "match the image): H and D are biased");
+          "match the image): H is read from the plate line, D and the flank angles through the "
+          "given camera may be biased");
   }
 
   if (!scale.camera) {
