@@ -91,23 +91,33 @@ inline bool any(M m) { return _mm_movemask_pd(m.v) != 0; }
 inline V max0(V f) { return {_mm_max_pd(_mm_setzero_pd(), f.v)}; }
 /// (a < b) ? a : b.
 inline V vmin(V a, V b) { return {_mm_min_pd(a.v, b.v)}; }
-inline V load1(const double* const* p) { return {_mm_loadh_pd(_mm_load_sd(p[0]), p[1])}; }
-inline void load3(const double* const* p, V& x, V& y, V& z) {
-  const __m128d a = _mm_loadu_pd(p[0]), b = _mm_loadu_pd(p[1]);
-  x.v = _mm_unpacklo_pd(a, b);
-  y.v = _mm_unpackhi_pd(a, b);
-  z.v = _mm_loadh_pd(_mm_load_sd(p[0] + 2), p[1] + 2);
+/// Lane l takes p[l][0].
+inline V load1p(const double* const* p) { return {_mm_loadh_pd(_mm_load_sd(p[0]), p[1])}; }
+/// Lane l takes b[ix[l]].
+inline V load1(const double* b, const std::size_t* ix) {
+  return {_mm_loadh_pd(_mm_load_sd(b + ix[0]), b + ix[1])};
 }
-inline void store1(double* const* p, int valid, V a) {
-  _mm_store_sd(p[0], a.v);
-  if (valid > 1) _mm_storeh_pd(p[1], a.v);
+/// Lane l takes the 3 doubles at b + ix[l].
+inline void load3(const double* b, const std::size_t* ix, V& x, V& y, V& z) {
+  const double* p0 = b + ix[0];
+  const double* p1 = b + ix[1];
+  const __m128d u = _mm_loadu_pd(p0), w = _mm_loadu_pd(p1);
+  x.v = _mm_unpacklo_pd(u, w);
+  y.v = _mm_unpackhi_pd(u, w);
+  z.v = _mm_loadh_pd(_mm_load_sd(p0 + 2), p1 + 2);
 }
-inline void store3(double* const* p, int valid, V x, V y, V z) {
-  _mm_storeu_pd(p[0], _mm_unpacklo_pd(x.v, y.v));
-  _mm_store_sd(p[0] + 2, z.v);
+/// Stores lane l (l < valid) to b[ix[l]].
+inline void store1(double* b, const std::size_t* ix, int valid, V a) {
+  _mm_store_sd(b + ix[0], a.v);
+  if (valid > 1) _mm_storeh_pd(b + ix[1], a.v);
+}
+/// Stores lane l (l < valid) to the 3 doubles at b + ix[l].
+inline void store3(double* b, const std::size_t* ix, int valid, V x, V y, V z) {
+  _mm_storeu_pd(b + ix[0], _mm_unpacklo_pd(x.v, y.v));
+  _mm_store_sd(b + ix[0] + 2, z.v);
   if (valid > 1) {
-    _mm_storeu_pd(p[1], _mm_unpackhi_pd(x.v, y.v));
-    _mm_storeh_pd(p[1] + 2, z.v);
+    _mm_storeu_pd(b + ix[1], _mm_unpackhi_pd(x.v, y.v));
+    _mm_storeh_pd(b + ix[1] + 2, z.v);
   }
 }
 
@@ -145,45 +155,53 @@ inline V vmin(V a, V b) { return {_mm256_min_pd(a.v, b.v)}; }
 inline __m128d pair_of(const double* a, const double* b) {
   return _mm_loadh_pd(_mm_load_sd(a), b);
 }
-inline V load1(const double* const* p) {
+inline V load1p(const double* const* p) {
   return {_mm256_insertf128_pd(_mm256_castpd128_pd256(pair_of(p[0], p[1])), pair_of(p[2], p[3]),
                                1)};
 }
-inline void load3(const double* const* p, V& x, V& y, V& z) {
+inline V load1(const double* b, const std::size_t* ix) {
+  return {_mm256_insertf128_pd(_mm256_castpd128_pd256(pair_of(b + ix[0], b + ix[1])),
+                               pair_of(b + ix[2], b + ix[3]), 1)};
+}
+inline void load3(const double* b, const std::size_t* ix, V& x, V& y, V& z) {
+  const double* p0 = b + ix[0];
+  const double* p1 = b + ix[1];
+  const double* p2 = b + ix[2];
+  const double* p3 = b + ix[3];
   // lo = (x0, y0, x2, y2), hi = (x1, y1, x3, y3).
   const __m256d lo =
-      _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p[0])), _mm_loadu_pd(p[2]), 1);
+      _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p0)), _mm_loadu_pd(p2), 1);
   const __m256d hi =
-      _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p[1])), _mm_loadu_pd(p[3]), 1);
+      _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p1)), _mm_loadu_pd(p3), 1);
   x.v = _mm256_unpacklo_pd(lo, hi);
   y.v = _mm256_unpackhi_pd(lo, hi);
-  const double* const pz[4] = {p[0] + 2, p[1] + 2, p[2] + 2, p[3] + 2};
-  z = load1(pz);
+  z.v = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair_of(p0 + 2, p1 + 2)),
+                             pair_of(p2 + 2, p3 + 2), 1);
 }
-inline void store1(double* const* p, int valid, V a) {
+inline void store1(double* b, const std::size_t* ix, int valid, V a) {
   const __m128d lo = _mm256_castpd256_pd128(a.v), hi = _mm256_extractf128_pd(a.v, 1);
-  _mm_store_sd(p[0], lo);
-  if (valid > 1) _mm_storeh_pd(p[1], lo);
-  if (valid > 2) _mm_store_sd(p[2], hi);
-  if (valid > 3) _mm_storeh_pd(p[3], hi);
+  _mm_store_sd(b + ix[0], lo);
+  if (valid > 1) _mm_storeh_pd(b + ix[1], lo);
+  if (valid > 2) _mm_store_sd(b + ix[2], hi);
+  if (valid > 3) _mm_storeh_pd(b + ix[3], hi);
 }
-inline void store3(double* const* p, int valid, V x, V y, V z) {
+inline void store3(double* b, const std::size_t* ix, int valid, V x, V y, V z) {
   const __m256d lo = _mm256_unpacklo_pd(x.v, y.v);  // (x0, y0, x2, y2)
   const __m256d hi = _mm256_unpackhi_pd(x.v, y.v);  // (x1, y1, x3, y3)
   const __m128d z01 = _mm256_castpd256_pd128(z.v), z23 = _mm256_extractf128_pd(z.v, 1);
-  _mm_storeu_pd(p[0], _mm256_castpd256_pd128(lo));
-  _mm_store_sd(p[0] + 2, z01);
+  _mm_storeu_pd(b + ix[0], _mm256_castpd256_pd128(lo));
+  _mm_store_sd(b + ix[0] + 2, z01);
   if (valid > 1) {
-    _mm_storeu_pd(p[1], _mm256_castpd256_pd128(hi));
-    _mm_storeh_pd(p[1] + 2, z01);
+    _mm_storeu_pd(b + ix[1], _mm256_castpd256_pd128(hi));
+    _mm_storeh_pd(b + ix[1] + 2, z01);
   }
   if (valid > 2) {
-    _mm_storeu_pd(p[2], _mm256_extractf128_pd(lo, 1));
-    _mm_store_sd(p[2] + 2, z23);
+    _mm_storeu_pd(b + ix[2], _mm256_extractf128_pd(lo, 1));
+    _mm_store_sd(b + ix[2] + 2, z23);
   }
   if (valid > 3) {
-    _mm_storeu_pd(p[3], _mm256_extractf128_pd(hi, 1));
-    _mm_storeh_pd(p[3] + 2, z23);
+    _mm_storeu_pd(b + ix[3], _mm256_extractf128_pd(hi, 1));
+    _mm_storeh_pd(b + ix[3] + 2, z23);
   }
 }
 

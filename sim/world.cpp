@@ -219,37 +219,45 @@ void World::pair_forces() {
   {
     std::vector<QueuedContact> queue;
     std::vector<Vec3> queue_force, queue_torque;
+    std::vector<std::int32_t> owner;  // (listed pairs of the block) first member of each
+    Vec3 block_force[kBlock], block_torque[kBlock];
 #pragma omp for schedule(dynamic, 8)
     for (std::size_t b = 0; b < blocks; ++b) {
       const std::size_t i0 = b * kBlock, i1 = std::min(n, i0 + kBlock);
-      const std::size_t listed = static_cast<std::size_t>(start[i1] - start[i0]);
+      const std::int32_t k0 = start[i0], k1 = start[i1];
+      const std::size_t listed = static_cast<std::size_t>(k1 - k0);
       if (queue.size() < listed) {
         queue.resize(listed);
         queue_force.resize(listed);
         queue_torque.resize(listed);
       }
+      // The first member of each listed pair, without a loop per particle (whose varying
+      // length the branch predictor cannot follow): a mark where each particle's pairs begin,
+      // then a running sum.
+      owner.assign(listed + 1, 0);
+      for (std::size_t i = i0 + 1; i < i1; ++i) ++owner[static_cast<std::size_t>(start[i] - k0)];
+      std::int32_t cur = static_cast<std::int32_t>(i0);
+      for (std::size_t m = 0; m < listed; ++m) {
+        cur += owner[m];
+        owner[m] = cur;
+      }
       std::size_t queued = 0;
-      for (std::size_t i = i0; i < i1; ++i) {
-        const Vec3 xi = x[i];
-        const double ri = radius[i];
-        for (std::int32_t k = start[i]; k < start[i + 1]; ++k) {
-          const std::int32_t j = second[k];
-          const double rj = radius[j];
-          const double cut = ri + rj;
-          if ((xi - x[j]).squaredNorm() >= cut * cut) {
-            if (live[k] != 0) {  // separated since the last step
-              history[k] = ContactHistory{};
-              reaction_force[slot[k]].setZero();
-              reaction_torque[slot[k]].setZero();
-              overlap[k] = 0.0;
-              live[k] = 0;
-            }
-            continue;
+      for (std::int32_t k = k0; k < k1; ++k) {
+        const std::int32_t i = owner[static_cast<std::size_t>(k - k0)];
+        const std::int32_t j = second[k];
+        const double cut = radius[i] + radius[j];
+        if ((x[i] - x[j]).squaredNorm() >= cut * cut) {
+          if (live[k] != 0) {  // separated since the last step
+            history[k] = ContactHistory{};
+            reaction_force[slot[k]].setZero();
+            reaction_torque[slot[k]].setZero();
+            overlap[k] = 0.0;
+            live[k] = 0;
           }
-          live[k] = 1;
-          queue[queued++] = QueuedContact{k, static_cast<std::int32_t>(i), j,
-                                          &table.c(material[i], material[j])};
+          continue;
         }
+        live[k] = 1;
+        queue[queued++] = QueuedContact{k, i, j, &table.c(material[i], material[j])};
       }
       PairOutputs out;
       out.history = history;
@@ -260,16 +268,18 @@ void World::pair_forces() {
       out.force_i = queue_force.data();
       out.torque_i = queue_torque.data();
       compute_queued_contacts(isa, p, queue.data(), queued, dt, out);
-      std::size_t q = 0;
       for (std::size_t i = i0; i < i1; ++i) {
-        Vec3 f = mass[i] * g;
-        Vec3 tq = Vec3::Zero();
-        for (; q < queued && static_cast<std::size_t>(queue[q].i) == i; ++q) {
-          f += queue_force[q];
-          tq += queue_torque[q];
-        }
-        force[i] = f;
-        torque[i] = tq;
+        block_force[i - i0] = mass[i] * g;
+        block_torque[i - i0].setZero();
+      }
+      for (std::size_t q = 0; q < queued; ++q) {  // in list order: each particle's own order
+        const std::size_t i = static_cast<std::size_t>(queue[q].i) - i0;
+        block_force[i] += queue_force[q];
+        block_torque[i] += queue_torque[q];
+      }
+      for (std::size_t i = i0; i < i1; ++i) {
+        force[i] = block_force[i - i0];
+        torque[i] = block_torque[i - i0];
       }
     }
   }
