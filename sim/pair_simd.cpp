@@ -62,6 +62,14 @@ LaneArrays lane_arrays(const Particles& p, const PairOutputs& out) {
   out.overlap[e.k] = in.delta / std::min(p.radius[e.i], p.radius[e.j]);
 }
 
+/// Clears the springs, reactions and overlap of pair k, which separated since the last step.
+[[gnu::noinline]] void clear_pair(const PairOutputs& out, std::int32_t k) {
+  out.history[k] = ContactHistory{};
+  out.reaction_force[out.slot[k]].setZero();
+  out.reaction_torque[out.slot[k]].setZero();
+  out.overlap[k] = 0.0;
+}
+
 // The same lane operations for each instruction set. Only IEEE add, subtract, multiply,
 // divide and square root, never a fused multiply-add (neither target enables FMA).
 
@@ -84,6 +92,10 @@ inline V bcast(double s) { return {_mm_set1_pd(s)}; }
 inline M operator>(V a, V b) { return {_mm_cmpgt_pd(a.v, b.v)}; }
 inline M operator>=(V a, V b) { return {_mm_cmpge_pd(a.v, b.v)}; }
 inline M operator!=(V a, V b) { return {_mm_cmpneq_pd(a.v, b.v)}; }  // true if unordered
+/// !(a >= b): true if unordered.
+inline M not_ge(V a, V b) { return {_mm_cmpnge_pd(a.v, b.v)}; }
+/// Bit l set if lane l of the mask is.
+inline int mask_bits(M m) { return _mm_movemask_pd(m.v); }
 /// m ? a : b, lane by lane.
 inline V select(M m, V a, V b) { return {_mm_or_pd(_mm_and_pd(m.v, a.v), _mm_andnot_pd(m.v, b.v))}; }
 inline bool any(M m) { return _mm_movemask_pd(m.v) != 0; }
@@ -148,6 +160,8 @@ inline V bcast(double s) { return {_mm256_set1_pd(s)}; }
 inline M operator>(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_GT_OQ)}; }
 inline M operator>=(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_GE_OQ)}; }
 inline M operator!=(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_NEQ_UQ)}; }
+inline M not_ge(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_NGE_UQ)}; }
+inline int mask_bits(M m) { return _mm256_movemask_pd(m.v); }
 inline V select(M m, V a, V b) { return {_mm256_blendv_pd(b.v, a.v, m.v)}; }
 inline bool any(M m) { return _mm256_movemask_pd(m.v) != 0; }
 inline V max0(V f) { return {_mm256_max_pd(_mm256_setzero_pd(), f.v)}; }
@@ -223,6 +237,23 @@ bool pair_isa_available(PairIsa isa) {
 }
 
 PairIsa best_pair_isa() { return cpu_has_avx() ? PairIsa::kAvx : PairIsa::kSse2; }
+
+std::size_t queue_touching_pairs(PairIsa isa, const Particles& p, const std::int32_t* owner,
+                                 const std::int32_t* second, std::int32_t k0, std::int32_t k1,
+                                 std::uint8_t* live, const PairOutputs& out,
+                                 QueuedContact* queue) {
+  if (k1 <= k0) return 0;
+  switch (isa) {
+    case PairIsa::kScalar:
+    case PairIsa::kSse2:
+      return sse2::scan_pairs(lane_arrays(p, out), owner, second, k0, k1, live, out, queue);
+    case PairIsa::kAvx:
+      if (!cpu_has_avx())
+        throw std::invalid_argument("queue_touching_pairs: isa kAvx, but this CPU has no AVX");
+      return avx::scan_pairs(lane_arrays(p, out), owner, second, k0, k1, live, out, queue);
+  }
+  return 0;
+}
 
 void compute_queued_contacts(PairIsa isa, const Particles& p, const QueuedContact* contacts,
                              std::size_t count, double dt, const PairOutputs& out) {

@@ -98,6 +98,17 @@ inline bool lanes_eligible(const ContactConstants& c) {
   return c.rolling == RollingModel::kEpsd && !c.cohesive && !c.size_dependent_rolling;
 }
 
+/// Tests the listed pairs k0 <= k < k1 (first member owner[k - k0], second member second[k])
+/// of the particles `p` for contact (|x_i - x_j| < r_i + r_j), several at a time, and appends
+/// the touching ones in list order to `queue` (room for k1 - k0 entries; QueuedContact::c is
+/// left for the caller to set). Sets live[k] to 1 if pair k touches, 0 if not; a pair that
+/// separated since the last step (live[k] was 1) gets its springs, reactions and overlap cleared
+/// in `out`. Returns the number queued.
+std::size_t queue_touching_pairs(PairIsa isa, const Particles& p, const std::int32_t* owner,
+                                 const std::int32_t* second, std::int32_t k0, std::int32_t k1,
+                                 std::uint8_t* live, const PairOutputs& out,
+                                 QueuedContact* queue);
+
 /// Runs the contact kernel on the `count` touching pairs `contacts` (distinct pair indices k)
 /// of the particles `p` with time step dt [s]: updates each pair's springs, stores its
 /// reactions and overlap, and writes the force and torque on its first member to

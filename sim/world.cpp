@@ -198,8 +198,6 @@ void World::pair_forces() {
   // same on any number of threads, so results stay bit-identical.
   // Raw pointers: the stores below (some of them bytes) would otherwise make the compiler reload
   // every vector's data pointer after each of them.
-  const Vec3* const x = p.x.data();
-  const double* const radius = p.radius.data();
   const double* const mass = p.mass.data();
   const std::int32_t* const material = p.material.data();
   Vec3* const force = state_.particles.force.data();
@@ -241,24 +239,6 @@ void World::pair_forces() {
         cur += owner[m];
         owner[m] = cur;
       }
-      std::size_t queued = 0;
-      for (std::int32_t k = k0; k < k1; ++k) {
-        const std::int32_t i = owner[static_cast<std::size_t>(k - k0)];
-        const std::int32_t j = second[k];
-        const double cut = radius[i] + radius[j];
-        if ((x[i] - x[j]).squaredNorm() >= cut * cut) {
-          if (live[k] != 0) {  // separated since the last step
-            history[k] = ContactHistory{};
-            reaction_force[slot[k]].setZero();
-            reaction_torque[slot[k]].setZero();
-            overlap[k] = 0.0;
-            live[k] = 0;
-          }
-          continue;
-        }
-        live[k] = 1;
-        queue[queued++] = QueuedContact{k, i, j, &table.c(material[i], material[j])};
-      }
       PairOutputs out;
       out.history = history;
       out.slot = slot;
@@ -267,6 +247,10 @@ void World::pair_forces() {
       out.overlap = overlap;
       out.force_i = queue_force.data();
       out.torque_i = queue_torque.data();
+      const std::size_t queued = queue_touching_pairs(isa, p, owner.data(), second, k0, k1, live,
+                                                      out, queue.data());
+      for (std::size_t q = 0; q < queued; ++q)
+        queue[q].c = &table.c(material[queue[q].i], material[queue[q].j]);
       compute_queued_contacts(isa, p, queue.data(), queued, dt, out);
       for (std::size_t i = i0; i < i1; ++i) {
         block_force[i - i0] = mass[i] * g;
