@@ -289,5 +289,80 @@ TEST(PairSimd, AllEligibleHeapLikeContactsOverManySteps) {
   }
 }
 
+TEST(PairSimd, DistanceTestQueuesTheTouchingPairsInListOrder) {
+  // A "list" of pairs at random near contact distance (about half of them touching, some at
+  // contact distance to within a rounding); pair_live random. Every instruction set must queue
+  // exactly the pairs with |x_i - x_j|^2 < (r_i + r_j)^2, in list order; set live to the outcome;
+  // clear the results of the pairs that separated (live was 1) and leave every other pair's.
+  Rng rng(31);
+  Particles p;
+  const int listed = 1001;  // not a multiple of the lanes: a scalar tail
+  const int owners = listed / 3;
+  for (int b = 0; b < owners + listed; ++b)
+    p.add(Vec3(rng.uniform(0, 0.1), rng.uniform(0, 0.1), rng.uniform(0, 0.1)),
+          rng.uniform(0.5e-3, 1e-3), 2760.0, 0, b);
+  std::vector<std::int32_t> owner(listed), second(listed), slot(listed);
+  std::vector<std::uint8_t> live0(listed);
+  for (int k = 0; k < listed; ++k) {
+    owner[k] = static_cast<std::int32_t>(k * owners / listed);  // increasing, as in a CSR list
+    second[k] = owners + k;
+    const std::size_t i = owner[k], j = second[k];
+    if (k % 50 == 7) {  // at contact distance up to one rounding: decided as the definition does
+      p.radius[j] = 0.5e-3;
+      p.radius[i] = 0.75e-3;
+      p.x[j] = p.x[i] - Vec3(1.25e-3, 0, 0);
+    } else {  // a partner near contact distance
+      p.x[j] = p.x[i] + (p.radius[i] + p.radius[j]) * rng.uniform(0.9, 1.1) * random_unit(rng);
+    }
+    live0[k] = static_cast<std::uint8_t>(rng.below(2));
+    slot[k] = listed - 1 - k;
+  }
+  // The expected outcome, from the definition.
+  std::vector<std::int32_t> expected;
+  for (int k = 0; k < listed; ++k) {
+    const double cut = p.radius[owner[k]] + p.radius[second[k]];
+    if ((p.x[owner[k]] - p.x[second[k]]).squaredNorm() < cut * cut) expected.push_back(k);
+  }
+  ASSERT_GT(expected.size(), 200u);
+  ASSERT_LT(expected.size(), 800u);
+  for (PairIsa isa : available_isas()) {
+    std::vector<std::uint8_t> live = live0;
+    std::vector<ContactHistory> history(listed);
+    for (ContactHistory& h : history) h.tangential = h.rolling = Vec3(1, 2, 3);
+    std::vector<Vec3> rf(listed, Vec3(4, 5, 6)), rt(listed, Vec3(7, 8, 9));
+    std::vector<double> ov(listed, 0.5);
+    PairOutputs out;
+    out.history = history.data();
+    out.slot = slot.data();
+    out.reaction_force = rf.data();
+    out.reaction_torque = rt.data();
+    out.overlap = ov.data();
+    std::vector<QueuedContact> queue(listed);
+    const std::size_t queued = queue_touching_pairs(isa, p, owner.data(), second.data(), 0,
+                                                    listed, live.data(), out, queue.data());
+    ASSERT_EQ(queued, expected.size()) << isa_name(isa);
+    for (std::size_t q = 0; q < queued; ++q) {
+      EXPECT_EQ(queue[q].k, expected[q]) << isa_name(isa);
+      EXPECT_EQ(queue[q].i, owner[expected[q]]);
+      EXPECT_EQ(queue[q].j, second[expected[q]]);
+    }
+    std::size_t e = 0;
+    int cleared = 0;
+    for (int k = 0; k < listed; ++k) {
+      const bool touch = e < expected.size() && expected[e] == k;
+      e += touch ? 1 : 0;
+      EXPECT_EQ(live[k], touch ? 1 : 0) << isa_name(isa) << " pair " << k;
+      const bool clear = !touch && live0[k] != 0;
+      cleared += clear ? 1 : 0;
+      EXPECT_EQ(history[k].tangential, clear ? Vec3::Zero() : Vec3(1, 2, 3)) << k;
+      EXPECT_EQ(history[k].rolling, clear ? Vec3::Zero() : Vec3(1, 2, 3)) << k;
+      EXPECT_EQ(rf[slot[k]], clear ? Vec3::Zero() : Vec3(4, 5, 6)) << k;
+      EXPECT_EQ(rt[slot[k]], clear ? Vec3::Zero() : Vec3(7, 8, 9)) << k;
+      EXPECT_EQ(ov[k], clear ? 0.0 : 0.5) << k;
+    }
+    EXPECT_GT(cleared, 100) << isa_name(isa);
+  }
+}
+
 }  // namespace
 }  // namespace reposetwin::sim
