@@ -1,23 +1,25 @@
-// The touching pairs of the neighbor list through the contact kernel, several at a time.
+// The pair loop's two inner phases, two pairs at a time: the distance test of the listed pairs
+// (queue_touching_pairs) and the contact kernel on the touching ones (compute_queued_contacts).
 //
 // Design note. The scalar kernel (sim/contact.hpp, hertz_mindlin, with the pair's geometry from
 // pair_input below) is one long dependency chain per contact: a square root for the distance, a
 // division for the normal, two square roots for the stiffnesses and dampings, one square root
-// and one division to rotate each spring, the Coulomb and rolling caps. A pair loop that runs
-// one contact after the other waits on these latencies. compute_queued_contacts() runs the same
-// arithmetic on 2 (SSE2, the build's baseline) or 4 (AVX, chosen at run time if the CPU has it)
-// contacts at once, one contact per lane: the particles' data are gathered straight into the
-// lanes, every branch of the kernel is a select, and the results are scattered back. Each lane
-// performs the scalar kernel's IEEE operations (+, -, *, /, sqrt, no fused multiply-add) in the
-// scalar kernel's order, Eigen's three-term sums included ((a0 + a1) + a2), so a lane gives the
-// bits of the scalar kernel exactly; tests/sim/pair_simd_test.cpp checks this contact by contact,
-// and the pinned determinism hash checks it for whole runs.
+// and one division to rotate each spring, the Coulomb and rolling caps. compute_queued_contacts()
+// runs the same arithmetic on two contacts at once, one per SSE2 lane (the x86-64 baseline): the
+// particles' data are gathered straight into the lanes (no intermediate ContactInput), every
+// branch of the kernel is a select (a branch only skips a square root that no lane of the pair
+// needs), and the results are scattered back. Each lane performs the scalar kernel's IEEE
+// operations (+, -, *, /, sqrt, no fused multiply-add) in the scalar kernel's order, Eigen's
+// three-term sums included ((a0 + a1) + a2), so a lane gives the bits of the scalar kernel
+// exactly; tests/sim/pair_simd_test.cpp checks this contact by contact, and the pinned
+// determinism hash checks it for whole runs. A 4-wide AVX copy of the same code (chosen at run
+// time) was as fast as SSE2 on the standard heap and was removed (bench/README.md, session 4).
 //
 // Scope of the lanes: material pairs with EPSD rolling and neither cohesion nor size-dependent
 // rolling (lanes_eligible), which is the standard heap's and the paper's physics; a contact of
 // any other material pair (CDT or no rolling, cohesion, size-dependent rolling) goes through the
-// scalar kernel at its place in the queue. The lanes gather each pair's constants per lane, so a
-// group may mix material pairs.
+// scalar kernel at its place in the queue. Each lane reads its own pair's constants, so the two
+// lanes may hold different material pairs.
 //
 // The force and torque of each contact on its first member are written per queued contact, not
 // summed here: the caller sums them per particle in list order, which keeps the sums, and so the
@@ -70,27 +72,20 @@ struct QueuedContact {
 
 /// Where the results of the queued contacts go, laid out as World::pair_forces keeps them.
 struct PairOutputs {
-  ContactHistory* history = nullptr;  // (pairs) springs of pair k, updated in place
-  const std::int32_t* slot = nullptr; // (pairs) incoming slot of pair k
-  Vec3* reaction_force = nullptr;     // (pairs, by slot) force of the pair on i [N]
-  Vec3* reaction_torque = nullptr;    // (pairs, by slot) torque of the pair on j [N m]
-  double* overlap = nullptr;          // (pairs) overlap / smaller radius [-]
-  Vec3* force_i = nullptr;            // (queued) force of each queued contact on i [N]
-  Vec3* torque_i = nullptr;           // (queued) torque of each queued contact on i [N m]
+  ContactHistory* history = nullptr;   // (pairs) springs of pair k, updated in place
+  const std::int32_t* slot = nullptr;  // (pairs) incoming slot of pair k
+  Vec3* reaction_force = nullptr;      // (pairs, by slot) force of the pair on i [N]
+  Vec3* reaction_torque = nullptr;     // (pairs, by slot) torque of the pair on j [N m]
+  double* overlap = nullptr;           // (pairs) overlap / smaller radius [-]
+  Vec3* force_i = nullptr;             // (queued) force of each queued contact on i [N]
+  Vec3* torque_i = nullptr;            // (queued) torque of each queued contact on i [N m]
 };
 
-/// The instruction sets compute_queued_contacts() can use.
+/// How compute_queued_contacts() runs the kernel.
 enum class PairIsa {
   kScalar,  // one contact at a time (pair_input + hertz_mindlin): the reference
-  kSse2,    // 2 contacts per instruction (the x86-64 baseline)
-  kAvx,     // 4 contacts per instruction (only if the CPU has AVX)
+  kSse2,    // 2 contacts per instruction (SSE2, the x86-64 baseline)
 };
-
-/// Whether this CPU can run `isa`.
-bool pair_isa_available(PairIsa isa);
-
-/// The widest instruction set this CPU can run (kAvx or kSse2).
-PairIsa best_pair_isa();
 
 /// Whether contacts of the material pair with constants `c` run in the lanes (EPSD rolling, no
 /// cohesion, no size-dependent rolling); the others take the scalar kernel.
@@ -99,21 +94,19 @@ inline bool lanes_eligible(const ContactConstants& c) {
 }
 
 /// Tests the listed pairs k0 <= k < k1 (first member owner[k - k0], second member second[k])
-/// of the particles `p` for contact (|x_i - x_j| < r_i + r_j), several at a time, and appends
+/// of the particles `p` for contact (|x_i - x_j| < r_i + r_j), two at a time, and appends
 /// the touching ones in list order to `queue` (room for k1 - k0 entries; QueuedContact::c is
 /// left for the caller to set). Sets live[k] to 1 if pair k touches, 0 if not; a pair that
 /// separated since the last step (live[k] was 1) gets its springs, reactions and overlap cleared
 /// in `out`. Returns the number queued.
-std::size_t queue_touching_pairs(PairIsa isa, const Particles& p, const std::int32_t* owner,
+std::size_t queue_touching_pairs(const Particles& p, const std::int32_t* owner,
                                  const std::int32_t* second, std::int32_t k0, std::int32_t k1,
-                                 std::uint8_t* live, const PairOutputs& out,
-                                 QueuedContact* queue);
+                                 std::uint8_t* live, const PairOutputs& out, QueuedContact* queue);
 
 /// Runs the contact kernel on the `count` touching pairs `contacts` (distinct pair indices k)
 /// of the particles `p` with time step dt [s]: updates each pair's springs, stores its
 /// reactions and overlap, and writes the force and torque on its first member to
-/// out.force_i[q] and out.torque_i[q] for queued contact q. Every instruction set gives the
-/// same bits. Throws std::invalid_argument if `isa` is not available on this CPU.
+/// out.force_i[q] and out.torque_i[q] for queued contact q. kScalar and kSse2 give the same bits.
 void compute_queued_contacts(PairIsa isa, const Particles& p, const QueuedContact* contacts,
                              std::size_t count, double dt, const PairOutputs& out);
 

@@ -210,7 +210,6 @@ void World::pair_forces() {
   Vec3* const reaction_torque = state_.reaction_torque.data();
   double* const overlap = state_.pair_overlap.data();
   std::uint8_t* const live = state_.pair_live.data();
-  static const PairIsa isa = best_pair_isa();
   constexpr std::size_t kBlock = 64;  // particles: about 100 touching pairs on a settled heap
   const std::size_t blocks = (n + kBlock - 1) / kBlock;
 #pragma omp parallel if (n > par_min)
@@ -247,11 +246,11 @@ void World::pair_forces() {
       out.overlap = overlap;
       out.force_i = queue_force.data();
       out.torque_i = queue_torque.data();
-      const std::size_t queued = queue_touching_pairs(isa, p, owner.data(), second, k0, k1, live,
+      const std::size_t queued = queue_touching_pairs(p, owner.data(), second, k0, k1, live,
                                                       out, queue.data());
       for (std::size_t q = 0; q < queued; ++q)
         queue[q].c = &table.c(material[queue[q].i], material[queue[q].j]);
-      compute_queued_contacts(isa, p, queue.data(), queued, dt, out);
+      compute_queued_contacts(PairIsa::kSse2, p, queue.data(), queued, dt, out);
       for (std::size_t i = i0; i < i1; ++i) {
         block_force[i - i0] = mass[i] * g;
         block_torque[i - i0].setZero();
