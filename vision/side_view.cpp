@@ -117,10 +117,9 @@ double col_mean(const cv::Mat& img, int c, int r0, int r1) {
 // of a flat pile), are part of it. Given connected components (`stats` of
 // cv::connectedComponentsWithStats, `n` labels) and the pile's label `seed`, returns a flag per
 // label: the pile, and every component that `rests` on the plate, no taller than half the pile,
-// at least `min_height` px tall (a grain, not a speck), at most 4 times as wide as tall (a grain
-// or a few, not a band of the scene) and round (filling at most kGrainMaxFill of its bounding
-// box: a disc fills 0.79, the scale bar's bottom band standing on the plate fills it all), whose
-// gap to the pile is at most its
+// at least `min_height` px tall (a grain, not a speck) and round (filling at most kGrainMaxFill
+// of its bounding box: a disc fills 0.79, a row of touching discs a little more, the scale
+// bar's bottom band standing on the plate fills it all), whose gap to the pile is at most its
 // own size (about one grain diameter), repeatedly, outwards. A loose grain farther out stays
 // apart.
 std::vector<uchar> with_nearby_grains(const cv::Mat& stats, int n, int seed, int min_height,
@@ -139,8 +138,7 @@ std::vector<uchar> with_nearby_grains(const cv::Mat& stats, int n, int seed, int
       if (member[i]) continue;
       const cv::Rect r = rect(i);
       const double fill = stats.at<int>(i, cv::CC_STAT_AREA) / std::max(1.0, r.area() * 1.0);
-      if (r.height > pile_h / 2 || r.height < min_height || r.width > 4 * r.height ||
-          fill > kGrainMaxFill || !rests(r))
+      if (r.height > pile_h / 2 || r.height < min_height || fill > kGrainMaxFill || !rests(r))
         continue;
       // The grain's size: its height, or its width when the picture cuts it (a grain seen
       // partly against the backdrop, partly against the plate's top face).
@@ -194,18 +192,43 @@ InterceptFit toe_intercept(const std::vector<double>& h, const std::vector<doubl
       ++f.n;
     }
   f.alpha = sum / f.n;
-  // Never beyond the band's own reach carried down from its lowest row: where the band is the
-  // near-vertical side of one layer of grains (a flat pile, or a monolayer of grains around it),
-  // carrying every row along the flank would move the toe outwards by up to the band's height
-  // times the flank's cotangent; the grains' reach is the toe. On a smooth cone the two agree.
+  // Never beyond the silhouette's own reach: where the band is the side of one layer of grains
+  // (a flat pile, or a monolayer of grains around it), carrying every row along the flank moved
+  // the toe outwards by up to the band's height times the flank's cotangent, while the toe is
+  // the grains' reach. The reach is the band's outermost point, or, where the silhouette's
+  // lowest rows slope like a flank (a least-squares line over the lowest quarter of the band, at
+  // least 4 px, leaning inwards by at least half the flank's cotangent), its lowest row carried
+  // down to the plate along the flank: that is a smooth cone's toe, while a grain's lower half
+  // overhangs and its widest point is the reach. (The lowest rows' own slope is too noisy to
+  // carry along: near the plate it mixes the bottom grains' outline with the flank.)
   const double outward = f.beta > 0.0 ? -1.0 : 1.0;
   double reach = -std::numeric_limits<double>::infinity();
-  double h_low = std::numeric_limits<double>::infinity();
+  double h_low = std::numeric_limits<double>::infinity(), h_max = 0.0;
   for (size_t i = 0; i < h.size(); ++i) {
     reach = std::max(reach, outward * x[i]);
     h_low = std::min(h_low, h[i]);
+    h_max = std::max(h_max, h[i]);
   }
-  const double limit = reach + std::abs(f.beta) * h_low;
+  const double h_fit = h_low + std::max(4.0, 0.25 * (h_max - h_low));
+  double sh = 0.0, sx = 0.0, shh = 0.0, shx = 0.0;
+  int m = 0;
+  for (size_t i = 0; i < h.size(); ++i)
+    if (h[i] <= h_fit) {
+      sh += h[i];
+      sx += outward * x[i];
+      shh += h[i] * h[i];
+      shx += h[i] * outward * x[i];
+      ++m;
+    }
+  double limit = reach;
+  if (m >= 2 && shh * m - sh * sh > 1e-9) {
+    const double slope = (m * shx - sh * sx) / (m * shh - sh * sh);  // outward per unit height
+    const double carry = -slope >= 0.5 * std::abs(f.beta) ? std::abs(f.beta) : 0.0;
+    double x_low = -std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < h.size(); ++i)
+      if (h[i] <= h_low + 1.0) x_low = std::max(x_low, outward * x[i]);
+    limit = std::max(limit, x_low + carry * h_low);
+  }
   if (outward * f.alpha > limit) {
     f.alpha = outward * limit;
     f.clamped = true;

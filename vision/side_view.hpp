@@ -46,11 +46,13 @@
 //     outline (the bottom layer's near-vertical sides), so a free line through it, extrapolated,
 //     put the toes of a rendered 80 mm sphere cone 3 mm too far out each side (D 86 mm); along
 //     the flank's slope they land on the bottom layer's reach. The toe is never farther out than
-//     the band's own reach carried down from its lowest row: when the whole band lies within one
-//     layer of grains (a flat pile, a monolayer edge) carrying every row along the flank moved
-//     the toe out by up to the band's height times the flank's cotangent (D 122 mm for 118). On
-//     a smooth cone the two agree. On a rendered flat cone of 3.5 mm spheres D still reads 2.6%
-//     wide (the carry over the lowest 2% of H).
+//     the silhouette's own reach: the band's outermost point, or its lowest row carried down
+//     along the flank when the lowest rows slope like a flank (a smooth cone: the two agree). A
+//     grain's lower half overhangs and its widest point is the reach. Without this, when the
+//     whole band lies within one layer of grains (a flat pile, a monolayer edge), carrying every
+//     row along the flank moved the toe out by up to the band's height times the flank's
+//     cotangent (rendered flat cone of 3.5 mm spheres: D 51.3 mm for 48, monolayer edge 122 for
+//     118; now 48.2 and 117.8).
 //     The apex of a sharp cone reads about half a pixel low (the tip narrower than a pixel is
 //     lost); real apexes are rounded and H is then the top of the rounding.
 // Everything here is in pixels and orthographic; vision/measure.hpp adds the scale and the
