@@ -106,7 +106,7 @@ std::string label(const std::string& stem, double height_m, double azimuth_deg) 
 // plate, lifted fast): the plate line is the plate (z = 0), not the monolayer's top one sphere
 // diameter up, and D reaches the outermost spheres on the plate, including the two lying one
 // diameter apart from the rest. Measured: plate line 0.00 mm, H 13.94 mm, D 117.8 mm for 118.
-// Before the fix (without the two lone spheres): plate line 3.6 mm up, D 34.6 mm for 104.
+// Before the fix: plate line 3.5 mm up, D 34.6 mm (H right: 13.99 mm).
 TEST(VisionOnRenders, SparseMonolayerEdgeBelongsToThePile) {
   double r1 = 0.0;
   const Spheres s = cone_with_monolayer(4, &r1);
@@ -164,6 +164,8 @@ TEST(VisionOnRenders, RaisedCameraReadsHFromTheToeLine) {
 // feet and D reaches them. Tolerances as above (the toes are the outermost spheres at the
 // axis' depth, where the toe line maps to z = -h; the formula's R^2 / (L^2 - R^2) term is 0.7%
 // of h here, inside the tolerance).
+// Measured: plate line -5.03 / -10.06 mm, H 13.99 / 14.02 mm, D 117.8 / 117.4 mm. Before the
+// fix: plate line -1.50 / -6.40 mm, H 9.00 / 3.99 mm, D 34.9 / 34.6 mm.
 TEST(VisionOnRenders, SparseEdgeSeenFromARaisedCamera) {
   double r1 = 0.0;
   const Spheres s = cone_with_monolayer(4, &r1);
