@@ -156,6 +156,13 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
   if (std::abs(p.plate.tilt_deg()) > 1.0)
     m.warnings.push_back("plate line tilted by " + fixed(p.plate.tilt_deg(), 2) +
                          " deg: level the camera");
+  if (p.far_edge) {
+    const double u = p.apex.x;
+    m.warnings.push_back(
+        "the pile stands on the plate's visible top face (camera above the plate): the plate line "
+        "is its toe line, " +
+        fixed(p.plate.v_at(u) - p.far_edge->v_at(u), 1) + " px below the plate's far edge");
+  }
   if (std::abs(p.left.angle_deg - p.right.angle_deg) > 3.0)
     m.warnings.push_back("flank angles differ by " +
                          fixed(std::abs(p.left.angle_deg - p.right.angle_deg), 1) +
@@ -453,7 +460,8 @@ nlohmann::json to_json(const SideMeasurement& m) {
           {"slope", p.plate.b},
           {"tilt_deg", p.plate.tilt_deg()},
           {"residual_px", p.plate.residual_px},
-          {"support_columns", p.plate.support}}},
+          {"support_columns", p.plate.support},
+          {"from", p.far_edge ? "toes on the plate's top face" : "plate edge"}}},
         {"flank_left", flank_json(p.left)},
         {"flank_right", flank_json(p.right)},
         {"pile_level", p.pile_level},
@@ -557,6 +565,10 @@ cv::Mat draw_side_overlay(const cv::Mat& image, const SideMeasurement& m) {
   // Plate (toe) line.
   cv::line(img, ip({0.0, p.plate.v_at(0.0)}), ip({img.cols - 1.0, p.plate.v_at(img.cols - 1.0)}),
            cv::Scalar(255, 200, 0), t, cv::LINE_AA);
+  if (p.far_edge)  // the plate's far edge, when the plate line is the toe line below it
+    cv::line(img, ip({0.0, p.far_edge->v_at(0.0)}),
+             ip({img.cols - 1.0, p.far_edge->v_at(img.cols - 1.0)}), cv::Scalar(160, 120, 0),
+             std::max(1, t / 2), cv::LINE_AA);
   // Fitted flank lines, from the plate line to the apex height, fit band marked thicker.
   auto flank = [&](const FlankFit& f, const cv::Scalar& colour) {
     const double h0 = p.plate.height_above(f.point);

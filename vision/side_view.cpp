@@ -923,6 +923,7 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
   const cv::Point2d toe_right(tr.alpha, plate.v_at(tr.alpha));
 
   out.plate = plate;
+  out.far_edge = far_edge;
   out.apex = apex;
   out.toe_left = toe_left;
   out.toe_right = toe_right;
@@ -950,6 +951,7 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
   const cv::Point2d off(roi.x, roi.y);
   if (off.x != 0.0 || off.y != 0.0) {
     out.plate.a = out.plate.a + off.y - out.plate.b * off.x;
+    if (out.far_edge) out.far_edge->a = out.far_edge->a + off.y - out.far_edge->b * off.x;
     out.apex += off;
     out.toe_left += off;
     out.toe_right += off;

@@ -60,6 +60,7 @@
 #pragma once
 
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -135,6 +136,9 @@ struct SideProfile {
   cv::Rect blob_box;                               // bounding box of the pile blob [px]
   double pile_level = 0.0;  // flat-field level of the pile (backdrop = 1) [-]
   double threshold = 0.0;   // flat-field threshold used [-]
+  /// When the pile stands on the plate's visible top face (a camera above the plate): the
+  /// plate's far edge against the backdrop, above the toe line that `plate` then is.
+  std::optional<PlateLine> far_edge;
 };
 
 /// Finds the plate line in a flat-fielded image (CV_32F, backdrop about 1). Throws

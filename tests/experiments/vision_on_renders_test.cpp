@@ -115,6 +115,7 @@ TEST(VisionOnRenders, SparseMonolayerEdgeBelongsToThePile) {
     const Photo p = photograph(s, 0.0, az);
     const vision::SideMeasurement m = measure(p, p.truth, label("sparse", 0.0, az));
     EXPECT_NEAR(m.plate_line_z_m, 0.0, 0.3 * kA) << az;
+    EXPECT_FALSE(m.pixels.far_edge) << az;
     EXPECT_NEAR(m.height_m, kH0, 0.03 * kH0) << az;
     EXPECT_NEAR(m.diameter_m, d_true, 0.05 * d_true) << az;
   }
@@ -148,6 +149,7 @@ TEST(VisionOnRenders, RaisedCameraReadsHFromTheToeLine) {
       const double z_toe = -h * (1.0 + kR0 * kR0 / (l * l - kR0 * kR0));
       const vision::SideMeasurement m = measure(p, p.declared, name);
       EXPECT_NEAR(m.plate_line_z_m, z_toe, 0.3 * kA) << name;
+      EXPECT_EQ(m.pixels.far_edge.has_value(), h > 0.0) << name;
       EXPECT_NEAR(m.height_m, kH0, 0.03 * kH0) << name;
       EXPECT_NEAR(m.diameter_m, 2.0 * kR0, 0.03 * 2.0 * kR0) << name;
       const vision::SideMeasurement t = measure(p, p.truth, name + "_true_camera");
