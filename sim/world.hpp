@@ -4,9 +4,10 @@
 //   1. kick_drift       v += dt/2 F/m, w += dt/2 T/I, x += dt v      (forces of the last step)
 //   2. move_walls       prescribed wall motion (the lift)
 //   3. update_neighbors rebuild the Verlet list if a particle moved more than skin/2
-//   4. pair_forces      Hertz-Mindlin + rolling kernel once per touching pair; the pair's first
-//                       member sums its own pairs (and gravity) at once, the reaction is stored
-//                       in the second member's incoming slot
+//   4. pair_forces      Hertz-Mindlin + rolling kernel once per touching pair, two pairs at a
+//                       time in SSE2 lanes (sim/pair_simd.hpp, bit-identical to the scalar
+//                       kernel); the pair's first member sums its own pairs (and gravity) in
+//                       list order, the reaction is stored in the second member's incoming slot
 //   5. gather_forces    each particle adds the stored reactions of the pairs it is second in,
 //                       contiguous and in a fixed order (deterministic)
 //   6. wall_forces      the particles near an enabled wall (candidates listed at rebuild)
