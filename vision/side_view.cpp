@@ -317,6 +317,17 @@ std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob
     if (std::isnan(rr)) return l;
     return l + (rr - l) * c / std::max(1, flat.cols - 1);
   };
+  // A level camera's pile ends at the edge: nothing of it one "deep enough" row below the edge
+  // (see the test on the deepest pixel below) ends the search early.
+  const double min_depth = std::max(5.0, 0.08 * h_above);
+  int below = 0;
+  for (int c = box.x; c < box.x + box.width; ++c) {
+    const int r = static_cast<int>(std::floor(edge.v_at(c) + min_depth)) + 1;
+    if (r < r_top || r > r_bot) continue;
+    const double level = plate_level(r, c);
+    if (!std::isnan(level) && std::abs(flat.at<float>(r, c) - level) > tol) ++below;
+  }
+  if (below < 3) return std::nullopt;
   // The band below the edge, as deep as the pile is tall above it; the pile widens downwards,
   // so every column is searched and connectivity to the blob decides. The first rows below the
   // edge are its blurred transition: they join the pile only in columns where the pile is on
@@ -367,18 +378,18 @@ std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob
   std::vector<int> low(flat.cols, -1);
   int e0 = flat.cols, e1 = -1;
   double deepest = 0.0;
+  for (int r = 0; r < flat.rows; ++r) {
+    const uchar* m = pile.ptr<uchar>(r);
+    for (int c = 0; c < flat.cols; ++c)
+      if (m[c]) low[c] = r;
+  }
   for (int c = 0; c < flat.cols; ++c) {
-    for (int r = flat.rows - 1; r >= 0; --r)
-      if (pile.at<uchar>(r, c)) {
-        low[c] = r;
-        break;
-      }
     if (low[c] < 0 || low[c] + 0.5 <= edge.v_at(c)) continue;
     e0 = std::min(e0, c);
     e1 = std::max(e1, c);
     deepest = std::max(deepest, low[c] + 0.5 - edge.v_at(c));
   }
-  if (e1 - e0 < 8 || deepest <= std::max(5.0, 0.08 * h_above)) return std::nullopt;
+  if (e1 - e0 < 8 || deepest <= min_depth) return std::nullopt;
   // Each toe: the lowest pixel near that end of the pile (detilted), i.e. the bottom of the
   // outermost grain on the plate, or the end of a smooth base ellipse.
   const int w = std::max(4, static_cast<int>(std::lround(0.05 * (e1 - e0))));
@@ -433,40 +444,40 @@ PlateLine find_plate_line(const cv::Mat& flat, const SideSettings& s, const std:
       if (g[c] > 0.0f && backdrop_like(up[c])) o[c] = g[c];
   }
   // Row sums along lines of every tilt up to plate_max_tilt_deg (strips of columns, one step of
-  // slope per pixel of drift across the image): a long straight edge adds up, noise, texture
-  // and sloping flanks do not.
+  // slope per pixel of drift across the image, searched coarse to fine): a long straight edge
+  // adds up, noise, texture and sloping flanks do not.
   const int n_strips = std::clamp(ncols / 8, 4, 64);
   std::vector<double> strip_u(n_strips);
-  cv::Mat strip_sum(rows, n_strips, CV_64F, cv::Scalar(0));
+  std::vector<int> strip_of(ncols);
   for (int k = 0; k < n_strips; ++k) {
     const int c0 = k * ncols / n_strips, c1 = (k + 1) * ncols / n_strips;
     strip_u[k] = 0.5 * (c0 + c1 - 1);
-    for (int r = 0; r < rows; ++r) {
-      const float* o = clean.ptr<float>(r);
-      double sum = 0.0;
-      for (int c = c0; c < c1; ++c) sum += o[c];
-      strip_sum.at<double>(r, k) = sum;
-    }
+    for (int c = c0; c < c1; ++c) strip_of[c] = k;
+  }
+  std::vector<std::vector<double>> strip_sum(n_strips, std::vector<double>(rows, 0.0));
+  for (int r = 0; r < rows; ++r) {
+    const float* o = clean.ptr<float>(r);
+    for (int c = 0; c < ncols; ++c)
+      if (o[c] != 0.0f) strip_sum[strip_of[c]][r] += o[c];
   }
   const double u_mid = 0.5 * (ncols - 1);
   const double tilt = std::tan(s.plate_max_tilt_deg / kRadToDeg);
   const int n_slopes = static_cast<int>(std::ceil(tilt * ncols * 0.5));
+  // Each strip shifted by a constant, linearly interpolated.
   auto sheared_profile = [&](double slope) {
     std::vector<double> prof(rows, 0.0);
     for (int k = 0; k < n_strips; ++k) {
       const double dv = slope * (strip_u[k] - u_mid);
-      for (int r = 0; r < rows; ++r) {
-        const double v = r + dv;
-        const int i = static_cast<int>(std::floor(v));
-        if (i < 0 || i + 1 >= rows) continue;
-        const double t = v - i;
-        prof[r] += (1.0 - t) * strip_sum.at<double>(i, k) + t * strip_sum.at<double>(i + 1, k);
-      }
+      const int i0 = static_cast<int>(std::floor(dv));
+      const double t = dv - i0;
+      const std::vector<double>& sk = strip_sum[k];
+      const int r0 = std::max(0, -i0), r1 = std::min(rows, rows - 1 - i0);
+      for (int r = r0; r < r1; ++r) prof[r] += (1.0 - t) * sk[r + i0] + t * sk[r + i0 + 1];
     }
     return prof;
   };
   double b = 0.0, best = -1.0;
-  for (int j = -n_slopes; j <= n_slopes; ++j) {
+  auto try_slope = [&](int j) {
     const double slope = n_slopes > 0 ? tilt * j / n_slopes : 0.0;
     const std::vector<double> prof = sheared_profile(slope);
     for (int r = 1; r < rows - 1; ++r)
@@ -474,7 +485,12 @@ PlateLine find_plate_line(const cv::Mat& flat, const SideSettings& s, const std:
         best = prof[r];
         b = slope;
       }
-  }
+  };
+  // Every fourth slope, then the neighbours of the best.
+  for (int j = -n_slopes; j <= n_slopes; j += 4) try_slope(j);
+  const int j_best = n_slopes > 0 ? static_cast<int>(std::lround(b / tilt * n_slopes)) : 0;
+  for (int j = std::max(-n_slopes, j_best - 3); j <= std::min(n_slopes, j_best + 3); ++j)
+    if (j != j_best) try_slope(j);
   // An average step of 0.02 of the backdrop level over the whole width, at the least.
   if (!(best > 0.02 * 0.5 * ncols))
     throw std::runtime_error(
@@ -738,10 +754,12 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
     std::vector<std::vector<cv::Point>> contours;
     cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
     cv::drawContours(filled, contours, -1, cv::Scalar(255), cv::FILLED);
+    std::vector<double> last(filled.cols);
+    for (int c = 0; c < filled.cols; ++c) last[c] = std::floor(line.v_at(c) - 0.5);
     for (int r = 0; r < filled.rows; ++r) {
       uchar* m = filled.ptr<uchar>(r);
       for (int c = 0; c < filled.cols; ++c)
-        if (r > std::floor(line.v_at(c) - 0.5)) m[c] = 0;
+        if (r > last[c]) m[c] = 0;
     }
     return filled;
   };
