@@ -435,30 +435,26 @@ PlateLine find_plate_line(const cv::Mat& flat, const SideSettings& s, const std:
   // those columns cannot tell the plate's edge from the grains' own top edge, so they are left out.
   auto backdrop_like = [](float v) { return v > 0.75f && v < 1.33f; };
   const int rows = flat.rows, ncols = flat.cols;
-  cv::Mat clean(gy.size(), CV_32F, cv::Scalar(0));
-  for (int r = kCleanGapPx; r < rows; ++r) {
-    const float* g = gy.ptr<float>(r);
-    const float* up = flat.ptr<float>(r - kCleanGapPx);
-    float* o = clean.ptr<float>(r);
-    for (int c = 0; c < ncols; ++c)
-      if (g[c] > 0.0f && backdrop_like(up[c])) o[c] = g[c];
-  }
   // Row sums along lines of every tilt up to plate_max_tilt_deg (strips of columns, one step of
   // slope per pixel of drift across the image, searched coarse to fine): a long straight edge
   // adds up, noise, texture and sloping flanks do not.
   const int n_strips = std::clamp(ncols / 8, 4, 64);
   std::vector<double> strip_u(n_strips);
-  std::vector<int> strip_of(ncols);
+  std::vector<int> strip_c0(n_strips + 1, ncols);
   for (int k = 0; k < n_strips; ++k) {
-    const int c0 = k * ncols / n_strips, c1 = (k + 1) * ncols / n_strips;
-    strip_u[k] = 0.5 * (c0 + c1 - 1);
-    for (int c = c0; c < c1; ++c) strip_of[c] = k;
+    strip_c0[k] = k * ncols / n_strips;
+    strip_u[k] = 0.5 * (strip_c0[k] + (k + 1) * ncols / n_strips - 1);
   }
   std::vector<std::vector<double>> strip_sum(n_strips, std::vector<double>(rows, 0.0));
-  for (int r = 0; r < rows; ++r) {
-    const float* o = clean.ptr<float>(r);
-    for (int c = 0; c < ncols; ++c)
-      if (o[c] != 0.0f) strip_sum[strip_of[c]][r] += o[c];
+  for (int r = kCleanGapPx; r < rows; ++r) {
+    const float* g = gy.ptr<float>(r);
+    const float* up = flat.ptr<float>(r - kCleanGapPx);
+    for (int k = 0; k < n_strips; ++k) {
+      float sum = 0.0f;
+      for (int c = strip_c0[k]; c < strip_c0[k + 1]; ++c)
+        if (g[c] > 0.0f && backdrop_like(up[c])) sum += g[c];
+      strip_sum[k][r] = sum;
+    }
   }
   const double u_mid = 0.5 * (ncols - 1);
   const double tilt = std::tan(s.plate_max_tilt_deg / kRadToDeg);
