@@ -271,26 +271,37 @@ std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob
   if (box.empty()) return std::nullopt;
   const double h_above = edge.v_at(box.x + 0.5 * box.width) - box.y;
   if (!(h_above > 4.0)) return std::nullopt;
-  // The plate's level, row by row, from the outer tenth of the image on each side (a pile
-  // reaching there is refused later anyway), interpolated across: the flat field is fitted to
-  // the backdrop above and may drift over the band.
-  const int outer = std::max(4, flat.cols / 10);
+  // The plate's level, row by row, on each side of the pile (beyond its height above the edge
+  // from its sides there, as it widens below the edge), interpolated across: the flat field is
+  // fitted to the backdrop above and may drift over the band. Only columns with plate (not
+  // backdrop) just below the edge count: beyond the plate's far corners the backdrop continues.
   auto first_row = [&](int c) { return static_cast<int>(std::floor(edge.v_at(c) - 0.5)) + 1; };
   const int r_top = std::max(0, std::min(first_row(0), first_row(flat.cols - 1)) + kCleanGapPx);
   int r_bot = std::min(
       flat.rows - 1, static_cast<int>(std::max(edge.v_at(0), edge.v_at(flat.cols - 1)) + h_above));
   if (r_bot - r_top < 4) return std::nullopt;
+  const int pad = std::max(8, box.height);
+  std::vector<int> left_cols, right_cols;
+  for (int c = 0; c < flat.cols; ++c) {
+    if (c >= box.x - pad && c < box.x + box.width + pad) continue;
+    const int r = first_row(c) + kCleanGapPx;
+    if (r < 0 || r >= flat.rows || std::abs(flat.at<float>(r, c) - 1.0f) < 0.25f) continue;
+    (c < box.x ? left_cols : right_cols).push_back(c);
+  }
+  for (std::vector<int>* cols : {&left_cols, &right_cols}) {  // at most ~128 columns a side
+    const size_t step = cols->size() / 128 + 1;
+    std::vector<int> kept;
+    for (size_t i = 0; i < cols->size(); i += step) kept.push_back((*cols)[i]);
+    *cols = kept;
+  }
   std::vector<double> level_left(flat.rows, std::nan("")), level_right(flat.rows, std::nan(""));
   std::vector<double> spread;
   for (int r = r_top; r <= r_bot; ++r) {
     std::vector<double> lv, rv;
-    for (int c = 0; c < outer; ++c) {
-      if (r >= first_row(c) + kCleanGapPx && !blob.at<uchar>(r, c))
-        lv.push_back(flat.at<float>(r, c));
-      const int cr = flat.cols - 1 - c;
-      if (r >= first_row(cr) + kCleanGapPx && !blob.at<uchar>(r, cr))
-        rv.push_back(flat.at<float>(r, cr));
-    }
+    for (int c : left_cols)
+      if (r >= first_row(c) + kCleanGapPx) lv.push_back(flat.at<float>(r, c));
+    for (int c : right_cols)
+      if (r >= first_row(c) + kCleanGapPx) rv.push_back(flat.at<float>(r, c));
     if (lv.size() >= 3) level_left[r] = median(lv);
     if (rv.size() >= 3) level_right[r] = median(rv);
     if (r < r_top + 6) {
