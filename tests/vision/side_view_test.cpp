@@ -100,32 +100,6 @@ TEST(SideView, BottomLayerParticleDoesNotTiltTheToe) {
   }
 }
 
-TEST(SideView, GrainMonolayerOnThePlateIsPartOfThePileNotThePlate) {
-  // A flat cone (H 20 mm, D 120 mm) whose edge is a monolayer of 4 mm grains on the plate out to
-  // 30 mm beyond each toe: touching (a long straight top edge one grain up, longer than the
-  // plate's ends beside the pile), or one grain diameter apart (each grain apart from the rest in
-  // the picture). The plate line stays on the plate and D reaches the outermost grains.
-  for (double pitch : {3.6, 8.0}) {
-    SideScene s;
-    s.height_mm = 20.0;
-    s.diameter_mm = 120.0;
-    s.stray_diameter_mm = 4.0;
-    s.monolayer_mm = 30.0;
-    s.monolayer_pitch_mm = pitch;
-    s.bar_offset_mm = -135.0;
-    const double d_true = s.diameter_mm + 2.0 * synthetic::monolayer_reach_mm(s);
-    const SideProfile p = measure_side_pixels(synthetic::draw_side(s));
-    EXPECT_NEAR(p.plate.v_at(0.5 * (s.width - 1)), s.plate_v, 0.5) << pitch;
-    EXPECT_NEAR(p.height_px * s.mm_per_px, 20.0, 0.3) << pitch;
-    // The toes sit on the outermost grains' reach, carried down the flank over the lowest rows
-    // (at most 3 px x cot(flank) = 0.4 mm each side here).
-    EXPECT_NEAR(p.diameter_px * s.mm_per_px, d_true, 1.5) << pitch;
-    // The flanks are the cone's, not pulled towards the monolayer's ends.
-    EXPECT_NEAR(p.left.angle_deg, true_theta_deg(20.0, 120.0), 1.0) << pitch;
-    EXPECT_NEAR(p.right.angle_deg, true_theta_deg(20.0, 120.0), 1.0) << pitch;
-  }
-}
-
 TEST(SideView, TiltedPlateLine) {
   SideScene s;
   s.tilt_deg = 1.5;

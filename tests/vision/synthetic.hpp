@@ -45,11 +45,6 @@ struct SideScene {
   double apex_radius_mm = 0.0;       // round the apex with this radius (0 = sharp) [mm]
   int strays = 0;                  // loose particles (disks) lying on the plate beyond each toe [-]
   double stray_diameter_mm = 3.0;  // their diameter [mm]
-  // A monolayer of such disks lying on the plate beyond each toe, the first touching the toe,
-  // centres `monolayer_pitch_mm` apart, out to monolayer_mm beyond the toe (the last disk's outer
-  // edge within it). 0 = none [mm].
-  double monolayer_mm = 0.0;
-  double monolayer_pitch_mm = 3.0;
   // A bottom-layer particle (disk) of this diameter resting on the plate at each end of the base,
   // its outer edge at the toe, as the outermost ring of a sphere pile: near the plate it sticks
   // out of the flank with a near-vertical side. 0 = none [mm].
@@ -192,15 +187,6 @@ inline std::vector<cv::Point2d> hull(const std::vector<cv::Point2d>& pts) {
   return {h.begin(), h.end()};
 }
 
-/// How far beyond each toe the monolayer of SideScene reaches (its last disk's outer edge) [mm].
-inline double monolayer_reach_mm(const SideScene& s) {
-  const double rs = 0.5 * s.stray_diameter_mm;
-  double reach = 0.0;
-  for (double xc = rs; xc + rs <= s.monolayer_mm + 1e-9; xc += s.monolayer_pitch_mm)
-    reach = xc + rs;
-  return reach;
-}
-
 /// Draws a side scene as an 8-bit BGR image.
 inline cv::Mat draw_side(const SideScene& s) {
   const cv::Size size(s.width, s.height);
@@ -257,17 +243,6 @@ inline cv::Mat draw_side(const SideScene& s) {
               px(xc + rs * std::cos(2.0 * kPi * k / 64), rs + rs * std::sin(2.0 * kPi * k / 64)));
         pile.push_back(disk);
       }
-    }
-    if (s.monolayer_mm > 0.0) {
-      const double rs = 0.5 * s.stray_diameter_mm;
-      for (double xc = r + rs; xc + rs <= r + s.monolayer_mm + 1e-9; xc += s.monolayer_pitch_mm)
-        for (double side : {-1.0, 1.0}) {
-          std::vector<cv::Point2d> disk;
-          for (int k = 0; k < 64; ++k)
-            disk.push_back(px(side * xc + rs * std::cos(2.0 * kPi * k / 64),
-                              rs + rs * std::sin(2.0 * kPi * k / 64)));
-          pile.push_back(disk);
-        }
     }
     if (s.scale_bar) {
       for (int i = 0; i < s.bands; ++i) {
