@@ -165,9 +165,9 @@ bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
 }
 
-/// The reference: the scalar kernel, one contact after the other, on the first `count`.
-Results scalar_reference(const Scene& s, std::size_t count) {
-  Results r(s);
+/// One step of the reference, the scalar kernel, one contact after the other, on the first
+/// `count` contacts, carrying the springs in `r`.
+void scalar_step(const Scene& s, std::size_t count, Results& r) {
   for (std::size_t q = 0; q < count; ++q) {
     const QueuedContact& e = s.contacts[q];
     const ContactInput in = pair_input(s.p, *e.c, e.i, e.j);
@@ -178,6 +178,12 @@ Results scalar_reference(const Scene& s, std::size_t count) {
     r.reaction_torque[s.slot[e.k]] = out.torque_j;
     r.overlap[e.k] = in.delta / std::min(s.p.radius[e.i], s.p.radius[e.j]);
   }
+}
+
+/// The reference from fresh springs.
+Results scalar_reference(const Scene& s, std::size_t count) {
+  Results r(s);
+  scalar_step(s, count, r);
   return r;
 }
 
@@ -269,16 +275,7 @@ TEST(PairSimd, AllEligibleHeapLikeContactsOverManySteps) {
   std::vector<Results> runs(isas.size(), Results(s));
   Results ref(s);
   for (int step = 0; step < 50; ++step) {
-    for (std::size_t q = 0; q < s.contacts.size(); ++q) {
-      const QueuedContact& e = s.contacts[q];
-      const ContactInput in = pair_input(s.p, *e.c, e.i, e.j);
-      const ContactOutput out = hertz_mindlin(*e.c, in, kDt, ref.history[e.k]);
-      ref.force_i[q] = out.force;
-      ref.torque_i[q] = out.torque_i;
-      ref.reaction_force[s.slot[e.k]] = out.force;
-      ref.reaction_torque[s.slot[e.k]] = out.torque_j;
-      ref.overlap[e.k] = in.delta / std::min(s.p.radius[e.i], s.p.radius[e.j]);
-    }
+    scalar_step(s, s.contacts.size(), ref);
     for (std::size_t r = 0; r < isas.size(); ++r) {
       compute_queued_contacts(isas[r], s.p, s.contacts.data(), s.contacts.size(), kDt,
                               runs[r].outputs(s));
