@@ -740,9 +740,25 @@ bool same_inputs(const nlohmann::json& stored, const CaseSpec& spec) {
   return true;
 }
 
-// Runs one run in its folder and records result.json or error.json. Never throws.
+// The started.json of an interrupted attempt at this run in `dir`, when the folder may be handed
+// back to the case function to continue: same inputs, not failed (a failure is retried clean),
+// and not forced.
+std::optional<nlohmann::json> interrupted_attempt(const fs::path& dir, const CaseSpec& spec,
+                                                  bool force) {
+  std::error_code ec;
+  if (force || fs::exists(dir / kErrorFile, ec) || fs::exists(dir / kResultFile, ec))
+    return std::nullopt;
+  auto started = read_json(dir / kStartedFile);
+  if (!started || !started->contains("spec") || !same_inputs((*started)["spec"], spec))
+    return std::nullopt;
+  return started;
+}
+
+// Runs one run in its folder and records result.json or error.json. Never throws. An interrupted
+// attempt with the same inputs keeps its folder, so the case function can continue its work
+// (a pile run resumes from its checkpoint); result.json then records the earlier attempt(s).
 bool execute_run(const CaseSpec& spec, const fs::path& out_dir, const CaseFn& case_fn,
-                 const std::string& job) {
+                 const std::string& job, bool force) {
   const fs::path dir = out_dir / spec.relative_dir();
   const std::string started = utc_now();
   const auto t0 = std::chrono::steady_clock::now();
@@ -751,9 +767,17 @@ bool execute_run(const CaseSpec& spec, const fs::path& out_dir, const CaseFn& ca
                          {"started", started},    {"code_version", code_version()}};
   try {
     std::error_code ec;
-    fs::remove_all(dir, ec);  // a started but unfinished run restarts clean
-    if (ec)
-      throw std::runtime_error(dir.string() + ": cannot clean the run folder: " + ec.message());
+    if (auto earlier = interrupted_attempt(dir, spec, force)) {
+      nlohmann::json attempts = earlier->value("earlier_attempts", nlohmann::json::array());
+      earlier->erase("earlier_attempts");
+      earlier->erase("spec");
+      attempts.push_back(*earlier);
+      meta["earlier_attempts"] = attempts;
+    } else {
+      fs::remove_all(dir, ec);  // a failed, forced or changed run restarts clean
+      if (ec)
+        throw std::runtime_error(dir.string() + ": cannot clean the run folder: " + ec.message());
+    }
     fs::create_directories(dir);
     write_json_atomic((dir / kStartedFile).string(), meta);
     nlohmann::json result = case_fn(spec, dir.string());
@@ -849,7 +873,8 @@ std::vector<RunStatus> scan(const Campaign& c, const fs::path& out_dir) {
 // processes and under a lock for threads.
 void run_pool(const Campaign& c, const fs::path& out_dir, const CaseFn& case_fn,
               const std::vector<std::size_t>& todo, int workers, WorkerMode mode,
-              const std::string& job, const std::function<void(std::size_t, bool)>& on_done) {
+              const std::string& job, bool force,
+              const std::function<void(std::size_t, bool)>& on_done) {
   workers = std::max(1, workers);
   if (mode == WorkerMode::kThreads) {
     std::atomic<std::size_t> next{0};
@@ -858,7 +883,7 @@ void run_pool(const Campaign& c, const fs::path& out_dir, const CaseFn& case_fn,
     for (int w = 0; w < std::min<int>(workers, static_cast<int>(todo.size())); ++w) {
       pool.emplace_back([&] {
         for (std::size_t k = next++; k < todo.size(); k = next++) {
-          const bool ok = execute_run(c.runs[todo[k]], out_dir, case_fn, job);
+          const bool ok = execute_run(c.runs[todo[k]], out_dir, case_fn, job, force);
           std::lock_guard<std::mutex> lock(m);
           on_done(todo[k], ok);
         }
@@ -880,7 +905,7 @@ void run_pool(const Campaign& c, const fs::path& out_dir, const CaseFn& case_fn,
       if (pid == 0) {
         ::prctl(PR_SET_PDEATHSIG, SIGKILL);
         if (::getppid() != parent) ::_exit(3);  // the parent died before prctl took effect
-        const bool ok = execute_run(c.runs[i], out_dir, case_fn, job);
+        const bool ok = execute_run(c.runs[i], out_dir, case_fn, job, force);
         std::cout.flush();  // _exit skips the buffers the case's output may sit in
         std::cerr.flush();
         std::fflush(nullptr);
@@ -1038,7 +1063,7 @@ CampaignSummary run_impl(const Campaign& campaign, const std::string& out_dir_st
     if (!mpi) write_manifest();
   };
   run_pool(campaign, out_dir, case_fn, todo, mpi ? 1 : settings.workers, settings.mode, rank.job,
-           on_done);
+           settings.force, on_done);
 
   if (mpi && (rank.rank == 0 || every_rank_waits)) {
     // Wait for every other rank's runs: a result of this job (or an earlier finished one when not

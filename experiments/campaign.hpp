@@ -9,8 +9,11 @@
 //  * One folder per run (case x seed): out/cases/<case>/seed_<n>/. A run is finished exactly when
 //    its result.json exists; that file is written atomically (temporary name + rename) as the last
 //    step, so a killed run leaves either no result or a whole one. A run without result.json is
-//    started again from a clean folder; a finished run is never redone (unless forced) and never
-//    overwritten. A finished result made from different inputs (the campaign file was edited) is an
+//    started again: when its started.json records the same inputs (it was killed, or the machine
+//    was lost) its folder is handed back to the case function, which continues from what it left
+//    (a pile run from its last checkpoint, bit-identically), and result.json lists the earlier
+//    attempts; otherwise (failed, forced, other inputs) from a clean folder. A finished run is
+//    never redone (unless forced) and never overwritten. A finished result made from different inputs (the campaign file was edited) is an
 //    error, not a silent mix. A failing run writes error.json; the campaign goes on.
 //  * campaign.json (atomic) summarises every run's status for reports.
 //  * Local pool: processes (fork per run; the parent waits; the child writes its result and calls
@@ -193,7 +196,10 @@ toml::table build_case_scene(const CaseSpec& spec);
 /// The inputs of a run as JSON (stored in its result.json and checked when resuming).
 nlohmann::json to_json(const CaseSpec& spec);
 
-/// Runs one case in `case_dir` (an existing, empty folder) and returns its result.
+/// Runs one case in `case_dir` and returns its result. The folder exists and holds only the
+/// runner's started.json, or, when an earlier attempt at the same inputs was interrupted (killed,
+/// machine lost), also what that attempt left there, which the function may continue from (a pile
+/// run resumes from its checkpoint) or clear.
 using CaseFn = std::function<nlohmann::json(const CaseSpec&, const std::string& case_dir)>;
 
 /// How runs are spread over local workers.

@@ -244,7 +244,11 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
   if (opt.resume && !resuming)
     throw InputError(out.string() + ": no checkpoint to resume from (checkpoint.bin, controller.json)");
   if (resuming) {
-    ctl = Controller::from_json(json::parse(read_file(ctrl_path.string())));
+    try {
+      ctl = Controller::from_json(json::parse(read_file(ctrl_path.string())));
+    } catch (const std::exception& e) {
+      throw ResumeError(ctrl_path.string() + ": cannot resume from it: " + e.what());
+    }
   } else {
     sim::Rng rng(scene.seed);
     sim::PsdSample sample;
@@ -268,8 +272,15 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
 
   PvdSeries series((out / "series.pvd").string());
   if (resuming) {
-    sim::read_checkpoint(world, ckpt_path.string());
-    series.load();
+    try {
+      sim::read_checkpoint(world, ckpt_path.string());
+      series.load();
+    } catch (const std::exception& e) {
+      throw ResumeError(std::string("cannot resume: ") + e.what());
+    }
+    ctl.events.push_back({{"event", "resumed"},
+                          {"t", world.state().time},
+                          {"code_version", code_version()}});
     series.truncate_after(world.state().time);
   } else {
     write_file_atomic((out / "scene.resolved.toml").string(), scene.resolved_toml);

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
 
 #include "experiments/scene.hpp"
@@ -31,6 +32,13 @@ struct RunOptions {
   std::int64_t stop_after_steps = 0;  // stop (with a checkpoint) after this many steps of this
                                       // session; 0 = never (deterministic, for tests)
   nlohmann::json extra_provenance = nlohmann::json::object();  // e.g. the campaign case
+};
+
+/// Thrown by run_pile_test with opt.resume when the folder's checkpoint or controller state cannot
+/// be read (damaged, or written by an incompatible version); nothing has been run or written.
+class ResumeError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 /// Runs the scene's pile test into opt.out_dir and returns the result JSON (also written to

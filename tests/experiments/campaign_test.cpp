@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <thread>
@@ -81,12 +82,16 @@ std::map<std::string, int> read_log(const fs::path& log) {
 }
 
 // A cheap deterministic case: reads the run's scene (overrides applied), sleeps, and returns a
-// value computed from mu_r, mass and the seed. It fails if its folder is not clean.
+// value computed from mu_r, mass and the seed. Its folder must hold only the runner's
+// started.json, or also the partial.out of its own interrupted attempt (which it continues);
+// anything else fails it.
 CaseFn fake_case(const fs::path& log, int sleep_ms) {
   return [log, sleep_ms](const CaseSpec& s, const std::string& dir) {
     log_start(log, s);
-    if (!fs::is_empty(dir) && !(fs::exists(fs::path(dir) / "started.json") &&
-                                std::distance(fs::directory_iterator(dir), {}) == 1))
+    const auto entries = std::distance(fs::directory_iterator(dir), {});
+    const bool started = fs::exists(fs::path(dir) / "started.json");
+    const bool continued = started && entries == 2 && fs::exists(fs::path(dir) / "partial.out");
+    if (!(started && entries == 1) && !continued)
       throw std::runtime_error("run folder not clean: " + dir);
     std::ofstream(fs::path(dir) / "partial.out") << "partial output\n";
     std::this_thread::sleep_for(std::chrono::milliseconds(sleep_ms));
@@ -389,11 +394,16 @@ TEST(Campaign, KilledCampaignResumesToTheSameResults) {
   }
   ASSERT_GE(mtime_before.size(), 2u);
   ASSERT_LT(mtime_before.size(), 12u) << "the kill came too late to test resuming";
-  int partial = 0;  // started but unfinished runs, with partial output in their folders
+  std::set<std::string> partial;  // started but unfinished runs (most with partial output)
+  int with_output = 0;
   for (const auto& s : c.runs)
-    partial += fs::exists(out / s.relative_dir() / "partial.out") &&
-               !fs::exists(out / s.relative_dir() / "result.json");
-  ASSERT_GE(partial, 1) << "the kill did not interrupt a run";
+    if (fs::exists(out / s.relative_dir() / "started.json") &&
+        !fs::exists(out / s.relative_dir() / "result.json")) {
+      partial.insert(s.id());
+      with_output += fs::exists(out / s.relative_dir() / "partial.out");
+    }
+  ASSERT_GE(with_output, 1) << "the kill did not interrupt a run";
+  ASSERT_GE(partial.size(), 1u) << "the kill did not interrupt a run";
   const auto starts_before = read_log(log);
 
   // Resume.
@@ -418,6 +428,9 @@ TEST(Campaign, KilledCampaignResumesToTheSameResults) {
     } else {
       const int before = starts_before.count(s.id()) ? starts_before.at(s.id()) : 0;
       EXPECT_EQ(starts_after.at(s.id()), before + 1) << s.id();
+      // An interrupted run was handed back to the case to continue, and says so.
+      EXPECT_EQ(result_of(out, s).contains("earlier_attempts"), partial.count(s.id()) == 1)
+          << s.id();
     }
   }
   const auto manifest = nlohmann::json::parse(read_file((out / "campaign.json").string()));
