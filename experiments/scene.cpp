@@ -79,8 +79,22 @@ sim::PairParams read_contact(TableReader t) {
 /// The scene as read, with the optional contact effects written out in every [contacts.a-b]
 /// table (defaults included), so a run folder states whether cohesion or size-dependent rolling
 /// was on without knowing the parser's defaults.
-std::string resolved_text(const toml::table& doc, const SceneConfig& s) {
+// The scene as run: every contact's defaults written out, and a sieve-table file's [psd] table
+// copied in as [sample.psd], so the text loads on its own from any folder (a psd_file path is
+// relative to the original scene's folder).
+std::string resolved_text(const toml::table& doc, const SceneConfig& s,
+                          const std::filesystem::path& dir) {
   toml::table out = doc;
+  if (toml::table* sample = out["sample"].as_table()) {
+    if (const auto file = (*sample)["psd_file"].value<std::string>()) {
+      const std::filesystem::path p = dir / *file;
+      const toml::table psd_doc = parse_toml(read_file(p.string()), p.string());
+      if (const toml::table* psd = psd_doc["psd"].as_table()) {
+        sample->insert_or_assign("psd", *psd);
+        sample->erase("psd_file");
+      }
+    }
+  }
   if (toml::table* contacts = out["contacts"].as_table()) {
     for (auto& [key, node] : *contacts) {
       toml::table* t = node.as_table();
@@ -297,7 +311,7 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
     const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
     build_model(s, 0.5 * psd.d_min, 0.5 * psd.d_max);
   }
-  s.resolved_toml = resolved_text(doc, s);
+  s.resolved_toml = resolved_text(doc, s, dir);
   return s;
 }
 

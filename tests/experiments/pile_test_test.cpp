@@ -138,6 +138,27 @@ TEST(PileTest, InterruptedRunResumesToTheSameResult) {
   EXPECT_EQ(a["performance"]["steps"], b["performance"]["steps"]);
 }
 
+// scene.resolved.toml (written into every run folder) loads on its own from another folder: a
+// sieve-table file named relative to the original scene is copied in as [sample.psd].
+TEST(SceneFile, ResolvedTextLoadsFromAnyFolderWithTheSamePsd) {
+  const std::string original =
+      std::string(REPOSETWIN_SOURCE_DIR) + "/data/scenes/paper/table1_s1_dmax2p0_200g_reduced.toml";
+  const SceneConfig a = parse_scene_file(original);
+  ASSERT_NE(read_file(original).find("psd_file"), std::string::npos) << "the scene must use a file";
+  EXPECT_EQ(a.resolved_toml.find("psd_file"), std::string::npos) << a.resolved_toml;
+  const fs::path dir = temp_dir("resolved");
+  write_file_atomic((dir / "scene.resolved.toml").string(), a.resolved_toml);
+  const SceneConfig b = parse_scene_file((dir / "scene.resolved.toml").string());
+  EXPECT_EQ(b.psd.spec.table.size, a.psd.spec.table.size);
+  EXPECT_EQ(b.psd.spec.table.passing, a.psd.spec.table.passing);
+  EXPECT_EQ(b.psd.spec.d_min, a.psd.spec.d_min);
+  EXPECT_EQ(b.psd.spec.d_max, a.psd.spec.d_max);
+  EXPECT_EQ(b.psd.spec.fines, a.psd.spec.fines);
+  EXPECT_EQ(b.psd.assumption, a.psd.assumption);
+  EXPECT_EQ(b.mass, a.mass);
+  EXPECT_EQ(b.resolved_toml, a.resolved_toml);  // resolving again changes nothing
+}
+
 void expect_scene_error(const std::string& text, const std::string& needle) {
   const fs::path dir = temp_dir("bad");
   try {
