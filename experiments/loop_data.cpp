@@ -8,6 +8,7 @@
 
 #include "experiments/campaign.hpp"
 #include "experiments/lab_photos.hpp"
+#include "experiments/loop_effects.hpp"
 #include "experiments/scene_overrides.hpp"
 #include "experiments/toml_reader.hpp"
 
@@ -285,6 +286,8 @@ LabData read_lab_csv(const std::string& path) {
   }
   if (header.empty()) throw InputError(data.file + ": no header line");
   if (data.tests.empty()) throw InputError(data.file + ": no test rows");
+  const double d_ref = reference_grain_diameter(data.tests);
+  for (LabTest& t : data.tests) t.reference_diameter_m = d_ref;
   return data;
 }
 
@@ -298,6 +301,7 @@ json to_json(const LabTest& t) {
   if (t.diameter_mm) j["D_mm"] = *t.diameter_mm;
   if (t.camera_height_m) j["camera_height_m"] = *t.camera_height_m;
   j["repeats"] = t.repeats;
+  if (t.reference_diameter_m > 0.0) j["reference_diameter_m"] = t.reference_diameter_m;
   if (!t.photos.empty()) {
     j["photos"] = t.photos;
     j["photo_measurement"] = t.photo_measurement;

@@ -36,6 +36,7 @@ struct LabTest {
   int repeats = 1;                            // piles averaged into the measured values [-]
   std::vector<std::string> photos;            // absolute paths (side views), may be empty
   nlohmann::json photo_measurement;           // what vision measured on the photos (if any)
+  double reference_diameter_m = 0.0;          // dataset's typical grain d_ref, 0: own d50 [m]
 };
 
 /// A measured dataset.
@@ -45,11 +46,12 @@ struct LabData {
 };
 
 /// Reads a loop CSV (see docs/loop.md): checks every column, builds every test's scene (with
-/// its overrides) and measures the photos. Throws InputError (std::invalid_argument) whose
-/// message names the file, the line, the test id and the column: missing required columns,
-/// unknown columns, non-numbers, an angle outside (0, 90), neither an angle nor H and D nor a
-/// photo, an unknown role, duplicate ids, scene or override errors, unreadable photos or photos
-/// without a usable scale.
+/// its overrides), measures the photos and sets every test's reference_diameter_m to the
+/// dataset's typical grain (reference_grain_diameter of loop_effects.hpp). Throws InputError
+/// (std::invalid_argument) whose message names the file, the line, the test id and the column:
+/// missing required columns, unknown columns, non-numbers, an angle outside (0, 90), neither an
+/// angle nor H and D nor a photo, an unknown role, duplicate ids, scene or override errors,
+/// unreadable photos or photos without a usable scale.
 LabData read_lab_csv(const std::string& path);
 
 /// Splits one CSV line into fields (RFC 4180 quotes: "a,b" and "" inside quotes). Throws

@@ -1,5 +1,6 @@
 #include "experiments/loop_effects.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
@@ -7,6 +8,7 @@
 #include "experiments/provenance.hpp"
 #include "experiments/scene_overrides.hpp"
 #include "experiments/toml_reader.hpp"
+#include "sim/psd.hpp"
 
 namespace reposetwin::experiments {
 using nlohmann::json;
@@ -76,9 +78,10 @@ const std::vector<CandidateEffect>& candidate_effects() {
        {}},
       {"rolling_size", EffectKind::kPhysics, EffectApply::kSetScene,
        "contacts.{sample}-{sample}.rolling_size_exponent", 0.0, false, 1.0, -3.0, 3.0, "-",
-       "Rolling resistance that varies with particle size, mu_r (d / 5 mm)^alpha (shape "
-       "differs between fine and coarse grains); shows between samples of different d_max.",
-       {{"contacts.{sample}-{sample}.rolling_reference_diameter_m", "0.005"}}},
+       "Rolling resistance that varies with particle size, mu_r (d / d_ref)^alpha with d_ref "
+       "the calibration tests' typical grain (shape differs between fine and coarse grains); "
+       "shows between samples of different size bands (d_min, d_max).",
+       {{"contacts.{sample}-{sample}.rolling_reference_diameter_m", "{d_ref}"}}},
       {"lift_speed", EffectKind::kPhysics, EffectApply::kFactorScene, "procedure.lift_speed_m_s",
        1.0, false, 4.0, 0.1, 20.0, "x declared",
        "The container was lifted faster (or slower) than declared; above a quasi-static "
@@ -106,6 +109,39 @@ const CandidateEffect& find_effect(const std::string& name) {
     known += " " + e.name;
   }
   throw std::invalid_argument("unknown candidate effect \"" + name + "\" (known:" + known + ")");
+}
+
+double median_grain_diameter(const LabTest& t) {
+  const SceneConfig s = load_scene(t.scene_path, sets_of(t));
+  const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
+  const sim::SieveTable& table = s.psd.spec.table;
+  // Percent passing at the cut sizes; the simulated mass is what lies between them.
+  const double lo = sim::percent_passing(table, psd.d_min);
+  const double hi = sim::percent_passing(table, psd.d_max);
+  const double half = 0.5 * (lo + hi);
+  std::vector<double> size = {psd.d_min}, pass = {lo};
+  for (std::size_t k = 0; k < table.size.size(); ++k)
+    if (table.size[k] > psd.d_min && table.size[k] < psd.d_max) {
+      size.push_back(table.size[k]);
+      pass.push_back(table.passing[k]);
+    }
+  size.push_back(psd.d_max);
+  pass.push_back(hi);
+  for (std::size_t k = 0; k + 1 < size.size(); ++k)
+    if (pass[k + 1] >= half && pass[k + 1] > pass[k])
+      return size[k] + (half - pass[k]) / (pass[k + 1] - pass[k]) * (size[k + 1] - size[k]);
+  return psd.d_max;
+}
+
+double reference_grain_diameter(const std::vector<LabTest>& tests) {
+  if (tests.empty()) throw std::invalid_argument("reference_grain_diameter: no tests");
+  double log_sum = 0.0;
+  int n = 0;
+  for (const LabTest& t : tests)
+    if (t.role == "calibrate") log_sum += std::log(median_grain_diameter(t)), ++n;
+  if (n == 0)
+    for (const LabTest& t : tests) log_sum += std::log(median_grain_diameter(t)), ++n;
+  return std::exp(log_sum / n);
 }
 
 double scene_value(const LabTest& t, const std::string& key_pattern) {
@@ -138,7 +174,15 @@ SimRequest make_request(const LabTest& test, const std::string& mu_key, double m
     switch (e.apply) {
       case EffectApply::kSetScene:
         r.extra.emplace_back(resolve_key(test, e.key), num(s.value));
-        for (const auto& [k, v] : e.companions) r.extra.emplace_back(resolve_key(test, k), v);
+        for (const auto& [k, v] : e.companions) {
+          if (v != "{d_ref}") {
+            r.extra.emplace_back(resolve_key(test, k), v);
+            continue;
+          }
+          const double d_ref = test.reference_diameter_m > 0.0 ? test.reference_diameter_m
+                                                                : median_grain_diameter(test);
+          r.extra.emplace_back(resolve_key(test, k), num(d_ref));
+        }
         break;
       case EffectApply::kFactorScene:
         r.extra.emplace_back(resolve_key(test, e.key), num(s.value * scene_value(test, e.key)));

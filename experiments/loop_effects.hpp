@@ -10,6 +10,15 @@
 // applied: set as is, or as a factor on the test's declared value (lift speed, fines cut-off).
 // A row whose scene key this engine build does not know (an effect not yet in sim/) is reported
 // as unavailable by the loop, not silently dropped.
+//
+// Size-dependent rolling resistance, mu_r,eff = mu_r (d / d_ref)^alpha, takes d_ref from the data:
+// the typical grain of the calibration tests (reference_grain_diameter), not a fixed size. With
+// a fixed d_ref far from the sample's sizes (5 mm for 2.5-4.5 mm grains) alpha also rescales
+// every contact's mu_r, so switching it on at its probe mostly moves mu_r (into the flat part of
+// the angle's response when mu_r is already low) and its fingerprint loses the size pattern that
+// tells it from mu_r; and mu_r's meaning changes with alpha, so the joint refit of (mu_r, alpha)
+// may need a mu_r outside the calibrated grid. With d_ref at the typical grain, mu_r stays the
+// typical grain's rolling friction and alpha only tilts it between fine and coarse grains.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -46,7 +55,8 @@ struct CandidateEffect {
   double hi = 0.0;
   std::string units;        // of the value
   std::string description;  // one sentence
-  /// Extra keys set together with `key` whenever the effect is on (e.g. the reference size).
+  /// Extra keys set together with `key` whenever the effect is on (e.g. the reference size);
+  /// the value "{d_ref}" stands for the test's reference_diameter_m [m].
   std::vector<std::pair<std::string, std::string>> companions;
 };
 
@@ -68,6 +78,17 @@ struct EffectSetting {
 SimRequest make_request(const LabTest& test, const std::string& mu_key, double mu_r,
                         std::uint64_t seed, const std::vector<EffectSetting>& effects,
                         const ImageVariant& base_image);
+
+/// The mass-median diameter d50 of the particles the test simulates [m]: the size at which the
+/// scene's sieve table, scalped at d_max and cut at d_min (its overrides applied), passes half
+/// of the simulated mass, interpolated linearly between sieve sizes. Throws InputError when the
+/// scene cannot be loaded.
+double median_grain_diameter(const LabTest& test);
+
+/// The dataset's typical grain d_ref [m]: the geometric mean of median_grain_diameter over the
+/// calibration tests (all tests when none has that role). Throws std::invalid_argument when
+/// `tests` is empty.
+double reference_grain_diameter(const std::vector<LabTest>& tests);
 
 /// The value of `key` in the test's resolved scene (its overrides applied), for factor effects
 /// and scene-valued off values. Throws InputError naming the test and key when absent.

@@ -131,6 +131,10 @@ std::string make_synthetic_dataset(const SynthDesign& d, const std::string& out_
     }
     tests.push_back(t);
   }
+  // The same typical grain as the loop computes when it reads the CSV back (read_lab_csv), so a
+  // hidden size-dependent effect means what the loop's candidate means.
+  const double d_ref = reference_grain_diameter(tests);
+  for (LabTest& t : tests) t.reference_diameter_m = d_ref;
   std::vector<SimRequest> req;
   ImageVariant cam = d.camera;
   cam.keep_photos = true;

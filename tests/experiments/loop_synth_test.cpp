@@ -15,10 +15,18 @@
 //    more; a raised camera changes small piles more (its elevation grows as the pile shrinks).
 //  * The lab is the twin with hidden mu_r 0.25 (between grid points), other seeds, a different
 //    camera (14 instead of 12 pile radii away, three views instead of two, image noise).
+//  * Size design (rolling resistance that varies with grain size has no fingerprint when every
+//    test has the same PSD): data/loop/size_scene.toml (one 2-5 mm sieve table, lifted at
+//    0.02 m/s), a fine band (d_min_mm 2, d_max_mm 2.5; 10 and 20 g) and a coarse band (4.5-5 mm;
+//    30 and 60 g) x plate (steel, wood), eight tests, one held out; hidden mu_r 0.25 and
+//    mu_r (d / d_ref)^3. Small fine piles respond little to mu_r and coarse piles scatter, so the
+//    effect must be strong to stand out of one pile's 1.06 deg scatter: at exponent 2.5 the loop
+//    names nothing (its fingerprint's leave-one-out gain is below the seed noise).
 #include "experiments/loop_synth.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "experiments/loop.hpp"
@@ -29,15 +37,18 @@ namespace {
 namespace fs = std::filesystem;
 
 const std::string kScene = std::string(REPOSETWIN_SOURCE_DIR) + "/data/loop/small_scene.toml";
+const std::string kSizeScene = std::string(REPOSETWIN_SOURCE_DIR) + "/data/loop/size_scene.toml";
 
 fs::path test_root() {
   return fs::temp_directory_path() / ("reposetwin_loop_test_" + fnv1a_hex(code_version()));
 }
 
-SynthDesign design(const std::vector<std::pair<std::string, double>>& hidden) {
+// The lab's hidden camera and pile seeds, shared by both designs.
+SynthDesign lab(const std::string& scene, double mu_r,
+                const std::vector<std::pair<std::string, double>>& hidden) {
   SynthDesign d;
-  d.scene = kScene;
-  d.mu_r = 0.25;
+  d.scene = scene;
+  d.mu_r = mu_r;
   d.seeds = {7001, 7002, 7003};
   d.hidden = hidden;
   d.camera.width_px = 960;
@@ -45,6 +56,11 @@ SynthDesign design(const std::vector<std::pair<std::string, double>>& hidden) {
   d.camera.side_views = 3;
   d.camera.distance_radii = 14.0;
   d.camera.noise_sd = 4.0;
+  return d;
+}
+
+SynthDesign design(const std::vector<std::pair<std::string, double>>& hidden) {
+  SynthDesign d = lab(kScene, 0.25, hidden);
   for (const char* plate : {"steel", "wood"})
     for (double lift : {0.03, 0.1})
       for (double mass : {0.015, 0.035}) {
@@ -60,9 +76,33 @@ SynthDesign design(const std::vector<std::pair<std::string, double>>& hidden) {
   return d;
 }
 
-LoopSettings settings() {
+// The size design: a fine (2-2.5 mm; 10 and 20 g) and a coarse (4.5-5 mm; 30 and 60 g) band of
+// one sieve table x plate; the coarse 60 g pile on wood is held out.
+SynthDesign size_design(const std::vector<std::pair<std::string, double>>& hidden) {
+  SynthDesign d = lab(kSizeScene, 0.25, hidden);
+  struct Band {
+    const char* name;
+    double d_min_mm, d_max_mm;
+    std::vector<int> masses_g;
+  };
+  const std::vector<Band> bands = {{"fine", 2.0, 2.5, {10, 20}}, {"coarse", 4.5, 5.0, {30, 60}}};
+  for (const char* plate : {"steel", "wood"})
+    for (const Band& b : bands)
+      for (int mass_g : b.masses_g) {
+        SynthTest t;
+        t.id = std::string(b.name) + "_m" + std::to_string(mass_g) + "_" + plate;
+        t.role = (mass_g == 60 && std::string(plate) == "wood") ? "validate" : "calibrate";
+        t.conditions = {
+            {"mass_kg", 1e-3 * mass_g}, {"d_min_mm", b.d_min_mm}, {"d_max_mm", b.d_max_mm}};
+        t.labels = {{"plate", plate}};
+        d.tests.push_back(t);
+      }
+  return d;
+}
+
+LoopSettings settings(std::vector<double> mu_grid = {0.1, 0.2, 0.35}) {
   LoopSettings s;
-  s.mu_grid = {0.1, 0.2, 0.35};
+  s.mu_grid = mu_grid;
   s.seeds = {1001, 1002, 1003};
   s.image.width_px = 960;
   s.image.height_px = 720;
@@ -77,13 +117,13 @@ LoopSettings settings() {
 }
 
 // Makes the dataset with the hidden settings, reads it as a lab would, and runs the loop.
-nlohmann::json run_case(const std::string& name,
-                        const std::vector<std::pair<std::string, double>>& hidden) {
+nlohmann::json run_case(const std::string& name, const SynthDesign& lab_design,
+                        const LoopSettings& loop_settings = settings()) {
   SimCache cache((test_root() / "cache").string(), {2, false});
   const std::string csv =
-      make_synthetic_dataset(design(hidden), (test_root() / name / "data").string(), cache);
+      make_synthetic_dataset(lab_design, (test_root() / name / "data").string(), cache);
   const LabData data = read_lab_csv(csv);
-  const nlohmann::json loop = run_loop(data, (test_root() / name / "loop").string(), settings());
+  const nlohmann::json loop = run_loop(data, (test_root() / name / "loop").string(), loop_settings);
   std::cerr << name << ": " << loop["summary"].dump() << "\n";
   if (!loop["final"]["effects"].empty())
     std::cerr << name << ": fitted " << loop["final"]["effects"][0]["value"] << " +- "
@@ -108,22 +148,71 @@ void expect_found(const nlohmann::json& loop, const std::string& effect, bool ab
 
 // A smooth steel plate (friction 0.16 where 0.5 is declared; wood's 0.25 becomes 0.16 too).
 TEST(LoopSynth, HiddenSmoothPlateIsFound) {
-  expect_found(run_case("plate", {{"plate_friction", 0.16}}), "plate_friction", false);
+  expect_found(run_case("plate", design({{"plate_friction", 0.16}})), "plate_friction", false);
 }
 
 // The camera stood 6 mm above the plate while the lab declares it level.
 TEST(LoopSynth, HiddenCameraElevationIsFound) {
-  expect_found(run_case("camera", {{"camera_height", 0.006}}), "camera_height", true);
+  expect_found(run_case("camera", design({{"camera_height", 0.006}})), "camera_height", true);
 }
 
 // The funnel was lifted five times faster than declared.
 TEST(LoopSynth, HiddenFastLiftIsFound) {
-  expect_found(run_case("lift", {{"lift_speed", 5.0}}), "lift_speed", true);
+  expect_found(run_case("lift", design({{"lift_speed", 5.0}})), "lift_speed", true);
+}
+
+// Rolling resistance grows with grain size, mu_r (d / d_ref)^3: fine piles flatter, coarse
+// steeper than one mu_r makes them (cohesion would do the opposite).
+TEST(LoopSynth, HiddenSizeDependentRollingIsFound) {
+  expect_found(
+      run_case("rolling_size", size_design({{"rolling_size", 3.0}}), settings({0.1, 0.25, 0.5})),
+      "rolling_size", true);
+}
+
+// The size-dependent rolling resistance is defined around the calibration tests' typical grain:
+// d_ref is the geometric mean of their mass-median diameters (the size scene's sieve table is
+// linear from 2 to 5 mm, so a band's d50 is its middle), and the candidate sets it with the
+// exponent. Held-out tests do not move it; a test outside a dataset uses its own d50.
+TEST(LoopSynth, RollingSizeReferenceIsTheCalibrationTestsTypicalGrain) {
+  auto band = [](const std::string& id, const std::string& role, double lo_mm, double hi_mm) {
+    LabTest t;
+    t.id = id;
+    t.role = role;
+    t.scene_path = kSizeScene;
+    t.overrides = {{"sample.d_min_mm", std::to_string(lo_mm)},
+                   {"sample.d_max_mm", std::to_string(hi_mm)}};
+    return t;
+  };
+  std::vector<LabTest> tests = {band("fine", "calibrate", 2.0, 2.5),
+                                band("coarse", "calibrate", 4.5, 5.0),
+                                band("all", "validate", 2.0, 5.0)};
+  EXPECT_NEAR(median_grain_diameter(tests[0]), 2.25e-3, 1e-12);
+  EXPECT_NEAR(median_grain_diameter(tests[1]), 4.75e-3, 1e-12);
+  EXPECT_NEAR(median_grain_diameter(tests[2]), 3.5e-3, 1e-12);
+  const double d_ref = reference_grain_diameter(tests);
+  EXPECT_NEAR(d_ref, std::sqrt(2.25e-3 * 4.75e-3), 1e-12);
+  const CandidateEffect& e = find_effect("rolling_size");
+  auto value_of = [](const SimRequest& r, const std::string& key) {
+    for (const auto& [k, v] : r.extra)
+      if (k == key) return std::stod(v);
+    ADD_FAILURE() << "no override " << key;
+    return 0.0;
+  };
+  const std::string ref_key = "contacts.rock-rock.rolling_reference_diameter_m";
+  // Outside a dataset: the test's own d50.
+  SimRequest r = make_request(tests[1], "contacts.{sample}-{sample}.rolling_friction", 0.3, 1,
+                              {{&e, 2.0}}, ImageVariant{});
+  EXPECT_NEAR(value_of(r, ref_key), 4.75e-3, 1e-12);
+  EXPECT_EQ(value_of(r, "contacts.rock-rock.rolling_size_exponent"), 2.0);
+  for (LabTest& t : tests) t.reference_diameter_m = d_ref;
+  r = make_request(tests[1], "contacts.{sample}-{sample}.rolling_friction", 0.3, 1, {{&e, 2.0}},
+                   ImageVariant{});
+  EXPECT_NEAR(value_of(r, ref_key), d_ref, 1e-10 * d_ref);  // 12 digits in the override
 }
 
 // No hidden effect: the loop must add nothing.
 TEST(LoopSynth, NullDatasetNamesNothing) {
-  const nlohmann::json loop = run_case("null", {});
+  const nlohmann::json loop = run_case("null", design({}));
   EXPECT_TRUE(loop["summary"]["chosen"].is_null()) << loop["iterations"].dump(1);
   EXPECT_TRUE(loop["final"]["effects"].empty());
 }
