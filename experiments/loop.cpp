@@ -131,10 +131,11 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
       for (std::size_t r = 0; r < k; ++r, ++q) {
         const SimOutcome& o = out[q];
         surf.raw[i][j].push_back(o);
-        a.push_back(o.angle_deg);
+        const double angle = twin_angle(o, s_.angle);
+        a.push_back(angle);
         h.push_back(o.height_mm);
         d.push_back(o.diameter_mm);
-        obs.push_back({s_.mu_grid[j], s_.seeds[r], std::clamp(o.angle_deg, 0.0, 90.0)});
+        obs.push_back({s_.mu_grid[j], s_.seeds[r], std::clamp(angle, 0.0, 90.0)});
       }
       c.angle.push_back(mean(a));
       c.h.push_back(mean(h));
@@ -358,7 +359,7 @@ json Loop::run() {
         std::vector<double> da, dh, dd;
         for (std::size_t r = 0; r < s_.seeds.size(); ++r, ++q) {
           const SimOutcome& off = base.raw[i][node][r];
-          da.push_back(on[q].angle_deg - off.angle_deg);
+          da.push_back(twin_angle(on[q], s_.angle) - twin_angle(off, s_.angle));
           dh.push_back(on[q].height_mm - off.height_mm);
           dd.push_back(on[q].diameter_mm - off.diameter_mm);
         }
@@ -620,6 +621,9 @@ json Loop::run() {
   const json rows_after = residual_table(model, fit.mu);
   json provenance = {
       {"code_version", code_version()}, {"data", data_.file},   {"seeds", s_.seeds},
+      {"angle_measure", angle_measure_name(s_.angle)},
+      {"angle_method", angle_measure_method(s_.angle)},
+      {"lab_angle_source", lab_angle_source(s_.angle)},
       {"mu_grid", s_.mu_grid},          {"mu_key", s_.mu_key},  {"image", s_.image.key()},
       {"cache", cache_.dir()},          {"finished", utc_now()}};
   if (!base.raw.empty() && !base.raw[0].empty() && !base.raw[0][0].empty())
@@ -680,8 +684,58 @@ json Loop::run() {
 
 }  // namespace
 
+LabData lab_angles(const LabData& data, AngleMeasure measure) {
+  if (measure == AngleMeasure::kSlice)
+    throw InputError(data.file + ": the loop cannot compare the 'slice' angle (a protractor on "
+                     "particle slices has no counterpart in a lab's photos or sheet); use image, "
+                     "image_flank or particles");
+  LabData out = data;
+  for (LabTest& t : out.tests) {
+    if (t.photos.empty()) continue;  // a typed angle (or H and D) is used as given
+    if (measure == AngleMeasure::kImageFlank) {
+      const json& f = t.photo_measurement.contains("flank_deg") ? t.photo_measurement["flank_deg"]
+                                                                : json();
+      if (!f.is_object() || !f.contains("mean") || !f["mean"].is_number())
+        throw InputError(data.file + " line " + std::to_string(t.line) + " (test " + t.id +
+                         "), column photo: the photos' measurement has no flank angle");
+      t.angle_deg = f["mean"].get<double>();
+    }
+    t.photo_measurement["compared_angle"] = {{"measure", angle_measure_name(measure)},
+                                             {"angle_deg", t.angle_deg}};
+  }
+  return out;
+}
+
+std::string lab_angle_source(AngleMeasure measure) {
+  if (measure == AngleMeasure::kImageFlank)
+    return "tests with photos: the flank angle vision measured on them; tests with a typed "
+           "angle (or H and D): that value, taken as the flank angle (the lab pile assumed a "
+           "full cone)";
+  return "tests with photos: atan(2H/D) vision measured on them; others: the typed angle (or "
+         "atan(2H/D) of the typed H and D)";
+}
+
+double twin_angle(const SimOutcome& o, AngleMeasure measure) {
+  switch (measure) {
+    case AngleMeasure::kImage:
+      return o.angle_deg;
+    case AngleMeasure::kImageFlank:
+      if (o.pile && !std::isfinite(o.flank_deg))
+        throw std::runtime_error(o.image_dir +
+                                 ": this photograph's measurement has no flank angle (made by an "
+                                 "older version); use a fresh --cache");
+      return o.pile ? o.flank_deg : 0.0;
+    case AngleMeasure::kParticles:
+      return o.positions_angle_deg;
+    case AngleMeasure::kSlice:
+      break;
+  }
+  throw std::runtime_error("the loop compares image, image_flank or particles angles, not slice");
+}
+
 json run_loop(const LabData& data, const std::string& out_dir, const LoopSettings& settings) {
-  Loop loop(data, out_dir, settings);
+  const LabData compared = lab_angles(data, settings.angle);
+  Loop loop(compared, out_dir, settings);
   return loop.run();
 }
 

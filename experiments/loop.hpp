@@ -46,6 +46,7 @@
 #include <string>
 #include <vector>
 
+#include "experiments/campaign.hpp"
 #include "experiments/loop_data.hpp"
 #include "experiments/loop_effects.hpp"
 #include "experiments/loop_sim.hpp"
@@ -56,6 +57,7 @@ namespace reposetwin::experiments {
 /// Settings of the loop.
 struct LoopSettings {
   std::string mu_key = "contacts.{sample}-{sample}.rolling_friction";  // calibrated scene key
+  AngleMeasure angle = AngleMeasure::kImage;  // the angle compared (lab_angles, twin_angle)
   std::vector<double> mu_grid = {0.05, 0.15, 0.3, 0.5};  // mu_r grid, increasing [-]
   std::vector<std::uint64_t> seeds = {1001, 1002, 1003};  // baseline seeds (common numbers)
   ImageVariant image;                      // how the twin photographs its piles
@@ -69,6 +71,23 @@ struct LoopSettings {
   bool html = true;                        // write index.html with gnuplot plots
   std::string cache_dir;                   // simulation cache; default OUT/cache
 };
+
+/// The measured data as the loop compares them under `measure`. kImage: as read (the lab's
+/// atan(2H/D), typed or measured on its photos). kImageFlank: a test with photos takes the flank
+/// angle vision measured on them; a test with a typed angle (or H and D) keeps it, which assumes
+/// the lab pile is a full cone (flank = atan(2H/D)), as a protractor reading on a photo does.
+/// kParticles: the typed or photo-measured atan(2H/D). A test with photos records the value
+/// used in its photo_measurement ("compared_angle"). Throws InputError for kSlice (no lab
+/// counterpart) or a photo record without a flank angle.
+LabData lab_angles(const LabData& data, AngleMeasure measure);
+
+/// Where the lab's compared angles come from under `measure` (a sentence for loop.json).
+std::string lab_angle_source(AngleMeasure measure);
+
+/// The twin's angle of one simulation under `measure` (kImage: vision atan(2H/D); kImageFlank:
+/// vision flank; kParticles: atan(2H/D) from particle positions). Throws std::runtime_error for
+/// a photograph without a flank angle (cached by an older version) or for kSlice.
+double twin_angle(const SimOutcome& o, AngleMeasure measure);
 
 /// Runs the loop on measured data and writes OUT/loop.json (and OUT/index.html). Returns the
 /// loop.json content. Throws InputError when OUT already holds a finished loop.json and `force`

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <opencv2/core.hpp>
 #include <set>
@@ -188,6 +189,7 @@ json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
   const vision::SideSummary s = vision::combine_sides(sides);
   return {{"angle_deg", s.theta_deg.mean},
           {"angle_sd_deg", s.theta_deg.stddev},
+          {"flank_deg", s.flank_deg.mean},
           {"height_mm", 1e3 * s.height_m.mean},
           {"diameter_mm", 1e3 * s.diameter_m.mean},
           {"views", views},
@@ -289,6 +291,7 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     const json& p = photo_result[photo_of[i]];
     o.pile = true;
     o.angle_deg = p.at("angle_deg");
+    o.flank_deg = p.value("flank_deg", std::numeric_limits<double>::quiet_NaN());
     o.height_mm = p.at("height_mm");
     o.diameter_mm = p.at("diameter_mm");
     o.positions_angle_deg = s.at("pile").value("theta_hd_deg", 0.0);

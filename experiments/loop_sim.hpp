@@ -58,6 +58,8 @@ struct SimRequest {
 struct SimOutcome {
   bool pile = false;          // a pile formed (else the angle is 0 and H, D are 0)
   double angle_deg = 0.0;     // vision atan(2H/D), mean over the side views [deg]
+  double flank_deg = 0.0;     // vision flank-line angle, mean over the side views [deg]; NaN
+                              // for a photograph cached by a version that did not record it
   double height_mm = 0.0;     // vision H [mm]
   double diameter_mm = 0.0;   // vision D [mm]
   double positions_angle_deg = 0.0;  // atan(2H/D) from particle positions [deg]
@@ -99,7 +101,7 @@ std::vector<std::string> resolved_overrides(const SimRequest& request);
 std::string fnv1a_hex(const std::string& text);
 
 /// Photographs a pile (centres, radii, material ids) with `variant`, measures it with the
-/// declared camera and returns {angle_deg, height_mm, diameter_mm, views[...]}. Writes the
+/// declared camera and returns {angle_deg, flank_deg, height_mm, diameter_mm, views[...]}. Writes the
 /// photographs and their declared-camera sidecars into `out_dir` when keep_photos is set
 /// (names side_az000.png / .json ...). Uses OSMesa: call it in a worker, not before forking.
 nlohmann::json photograph_pile(const std::vector<Eigen::Vector3d>& positions,

@@ -40,6 +40,7 @@ void add_loop_command(CLI::App& app) {
     std::string grid;
     std::string seeds;
     std::string candidates;
+    std::string angle = "image";
     experiments::LoopSettings settings;
     bool quiet = false;
   };
@@ -67,6 +68,11 @@ void add_loop_command(CLI::App& app) {
   cmd->add_option("--views", args->settings.image.side_views, "Side views per pile")
       ->capture_default_str();
   cmd->add_option("--cache", args->settings.cache_dir, "Simulation cache (default OUT/cache)");
+  cmd->add_option("--angle", args->angle,
+                  "Angle compared: image (vision atan(2H/D), as the lab reads its photos), "
+                  "image_flank (vision's flank lines; typed lab angles are then taken as flank "
+                  "angles, a full cone assumed), particles")
+      ->capture_default_str();
   cmd->add_flag("--force", args->settings.force, "Recompute a finished loop.json (cache kept)");
   cmd->add_flag("--quiet,-q", args->quiet, "No progress lines");
   cmd->callback([args]() {
@@ -88,6 +94,7 @@ void add_loop_command(CLI::App& app) {
         s.candidates.push_back(c);
       }
     }
+    s.angle = experiments::parse_angle_measure(args->angle, "--angle");
     s.progress = !args->quiet;
     const experiments::LabData data = experiments::read_lab_csv(args->data);
     const nlohmann::json loop = experiments::run_loop(data, args->out, s);
