@@ -1,51 +1,13 @@
 #include "experiments/case_runner.hpp"
 
 #include <filesystem>
-#include <iostream>
 #include <stdexcept>
 
 #include "experiments/pile_test.hpp"
-#include "experiments/provenance.hpp"
 #include "experiments/scene.hpp"
 
 namespace reposetwin::experiments {
 using nlohmann::json;
-
-namespace {
-namespace fs = std::filesystem;
-
-// Runs the pile test in opt.out_dir, continuing what an interrupted attempt left there: a
-// finished run (the case was stopped while photographing it) is taken as it is, a checkpoint is
-// resumed (bit-identical to an uninterrupted run), and anything else is cleared and run afresh.
-// A checkpoint that cannot be resumed (unreadable, or written by an incompatible version) is
-// also cleared and the run started again, never half-mixed.
-json run_or_continue(const SceneConfig& scene, RunOptions opt) {
-  const fs::path out(opt.out_dir);
-  std::error_code ec;
-  if (fs::is_regular_file(out / "result.json", ec)) {
-    try {
-      json done = json::parse(read_file((out / "result.json").string()));
-      if (done.contains("stop") && done.contains("pile")) return done;
-    } catch (const std::exception&) {
-    }
-  }
-  if (fs::is_regular_file(out / "checkpoint.bin", ec) &&
-      fs::is_regular_file(out / "controller.json", ec)) {
-    RunOptions resume = opt;
-    resume.resume = true;
-    try {
-      return run_pile_test(scene, resume);
-    } catch (const ResumeError& e) {
-      std::cerr << out.string() << ": cannot continue from the checkpoint (" << e.what()
-                << "); running again from the start\n";
-    }
-  }
-  fs::remove_all(out, ec);
-  if (ec) throw std::runtime_error(out.string() + ": cannot clear the run folder: " + ec.message());
-  return run_pile_test(scene, opt);
-}
-
-}  // namespace
 
 CaseFn pile_case_fn(const CaseRunSettings& settings) {
   return [settings](const CaseSpec& spec, const std::string& case_dir) -> json {
@@ -58,7 +20,7 @@ CaseFn pile_case_fn(const CaseRunSettings& settings) {
     opt.progress = false;
     opt.threads = settings.threads;
     opt.extra_provenance = {{"campaign_case", spec.id()}};
-    const json run = run_or_continue(scene, opt);
+    const json run = run_pile_test_or_continue(scene, opt);
     json out = {{"stop", run.at("stop")},
                 {"pile", run.at("pile")},
                 {"particles", run.at("particles")},

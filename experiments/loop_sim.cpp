@@ -242,7 +242,7 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     opt.progress = false;
     opt.threads = 1;
     opt.extra_provenance = {{"loop_overrides", job.sets}};
-    const json run = run_pile_test(scene, opt);
+    const json run = run_pile_test_or_continue(scene, opt);  // a killed run continues
     return {{"stop", run.at("stop")},
             {"pile", run.at("pile")},
             {"provenance", run.at("provenance")},

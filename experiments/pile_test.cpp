@@ -512,4 +512,30 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
   return result;
 }
 
+json run_pile_test_or_continue(const SceneConfig& scene, const RunOptions& opt) {
+  const fs::path out(opt.out_dir);
+  std::error_code ec;
+  if (fs::is_regular_file(out / "result.json", ec)) {
+    try {
+      json done = json::parse(read_file((out / "result.json").string()));
+      if (done.contains("stop") && done.contains("pile")) return done;
+    } catch (const std::exception&) {
+    }
+  }
+  if (fs::is_regular_file(out / "checkpoint.bin", ec) &&
+      fs::is_regular_file(out / "controller.json", ec)) {
+    RunOptions resume = opt;
+    resume.resume = true;
+    try {
+      return run_pile_test(scene, resume);
+    } catch (const ResumeError& e) {
+      std::cerr << out.string() << ": cannot continue from the checkpoint (" << e.what()
+                << "); running again from the start\n";
+    }
+  }
+  fs::remove_all(out, ec);
+  if (ec) throw std::runtime_error(out.string() + ": cannot clear the run folder: " + ec.message());
+  return run_pile_test(scene, opt);
+}
+
 }  // namespace reposetwin::experiments

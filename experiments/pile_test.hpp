@@ -46,6 +46,14 @@ class ResumeError : public std::runtime_error {
 /// would be overwritten without force).
 nlohmann::json run_pile_test(const SceneConfig& scene, const RunOptions& opt);
 
+/// Runs the pile test in opt.out_dir, continuing what an interrupted attempt left there (for
+/// campaigns and the loop's cache, whose runs may be killed or lose their machine): a finished
+/// run (result.json) is returned as it is, a checkpoint is resumed (bit-identical to an
+/// uninterrupted run), anything else is cleared and run afresh. A checkpoint that cannot be
+/// resumed (ResumeError: damaged, or written by an incompatible version) is cleared too and the
+/// run started again, never half-mixed.
+nlohmann::json run_pile_test_or_continue(const SceneConfig& scene, const RunOptions& opt);
+
 /// The pile measurement as JSON, angles in degrees (shared with reports).
 nlohmann::json pile_json(const sim::PileGeometry& g);
 
