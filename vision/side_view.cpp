@@ -117,7 +117,6 @@ double col_mean(const cv::Mat& img, int c, int r0, int r1) {
 struct InterceptFit {
   double alpha = 0.0, beta = 0.0, sigma_alpha = 0.0;
   int n = 0;
-  bool clamped = false;  // the toe is the band's reach, not its flank-carried offset
 };
 
 // The toe from the low band's silhouette points (heights h above the plate line, columns x) and
@@ -189,10 +188,7 @@ InterceptFit toe_intercept(const std::vector<double>& h, const std::vector<doubl
       if (h[i] <= h_low + 1.0) x_low = std::max(x_low, outward * x[i]);
     limit = std::max(limit, x_low + carry * h_low);
   }
-  if (outward * f.alpha > limit) {
-    f.alpha = outward * limit;
-    f.clamped = true;
-  }
+  if (outward * f.alpha > limit) f.alpha = outward * limit;
   const double hm = hsum / f.n;
   double ss = 0.0;
   for (double o : off)
