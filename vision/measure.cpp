@@ -156,6 +156,13 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
   if (std::abs(p.plate.tilt_deg()) > 1.0)
     m.warnings.push_back("plate line tilted by " + fixed(p.plate.tilt_deg(), 2) +
                          " deg: level the camera");
+  if (p.far_edge) {
+    const double u = p.apex.x;
+    m.warnings.push_back(
+        "the pile stands on the plate's visible top face (camera above the plate): the plate line "
+        "is its toe line, " +
+        fixed(p.plate.v_at(u) - p.far_edge->v_at(u), 1) + " px below the plate's far edge");
+  }
   if (std::abs(p.left.angle_deg - p.right.angle_deg) > 3.0)
     m.warnings.push_back("flank angles differ by " +
                          fixed(std::abs(p.left.angle_deg - p.right.angle_deg), 1) +
@@ -166,7 +173,8 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
       m.warnings.push_back(
           "the camera puts the axis foot " + fixed(p.plate.v_at(foot->x()) - foot->y(), 1) +
           " px from the detected plate line (camera above the plate, or the camera does not "
-          "match the image): H and D are biased");
+          "match the image): H is read from the plate line, D and the flank angles through the "
+          "given camera may be biased");
   }
 
   if (!scale.camera) {
@@ -234,7 +242,14 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
       cam, Eigen::Vector2d(p.apex.x, p.plate.v_at(p.apex.x)), plane_point, plane_normal);
   m.base_center_m = plane_point;
   m.plate_line_z_m = plate_at_axis ? plate_at_axis->z() : std::nan("");
-  m.height_m = apex->z() - scale.axis_foot.z();
+  // H above the plate the camera gives (its axis foot), or, when the pile stands on the plate's
+  // visible top face (a camera above the plate), above the toe line it stands on, as the lab
+  // reads its photo: with the camera's true pose that line maps to the plate (z = 0); with a
+  // camera higher than declared the whole picture is shifted and only the difference holds
+  // (the apex's z alone read 4 mm for a 14 mm pile photographed from 10 mm up).
+  if (p.far_edge && !plate_at_axis)
+    throw std::runtime_error(where + ": the plate line's ray misses the pile's axis plane");
+  m.height_m = apex->z() - (p.far_edge ? m.plate_line_z_m : scale.axis_foot.z());
   m.diameter_m = 2.0 * radius;
   if (!(m.height_m > 0.0))
     throw std::runtime_error(where + ": the apex maps below the plate (H = " + str(m.height_m) +
@@ -447,7 +462,8 @@ nlohmann::json to_json(const SideMeasurement& m) {
           {"slope", p.plate.b},
           {"tilt_deg", p.plate.tilt_deg()},
           {"residual_px", p.plate.residual_px},
-          {"support_columns", p.plate.support}}},
+          {"support_columns", p.plate.support},
+          {"from", p.far_edge ? "toes on the plate's top face" : "plate edge"}}},
         {"flank_left", flank_json(p.left)},
         {"flank_right", flank_json(p.right)},
         {"pile_level", p.pile_level},
@@ -551,6 +567,10 @@ cv::Mat draw_side_overlay(const cv::Mat& image, const SideMeasurement& m) {
   // Plate (toe) line.
   cv::line(img, ip({0.0, p.plate.v_at(0.0)}), ip({img.cols - 1.0, p.plate.v_at(img.cols - 1.0)}),
            cv::Scalar(255, 200, 0), t, cv::LINE_AA);
+  if (p.far_edge)  // the plate's far edge, when the plate line is the toe line below it
+    cv::line(img, ip({0.0, p.far_edge->v_at(0.0)}),
+             ip({img.cols - 1.0, p.far_edge->v_at(img.cols - 1.0)}), cv::Scalar(160, 120, 0),
+             std::max(1, t / 2), cv::LINE_AA);
   // Fitted flank lines, from the plate line to the apex height, fit band marked thicker.
   auto flank = [&](const FlankFit& f, const cv::Scalar& colour) {
     const double h0 = p.plate.height_above(f.point);

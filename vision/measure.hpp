@@ -5,14 +5,22 @@
 // which one it used:
 //  1. A known camera (camera::Camera, e.g. from a render's sidecar): perspective corrected. The
 //     apex pixel's ray is intersected with the vertical plane through the pile axis that faces
-//     the camera, giving H. The toe pixels' rays graze the base circle (they are the silhouette's
-//     tangents), so in the horizontal plane the two rays are tangents from the camera to that
-//     circle: with the centre at the axis' distance from the camera along their bisector, the
-//     radius is that distance times the sine of their half angle. The flank angles are measured
+//     the camera, giving H above the plate (z = 0). When the pile stands on the plate's visible
+//     top face (side_view.hpp step 2: a camera above the plate), H is instead the height between
+//     the apex and the toe line's ray below it on that plane (with the camera's true pose the toe
+//     line lands on z = 0; with a camera higher than declared, as in the lab's photos measured as
+//     if level, the whole picture shifts and only the difference is right: the apex's z alone
+//     read 4 mm for a 14 mm pile photographed from 10 mm up). The toe pixels' rays graze the base
+//     circle (they are the silhouette's tangents), so in the horizontal plane the two rays are
+//     tangents from the camera to that circle: with the centre at the axis' distance from the
+//     camera along their bisector, the radius is that distance times the sine of their half
+//     angle. The flank angles are measured
 //     on the meridian plane through each toe's tangent point (where a cone's silhouette generator
 //     lies). For a top view, the outline is mapped onto the plate plane z = 0. This is exact
-//     for a camera level with the plate (the lab's and the renders' side view); a camera above
-//     the plate sees the plate's far edge as its "plate line", which this does not model.
+//     for a camera level with the plate (the lab's and the renders' side view). A camera h above
+//     the plate at distance L, declared level, reads H + h R^2 / (L^2 - R^2) for a base radius R
+//     once the toe line is found (it is at the toes, the base circle's tangent points, nearer
+//     than the axis): +0.07 mm at h = 10 mm, L = 12 R; D does not change to first order.
 //  2. A given mm per pixel at the pile axis: an orthographic view is assumed (reported so).
 //  3. The scale marker of the render convention found in the image (band bar in a side view,
 //     checker card in a top view): orthographic view assumed, scale from the marker's pitch.

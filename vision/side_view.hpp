@@ -5,26 +5,65 @@
 //  1. Flat field (vision/image.hpp): grey / backdrop, so thresholds hold under uneven light.
 //     Given an image of the empty scene, the pile is segmented on grey / empty scene instead
 //     (background difference), while the plate line still comes from the fitted flat field.
-//  2. Plate line: the strongest long "darker below" horizontal edge, found from the signed row
-//     sum of the vertical gradient (noise and sloping flanks cancel in that sum, a long edge does
-//     not), then refined column by column to sub-pixel and fitted with a robust (Huber) line, so
-//     a slightly tilted camera is handled. It is detected, never taken as the lowest blob pixel.
+//  2. Plate line: a long straight "darker below" edge with the backdrop directly above it (the
+//     plate's edge beside the pile), found from row sums of the vertical gradient along lines of
+//     every tilt up to plate_max_tilt_deg (noise and sloping flanks cancel in those sums, a long
+//     edge does not), then refined column by column to sub-pixel, over the columns with backdrop
+//     directly above, and fitted with a robust (Huber) line, so a slightly tilted camera is
+//     handled. It is detected, never taken as the lowest blob pixel. When several such edges
+//     qualify, the plate is the lowest: a flat pile whose outer part is a sparse monolayer of
+//     grains on the plate shows the monolayer's top, one grain diameter up, as a longer edge than
+//     the plate's ends beside the pile (measured on the loop's 35 g pile on a 0.12-friction plate:
+//     the plate line 4 mm up and D 22 mm for 100; on a rendered cone of 3.5 mm spheres with a
+//     monolayer out to 52 mm: 3.6 mm up, D 35 mm for 104; now 0.0 mm and D 104.3 mm).
+//     A camera above the plate (the lab's was 5-10 mm up) sees the plate's top face as a band
+//     between its far edge (the edge above, against the backdrop) and its near edge, and the pile
+//     stands inside the band. Taking the far edge as the plate line cut the pile there (H 9 and 4
+//     mm for 14 at 5 and 10 mm up). So when the pile continues below that edge (pixels outside
+//     the range of the plate's levels read on both sides of the pile, connected to it, more than
+//     max(5 px, 4% of its height) deep), the plate line becomes the toe line: through the lowest
+//     pixel near each end of the pile (the outermost grains' feet), parallel to the edge. Rows
+//     seen against the top face take the blob's pixel boundary as their edge (there is no
+//     backdrop for the coverage of step 4). The guard is the range: a level camera facing the
+//     square plate's corner (azimuth 45 or 135 deg) sees two side faces below the plate line, lit
+//     differently and meeting under the pile; a level interpolated across the pile differed from
+//     both near the corner and read the corner as the pile standing on a top face (sample-3
+//     piles: H 64-76 mm for 47-59 mm). A top face is one plane and reads alike on both sides.
+//     Limits: a toe line less than max(5 px, 4% of the pile's height) below the far edge is not
+//     told from a level view's edge, and the far edge stays the plate line (a camera 5 mm up at
+//     12 pile radii over the lab's 0.5 m plate); a raised camera facing the plate's corner sees
+//     its far edges as a flat "^", not one line, and is not handled either.
 //  3. Pile: Otsu's dark class above the plate line, opened and closed, the largest component
-//     resting on the plate line (scale markers and dust are other components). The pile must
-//     be darker than the backdrop (true of the renders and of a light lab backdrop); a pile cut
-//     by the image or ROI border is refused.
+//     resting on the plate line (scale markers and dust are other components). Grains lying
+//     apart from it in the picture are strays and not part of it, as sim/pile_geometry.hpp
+//     leaves out particles not joined to the pile. The pile must be darker than the backdrop
+//     (true of the renders and of a light lab backdrop); a pile cut by the image or ROI border
+//     is refused.
 //  4. Sub-pixel silhouette: along each row, the edge is placed where the integral of the pixel
 //     coverage says it is (coverage = (backdrop - value) / (backdrop - pile)). Blur preserves
 //     that integral, so the estimate is unbiased for blurred and anti-aliased edges alike.
 //  5. H is the apex's perpendicular distance to the plate line. Flank angles are Huber line fits
 //     over a middle band of the height (20-80% by default, excluding the rounded apex and the
-//     toe). The toe points are the flank edges just above the plate (a low band, 2-12% of H,
-//     excluding the blurred rows at the plate) carried to the plate line along the fitted
-//     flank's slope; D is their distance. The low band gives the toe's position only, never its
-//     own slope: on a pile of particles that band is one or two particles tall and its local
-//     slope is the particles' outline (the bottom layer's near-vertical sides), so a free line
-//     through it, extrapolated, put the toes of a rendered 80 mm sphere cone 3 mm too far out
-//     each side (D 86 mm); along the flank's slope they land on the bottom layer's reach.
+//     toe), after setting aside the rows farther than max(3 px, 5 robust sigmas) from a
+//     Theil-Sen line: on a flat pile with a grain monolayer around it the band's lowest rows are
+//     the monolayer's ends, which pulled a plain Huber fit to 7 deg for a 30 deg cone (at 3
+//     sigmas the rough flanks of simulated piles lost rows as well, moving them up to 0.7 deg).
+//     The toe points are the flank edges just above the plate (a low band, 2-12% of H, excluding
+//     the blurred rows at the plate) carried to the plate line along the fitted flank's slope; D
+//     is their distance. The low band gives the toe's position only, never its own slope: on a
+//     pile of particles that band is one or two particles tall and its local slope is the
+//     particles' outline (the bottom layer's near-vertical sides), so a free line through it,
+//     extrapolated, put the toes of a rendered 80 mm sphere cone 3 mm too far out each side
+//     (D 86 mm); along the flank's slope they land near the bottom layer's reach. The toe is
+//     never farther out than the silhouette's own reach: the band's outermost point, or its
+//     lowest row carried down along the flank when the lowest rows slope like a flank (a smooth
+//     cone: the two agree). A grain's lower half overhangs and its widest point is the reach.
+//     Without this, carrying every row along the flank put the toe on the empty plate beyond the
+//     outermost grain, by up to the band's height times the flank's cotangent: most where the
+//     band lies within one layer of grains (rendered flat cone of 3.5 mm spheres: D 51.3 mm for
+//     48, now 48.2; synthetic monolayer edge +10 mm), but also on ordinary piles (rendered 80 mm
+//     cone of 2 mm spheres: D 83.7 mm, now 82.3; simulated sample piles: D 1-4% smaller, their
+//     image angle 0.3-0.8 deg nearer the particles' atan(2H/D)).
 //     The apex of a sharp cone reads about half a pixel low (the tip narrower than a pixel is
 //     lost); real apexes are rounded and H is then the top of the rounding.
 // Everything here is in pixels and orthographic; vision/measure.hpp adds the scale and the
@@ -32,6 +71,7 @@
 #pragma once
 
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -107,6 +147,9 @@ struct SideProfile {
   cv::Rect blob_box;                               // bounding box of the pile blob [px]
   double pile_level = 0.0;  // flat-field level of the pile (backdrop = 1) [-]
   double threshold = 0.0;   // flat-field threshold used [-]
+  /// When the pile stands on the plate's visible top face (a camera above the plate): the
+  /// plate's far edge against the backdrop, above the toe line that `plate` then is.
+  std::optional<PlateLine> far_edge;
 };
 
 /// Finds the plate line in a flat-fielded image (CV_32F, backdrop about 1). Throws

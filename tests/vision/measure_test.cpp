@@ -85,6 +85,45 @@ TEST(MeasureSide, PerspectiveCorrectionRecoversHandD) {
   EXPECT_GT(std::abs(o.theta_deg - theta_of(60.0, 200.0)), 0.3);
 }
 
+TEST(MeasureSide, CameraAboveThePlateReadsHFromTheToeLine) {
+  // The camera 10 mm above the plate, 0.6 m from a smooth 200 mm cone, measured as if level: the
+  // plate's top face is a band from its far edge (23 px below the horizon) to its near edge
+  // (55 px), and the pile stands in it with its toes (the base circle's tangent points, at depth
+  // L - R^2/L) 33 px below the horizon. The plate line is the toe line, which maps to
+  // z_toe = -h (1 + R^2 / (L^2 - R^2)) on the axis plane, and H reads H + h R^2 / (L^2 - R^2)
+  // (+0.29 mm), not the H - h = 50 mm of the apex's height through the declared camera, nor the
+  // 57 mm of the far edge (z = -h L / (L + s) = -7.1 mm). The toe line is the lowest pixel
+  // within 5% of the width from each end; on this smooth cone that is below the tangent points
+  // by: the synthetic cone's reach into the plate (2 px), the base ellipse's descent over 5% of
+  // its width (0.44 C, C = f h R / L^2 = 5.3 px: 2.4 px), half a pixel (the pixel's bottom) and
+  // up to 1.5 px of anti-aliased coverage: at most 6.4 px. The toes are carried down the flank
+  // to that line, D wider by 2 x 6.4 px x cot(31 deg).
+  const double h = 0.010, l = 0.6, r = 0.1;
+  synthetic::SideScene s;
+  s.camera = camera::side_view(l, 0.4, h, 0.0, 1280, 720);
+  s.scale_bar = false;
+  const cv::Mat img = synthetic::draw_side(s);
+  const camera::Camera declared = camera::side_view(l, 0.4, 0.0, 0.0, 1280, 720);
+  const SideMeasurement m = measure_side_camera(img, declared, {}, "raised.png");
+  const double mm_px = camera::mm_per_px_at(declared, Eigen::Vector3d::Zero()) * 1e-3;  // [m/px]
+  const double f_px = 1280 * l / 0.4;
+  const double low_px = 2.0 + 0.44 * f_px * h * r / (l * l) + 0.5 + 1.5;
+  const double z_toe = -h * (1.0 + r * r / (l * l - r * r));
+  EXPECT_LT(m.plate_line_z_m, z_toe + 0.5 * mm_px);
+  EXPECT_GT(m.plate_line_z_m, z_toe - low_px * mm_px);
+  const double h_read = 0.060 + h * r * r / (l * l - r * r);
+  EXPECT_GT(m.height_m, h_read - 0.5 * mm_px);
+  EXPECT_LT(m.height_m, h_read + low_px * mm_px);
+  EXPECT_NEAR(m.diameter_m, 0.200, 2.0 * low_px * mm_px / std::tan(0.54));
+  // Through the true camera the same image reads the plate line on the plate (the toes, nearer
+  // than the axis, map to z = -h R^2 / (L^2 - R^2) on the axis plane), H as above.
+  const SideMeasurement t = measure_side_camera(img, *s.camera, {}, "raised.png");
+  const double z_true = -h * r * r / (l * l - r * r);
+  EXPECT_LT(t.plate_line_z_m, z_true + 0.5 * mm_px);
+  EXPECT_GT(t.plate_line_z_m, z_true - low_px * mm_px);
+  EXPECT_NEAR(t.height_m, m.height_m, 0.5 * mm_px);
+}
+
 TEST(MeasureSide, SidecarGivesCameraAndScale) {
   const camera::Camera cam = camera::side_view(2.0, 0.4, 0.0, 0.0, 1280, 720);
   const std::string path = temp_path("sidecar.json");

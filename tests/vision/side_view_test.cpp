@@ -100,6 +100,54 @@ TEST(SideView, BottomLayerParticleDoesNotTiltTheToe) {
   }
 }
 
+TEST(SideView, GrainMonolayerOnThePlateIsPartOfThePileNotThePlate) {
+  // A flat cone (H 20 mm, D 120 mm) whose edge is a monolayer of 4 mm grains on the plate out to
+  // 30 mm beyond each toe, the first centred on the toe: overlapping (a long straight top edge
+  // one grain up, longer than the plate's ends beside the pile, which was taken as the plate
+  // line), or one grain diameter apart. The plate line stays on the plate. D reaches the
+  // outermost grain joined to the pile in the picture: the last of the overlapping layer, or the
+  // first grain when the others lie apart (strays, as sim/pile_geometry.hpp leaves them out).
+  for (double pitch : {3.6, 8.0}) {
+    SideScene s;
+    s.height_mm = 20.0;
+    s.diameter_mm = 120.0;
+    s.stray_diameter_mm = 4.0;
+    s.monolayer_mm = 30.0;
+    s.monolayer_pitch_mm = pitch;
+    s.bar_offset_mm = -135.0;
+    const double reach =
+        pitch < s.stray_diameter_mm ? synthetic::monolayer_reach_mm(s) : 0.5 * s.stray_diameter_mm;
+    const double d_true = s.diameter_mm + 2.0 * reach;
+    const SideProfile p = measure_side_pixels(synthetic::draw_side(s));
+    EXPECT_NEAR(p.plate.v_at(0.5 * (s.width - 1)), s.plate_v, 0.5) << pitch;
+    EXPECT_NEAR(p.height_px * s.mm_per_px, 20.0, 0.3) << pitch;
+    // The toes sit on the outermost grains' reach, carried down the flank over the lowest rows
+    // (at most 3 px x cot(flank) = 0.4 mm each side here).
+    EXPECT_NEAR(p.diameter_px * s.mm_per_px, d_true, 1.5) << pitch;
+    // The flanks are the cone's, not pulled towards the monolayer's ends.
+    EXPECT_NEAR(p.left.angle_deg, true_theta_deg(20.0, 120.0), 1.0) << pitch;
+    EXPECT_NEAR(p.right.angle_deg, true_theta_deg(20.0, 120.0), 1.0) << pitch;
+  }
+}
+
+TEST(SideView, PlateCornerFacingALevelCameraIsNotATopFace) {
+  // A level view at 45 deg azimuth: below the plate line two side faces of the square plate,
+  // lit differently (here 1.0 and 0.6 of the plate colour, as the renders' two faces), meet at
+  // the corner under the pile's axis. Nothing of the pile lies below the plate line: the plate
+  // line stays on the plate and H and D are the cone's (a level read across the pile from both
+  // sides differed from both faces near the corner and read the pile as standing 15 mm lower,
+  // on a visible top face).
+  for (double shade : {0.6, 1.5}) {
+    SideScene s;
+    s.plate_right_shade = shade;
+    const SideProfile p = measure_side_pixels(synthetic::draw_side(s));
+    EXPECT_FALSE(p.far_edge) << shade;
+    EXPECT_NEAR(p.plate.v_at(0.5 * (s.width - 1)), s.plate_v, 0.5) << shade;
+    EXPECT_NEAR(p.height_px * s.mm_per_px, s.height_mm, 0.3) << shade;
+    EXPECT_NEAR(p.diameter_px * s.mm_per_px, s.diameter_mm, 0.5) << shade;
+  }
+}
+
 TEST(SideView, TiltedPlateLine) {
   SideScene s;
   s.tilt_deg = 1.5;

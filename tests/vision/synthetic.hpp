@@ -42,9 +42,20 @@ struct SideScene {
   double axis_u = -1.0;              // column of the cone axis [px]; < 0 = image centre
   double plate_v = 520.0;            // row of the plate line [px]
   double plate_thickness_mm = 15.0;  // plate band thickness [mm]
-  double apex_radius_mm = 0.0;       // round the apex with this radius (0 = sharp) [mm]
+  // The plate's face right of the axis drawn at this fraction of the plate colour: a level view
+  // facing the square plate's corner (azimuth 45 deg) shows two side faces lit differently,
+  // meeting under the pile (orthographic scenes only) [-].
+  double plate_right_shade = 1.0;
+  double apex_radius_mm = 0.0;     // round the apex with this radius (0 = sharp) [mm]
   int strays = 0;                  // loose particles (disks) lying on the plate beyond each toe [-]
   double stray_diameter_mm = 3.0;  // their diameter [mm]
+  // A monolayer of such disks lying on the plate beyond each toe, the first centred on the toe
+  // (half inside the cone's foot, joined to it in the picture), centres `monolayer_pitch_mm`
+  // apart, out to monolayer_mm beyond the toe (the last disk's outer edge within it). Disks
+  // closer than their diameter overlap (a layer joined in the picture); farther apart, each is
+  // apart from the rest. 0 = none [mm].
+  double monolayer_mm = 0.0;
+  double monolayer_pitch_mm = 3.0;
   // A bottom-layer particle (disk) of this diameter resting on the plate at each end of the base,
   // its outer edge at the toe, as the outermost ring of a sphere pile: near the plate it sticks
   // out of the flank with a near-vertical side. 0 = none [mm].
@@ -187,12 +198,21 @@ inline std::vector<cv::Point2d> hull(const std::vector<cv::Point2d>& pts) {
   return {h.begin(), h.end()};
 }
 
+/// How far beyond each toe the monolayer of SideScene reaches (its last disk's outer edge) [mm].
+inline double monolayer_reach_mm(const SideScene& s) {
+  const double rs = 0.5 * s.stray_diameter_mm;
+  double reach = 0.0;
+  for (double xc = 0.0; xc + rs <= s.monolayer_mm + 1e-9; xc += s.monolayer_pitch_mm)
+    reach = xc + rs;
+  return reach;
+}
+
 /// Draws a side scene as an 8-bit BGR image.
 inline cv::Mat draw_side(const SideScene& s) {
   const cv::Size size(s.width, s.height);
   cv::RNG rng(s.look.seed);
   cv::Mat img = backdrop(size, s.look, rng);
-  std::vector<std::vector<cv::Point2d>> plate, pile, black, white;
+  std::vector<std::vector<cv::Point2d>> plate, plate_right, pile, black, white;
   if (!s.camera) {
     const double au = s.axis_u < 0 ? 0.5 * (s.width - 1) : s.axis_u;
     const double k = 1.0 / s.mm_per_px;
@@ -206,6 +226,9 @@ inline cv::Mat draw_side(const SideScene& s) {
     const double big = 4.0 * (s.width + s.height) * s.mm_per_px;
     plate.push_back(
         {px(-big, 0), px(big, 0), px(big, -s.plate_thickness_mm), px(-big, -s.plate_thickness_mm)});
+    if (s.plate_right_shade != 1.0)
+      plate_right.push_back(
+          {px(0, 0), px(big, 0), px(big, -s.plate_thickness_mm), px(0, -s.plate_thickness_mm)});
     // The cone reaches 2 px into the plate so that it, not the plate, owns the toe row.
     const double r = 0.5 * s.diameter_mm, below = 2.0 * s.mm_per_px;
     const double rb = r * (1.0 + below / s.height_mm);
@@ -243,6 +266,17 @@ inline cv::Mat draw_side(const SideScene& s) {
               px(xc + rs * std::cos(2.0 * kPi * k / 64), rs + rs * std::sin(2.0 * kPi * k / 64)));
         pile.push_back(disk);
       }
+    }
+    if (s.monolayer_mm > 0.0) {
+      const double rs = 0.5 * s.stray_diameter_mm;
+      for (double xc = r; xc + rs <= r + s.monolayer_mm + 1e-9; xc += s.monolayer_pitch_mm)
+        for (double side : {-1.0, 1.0}) {
+          std::vector<cv::Point2d> disk;
+          for (int k = 0; k < 64; ++k)
+            disk.push_back(px(side * xc + rs * std::cos(2.0 * kPi * k / 64),
+                              rs + rs * std::sin(2.0 * kPi * k / 64)));
+          pile.push_back(disk);
+        }
     }
     if (s.scale_bar) {
       for (int i = 0; i < s.bands; ++i) {
@@ -289,6 +323,7 @@ inline cv::Mat draw_side(const SideScene& s) {
     }
   }
   paint(img, coverage(size, plate), kPlate);
+  if (!plate_right.empty()) paint(img, coverage(size, plate_right), kPlate * s.plate_right_shade);
   if (!black.empty()) paint(img, coverage(size, black), kBlack);
   if (!white.empty()) paint(img, coverage(size, white), kWhite);
   if (s.pile) paint(img, coverage(size, pile), kPile, speckle(size, s.look, rng));
