@@ -386,6 +386,31 @@ json Loop::run() {
         say("candidate " + e->name + " not traceable: " + why);
         continue;
       }
+      // Nor can an effect whose fingerprint does not stand out of its own seed noise. A
+      // fingerprint is a mean of paired differences whose noise (about sd sqrt(2 / seeds) for a
+      // physical effect, which re-draws the piles) is larger than the seed noise above, so a pure
+      // noise column passes the first test. Under "no effect", n RMS^2 / se^2 (se^2 the mean
+      // squared standard error of the per-test means, n calibration tests) is about chi^2(n);
+      // the fingerprint must exceed its 95% point (Wilson-Hilferty).
+      if (s_.seeds.size() >= 2) {
+        double se2 = 0.0;
+        for (std::size_t i : cal_) se2 += f.angle_se[i] * f.angle_se[i];
+        const double n = static_cast<double>(cal_.size());
+        se2 /= n;
+        const double a = 2.0 / (9.0 * n);
+        const double chi2_95_per_n = std::pow(1.0 - a + 1.645 * std::sqrt(a), 3);
+        if (rms * rms < chi2_95_per_n * se2) {
+          char why[240];
+          std::snprintf(why, sizeof why,
+                        "its fingerprint at the probe (RMS %.3g deg over the calibration tests) "
+                        "does not stand out of its own seed noise (standard error %.3g deg per "
+                        "test; 95%% point %.3g deg)",
+                        rms, std::sqrt(se2), std::sqrt(chi2_95_per_n * se2));
+          unavailable.push_back({{"name", e->name}, {"why", why}});
+          say("candidate " + e->name + " not traceable: " + why);
+          continue;
+        }
+      }
       fps.push_back(std::move(f));
     }
   }
