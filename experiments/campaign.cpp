@@ -1504,6 +1504,20 @@ nlohmann::json run_predictions(const Campaign& c, const nlohmann::json& cal,
     j["interval_effect"] = effect;
     list.push_back(j);
   }
+  // Predictions made earlier from the same calibration (another --only selection) stay in the
+  // file; an entry of the same name is replaced by the new one.
+  const fs::path file = fs::path(out_dir) / kPredictionsFile;
+  if (const auto old = read_json(file);
+      old && old->value("mu_r", -1.0) == mu && (*old)["keys"] == keys_of(*c.calibration) &&
+      (*old)["predictions"].is_array()) {
+    std::set<std::string> fresh;
+    for (const auto& p : list) fresh.insert(p.value("name", std::string()));
+    nlohmann::json merged = nlohmann::json::array();
+    for (const auto& p : (*old)["predictions"])
+      if (!fresh.count(p.value("name", std::string()))) merged.push_back(p);
+    for (auto& p : list) merged.push_back(std::move(p));
+    list = std::move(merged);
+  }
   nlohmann::json out = {{"campaign", c.file},
                         {"campaign_name", c.name},
                         {"calibration_file", kCalibrationFile},
@@ -1517,7 +1531,7 @@ nlohmann::json run_predictions(const Campaign& c, const nlohmann::json& cal,
   if (options.extra.is_object())
     for (const auto& [k, v] : options.extra.items()) out[k] = v;
   if (!runner.rank || runner.rank->rank == 0)
-    write_json_atomic((fs::path(out_dir) / kPredictionsFile).string(), out);
+    write_json_atomic(file.string(), out);
   return out;
 }
 

@@ -374,6 +374,35 @@ TEST(Predict, AClogIsCountedNeverAveraged) {
   EXPECT_TRUE(fs::exists(out / "predictions.json"));
 }
 
+// Predictions run in separate --only selections from one calibration all stay in
+// predictions.json; running one again replaces only its own entry.
+TEST(Predict, SeparateSelectionsAddUpInOneFile) {
+  const Scratch d("selections");
+  write_file_atomic((d.path / "c.toml").string(), calibration_campaign());
+  const Campaign full = load_campaign((d.path / "c.toml").string());
+  const fs::path out = d.path / "out", log = d.path / "log";
+  run_calibration(full, out.string(), synthetic_case(log), kAngle, quiet());
+  const json cal = read_calibration(full, out.string());
+  auto names = [&]() {
+    std::vector<std::string> n;
+    const json pj = json::parse(read_file((out / "predictions.json").string()));
+    for (const auto& p : pj["predictions"]) n.push_back(p["name"]);
+    std::sort(n.begin(), n.end());
+    return n;
+  };
+  Campaign a = full;
+  keep_only_predictions(a, {"self"});
+  run_predictions(a, cal, out.string(), synthetic_case(log), kAngle, quiet());
+  EXPECT_EQ(names(), std::vector<std::string>({"self"}));
+  Campaign b = full;
+  keep_only_predictions(b, {"sample4"});
+  const json pj = run_predictions(b, cal, out.string(), synthetic_case(log), kAngle, quiet());
+  EXPECT_EQ(names(), std::vector<std::string>({"sample4", "self"}));
+  EXPECT_EQ(pj["predictions"].size(), 2u);
+  run_predictions(a, cal, out.string(), synthetic_case(log), kAngle, quiet());
+  EXPECT_EQ(names(), std::vector<std::string>({"sample4", "self"}));
+}
+
 TEST(Predict, OnlyTheNamedPredictionsAreKept) {
   const Scratch d("only");
   write_file_atomic((d.path / "c.toml").string(), calibration_campaign());
