@@ -254,6 +254,7 @@ json Loop::run() {
       s_.mu_grid.front() < 0.0)
     throw InputError("loop: mu_grid must hold at least two increasing values >= 0");
   if (s_.seeds.size() < 2) throw InputError("loop: at least two seeds are needed (seed noise)");
+  for (const LabTest& t : data_.tests) check_mu_key(t, s_.mu_key);
   for (std::size_t i = 0; i < data_.tests.size(); ++i)
     (data_.tests[i].role == "calibrate" ? cal_ : val_).push_back(i);
   if (cal_.size() < 3)

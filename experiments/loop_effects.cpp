@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <stdexcept>
 
 #include "experiments/overrides.hpp"
@@ -157,6 +158,27 @@ double scene_value(const LabTest& t, const std::string& key_pattern) {
                    " has no numeric value");
 }
 
+std::vector<std::string> split_keys(const std::string& keys) {
+  std::vector<std::string> out;
+  std::string k;
+  std::stringstream ss(keys);
+  while (std::getline(ss, k, ','))
+    if (!k.empty()) out.push_back(k);
+  return out;
+}
+
+void check_mu_key(const LabTest& test, const std::string& mu_key) {
+  const std::vector<std::string> keys = split_keys(mu_key);
+  if (keys.empty()) throw InputError("mu_key: no scene key given");
+  for (const std::string& k : keys) {
+    try {
+      (void)scene_value(test, k);
+    } catch (const std::exception& e) {
+      throw InputError("mu_key " + k + " (test " + test.id + "): " + e.what());
+    }
+  }
+}
+
 SimRequest make_request(const LabTest& test, const std::string& mu_key, double mu_r,
                         std::uint64_t seed, const std::vector<EffectSetting>& effects,
                         const ImageVariant& base_image) {
@@ -168,7 +190,7 @@ SimRequest make_request(const LabTest& test, const std::string& mu_key, double m
     r.image.camera_height_m = *test.camera_height_m;
     r.image.declared_height_m = *test.camera_height_m;
   }
-  r.extra.emplace_back(resolve_key(test, mu_key), num(mu_r));
+  for (const std::string& k : split_keys(mu_key)) r.extra.emplace_back(resolve_key(test, k), num(mu_r));
   for (const EffectSetting& s : effects) {
     const CandidateEffect& e = *s.effect;
     switch (e.apply) {

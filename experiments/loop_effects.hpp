@@ -72,8 +72,16 @@ struct EffectSetting {
   double value = 0.0;
 };
 
-/// The request for `test` with the effects applied on top of mu_r (rolling key) and the image
-/// settings `base_image`. Throws InputError when a factor effect's key cannot be read from the
+/// The scene keys of a calibrated-parameter key list ("a,b": every key takes the same mu_r, as
+/// calibrate's `key = [...]` does, e.g. rock-rock and rock-plate rolling friction together).
+std::vector<std::string> split_keys(const std::string& keys);
+
+/// Checks that every key of `mu_key` names a numeric value in the test's scene. Throws
+/// InputError naming the key, the test and the reason.
+void check_mu_key(const LabTest& test, const std::string& mu_key);
+
+/// The request for `test` with the effects applied on top of mu_r (every key of `mu_key`, a
+/// comma-separated list) and the image settings `base_image`. Throws InputError when a factor effect's key cannot be read from the
 /// test's scene.
 SimRequest make_request(const LabTest& test, const std::string& mu_key, double mu_r,
                         std::uint64_t seed, const std::vector<EffectSetting>& effects,

@@ -53,6 +53,10 @@ void add_loop_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--mu-grid", args->grid, "mu_r grid, comma separated (default 0.05,0.15,0.3,0.5)");
   cmd->add_option("--seeds", args->seeds, "Seeds, comma separated (default 1001,1002,1003)");
+  cmd->add_option("--mu-key", args->settings.mu_key,
+                  "Scene key(s) of the calibrated mu_r, comma separated, all set to the same value "
+                  "({sample}, {plate} stand for the test's materials)")
+      ->capture_default_str();
   cmd->add_option("--candidates", args->candidates,
                   "Candidate effects to try, comma separated (default: all in the registry)");
   cmd->add_option("--max-effects", args->settings.max_effects, "Stop after this many effects")

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 #include "experiments/loop_data.hpp"
 #include "experiments/loop_effects.hpp"
@@ -59,6 +60,37 @@ TEST(LoopData, AGoodFileBecomesTestsWithOverrides) {
   EXPECT_NEAR(scene_value(d.tests[1], "contacts.{sample}-{plate}.friction"), 0.5, 1e-15);
   EXPECT_NEAR(d.tests[1].angle_deg, 27.5, 1e-12);
   EXPECT_FALSE(d.tests[1].height_mm.has_value());
+}
+
+// A calibrated parameter may be several scene keys set together (rock-rock and rock-plate rolling
+// friction, as the Table 3 calibrations do); each takes the same mu_r, and a key the test's scene
+// does not have is an error naming the key and the test.
+TEST(LoopData, TheCalibratedParameterMaySetSeveralKeys) {
+  const LabData d = read_lab_csv(
+      write_csv("mukey", "id,role,scene,angle_deg\nt1,calibrate," + kScene + ",30\n"));
+  const LabTest& t = d.tests.at(0);
+  const std::string both =
+      "contacts.{sample}-{sample}.rolling_friction,contacts.{sample}-{plate}.rolling_friction";
+  const SimRequest r = make_request(t, both, 0.37, 5, {}, ImageVariant{});
+  std::map<std::string, std::string> set(r.extra.begin(), r.extra.end());
+  ASSERT_EQ(set.size(), 2u);
+  EXPECT_EQ(std::stod(set.at("contacts.rock-rock.rolling_friction")), 0.37);
+  EXPECT_EQ(std::stod(set.at("contacts.rock-plate.rolling_friction")), 0.37);
+  EXPECT_NO_THROW(check_mu_key(t, both));
+  // One key alone sets only that key.
+  EXPECT_EQ(make_request(t, "contacts.{sample}-{sample}.rolling_friction", 0.2, 5, {},
+                         ImageVariant{})
+                .extra.size(),
+            1u);
+  try {
+    check_mu_key(t, "contacts.{sample}-{sample}.rolling_friction,contacts.rock-rock.rolling_fric");
+    ADD_FAILURE() << "a misspelt key was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("contacts.rock-rock.rolling_fric"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("t1"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(check_mu_key(t, ","), std::invalid_argument);
 }
 
 TEST(LoopData, BadInputNamesTheLineAndColumn) {
