@@ -60,6 +60,8 @@ struct Controller {
   double r_min = 0.0, r_max = 0.0; // particle radii the model was built for [m]
   double wall_seconds = 0.0;       // wall time of earlier sessions of this run [s]
   double max_overlap_seen = 0.0;   // largest overlap / smaller radius at any check [-]
+  std::int64_t retained = 0;       // particles left in the container and lifted away with it
+  double retained_mass = 0.0;      // their mass [kg]
   std::string stop_reason;         // set when done
   std::string stop_detail;
   json psd = json::object();       // PSD sampling summary
@@ -73,6 +75,7 @@ struct Controller {
             {"ke_threshold", ke_threshold}, {"r_min", r_min},
             {"r_max", r_max},             {"wall_seconds", wall_seconds}, {"max_overlap_seen", max_overlap_seen},
             {"stop_reason", stop_reason}, {"stop_detail", stop_detail},
+            {"retained", retained},       {"retained_mass", retained_mass},
             {"psd", psd},                 {"events", events}};
   }
   static Controller from_json(const json& j) {
@@ -92,6 +95,9 @@ struct Controller {
     c.max_overlap_seen = j.at("max_overlap_seen");
     c.stop_reason = j.at("stop_reason");
     c.stop_detail = j.at("stop_detail");
+    // Checkpoints written before the retained-material rule have none retained.
+    c.retained = j.value("retained", std::int64_t{0});
+    c.retained_mass = j.value("retained_mass", 0.0);
     c.psd = j.at("psd");
     c.events = j.at("events");
     return c;
@@ -157,17 +163,24 @@ void fill_container(sim::World& world, const SceneConfig& scene,
   }
 }
 
-std::int64_t count_inside(const sim::World& world, const ContainerConfig& c) {
+// Which particles are inside the container (none when it is removed).
+std::vector<char> inside_mask(const sim::World& world, const ContainerConfig& c) {
   const sim::State& st = world.state();
-  if (!st.walls[kContainer].enabled) return 0;
+  std::vector<char> in(st.particles.size(), 0);
+  if (!st.walls[kContainer].enabled) return in;
   const double z0 = c.gap + st.walls[kContainer].offset.z();
-  std::int64_t n = 0;
-  for (const sim::Vec3& x : st.particles.x) {
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    const sim::Vec3& x = st.particles.x[i];
     const double z_rel = x.z() - z0;
     if (z_rel < 0.0 || z_rel > c.height) continue;
-    if (std::hypot(x.x(), x.y()) < container_radius(c, z_rel)) ++n;
+    in[i] = std::hypot(x.x(), x.y()) < container_radius(c, z_rel);
   }
-  return n;
+  return in;
+}
+
+std::int64_t count_inside(const sim::World& world, const ContainerConfig& c) {
+  const std::vector<char> in = inside_mask(world, c);
+  return std::count(in.begin(), in.end(), 1);
 }
 
 std::string eta_text(double seconds) {
@@ -300,7 +313,8 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
     ctl.events.push_back({{"t", 0.0}, {"event", "filled"}, {"particles", world.state().particles.size()}});
   }
 
-  const std::size_t n0 = world.state().particles.size();
+  // The sample as filled (a resumed run may already have lifted some away with the container).
+  const std::size_t n0 = world.state().particles.size() + static_cast<std::size_t>(ctl.retained);
   const int threads = settings.threads > 0 ? settings.threads : omp_get_max_threads();
   json provenance = {
       {"scene_file", scene.file},
@@ -402,6 +416,24 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
           ctl.inside_last = inside;
           ctl.inside_changed = t;
         } else if (t - ctl.inside_changed > scene.procedure.clog_window &&
+                   st.walls[kContainer].offset.z() > 4.0 * ctl.r_max &&
+                   static_cast<double>(inside) <=
+                       scene.procedure.max_retained_fraction * static_cast<double>(n0)) {
+          // The flow has stopped with a little material left inside (cohesive grains on the
+          // wall): it stays in the container, which is lifted away with it, as in the lab.
+          const std::vector<char> in = inside_mask(world, scene.container);
+          double mass = 0.0;
+          for (std::size_t i = 0; i < in.size(); ++i)
+            if (in[i]) mass += st.particles.mass[i];
+          ctl.retained += static_cast<std::int64_t>(world.remove_particles(in));
+          ctl.retained_mass += mass;
+          world.set_wall_velocity(kContainer, sim::Vec3::Zero());
+          world.set_wall_enabled(kContainer, false);
+          ctl.phase = Phase::kSettle;
+          ctl.phase_start = ctl.lift_end = t;
+          event("flow stopped; " + std::to_string(ctl.retained) +
+                " particles stayed in the container and were lifted away with it");
+        } else if (t - ctl.inside_changed > scene.procedure.clog_window &&
                    st.walls[kContainer].offset.z() > 4.0 * ctl.r_max) {
           ctl.stop_reason = "clogged";
           ctl.stop_detail = "no pile: " + std::to_string(inside) + " particles lodged";
@@ -483,11 +515,17 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
       {"stop", {{"reason", ctl.stop_reason}, {"detail", ctl.stop_detail}}},
       {"pile", pile},
       {"psd", ctl.psd},
-      {"particles", {{"initial", n0}, {"final", st.particles.size()}}},
+      {"particles",
+       {{"initial", n0},
+        {"final", st.particles.size()},
+        {"retained_in_container", ctl.retained},
+        {"retained_mass_kg", ctl.retained_mass}}},
       {"procedure",
        {{"lift_speed_m_s", scene.procedure.lift_speed},
         {"lift_start_s", ctl.lift_start},
         {"lift_end_s", ctl.lift_end},
+        {"clog_window_s", scene.procedure.clog_window},
+        {"max_retained_fraction", scene.procedure.max_retained_fraction},
         {"end_s", st.time},
         {"ke_threshold_j", ctl.ke_threshold},
         {"container", {{"kind", scene.container.kind},

@@ -6,8 +6,12 @@
 //           plate, which closes the outlet as in the lab) and settles until its kinetic energy
 //           per particle falls below the threshold;
 //   lift    the container rises at the set speed until no particle is left inside it; if the
-//           count inside stops changing for clog_window seconds, particles have arched in the
-//           outlet and the run ends with "no pile: N particles lodged" and an angle of 0;
+//           count inside stops changing for clog_window seconds, the flow has stopped: with at
+//           most max_retained_fraction of the sample inside (cohesive grains stuck to the wall),
+//           that material stays in the container and is lifted away with it (removed from the
+//           run, counted in the result as retained_in_container), and the pile settles; with
+//           more, particles have arched in the outlet and the run ends with "no pile: N
+//           particles lodged" and an angle of 0;
 //   settle  the container is gone; the pile settles until the energy threshold again;
 //   done    the pile is measured from the particle positions (sim/pile_geometry).
 // The run stops by itself and records why. Everything needed to resume (the engine checkpoint

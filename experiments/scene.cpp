@@ -249,6 +249,7 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
     p.final_settle_max = t->number("final_settle_max_s", p.final_settle_max);
     p.max_time = t->number("max_time_s", p.max_time);
     p.clog_window = t->number("clog_window_s", p.clog_window);
+    p.max_retained_fraction = t->number("max_retained_fraction", p.max_retained_fraction);
     p.lattice_gap = t->number("lattice_gap", p.lattice_gap);
     p.fill_max_speed = t->number("fill_max_speed_m_s", p.fill_max_speed);
     if (!(p.fill_max_speed > 0))
@@ -258,6 +259,9 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
       t->fail("settle_speed_m_s", "= " + num(p.settle_speed) + " must be positive");
     if (!(p.max_time > 0)) t->fail("max_time_s", "= " + num(p.max_time) + " must be positive");
     if (!(p.clog_window > 0)) t->fail("clog_window_s", "= " + num(p.clog_window) + " must be positive");
+    if (!(p.max_retained_fraction >= 0 && p.max_retained_fraction < 1))
+      t->fail("max_retained_fraction",
+              "= " + num(p.max_retained_fraction) + " must be in [0, 1)");
     if (!(p.lattice_gap >= 0)) t->fail("lattice_gap", "= " + num(p.lattice_gap) + " must not be negative");
     t->finish();
   }

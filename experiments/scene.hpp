@@ -33,6 +33,10 @@ struct ProcedureConfig {
   double final_settle_max = 5.0;     // longest settling after the container is empty [s]
   double max_time = 60.0;            // simulated-time limit of the whole run [s]
   double clog_window = 1.0;          // lodged if the count inside does not change for [s]
+  double max_retained_fraction = 0.1; // flow stopped with at most this fraction of the sample
+                                     // still inside: that material stays in the container and is
+                                     // lifted away with it (cohesive grains on its wall, as in the
+                                     // lab), and the pile settles; above it the test clogged [-]
   double lattice_gap = 0.05;         // fill lattice spacing = d_max (1 + this) [-]
   double fill_max_speed = 0.3;       // gentle pour: speeds capped at this while filling [m/s]
 };
