@@ -72,10 +72,11 @@ const std::vector<CandidateEffect>& candidate_effects() {
        "(smooth or dusted board); shows most on small piles and as a step between plates.",
        {}},
       {"cohesion", EffectKind::kPhysics, EffectApply::kSetScene,
-       "contacts.{sample}-{sample}.cohesion_energy_density", 0.0, false, 5000.0, 0.0, 1e6,
+       "contacts.{sample}-{sample}.cohesion_energy_density", 0.0, false, 10000.0, 0.0, 1e6,
        "J/m^3",
-       "Cohesion between particles (simplified JKR, moisture or clay coating); steepens small "
-       "piles most (roughly as 1/H).",
+       "Cohesion between particles (simplified JKR, moisture or clay coating); steepens the "
+       "piles beyond what rolling friction reaches (on the loop's 3-5 layer test piles the "
+       "heavier ones most) and, strong enough, makes grains hang in the funnel.",
        {}},
       {"rolling_size", EffectKind::kPhysics, EffectApply::kSetScene,
        "contacts.{sample}-{sample}.rolling_size_exponent", 0.0, false, 1.0, -3.0, 3.0, "-",

@@ -12,7 +12,7 @@
 //  * Conditions: mass (15, 35 g) x plate (steel, declared friction 0.5; wood, 0.25) x declared
 //    lift speed (0.03, 0.1 m/s), eight tests, one held out. Each hidden effect leaves its own
 //    pattern: a smooth plate changes steel more than wood; a faster lift changes the fast series
-//    more. (A camera 6 mm above the plate, declared level, was a test here until session 5; it
+//    more; cohesion steepens the heavier piles more and lifts every angle beyond mu_r's reach. (A camera 6 mm above the plate, declared level, was a test here until session 5; it
 //    passed only through vision's plate-line flaw. With vision reading H from the toe line, its
 //    true effect, about 0.5 deg, is below one pile's scatter and the loop names nothing.)
 //  * The lab is the twin with hidden mu_r 0.25 (between grid points), other seeds, a different
@@ -156,6 +156,15 @@ TEST(LoopSynth, HiddenSmoothPlateIsFound) {
 // The funnel was lifted five times faster than declared.
 TEST(LoopSynth, HiddenFastLiftIsFound) {
   expect_found(run_case("lift", design({{"lift_speed", 5.0}})), "lift_speed", true);
+}
+
+// The grains are cohesive (simplified JKR, 12 kJ/m^3 between rock grains; the funnel is rock too,
+// so grains also stick to its wall): the piles stand steeper than the grid's highest mu_r makes
+// them, the 35 g piles most. Measured (docs/loop.md): 10 kJ/m^3 leaves a 2.5 deg residual and is
+// named but cut 56%; 12-14 kJ/m^3 cut 76-79%; from 15 kJ/m^3 the 26 mm funnel arches on the slow
+// 15 g tests (17-28% of the grains lodged).
+TEST(LoopSynth, HiddenCohesionIsFound) {
+  expect_found(run_case("cohesion", design({{"cohesion", 12000.0}})), "cohesion", true);
 }
 
 // Rolling resistance grows with grain size, mu_r (d / d_ref)^3: fine piles flatter, coarse
