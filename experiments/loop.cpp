@@ -130,6 +130,13 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
       std::vector<double> a, h, d;
       for (std::size_t r = 0; r < k; ++r, ++q) {
         const SimOutcome& o = out[q];
+        // A run that formed no pile (clogged) has no angle; averaging its 0 into the curve would
+        // be silent garbage. The caller decides (the baseline stops, a refit trial steps back).
+        if (!o.pile)
+          throw std::runtime_error("test " + data_.tests[i].id + " formed no pile at mu_r " +
+                                   std::to_string(s_.mu_grid[j]) + ", seed " +
+                                   std::to_string(s_.seeds[r]) + " (" + o.sim_dir +
+                                   "): the loop needs a pile at every grid point");
         surf.raw[i][j].push_back(o);
         const double angle = twin_angle(o, s_.angle);
         a.push_back(angle);

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <map>
 
+#include "experiments/loop.hpp"
 #include "experiments/loop_data.hpp"
 #include "experiments/loop_effects.hpp"
 #include "experiments/provenance.hpp"
@@ -91,6 +92,36 @@ TEST(LoopData, TheCalibratedParameterMaySetSeveralKeys) {
     EXPECT_NE(std::string(e.what()).find("t1"), std::string::npos) << e.what();
   }
   EXPECT_THROW(check_mu_key(t, ","), std::invalid_argument);
+}
+
+// A twin run that forms no pile (the outlet clogs) has no angle: the loop stops with an error
+// naming the test and the grid point instead of averaging a 0 deg "angle" into the test's curve.
+TEST(LoopData, ATwinRunWithoutAPileStopsTheLoop) {
+  const std::string csv = write_csv(
+      "clogging", "id,role,scene,W_mm,mass_g,angle_deg\n"
+                  "a,calibrate," + kScene + ",20,6,25\n"
+                  "b,calibrate," + kScene + ",20,8,26\n"
+                  "narrow,calibrate," + kScene + ",5,6,27\n");
+  const fs::path out = fs::temp_directory_path() / "reposetwin_loop_clog_test";
+  fs::remove_all(out);
+  LoopSettings s;
+  s.mu_grid = {0.1, 0.3};
+  s.seeds = {1, 2};
+  s.angle = AngleMeasure::kParticles;
+  s.image.width_px = 320;
+  s.image.height_px = 240;
+  s.image.side_views = 1;
+  s.progress = false;
+  s.html = false;
+  try {
+    (void)run_loop(read_lab_csv(csv), out.string(), s);
+    ADD_FAILURE() << "the loop ran on a test whose twin clogs";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("test narrow formed no pile"), std::string::npos) << what;
+    EXPECT_NE(what.find("mu_r 0.1"), std::string::npos) << what;
+  }
+  EXPECT_FALSE(fs::exists(out / "loop.json"));
 }
 
 TEST(LoopData, BadInputNamesTheLineAndColumn) {
