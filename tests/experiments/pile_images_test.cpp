@@ -21,7 +21,10 @@ TEST_P(RenderedCone, ImageAngleAgreesWithParticleMeasurement) {
   const test_support::Spheres s = test_support::make_cone(h, big_r, 0.002, -0.001, 1e-3, 5, 0.3);
   const sim::PileGeometry g = sim::measure_pile(s.x, s.r);
   ASSERT_EQ(g.status, sim::PileStatus::kOk);
-  const fs::path dir = fs::temp_directory_path() / "reposetwin_rendered_cone";
+  // One folder per angle: ctest runs the two instances side by side, and a shared folder let one
+  // remove the other's files mid-test.
+  const fs::path dir = fs::temp_directory_path() /
+                       ("reposetwin_rendered_cone_" + std::to_string(static_cast<int>(angle_deg)));
   fs::remove_all(dir);
   ImageSettings settings;
   settings.width_px = 960;
