@@ -406,35 +406,32 @@ json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
         break;
       case Phase::kLift: {
         const std::int64_t inside = count_inside(world, scene.container);
-        if (inside == 0) {
+        const bool flow_stopped = inside != 0 && inside == ctl.inside_last &&
+                                  t - ctl.inside_changed > scene.procedure.clog_window &&
+                                  st.walls[kContainer].offset.z() > 4.0 * ctl.r_max;
+        const bool little_left = static_cast<double>(inside) <=
+                                 scene.procedure.max_retained_fraction * static_cast<double>(n0);
+        if (inside == 0 || (flow_stopped && little_left)) {
+          std::string what = "container empty; removed";
+          if (inside > 0) {
+            // The flow has stopped with a little material left inside (cohesive grains on the
+            // wall): it stays in the container, which is lifted away with it, as in the lab.
+            const std::vector<char> in = inside_mask(world, scene.container);
+            for (std::size_t i = 0; i < in.size(); ++i)
+              if (in[i]) ctl.retained_mass += st.particles.mass[i];
+            ctl.retained += static_cast<std::int64_t>(world.remove_particles(in));
+            what = "flow stopped; " + std::to_string(ctl.retained) +
+                   " particles stayed in the container and were lifted away with it";
+          }
           world.set_wall_velocity(kContainer, sim::Vec3::Zero());
           world.set_wall_enabled(kContainer, false);
           ctl.phase = Phase::kSettle;
           ctl.phase_start = ctl.lift_end = t;
-          event("container empty; removed");
+          event(what);
         } else if (inside != ctl.inside_last) {
           ctl.inside_last = inside;
           ctl.inside_changed = t;
-        } else if (t - ctl.inside_changed > scene.procedure.clog_window &&
-                   st.walls[kContainer].offset.z() > 4.0 * ctl.r_max &&
-                   static_cast<double>(inside) <=
-                       scene.procedure.max_retained_fraction * static_cast<double>(n0)) {
-          // The flow has stopped with a little material left inside (cohesive grains on the
-          // wall): it stays in the container, which is lifted away with it, as in the lab.
-          const std::vector<char> in = inside_mask(world, scene.container);
-          double mass = 0.0;
-          for (std::size_t i = 0; i < in.size(); ++i)
-            if (in[i]) mass += st.particles.mass[i];
-          ctl.retained += static_cast<std::int64_t>(world.remove_particles(in));
-          ctl.retained_mass += mass;
-          world.set_wall_velocity(kContainer, sim::Vec3::Zero());
-          world.set_wall_enabled(kContainer, false);
-          ctl.phase = Phase::kSettle;
-          ctl.phase_start = ctl.lift_end = t;
-          event("flow stopped; " + std::to_string(ctl.retained) +
-                " particles stayed in the container and were lifted away with it");
-        } else if (t - ctl.inside_changed > scene.procedure.clog_window &&
-                   st.walls[kContainer].offset.z() > 4.0 * ctl.r_max) {
+        } else if (flow_stopped) {
           ctl.stop_reason = "clogged";
           ctl.stop_detail = "no pile: " + std::to_string(inside) + " particles lodged";
           ctl.phase = Phase::kDone;
