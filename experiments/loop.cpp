@@ -25,6 +25,7 @@ struct Curve {
   std::vector<double> h, d, angle;               // seed means per grid point [mm, mm, deg]
   std::vector<std::vector<double>> angle_seeds;  // per grid point, per seed [deg]
   std::vector<std::vector<double>> h_seeds, d_seeds;
+  std::vector<int> clogged;                      // per grid point: pours that formed no pile
 
   double clamp(double m) const { return std::clamp(m, mu.front(), mu.back()); }
   double at(double m) const { return evaluate(fit, clamp(m)); }
@@ -91,6 +92,11 @@ class Loop {
   void say(const std::string& m) const {
     if (s_.progress) std::cerr << "[loop] " << m << std::endl;
   }
+  // The cache's runs, a pour that formed no pile repeated with a new seed (s_.max_pours).
+  std::vector<SimOutcome> pour(const std::vector<SimRequest>& req) {
+    return run_repouring(req, s_.max_pours,
+                         [this](const std::vector<SimRequest>& r) { return cache_.run(r); });
+  }
   Surface simulate_surface(const std::vector<EffectSetting>& effects);
   struct MuFit {
     double mu = 0.0, mu_se = 0.0, t = 0.0, t_se = 0.0;
@@ -116,7 +122,7 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
     for (double m : s_.mu_grid)
       for (std::uint64_t seed : s_.seeds)
         req.push_back(make_request(data_.tests[i], s_.mu_key, m, seed, effects, s_.image));
-  const std::vector<SimOutcome> out = cache_.run(req);
+  const std::vector<SimOutcome> out = pour(req);
   Surface surf;
   surf.effects = effects;
   surf.curve.resize(n);
@@ -128,21 +134,26 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
     std::vector<Observation> obs;
     for (std::size_t j = 0; j < g; ++j) {
       std::vector<double> a, h, d;
+      int clogged = 0;
       for (std::size_t r = 0; r < k; ++r, ++q) {
         const SimOutcome& o = out[q];
         // A run that formed no pile (clogged) has no angle; averaging its 0 into the curve would
-        // be silent garbage. The caller decides (the baseline stops, a refit trial steps back).
+        // be silent garbage. A jammed pour is repeated with a new seed (pour()); one still
+        // without a pile after max_pours pours is left to the caller (the baseline stops, a
+        // refit trial steps back).
         if (!o.pile)
           throw std::runtime_error("test " + data_.tests[i].id + " formed no pile at mu_r " +
                                    std::to_string(s_.mu_grid[j]) + ", seed " +
-                                   std::to_string(s_.seeds[r]) + " (" + o.sim_dir +
-                                   "): the loop needs a pile at every grid point");
+                                   std::to_string(s_.seeds[r]) + ", in " +
+                                   std::to_string(s_.max_pours) + " pour(s) (last: " +
+                                   o.sim_dir + "): the loop needs a pile at every grid point");
+        clogged += o.clogged_pours;
         surf.raw[i][j].push_back(o);
         const double angle = twin_angle(o, s_.angle);
         a.push_back(angle);
         h.push_back(o.height_mm);
         d.push_back(o.diameter_mm);
-        obs.push_back({s_.mu_grid[j], s_.seeds[r], std::clamp(angle, 0.0, 90.0)});
+        obs.push_back({s_.mu_grid[j], o.seed, std::clamp(angle, 0.0, 90.0)});
       }
       c.angle.push_back(mean(a));
       c.h.push_back(mean(h));
@@ -150,6 +161,7 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
       c.angle_seeds.push_back(a);
       c.h_seeds.push_back(h);
       c.d_seeds.push_back(d);
+      c.clogged.push_back(clogged);
     }
     c.fit = fit_monotone(obs);
   }
@@ -299,6 +311,29 @@ json Loop::run() {
                    {"seed_se_deg", seed_se},
                    {"residuals", rows_before},
                    {"rmse", rmse_by_role(rows_before)}};
+  // Each test's simulated angles on the grid, with the seeds of the pours that made the piles
+  // and the pours that jammed (repeated; a lab pours its tests without jamming).
+  baseline["curves"] = json::array();
+  for (std::size_t i = 0; i < data_.tests.size(); ++i) {
+    const Curve& c = base.curve[i];
+    json seeds = json::array();
+    for (const auto& at : base.raw[i]) {
+      json s = json::array();
+      for (const SimOutcome& o : at) s.push_back(o.seed);
+      seeds.push_back(s);
+    }
+    int jammed = 0;
+    for (int x : c.clogged) jammed += x;
+    baseline["curves"].push_back({{"id", data_.tests[i].id},
+                                  {"mu_r", c.mu},
+                                  {"angle_deg", c.angle},
+                                  {"angle_seeds_deg", c.angle_seeds},
+                                  {"pour_seeds", seeds},
+                                  {"clogged_pours", c.clogged}});
+    if (jammed > 0)
+      say("test " + data_.tests[i].id + ": " + std::to_string(jammed) +
+          " baseline pour(s) formed no pile and were repeated with new seeds");
+  }
   say("baseline mu_r = " + std::to_string(fit.mu) + ", calibration RMSE " +
       std::to_string(baseline["rmse"]["calibrate_deg"].get<double>()) + " deg, seed sd " +
       std::to_string(noise_sd_) + " deg");
@@ -333,11 +368,13 @@ json Loop::run() {
   }
   {
     std::vector<SimRequest> req;
+    // Each pair starts from the seed of the baseline pile it is compared with (a repeated pour's
+    // seed if the first one jammed), so a measurement effect re-photographs that very pile.
     for (const CandidateEffect* e : cands)
-      for (const LabTest& t : data_.tests)
-        for (std::uint64_t seed : s_.seeds)
-          req.push_back(
-              make_request(t, s_.mu_key, s_.mu_grid[node], seed, {{e, e->probe}}, s_.image));
+      for (std::size_t i = 0; i < data_.tests.size(); ++i)
+        for (const SimOutcome& off : base.raw[i][node])
+          req.push_back(make_request(data_.tests[i], s_.mu_key, s_.mu_grid[node], off.seed,
+                                     {{e, e->probe}}, s_.image));
     say("fingerprints: " + std::to_string(cands.size()) +
         " candidates at mu_r = " + std::to_string(s_.mu_grid[node]));
     // One batch per candidate, so that a candidate whose runs or photographs fail (a lens
@@ -348,7 +385,7 @@ json Loop::run() {
     for (std::size_t c = 0; c < cands.size(); ++c) {
       try {
         const std::vector<SimRequest> part(req.begin() + c * per, req.begin() + (c + 1) * per);
-        const std::vector<SimOutcome> got = cache_.run(part);
+        const std::vector<SimOutcome> got = pour(part);
         bool all = true;
         for (const SimOutcome& o : got) all = all && o.pile;
         if (!all) throw std::runtime_error("a run formed no pile with the effect at its probe");
@@ -658,6 +695,7 @@ json Loop::run() {
       {"angle_method", angle_measure_method(s_.angle)},
       {"lab_angle_source", lab_angle_source(s_.angle)},
       {"mu_grid", s_.mu_grid},          {"mu_key", s_.mu_key},  {"image", s_.image.key()},
+      {"max_pours", s_.max_pours},
       {"cache", cache_.dir()},          {"finished", utc_now()}};
   if (!base.raw.empty() && !base.raw[0].empty() && !base.raw[0][0].empty())
     provenance["run"] = base.raw[0][0][0].provenance;

@@ -64,6 +64,7 @@ struct LoopSettings {
   AcceptanceRule rule;                     // significance and LOO thresholds
   std::vector<std::string> candidates;     // registry names to try; empty = all
   int max_effects = 2;                     // stop after adding this many effects
+  int max_pours = 3;                       // pours per pile when the funnel jams (new seeds)
   double t_max = 3.0;                      // largest t = (p - off) / (p1 - off) of a refit [-]
   int workers = 2;                         // concurrent simulations
   bool progress = true;                    // progress lines on stderr

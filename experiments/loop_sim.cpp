@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <thread>
 
 #include "experiments/campaign.hpp"
@@ -196,6 +197,32 @@ json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
           {"variant", v.key()}};
 }
 
+std::vector<SimOutcome> run_repouring(
+    const std::vector<SimRequest>& requests, int max_pours,
+    const std::function<std::vector<SimOutcome>(const std::vector<SimRequest>&)>& run) {
+  if (max_pours < 1)
+    throw std::invalid_argument("loop: max_pours must be at least 1, got " +
+                                std::to_string(max_pours));
+  std::vector<SimOutcome> out = run(requests);
+  for (int pour = 1; pour < max_pours; ++pour) {
+    std::vector<std::size_t> again;
+    std::vector<SimRequest> repeat;
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      if (out[i].pile) continue;
+      again.push_back(i);
+      repeat.push_back(requests[i]);
+      repeat.back().seed = requests[i].seed + static_cast<std::uint64_t>(pour) * kRepourSeedStride;
+    }
+    if (again.empty()) break;
+    const std::vector<SimOutcome> got = run(repeat);
+    for (std::size_t k = 0; k < again.size(); ++k) {
+      out[again[k]] = got[k];
+      out[again[k]].clogged_pours = pour;
+    }
+  }
+  return out;
+}
+
 SimCache::SimCache(std::string dir, SimCacheSettings settings)
     : dir_(fs::absolute(dir).lexically_normal().string()), settings_(settings) {
   fs::create_directories(dir_);
@@ -287,6 +314,7 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     SimOutcome& o = out[i];
     o.sim_dir = (fs::path(dir_) / "cases" / sim_of[i]).string();
     o.provenance = s.at("provenance");
+    o.seed = requests[i].seed;
     if (photo_of[i].empty()) continue;
     const json& p = photo_result[photo_of[i]];
     o.pile = true;

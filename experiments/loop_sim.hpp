@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
@@ -66,6 +67,8 @@ struct SimOutcome {
   std::string sim_dir;        // the pile run's folder
   std::string image_dir;      // the photograph's folder
   nlohmann::json provenance;  // the run's provenance (scene, seed, dt, softened E, version)
+  std::uint64_t seed = 0;     // the seed of the pour that gave this outcome
+  int clogged_pours = 0;      // earlier pours of the request that formed no pile (repeated)
 };
 
 /// Settings of the cache and pool.
@@ -92,6 +95,19 @@ class SimCache {
   int started_sims_ = 0;
   int started_photos_ = 0;
 };
+
+/// Seed of the a-th repeat of a pour with seed s: s + a * kRepourSeedStride (far from the seed
+/// lists a user types, so a repeat never lands on another request's seed).
+constexpr std::uint64_t kRepourSeedStride = 1000000;
+
+/// Runs `requests` with `run` (SimCache::run, or a stand-in in tests) and repeats every pour
+/// that formed no pile with the next repeat seed, up to `max_pours` pours in all, as a lab
+/// repeats a pour whose funnel jammed. Each outcome records the seed of its pour and how many
+/// pours before it formed no pile; one that still formed none after max_pours is returned as it
+/// is (pile false), for the caller to decide. Throws std::invalid_argument for max_pours < 1.
+std::vector<SimOutcome> run_repouring(
+    const std::vector<SimRequest>& requests, int max_pours,
+    const std::function<std::vector<SimOutcome>(const std::vector<SimRequest>&)>& run);
 
 /// The resolved overrides of a request: the test's, then the extra ones (later keys win), as
 /// "key=value" strings in application order.

@@ -61,6 +61,11 @@ void add_loop_command(CLI::App& app) {
                   "Candidate effects to try, comma separated (default: all in the registry)");
   cmd->add_option("--max-effects", args->settings.max_effects, "Stop after this many effects")
       ->capture_default_str();
+  cmd->add_option("--max-pours", args->settings.max_pours,
+                  "Pours per pile: a pour that forms no pile (the funnel jammed) is repeated with "
+                  "a new seed, as a lab repeats it, up to this many pours in all")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
   cmd->add_option("--min-t", args->settings.rule.min_t, "Significance threshold |c|/se")
       ->capture_default_str();
   cmd->add_option("--workers", args->settings.workers, "Concurrent simulations")

@@ -94,8 +94,9 @@ TEST(LoopData, TheCalibratedParameterMaySetSeveralKeys) {
   EXPECT_THROW(check_mu_key(t, ","), std::invalid_argument);
 }
 
-// A twin run that forms no pile (the outlet clogs) has no angle: the loop stops with an error
-// naming the test and the grid point instead of averaging a 0 deg "angle" into the test's curve.
+// A twin run that forms no pile (the outlet clogs) has no angle: the pour is repeated with a new
+// seed, and when every pour jams the loop stops with an error naming the test and the grid point
+// instead of averaging a 0 deg "angle" into the test's curve.
 TEST(LoopData, ATwinRunWithoutAPileStopsTheLoop) {
   const std::string csv = write_csv(
       "clogging", "id,role,scene,W_mm,mass_g,angle_deg\n"
@@ -113,6 +114,7 @@ TEST(LoopData, ATwinRunWithoutAPileStopsTheLoop) {
   s.image.side_views = 1;
   s.progress = false;
   s.html = false;
+  s.max_pours = 2;
   try {
     (void)run_loop(read_lab_csv(csv), out.string(), s);
     ADD_FAILURE() << "the loop ran on a test whose twin clogs";
@@ -120,6 +122,10 @@ TEST(LoopData, ATwinRunWithoutAPileStopsTheLoop) {
     const std::string what = e.what();
     EXPECT_NE(what.find("test narrow formed no pile"), std::string::npos) << what;
     EXPECT_NE(what.find("mu_r 0.1"), std::string::npos) << what;
+    EXPECT_NE(what.find("in 2 pour(s)"), std::string::npos) << what;
+    // The last pour named is the repeat, with its own seed.
+    EXPECT_NE(what.find("seed_" + std::to_string(1 + kRepourSeedStride)), std::string::npos)
+        << what;
   }
   EXPECT_FALSE(fs::exists(out / "loop.json"));
 }
