@@ -512,8 +512,17 @@ json Loop::run() {
     for (const auto& sc : scores) iter["candidates"].push_back(to_json(sc));
     if (best < 0 || it == s_.max_effects) {
       iter["chosen"] = nullptr;
+      if (best >= 0) {
+        // The rule holds for a candidate, but the effect limit stops the loop before its refit
+        // (--max-effects 0 traces and ranks only).
+        iter["stopped"] = "max_effects (" + std::to_string(s_.max_effects) + ") reached: " +
+                          scores[static_cast<std::size_t>(best)].name +
+                          " meets the acceptance rule but was not refitted";
+        say("iteration " + std::to_string(it) + ": " + iter["stopped"].get<std::string>());
+      } else {
+        say("iteration " + std::to_string(it) + ": no candidate accepted");
+      }
       iterations.push_back(iter);
-      say("iteration " + std::to_string(it) + ": no candidate accepted");
       break;
     }
     const CandidateScore& sc = scores[static_cast<std::size_t>(best)];

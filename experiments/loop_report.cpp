@@ -125,7 +125,19 @@ void write_loop_html(const json& loop, const std::string& out_dir) {
         << "</td><td>" << f3(c["loo_gain_deg"]) << "</td><td>" << f3(c["explained"])
         << "</td><td>" << (c["accepted"].get<bool>() ? "yes" : "no") << "</td></tr>";
     h << "</table>\n";
+    if (it.contains("stopped")) h << "<p>Stopped: " << esc(it["stopped"]) << ".</p>\n";
   }
+  // Pours that jammed in the baseline (repeated with new seeds; a lab reports none).
+  std::string jams;
+  for (const json& c : loop["baseline"].value("curves", json::array())) {
+    int n = 0;
+    for (const json& x : c["clogged_pours"]) n += x.get<int>();
+    if (n > 0) jams += "<li>" + esc(c["id"]) + ": " + std::to_string(n) + "</li>";
+  }
+  if (!jams.empty())
+    h << "<p>Baseline pours that formed no pile and were repeated with new seeds (the lab "
+         "reports none):</p><ul>"
+      << jams << "</ul>\n";
   if (!loop["unavailable_candidates"].empty()) {
     h << "<p>Unavailable candidates:</p><ul>";
     for (const json& u : loop["unavailable_candidates"])

@@ -59,7 +59,9 @@ void add_loop_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--candidates", args->candidates,
                   "Candidate effects to try, comma separated (default: all in the registry)");
-  cmd->add_option("--max-effects", args->settings.max_effects, "Stop after this many effects")
+  cmd->add_option("--max-effects", args->settings.max_effects,
+                  "Stop after this many effects (0: trace and rank only, no refit)")
+      ->check(CLI::Range(0, 10))
       ->capture_default_str();
   cmd->add_option("--max-pours", args->settings.max_pours,
                   "Pours per pile: a pour that forms no pile (the funnel jammed) is repeated with "

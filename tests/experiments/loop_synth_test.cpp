@@ -151,6 +151,21 @@ void expect_found(const nlohmann::json& loop, const std::string& effect, bool ab
 // A smooth steel plate (friction 0.16 where 0.5 is declared; wood's 0.25 becomes 0.16 too).
 TEST(LoopSynth, HiddenSmoothPlateIsFound) {
   expect_found(run_case("plate", design({{"plate_friction", 0.16}})), "plate_friction", false);
+  // With no effect allowed (--max-effects 0) the loop traces and ranks only: it names the
+  // candidate that meets the rule, refits nothing and reports the baseline as final (from the
+  // cache: no new simulation).
+  LoopSettings trace_only = settings();
+  trace_only.max_effects = 0;
+  const nlohmann::json loop = run_case("plate_trace_only", design({{"plate_friction", 0.16}}),
+                                       trace_only);
+  ASSERT_EQ(loop["iterations"].size(), 1u);
+  EXPECT_TRUE(loop["summary"]["chosen"].is_null());
+  EXPECT_NE(loop["iterations"][0].value("stopped", "").find("plate_friction meets"),
+            std::string::npos)
+      << loop["iterations"].dump(1);
+  EXPECT_EQ(loop["summary"]["rmse_calibrate_after_deg"],
+            loop["summary"]["rmse_calibrate_before_deg"]);
+  EXPECT_EQ(loop["simulations"]["pile_runs_started"], 0);
 }
 
 // The funnel was lifted five times faster than declared.
