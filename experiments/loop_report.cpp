@@ -70,7 +70,7 @@ void write_loop_html(const json& loop, const std::string& out_dir) {
     write_file_atomic(data.string(), d.str());
     std::ostringstream g;
     g << "set terminal pngcairo size 640,420\nset output '" << png.string() << "'\n"
-      << "set xlabel '" << c << "'\nset ylabel 'measured - predicted angle [deg]'\n"
+      << "set xlabel '" << c << "' noenhanced\nset ylabel 'measured - predicted angle [deg]'\n"
       << "set key outside top center horizontal\nset grid\nset offsets graph 0.05, graph 0.05, "
          "graph 0.05, graph 0.05\nset xzeroaxis lt -1\n"
       << "plot '" << data.string() << "' u ($1):2:4 w yerrorbars pt 7 lc rgb '#c0392b' t 'before', "
