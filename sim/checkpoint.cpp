@@ -20,8 +20,8 @@ class Writer {
     static_assert(std::is_standard_layout_v<T>);  // plain data (Eigen fixed vectors included)
     out_.write(reinterpret_cast<const char*>(&v), sizeof(T));
   }
-  template <class T>
-  void vec(const std::vector<T>& v) {
+  template <class T, class A>
+  void vec(const std::vector<T, A>& v) {
     static_assert(std::is_standard_layout_v<T>);  // plain data (Eigen fixed vectors included)
     pod<std::uint64_t>(v.size());
     out_.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(T)));
@@ -39,8 +39,8 @@ class Reader {
     in_.read(reinterpret_cast<char*>(&v), sizeof(T));
     check();
   }
-  template <class T>
-  void vec(std::vector<T>& v) {
+  template <class T, class A>
+  void vec(std::vector<T, A>& v) {
     std::uint64_t n = 0;
     pod(n);
     if (n > (std::uint64_t{1} << 34) / sizeof(T)) fail("an array length is implausible");

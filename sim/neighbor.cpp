@@ -89,7 +89,7 @@ void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) 
   list.in_start.assign(n + 1, 0);
   list.in_pairs.clear();
   list.in_slot.clear();
-  list.x_at_build = p.x;
+  list.x_at_build.assign(p.x.begin(), p.x.end());
   if (n == 0) return;
 
   // 2. Bin particles into cells (counting sort); optionally reorder them by cell.
@@ -110,7 +110,7 @@ void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) 
   }
   if (sort_particles) {
     p.permute(order);
-    list.x_at_build = p.x;
+    list.x_at_build.assign(p.x.begin(), p.x.end());
     for (std::size_t k = 0; k < n; ++k) order[k] = k;
   }
   // order[k] = particle index of the k-th entry in cell order.
@@ -204,9 +204,9 @@ void compact_neighbor_list(NeighborList& list, const std::vector<char>& keep) {
   std::int32_t n = 0;
   for (std::size_t i = 0; i < n_old; ++i)
     if (keep[i]) remap[i] = n++;
-  std::vector<std::int32_t> start(n + 1, 0), second;
-  std::vector<ContactHistory> history;
-  std::vector<Vec3> x_at_build;
+  HugeVector<std::int32_t> start(n + 1, 0), second;
+  HugeVector<ContactHistory> history;
+  HugeVector<Vec3> x_at_build;
   for (std::size_t i = 0; i < n_old; ++i) {
     if (!keep[i]) continue;
     for (std::int32_t k = list.start[i]; k < list.start[i + 1]; ++k) {

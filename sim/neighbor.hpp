@@ -20,20 +20,21 @@
 #include <vector>
 
 #include "sim/contact.hpp"
+#include "sim/huge_pages.hpp"
 #include "sim/particles.hpp"
 
 namespace reposetwin::sim {
 
 struct NeighborList {
   double skin = 0.0;                // [m]
-  std::vector<std::int32_t> start;  // (n + 1) CSR offsets of each particle's pairs
-  std::vector<std::int32_t> second; // (pairs) partner index
-  std::vector<ContactHistory> history;  // (pairs)
-  std::vector<std::int32_t> in_start;   // (n + 1) CSR offsets of incoming pairs
-  std::vector<std::int32_t> in_pairs;   // pair indices where the particle is second
-  std::vector<std::int32_t> in_slot;    // (pairs) position of each pair in in_pairs (derived
+  HugeVector<std::int32_t> start;  // (n + 1) CSR offsets of each particle's pairs
+  HugeVector<std::int32_t> second; // (pairs) partner index
+  HugeVector<ContactHistory> history;  // (pairs)
+  HugeVector<std::int32_t> in_start;   // (n + 1) CSR offsets of incoming pairs
+  HugeVector<std::int32_t> in_pairs;   // pair indices where the particle is second
+  HugeVector<std::int32_t> in_slot;    // (pairs) position of each pair in in_pairs (derived
                                         // from in_pairs, not saved in checkpoints)
-  std::vector<Vec3> x_at_build;     // (n) positions at the last build [m]
+  HugeVector<Vec3> x_at_build;     // (n) positions at the last build [m]
   std::int64_t builds = 0;          // number of rebuilds so far
   std::size_t parallel_min = 2000;  // fewer particles build on one thread
 

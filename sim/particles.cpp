@@ -8,7 +8,7 @@ void Particles::permute(const std::vector<std::size_t>& order) {
   assert(order.size() == size());
 #define REPOSETWIN_PERMUTE_FIELD(type, name, doc)                             \
   {                                                                           \
-    std::vector<type> tmp(order.size());                                      \
+    HugeVector<type> tmp(order.size());                                       \
     for (std::size_t i = 0; i < order.size(); ++i) tmp[i] = name[order[i]];   \
     name.swap(tmp);                                                           \
   }
@@ -24,7 +24,7 @@ void Particles::keep(const std::vector<char>& flags) {
     if (flags[i]) order.push_back(i);
 #define REPOSETWIN_KEEP_FIELD(type, name, doc)                                \
   {                                                                           \
-    std::vector<type> tmp(order.size());                                      \
+    HugeVector<type> tmp(order.size());                                       \
     for (std::size_t i = 0; i < order.size(); ++i) tmp[i] = name[order[i]];   \
     name.swap(tmp);                                                           \
   }

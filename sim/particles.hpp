@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "sim/contact.hpp"
+#include "sim/huge_pages.hpp"
 
 namespace reposetwin::sim {
 
@@ -37,7 +38,7 @@ using WallHistory = std::array<ContactHistory, kMaxWalls>;
 
 /// Per-particle arrays, all of the same length.
 struct Particles {
-#define REPOSETWIN_DECLARE_FIELD(type, name, doc) std::vector<type> name;  // doc
+#define REPOSETWIN_DECLARE_FIELD(type, name, doc) HugeVector<type> name;  // doc
   REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_DECLARE_FIELD)
 #undef REPOSETWIN_DECLARE_FIELD
 

@@ -26,7 +26,7 @@ std::string number(double x) {
   return s.str();
 }
 
-void check_inputs(const std::vector<Vec3>& x, const std::vector<double>& r,
+void check_inputs(std::span<const Vec3> x, std::span<const double> r,
                   const PileGeometrySettings& s) {
   if (x.size() != r.size()) {
     fail(std::to_string(x.size()) + " positions but " + std::to_string(r.size()) + " radii");
@@ -84,7 +84,7 @@ struct DisjointSets {
 
 // Labels the clusters of touching spheres: returns each particle's root index. Uses a uniform
 // grid (cell = the largest connection distance), sorted by cell, so the work is O(n log n).
-std::vector<std::size_t> cluster_roots(const std::vector<Vec3>& x, const std::vector<double>& r,
+std::vector<std::size_t> cluster_roots(std::span<const Vec3> x, std::span<const double> r,
                                        double tolerance) {
   const std::size_t n = x.size();
   DisjointSets sets(n);
@@ -164,7 +164,7 @@ struct SectorReach {
   std::vector<Eigen::Vector2d> outer;  // outermost point of the reaching particle [m]
 };
 
-SectorReach sector_reach(const std::vector<Vec3>& x, const std::vector<double>& r,
+SectorReach sector_reach(std::span<const Vec3> x, std::span<const double> r,
                          const std::vector<std::size_t>& footprint, const Eigen::Vector2d& centre,
                          int sectors) {
   SectorReach s;
@@ -210,7 +210,7 @@ bool fit_circle(const std::vector<Eigen::Vector2d>& p, Eigen::Vector2d& centre) 
 // Refines the footprint centre: fit a circle to the sectors' outer points, excluding sectors
 // whose reach is further from the median than three robust deviations (1.4826 MAD) or one
 // particle diameter, whichever is larger, and repeat.
-Eigen::Vector2d find_centre(const std::vector<Vec3>& x, const std::vector<double>& r,
+Eigen::Vector2d find_centre(std::span<const Vec3> x, std::span<const double> r,
                             const std::vector<std::size_t>& footprint, int sectors, int iterations,
                             double diameter) {
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
@@ -282,7 +282,7 @@ std::pair<double, double> mean_sd(const std::vector<double>& v) {
   return {m, std::sqrt(ss / (v.size() - 1))};
 }
 
-PileSlice measure_slice(const std::vector<Vec3>& x, const std::vector<double>& r,
+PileSlice measure_slice(std::span<const Vec3> x, std::span<const double> r,
                         const std::vector<std::size_t>& pile, const PileGeometry& g, double azimuth,
                         const PileGeometrySettings& s) {
   PileSlice slice;
@@ -352,16 +352,17 @@ std::string to_string(PileStatus status) {
   return "unknown";
 }
 
-PileGeometry measure_pile(const std::vector<Vec3>& positions, const std::vector<double>& radii,
+PileGeometry measure_pile(std::span<const Vec3> positions, std::span<const double> radii,
                           const PileGeometrySettings& settings) {
   check_inputs(positions, radii, settings);
   // Heights are measured from the plate: work on a shifted copy if it is not at z = 0.
   std::vector<Vec3> shifted;
   if (settings.plate_z != 0.0) {
-    shifted = positions;
+    shifted.assign(positions.begin(), positions.end());
     for (Vec3& p : shifted) p.z() -= settings.plate_z;
   }
-  const auto& x = settings.plate_z != 0.0 ? shifted : positions;
+  const std::span<const Vec3> x =
+      settings.plate_z != 0.0 ? std::span<const Vec3>(shifted) : positions;
   const auto& r = radii;
   PileGeometry g;
   g.particle_count = x.size();

@@ -44,6 +44,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -124,7 +125,7 @@ struct PileGeometry {
 /// z = settings.plate_z. Throws std::invalid_argument if the sizes differ, a position is not
 /// finite, a radius is not positive, or a setting is out of range. An empty input or no particle on
 /// the plate gives status kNoPile, not an exception.
-PileGeometry measure_pile(const std::vector<Vec3>& positions, const std::vector<double>& radii,
+PileGeometry measure_pile(std::span<const Vec3> positions, std::span<const double> radii,
                           const PileGeometrySettings& settings = {});
 
 }  // namespace reposetwin::sim

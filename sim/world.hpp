@@ -66,13 +66,13 @@ struct State {
   // Per-pair results of the last force phase (scratch, sized with the neighbor list). The
   // reactions are stored in the order of the incoming lists (slot neighbors.in_slot[k] for pair
   // k), so gather_forces reads each particle's reactions contiguously.
-  std::vector<Vec3> reaction_force;   // (pairs, by slot) force of the pair on its first member [N]
-  std::vector<Vec3> reaction_torque;  // (pairs, by slot) torque on its second member [N m]
-  std::vector<double> pair_overlap;   // (pairs) overlap / smaller radius, 0 if not touching
+  HugeVector<Vec3> reaction_force;   // (pairs, by slot) force of the pair on its first member [N]
+  HugeVector<Vec3> reaction_torque;  // (pairs, by slot) torque on its second member [N m]
+  HugeVector<double> pair_overlap;   // (pairs) overlap / smaller radius, 0 if not touching
   // (pairs) 0 only if the pair's history, reactions and overlap are known to be zero; a pair
   // that does not touch costs a distance test and nothing else unless it touched last step.
   // Set to 1 for every pair when the list is rebuilt, compacted or read from a checkpoint.
-  std::vector<std::uint8_t> pair_live;
+  HugeVector<std::uint8_t> pair_live;
   // Wall candidates (scratch, rebuilt with the neighbor list, and alone when invalid or when a
   // wall has moved half a skin): the particles within 1.5 skins of an enabled wall, each with its
   // walls in increasing order (CSR). Only these are tested in wall_forces; every other particle

@@ -178,21 +178,26 @@ TEST(PileGeometry, MonolayerHasNoFlanksAndKnownHeightDiameterAndCentreOfMass) {
 }
 
 TEST(PileGeometry, NoPileWhenNothingTouchesThePlate) {
-  EXPECT_EQ(measure_pile({}, {}).status, PileStatus::kNoPile);
-  const PileGeometry g = measure_pile({Vec3(0, 0, 0.05), Vec3(0.001, 0, 0.05)}, {5e-4, 5e-4});
+  EXPECT_EQ(measure_pile(std::vector<Vec3>{}, std::vector<double>{}).status,
+            PileStatus::kNoPile);
+  const PileGeometry g = measure_pile(std::vector<Vec3>{Vec3(0, 0, 0.05), Vec3(0.001, 0, 0.05)},
+                                      std::vector<double>{5e-4, 5e-4});
   EXPECT_EQ(g.status, PileStatus::kNoPile);
   EXPECT_EQ(g.stray_count, 2u);
   EXPECT_EQ(g.height, 0.0);
 }
 
 TEST(PileGeometry, BadInputThrows) {
-  EXPECT_THROW(measure_pile({Vec3(0, 0, 0)}, {}), std::invalid_argument);
-  EXPECT_THROW(measure_pile({Vec3(0, 0, 0)}, {-1.0}), std::invalid_argument);
-  EXPECT_THROW(measure_pile({Vec3(0, std::nan(""), 0)}, {1e-3}), std::invalid_argument);
+  EXPECT_THROW(measure_pile(std::vector<Vec3>{Vec3(0, 0, 0)}, std::vector<double>{}),
+               std::invalid_argument);
+  EXPECT_THROW(measure_pile(std::vector<Vec3>{Vec3(0, 0, 0)}, std::vector<double>{-1.0}),
+               std::invalid_argument);
+  EXPECT_THROW(measure_pile(std::vector<Vec3>{Vec3(0, std::nan(""), 0)}, std::vector<double>{1e-3}),
+               std::invalid_argument);
   PileGeometrySettings bad;
   bad.flank_low = 0.9;
   try {
-    measure_pile({Vec3(0, 0, 1e-3)}, {1e-3}, bad);
+    measure_pile(std::vector<Vec3>{Vec3(0, 0, 1e-3)}, std::vector<double>{1e-3}, bad);
     ADD_FAILURE() << "no exception";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("flank_low = 0.9"), std::string::npos) << e.what();
