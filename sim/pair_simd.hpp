@@ -7,9 +7,9 @@
 // and one division to rotate each spring, the Coulomb and rolling caps. compute_queued_contacts()
 // runs the same arithmetic on two contacts at once, one per SSE2 lane (the x86-64 baseline): the
 // particles' data are gathered straight into the lanes (no intermediate ContactInput), every
-// branch of the kernel is a select (a branch only skips a square root that no lane of the pair
-// needs), and the results are scattered back. Each lane performs the scalar kernel's IEEE
-// operations (+, -, *, /, sqrt, no fused multiply-add) in the scalar kernel's order, Eigen's
+// branch of the kernel is a select (only the rolling dashpot, off or on for a whole material
+// pair, is branched around), and the results are scattered back. Each lane performs the scalar
+// kernel's IEEE operations (+, -, *, /, sqrt, no fused multiply-add) in its order, Eigen's
 // three-term sums included ((a0 + a1) + a2), so a lane gives the bits of the scalar kernel
 // exactly; tests/sim/pair_simd_test.cpp checks this contact by contact, and the pinned
 // determinism hash checks it for whole runs. A 4-wide AVX copy of the same code (chosen at run
