@@ -312,7 +312,7 @@ void write_liggghts(const World& w, const Options& o, const std::string& dir) {
 void print_profile(const Profile& pr, double particle_steps) {
   const double total = pr.total();
   auto row = [&](const char* name, double s) {
-    std::cout << "    " << std::left << std::setw(12) << name << std::right << std::fixed
+    std::cout << "    " << std::left << std::setw(17) << name << std::right << std::fixed
               << std::setprecision(3) << std::setw(9) << s << " s  " << std::setprecision(1)
               << std::setw(5) << (total > 0 ? 100.0 * s / total : 0.0) << " %  "
               << std::setprecision(3) << std::setw(7) << 1e9 * s / particle_steps
@@ -322,10 +322,7 @@ void print_profile(const Profile& pr, double particle_steps) {
   row("move_walls", pr.move_walls);
   row("neighbors", pr.neighbors);
   row("pair_forces", pr.pair_forces);
-  row("gather", pr.gather);
-  row("wall_forces", pr.wall_forces);
-  row("kick", pr.kick);
-  row("diagnostics", pr.diagnostics);
+  row("gather_walls_kick", pr.gather_walls_kick);
   std::cout << std::defaultfloat;
 }
 

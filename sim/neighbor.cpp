@@ -89,6 +89,7 @@ void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) 
   list.in_start.assign(n + 1, 0);
   list.in_pairs.clear();
   list.in_slot.clear();
+  list.in_particle.clear();
   list.x_at_build.assign(p.x.begin(), p.x.end());
   if (n == 0) return;
 
@@ -192,6 +193,10 @@ void index_incoming_slots(NeighborList& list) {
   list.in_slot.resize(list.in_pairs.size());
   for (std::size_t q = 0; q < list.in_pairs.size(); ++q)
     list.in_slot[list.in_pairs[q]] = static_cast<std::int32_t>(q);
+  list.in_particle.resize(list.in_pairs.size());
+  for (std::size_t i = 0; i + 1 < list.in_start.size(); ++i)
+    for (std::int32_t q = list.in_start[i]; q < list.in_start[i + 1]; ++q)
+      list.in_particle[q] = static_cast<std::int32_t>(i);
 }
 
 void compact_neighbor_list(NeighborList& list, const std::vector<char>& keep) {

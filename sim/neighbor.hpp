@@ -34,6 +34,8 @@ struct NeighborList {
   HugeVector<std::int32_t> in_pairs;   // pair indices where the particle is second
   HugeVector<std::int32_t> in_slot;    // (pairs) position of each pair in in_pairs (derived
                                         // from in_pairs, not saved in checkpoints)
+  HugeVector<std::int32_t> in_particle; // (pairs) the particle whose incoming list holds slot q,
+                                        // the second member of pair in_pairs[q] (derived too)
   HugeVector<Vec3> x_at_build;     // (n) positions at the last build [m]
   std::int64_t builds = 0;          // number of rebuilds so far
   std::size_t parallel_min = 2000;  // fewer particles build on one thread
@@ -47,7 +49,8 @@ struct NeighborList {
 /// that persist are kept.
 void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles);
 
-/// Derives list.in_slot from list.in_pairs (in_slot[in_pairs[q]] = q).
+/// Derives list.in_slot (in_slot[in_pairs[q]] = q) and list.in_particle from list.in_pairs
+/// and list.in_start.
 void index_incoming_slots(NeighborList& list);
 
 /// Drops the particles whose `keep` flag is false from a built list, keeping every surviving

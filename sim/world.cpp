@@ -70,19 +70,19 @@ void World::step() {
   if (!state_.forces_valid) compute_forces();
   kick_drift();
   move_walls();
-  compute_forces();
-  kick();
+  update_neighbors();
+  pair_forces();
+  gather_wall_forces(/*kick=*/true);
   state_.time += model_.dt;
   ++state_.step;
   ++profile_.steps;
 }
 
 void World::compute_forces() {
+  moved2_ = -1.0;  // positions may have been set from outside: measure the displacement
   update_neighbors();
   pair_forces();
-  gather_forces();
-  wall_forces();
-  state_.forces_valid = true;
+  gather_wall_forces(/*kick=*/false);
 }
 
 void World::kick_drift() {
@@ -91,12 +91,19 @@ void World::kick_drift() {
   const double dt = model_.dt, h = 0.5 * model_.dt;
   const std::size_t n = p.size();
   const std::size_t par_min = model_.settings.parallel_min_particles;
-#pragma omp parallel for schedule(static) if (n > par_min)
+  // The largest displacement since the neighbor list was built, measured here while the
+  // positions are at hand (update_neighbors reads it instead of a pass of its own).
+  const bool listed = state_.neighbors.x_at_build.size() == n;
+  const Vec3* const x_at_build = listed ? state_.neighbors.x_at_build.data() : nullptr;
+  double max2 = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : max2) if (n > par_min)
   for (std::size_t i = 0; i < n; ++i) {
     p.v[i] += (h / p.mass[i]) * p.force[i];
     p.w[i] += (h / p.inertia[i]) * p.torque[i];
     p.x[i] += dt * p.v[i];
+    if (listed) max2 = std::max(max2, (p.x[i] - x_at_build[i]).squaredNorm());
   }
+  moved2_ = listed ? max2 : -1.0;
 }
 
 void World::move_walls() {
@@ -110,7 +117,13 @@ void World::update_neighbors() {
   // checkpoint, a wall switched) or a wall has moved half a skin. Rebuilding them alone never
   // reorders the particles, so the results do not depend on when it happens (a resumed run stays
   // bit-identical to an uninterrupted one).
-  if (!state_.neighbors.needs_rebuild(state_.particles)) {
+  const NeighborList& nl = state_.neighbors;
+  const double moved2 = moved2_;
+  moved2_ = -1.0;  // used once: the next call measures again unless kick_drift has
+  const bool rebuild = moved2 >= 0.0 && nl.start.size() == state_.particles.size() + 1
+                           ? 4.0 * moved2 > nl.skin * nl.skin  // NeighborList::needs_rebuild
+                           : nl.needs_rebuild(state_.particles);
+  if (!rebuild) {
     if (!wall_candidates_current()) build_wall_candidates();
     return;
   }
@@ -180,7 +193,8 @@ void World::pair_forces() {
   const std::size_t par_min = model_.settings.parallel_min_particles;
   const std::size_t np = nl.pairs();
   if (state_.pair_live.size() != np || state_.reaction_force.size() != np ||
-      nl.in_slot.size() != np) {  // a state assembled elsewhere: nothing is known to be zero
+      nl.in_slot.size() != np || nl.in_particle.size() != np) {  // a state assembled elsewhere:
+                                                                 // nothing is known to be zero
     index_incoming_slots(nl);
     state_.reaction_force.assign(np, Vec3::Zero());
     state_.reaction_torque.assign(np, Vec3::Zero());
@@ -268,78 +282,88 @@ void World::pair_forces() {
   }
 }
 
-void World::gather_forces() {
-  PhaseTimer t(profile_.gather);
+void World::gather_wall_forces(bool kick) {
+  PhaseTimer t(profile_.gather_walls_kick);
   Particles& p = state_.particles;
   const NeighborList& nl = state_.neighbors;
-  const std::size_t n = p.size();
-  const std::size_t par_min = model_.settings.parallel_min_particles;
-  // The reactions are stored by incoming slot: each particle reads one contiguous range.
-#pragma omp parallel for schedule(static) if (n > par_min)
-  for (std::size_t i = 0; i < n; ++i) {
-    Vec3 f = p.force[i];
-    Vec3 tq = p.torque[i];
-    for (std::int32_t q = nl.in_start[i]; q < nl.in_start[i + 1]; ++q) {
-      f -= state_.reaction_force[q];
-      tq += state_.reaction_torque[q];
-    }
-    p.force[i] = f;
-    p.torque[i] = tq;
-  }
-}
-
-void World::wall_forces() {
-  PhaseTimer t(profile_.wall_forces);
-  Particles& p = state_.particles;
   const PairTable& table = model_.table;
-  const double dt = model_.dt;
-  const std::size_t m = state_.wall_cand_particle.size();
-  const std::size_t par_min = model_.settings.parallel_min_particles;
-#pragma omp parallel for schedule(static) if (m > par_min / 4)
-  for (std::size_t c = 0; c < m; ++c) {
-    const std::size_t i = state_.wall_cand_particle[c];
-    for (std::int32_t q = state_.wall_cand_start[c]; q < state_.wall_cand_start[c + 1]; ++q) {
-      const int w = state_.wall_cand_wall[q];
-      const WallSpec& spec = model_.walls[w];
-      const WallState& ws = state_.walls[w];
-      ContactHistory& h = p.wall_history[i][w];
-      Vec3 normal;
-      double delta;
-      if (!wall_contact(spec, ws.offset, p.x[i], p.radius[i], &normal, &delta)) {
-        h = ContactHistory{};
-        continue;
-      }
-      const double ri = p.radius[i];
-      ContactInput in;
-      in.n = normal;
-      in.delta = delta;
-      in.r_eff = ri;
-      in.m_eff = p.mass[i];
-      in.i_roll = p.inertia[i] + p.mass[i] * ri * ri;
-      in.a_i = ri - delta;
-      in.a_j = 0.0;
-      in.w_i = p.w[i];
-      in.w_j = Vec3::Zero();
-      in.v_rel = p.v[i] - in.a_i * p.w[i].cross(normal) - ws.velocity;
-      in.contact_diameter = 2.0 * ri;  // the particle's diameter (size-dependent rolling)
-      const ContactOutput out = hertz_mindlin(table.c(p.material[i], spec.material), in, dt, h);
-      p.force[i] += out.force;
-      p.torque[i] += out.torque_i;
-    }
-  }
-}
-
-void World::kick() {
-  PhaseTimer t(profile_.kick);
-  Particles& p = state_.particles;
-  const double h = 0.5 * model_.dt;
+  const double dt = model_.dt, h = 0.5 * model_.dt;
   const std::size_t n = p.size();
   const std::size_t par_min = model_.settings.parallel_min_particles;
+  const std::vector<std::int32_t>& cand = state_.wall_cand_particle;
+  const std::int32_t* const in_start = nl.in_start.data();
+  const std::int32_t* const in_particle = nl.in_particle.data();
+  const Vec3* const reaction_force = state_.reaction_force.data();
+  const Vec3* const reaction_torque = state_.reaction_torque.data();
+  // Blocks of particles. In each, the reactions of the pairs the block's particles are second
+  // in (stored contiguously by incoming slot) are added in one flat loop over the slots (a loop
+  // per particle, of 0 to 8 slots, would cost a mispredicted branch per particle); then each
+  // particle adds its wall contacts and takes the closing kick. Every particle's sum has the
+  // order of a loop over its own slots, whichever thread takes its block.
+  constexpr std::size_t kBlock = 256;
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
 #pragma omp parallel for schedule(static) if (n > par_min)
-  for (std::size_t i = 0; i < n; ++i) {
-    p.v[i] += (h / p.mass[i]) * p.force[i];
-    p.w[i] += (h / p.inertia[i]) * p.torque[i];
+  for (std::size_t b = 0; b < blocks; ++b) {
+    const std::size_t i0 = b * kBlock, i1 = std::min(n, i0 + kBlock);
+    Vec3 f[kBlock], tq[kBlock];
+    for (std::size_t i = i0; i < i1; ++i) {
+      f[i - i0] = p.force[i];
+      tq[i - i0] = p.torque[i];
+    }
+    for (std::int32_t q = in_start[i0]; q < in_start[i1]; ++q) {
+      const std::size_t i = static_cast<std::size_t>(in_particle[q]) - i0;
+      f[i] -= reaction_force[q];
+      tq[i] += reaction_torque[q];
+    }
+    // Wall contacts of the block's particles near an enabled wall (candidates in particle order).
+    for (std::size_t c = static_cast<std::size_t>(
+             std::lower_bound(cand.begin(), cand.end(), static_cast<std::int32_t>(i0)) -
+             cand.begin());
+         c < cand.size() && static_cast<std::size_t>(cand[c]) < i1; ++c) {
+      const std::size_t i = static_cast<std::size_t>(cand[c]);
+      for (std::int32_t q = state_.wall_cand_start[c]; q < state_.wall_cand_start[c + 1]; ++q)
+        add_wall_contact(i, state_.wall_cand_wall[q], table, dt, f[i - i0], tq[i - i0]);
+    }
+    for (std::size_t i = i0; i < i1; ++i) {
+      p.force[i] = f[i - i0];
+      p.torque[i] = tq[i - i0];
+      if (kick) {
+        p.v[i] += (h / p.mass[i]) * f[i - i0];
+        p.w[i] += (h / p.inertia[i]) * tq[i - i0];
+      }
+    }
   }
+  state_.forces_valid = true;
+}
+
+void World::add_wall_contact(std::size_t i, int w, const PairTable& table, double dt, Vec3& f,
+                             Vec3& tq) {
+  Particles& p = state_.particles;
+  const WallSpec& spec = model_.walls[w];
+  const WallState& ws = state_.walls[w];
+  ContactHistory& h = p.wall_history[i][w];
+  Vec3 normal;
+  double delta;
+  if (!wall_contact(spec, ws.offset, p.x[i], p.radius[i], &normal, &delta)) {
+    h = ContactHistory{};
+    return;
+  }
+  const double ri = p.radius[i];
+  ContactInput in;
+  in.n = normal;
+  in.delta = delta;
+  in.r_eff = ri;
+  in.m_eff = p.mass[i];
+  in.i_roll = p.inertia[i] + p.mass[i] * ri * ri;
+  in.a_i = ri - delta;
+  in.a_j = 0.0;
+  in.w_i = p.w[i];
+  in.w_j = Vec3::Zero();
+  in.v_rel = p.v[i] - in.a_i * p.w[i].cross(normal) - ws.velocity;
+  in.contact_diameter = 2.0 * ri;  // the particle's diameter (size-dependent rolling)
+  const ContactOutput out = hertz_mindlin(table.c(p.material[i], spec.material), in, dt, h);
+  f += out.force;
+  tq += out.torque_i;
 }
 
 Diagnostics World::diagnose() const {

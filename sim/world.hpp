@@ -8,11 +8,12 @@
 //                       time in SSE2 lanes (sim/pair_simd.hpp, bit-identical to the scalar
 //                       kernel); the pair's first member sums its own pairs (and gravity) in
 //                       list order, the reaction is stored in the second member's incoming slot
-//   5. gather_forces    each particle adds the stored reactions of the pairs it is second in,
-//                       contiguous and in a fixed order (deterministic)
-//   6. wall_forces      the particles near an enabled wall (candidates listed at rebuild)
-//   7. kick             v += dt/2 F/m, w += dt/2 T/I
-//   8. diagnostics      energy, overlap, NaN and escape checks (every few steps)
+//   5. gather_wall_forces, one pass over the particles (each particle's data read once):
+//                       each particle adds the stored reactions of the pairs it is second in
+//                       (contiguous, in a fixed order: deterministic), then its wall contacts
+//                       (the particles near an enabled wall, listed at rebuild), then takes the
+//                       closing kick v += dt/2 F/m, w += dt/2 T/I
+// (diagnose(): energy, overlap, NaN and escape checks, called by the runner every few steps.)
 // Each phase is timed into Profile, which the benchmark prints. No phase writes memory another
 // thread writes, and no floating-point sum depends on the thread count, so a run is
 // bit-identical for the same scene and seed on any number of threads.
@@ -35,12 +36,10 @@ const char* status_name(Status s);
 
 /// Seconds spent in each phase of step() since the start (or the last reset).
 struct Profile {
-  double kick_drift = 0, move_walls = 0, neighbors = 0, pair_forces = 0, gather = 0,
-         wall_forces = 0, kick = 0, diagnostics = 0;
+  double kick_drift = 0, move_walls = 0, neighbors = 0, pair_forces = 0, gather_walls_kick = 0;
   std::int64_t steps = 0;
   double total() const {
-    return kick_drift + move_walls + neighbors + pair_forces + gather + wall_forces + kick +
-           diagnostics;
+    return kick_drift + move_walls + neighbors + pair_forces + gather_walls_kick;
   }
 };
 
@@ -123,14 +122,17 @@ class World {
   bool wall_candidates_current() const;
   void build_wall_candidates();
   void pair_forces();
-  void gather_forces();
-  void wall_forces();
-  void kick();
-  void compute_forces();  // phases 3-6 (also used once before the first step)
+  void gather_wall_forces(bool kick);
+  void add_wall_contact(std::size_t i, int wall, const PairTable& table, double dt, Vec3& force,
+                        Vec3& torque);
+  void compute_forces();  // phases 3-5 without the kick (also used once before the first step)
 
   Model model_;
   State state_;
   Profile profile_;
+  // Largest squared displacement since the list was built, measured by kick_drift for the
+  // update_neighbors that follows it; -1 if unknown (then update_neighbors measures) [m^2].
+  double moved2_ = -1.0;
 };
 
 /// A SHA-256-free, portable 64-bit FNV-1a hash of the particle state (positions, velocities,
