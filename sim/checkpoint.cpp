@@ -135,6 +135,7 @@ void read_checkpoint(World& world, const std::string& path) {
   for (std::int32_t k : nl.in_pairs)
     if (k < 0 || static_cast<std::size_t>(k) >= np) r.fail("has a pair index out of range");
   index_incoming_slots(nl);
+  compute_clearances(nl, s.particles);
   s.reaction_force.assign(np, Vec3::Zero());
   s.reaction_torque.assign(np, Vec3::Zero());
   s.pair_live.assign(np, 1);

@@ -90,6 +90,7 @@ void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) 
   list.in_pairs.clear();
   list.in_slot.clear();
   list.in_particle.clear();
+  list.clearance2.clear();
   list.x_at_build.assign(p.x.begin(), p.x.end());
   if (n == 0) return;
 
@@ -172,6 +173,27 @@ void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) 
 
   // 5. Incoming CSR: for each particle, the pairs where it is second, in pair order.
   build_incoming(list, n);
+  compute_clearances(list, p);
+}
+
+void compute_clearances(NeighborList& list, const Particles& p) {
+  const std::size_t n = list.start.size() > 0 ? list.start.size() - 1 : 0;
+  list.clearance2.assign(list.second.size(), 0.0);
+  if (list.x_at_build.size() != n || p.size() != n) return;  // no list: nothing skipped
+  // Half the gap, less one part in a million: the margin covers the roundings of the distances
+  // and displacements compared (a few parts in 1e16), so a skipped pair never touches.
+  constexpr double kShrink = 0.5 * (1.0 - 1e-6);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::int32_t k = list.start[i]; k < list.start[i + 1]; ++k) {
+      const std::size_t j = static_cast<std::size_t>(list.second[k]);
+      const double gap = (list.x_at_build[i] - list.x_at_build[j]).norm() -
+                         (p.radius[i] + p.radius[j]);
+      if (gap > 1e-12 * (p.radius[i] + p.radius[j])) {
+        const double half = kShrink * gap;
+        list.clearance2[k] = half * half;
+      }
+    }
+  }
 }
 
 namespace {
@@ -211,7 +233,9 @@ void compact_neighbor_list(NeighborList& list, const std::vector<char>& keep) {
     if (keep[i]) remap[i] = n++;
   HugeVector<std::int32_t> start(n + 1, 0), second;
   HugeVector<ContactHistory> history;
+  HugeVector<double> clearance2;
   HugeVector<Vec3> x_at_build;
+  const bool clearances = list.clearance2.size() == list.second.size();
   for (std::size_t i = 0; i < n_old; ++i) {
     if (!keep[i]) continue;
     for (std::int32_t k = list.start[i]; k < list.start[i + 1]; ++k) {
@@ -219,6 +243,7 @@ void compact_neighbor_list(NeighborList& list, const std::vector<char>& keep) {
       if (j < 0) continue;
       second.push_back(j);
       history.push_back(list.history[k]);
+      if (clearances) clearance2.push_back(list.clearance2[k]);
     }
     start[remap[i] + 1] = static_cast<std::int32_t>(second.size());
     x_at_build.push_back(list.x_at_build[i]);
@@ -226,6 +251,7 @@ void compact_neighbor_list(NeighborList& list, const std::vector<char>& keep) {
   list.start.swap(start);
   list.second.swap(second);
   list.history.swap(history);
+  list.clearance2.swap(clearance2);  // kept particles keep their build positions
   list.x_at_build.swap(x_at_build);
   build_incoming(list, static_cast<std::size_t>(n));
 }

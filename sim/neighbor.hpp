@@ -37,6 +37,12 @@ struct NeighborList {
   HugeVector<std::int32_t> in_particle; // (pairs) the particle whose incoming list holds slot q,
                                         // the second member of pair in_pairs[q] (derived too)
   HugeVector<Vec3> x_at_build;     // (n) positions at the last build [m]
+  // (pairs) the square of a little less than half the gap between the pair's surfaces at the
+  // last build, 0 if they were touching or nearly [m^2]. While neither particle has moved as far
+  // (squared) since the build, the pair cannot touch: with both displacements below half the gap
+  // the centres are still farther apart than r_i + r_j. Derived from x_at_build and the radii
+  // (compute_clearances), not saved in checkpoints.
+  HugeVector<double> clearance2;
   std::int64_t builds = 0;          // number of rebuilds so far
   std::size_t parallel_min = 2000;  // fewer particles build on one thread
 
@@ -52,6 +58,9 @@ void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles);
 /// Derives list.in_slot (in_slot[in_pairs[q]] = q) and list.in_particle from list.in_pairs
 /// and list.in_start.
 void index_incoming_slots(NeighborList& list);
+
+/// Derives list.clearance2 from list.x_at_build and the radii of `p`.
+void compute_clearances(NeighborList& list, const Particles& p);
 
 /// Drops the particles whose `keep` flag is false from a built list, keeping every surviving
 /// pair and its history (indices are renumbered as Particles::keep does).

@@ -25,6 +25,7 @@ struct LaneArrays {
   double* reaction_force = nullptr;    // (slots x 3) [N]
   double* reaction_torque = nullptr;   // (slots x 3) [N m]
   double* overlap = nullptr;           // (pairs) [-]
+  std::uint8_t* live = nullptr;        // (pairs)
   double* force_i = nullptr;           // (queued x 3) [N]
   double* torque_i = nullptr;          // (queued x 3) [N m]
 };
@@ -42,22 +43,10 @@ LaneArrays lane_arrays(const Particles& p, const PairOutputs& out) {
   a.reaction_force = out.reaction_force->data();
   a.reaction_torque = out.reaction_torque->data();
   a.overlap = out.overlap;
+  a.live = out.live;
   a.force_i = out.force_i->data();
   a.torque_i = out.torque_i->data();
   return a;
-}
-
-/// The scalar kernel on queued contact q, with the stores of the pair loop.
-[[gnu::noinline]] void scalar_contact(const Particles& p, const QueuedContact* contacts,
-                                      std::size_t q, double dt, const PairOutputs& out) {
-  const QueuedContact& e = contacts[q];
-  const ContactInput in = pair_input(p, *e.c, e.i, e.j);
-  const ContactOutput o = hertz_mindlin(*e.c, in, dt, out.history[e.k]);
-  out.force_i[q] = o.force;
-  out.torque_i[q] = o.torque_i;
-  out.reaction_force[out.slot[e.k]] = o.force;
-  out.reaction_torque[out.slot[e.k]] = o.torque_j;
-  out.overlap[e.k] = in.delta / std::min(p.radius[e.i], p.radius[e.j]);
 }
 
 /// Clears the springs, reactions and overlap of pair k, which separated since the last step.
@@ -66,6 +55,32 @@ LaneArrays lane_arrays(const Particles& p, const PairOutputs& out) {
   out.reaction_force[out.slot[k]].setZero();
   out.reaction_torque[out.slot[k]].setZero();
   out.overlap[k] = 0.0;
+  out.live[k] = 0;
+}
+
+/// The scalar kernel on queued contact q, with the stores of the pair loop.
+[[gnu::noinline]] void scalar_contact(const Particles& p, const QueuedContact* contacts,
+                                      std::size_t q, double dt, const PairOutputs& out) {
+  const QueuedContact& e = contacts[q];
+  {  // the distance test of queue_touching_pairs
+    const Vec3& xi = p.x[e.i];
+    const Vec3& xj = p.x[e.j];
+    const double d0 = xi[0] - xj[0], d1 = xi[1] - xj[1], d2 = xi[2] - xj[2];
+    const double cut = p.radius[e.i] + p.radius[e.j];
+    if ((d0 * d0 + d1 * d1) + d2 * d2 >= cut * cut) {
+      clear_pair(out, e.k);
+      out.force_i[q].setZero();
+      out.torque_i[q].setZero();
+      return;
+    }
+  }
+  const ContactInput in = pair_input(p, *e.c, e.i, e.j);
+  const ContactOutput o = hertz_mindlin(*e.c, in, dt, out.history[e.k]);
+  out.force_i[q] = o.force;
+  out.torque_i[q] = o.torque_i;
+  out.reaction_force[out.slot[e.k]] = o.force;
+  out.reaction_torque[out.slot[e.k]] = o.torque_j;
+  out.overlap[e.k] = in.delta / std::min(p.radius[e.i], p.radius[e.j]);
 }
 
 // Two contacts per instruction (SSE2, the x86-64 baseline): the lane type V, its mask M and the
@@ -130,6 +145,20 @@ inline void store3(double* b, const std::size_t* ix, int valid, V x, V y, V z) {
     _mm_storeu_pd(b + ix[1], _mm_unpackhi_pd(x.v, y.v));
     _mm_storeh_pd(b + ix[1] + 2, z.v);
   }
+}
+
+/// What the lanes store for a queued pair k that does not touch (any more): its springs,
+/// reactions (at 3 times slot s3) and overlap cleared, zero force and torque for queue position
+/// q3 / 3, live flag 0.
+[[gnu::noinline]] void separate_lane(const LaneArrays& a, std::size_t k, std::size_t s3,
+                                     std::size_t q3) {
+  std::fill_n(a.history + 6 * k, 6, 0.0);
+  std::fill_n(a.reaction_force + s3, 3, 0.0);
+  std::fill_n(a.reaction_torque + s3, 3, 0.0);
+  std::fill_n(a.force_i + q3, 3, 0.0);
+  std::fill_n(a.torque_i + q3, 3, 0.0);
+  a.overlap[k] = 0.0;
+  a.live[k] = 0;
 }
 
 // The kernel. Each line is the operation of the scalar kernel (pair_input, hertz_mindlin and the
@@ -213,7 +242,10 @@ inline void store3(double* b, const std::size_t* ix, int valid, V x, V y, V z) {
   const V ri = load1(a.radius, i1), rj = load1(a.radius, j1);
   const V d0 = xi0 - xj0, d1 = xi1 - xj1, d2 = xi2 - xj2;
   const V cut = ri + rj;
-  const V dist = vsqrt(dot3(d0, d1, d2, d0, d1, d2));
+  const V dist2 = dot3(d0, d1, d2, d0, d1, d2);
+  // The distance test of queue_touching_pairs: a live pair may have separated since last step.
+  const int touch = mask_bits(not_ge(dist2, cut * cut));
+  const V dist = vsqrt(dist2);
   const V n0 = d0 / dist, n1 = d1 / dist, n2 = d2 / dist;
   const V delta = cut - dist;
   const V r_eff = ri * rj / cut;
@@ -338,6 +370,11 @@ inline void store3(double* b, const std::size_t* ix, int valid, V x, V y, V z) {
   store3(a.reaction_force, s3, valid, force0, force1, force2);
   store3(a.reaction_torque, s3, valid, tj0, tj1, tj2);
   store1(a.overlap, k1, valid, delta / vmin(rj, ri));  // std::min(ri, rj)
+  const int stored = (1 << valid) - 1;  // the lanes whose results are stored
+  if ((touch & stored) != stored) {      // one of them separated (rare)
+    for (int l = 0; l < valid; ++l)
+      if (((touch >> l) & 1) == 0) separate_lane(a, k1[l], s3[l], q3[l]);
+  }
 }
 
 /// compute_queued_contacts on the lanes.
@@ -365,15 +402,17 @@ void run_queue(const LaneArrays& a, const Particles& p, const QueuedContact* con
 /// queue_touching_pairs: the distance test of kLanes listed pairs at once, the touching ones
 /// appended to the queue without a branch on the outcome.
 std::size_t scan_pairs(const LaneArrays& a, const std::int32_t* owner, const std::int32_t* second,
-                       std::int32_t k0, std::int32_t k1, std::uint8_t* live, const PairOutputs& out,
-                       QueuedContact* queue) {
-  std::size_t queued = 0;
-  std::int32_t k = k0;
-  for (; k + kLanes <= k1; k += kLanes) {
+                       std::int32_t k0, const std::int32_t* tested, std::size_t count,
+                       std::uint8_t* live, QueuedContact* queue) {
+  std::size_t queued = 0, t = 0;
+  for (; t + kLanes <= count; t += kLanes) {
     std::size_t i1[kLanes], j1[kLanes], i3[kLanes], j3[kLanes];
+    std::int32_t k[kLanes];
     for (int l = 0; l < kLanes; ++l) {
-      i1[l] = static_cast<std::size_t>(owner[k - k0 + l]);
-      j1[l] = static_cast<std::size_t>(second[k + l]);
+      const std::int32_t m = tested[t + l];
+      k[l] = k0 + m;
+      i1[l] = static_cast<std::size_t>(owner[m]);
+      j1[l] = static_cast<std::size_t>(second[k[l]]);
       i3[l] = 3 * i1[l];
       j3[l] = 3 * j1[l];
     }
@@ -386,27 +425,24 @@ std::size_t scan_pairs(const LaneArrays& a, const std::int32_t* owner, const std
     const int touch = mask_bits(not_ge(dot3(d0, d1, d2, d0, d1, d2), cut * cut));
     for (int l = 0; l < kLanes; ++l) {
       QueuedContact& e = queue[queued];
-      e.k = k + l;
+      e.k = k[l];
       e.i = static_cast<std::int32_t>(i1[l]);
       e.j = static_cast<std::int32_t>(j1[l]);
-      const int t = (touch >> l) & 1;
-      queued += static_cast<std::size_t>(t);
-      if ((t == 0) & (live[k + l] != 0)) clear_pair(out, k + l);  // separated (rare)
-      live[k + l] = static_cast<std::uint8_t>(t);
+      const int bit = (touch >> l) & 1;
+      queued += static_cast<std::size_t>(bit);
+      live[k[l]] = static_cast<std::uint8_t>(bit);
     }
   }
-  for (; k < k1; ++k) {
-    const std::size_t i = static_cast<std::size_t>(owner[k - k0]);
+  for (; t < count; ++t) {
+    const std::int32_t m = tested[t];
+    const std::int32_t k = k0 + m;
+    const std::size_t i = static_cast<std::size_t>(owner[m]);
     const std::size_t j = static_cast<std::size_t>(second[k]);
     const double* xi = a.x + 3 * i;
     const double* xj = a.x + 3 * j;
     const double d0 = xi[0] - xj[0], d1 = xi[1] - xj[1], d2 = xi[2] - xj[2];
     const double cut = a.radius[i] + a.radius[j];
-    if ((d0 * d0 + d1 * d1) + d2 * d2 >= cut * cut) {
-      if (live[k] != 0) clear_pair(out, k);
-      live[k] = 0;
-      continue;
-    }
+    if ((d0 * d0 + d1 * d1) + d2 * d2 >= cut * cut) continue;
     live[k] = 1;
     queue[queued++] =
         QueuedContact{k, static_cast<std::int32_t>(i), static_cast<std::int32_t>(j), nullptr};
@@ -417,10 +453,14 @@ std::size_t scan_pairs(const LaneArrays& a, const std::int32_t* owner, const std
 }  // namespace
 
 std::size_t queue_touching_pairs(const Particles& p, const std::int32_t* owner,
-                                 const std::int32_t* second, std::int32_t k0, std::int32_t k1,
-                                 std::uint8_t* live, const PairOutputs& out, QueuedContact* queue) {
-  if (k1 <= k0) return 0;
-  return scan_pairs(lane_arrays(p, out), owner, second, k0, k1, live, out, queue);
+                                 const std::int32_t* second, std::int32_t k0,
+                                 const std::int32_t* tested, std::size_t count,
+                                 std::uint8_t* live, QueuedContact* queue) {
+  if (count == 0) return 0;
+  LaneArrays a;
+  a.x = p.x.data()->data();
+  a.radius = p.radius.data();
+  return scan_pairs(a, owner, second, k0, tested, count, live, queue);
 }
 
 void compute_queued_contacts(PairIsa isa, const Particles& p, const QueuedContact* contacts,

@@ -77,6 +77,7 @@ struct PairOutputs {
   Vec3* reaction_force = nullptr;      // (pairs, by slot) force of the pair on i [N]
   Vec3* reaction_torque = nullptr;     // (pairs, by slot) torque of the pair on j [N m]
   double* overlap = nullptr;           // (pairs) overlap / smaller radius [-]
+  std::uint8_t* live = nullptr;        // (pairs) set to 0 for a queued pair that does not touch
   Vec3* force_i = nullptr;             // (queued) force of each queued contact on i [N]
   Vec3* torque_i = nullptr;            // (queued) torque of each queued contact on i [N m]
 };
@@ -93,20 +94,23 @@ inline bool lanes_eligible(const ContactConstants& c) {
   return c.rolling == RollingModel::kEpsd && !c.cohesive && !c.size_dependent_rolling;
 }
 
-/// Tests the listed pairs k0 <= k < k1 (first member owner[k - k0], second member second[k])
-/// of the particles `p` for contact (|x_i - x_j| < r_i + r_j), two at a time, and appends
-/// the touching ones in list order to `queue` (room for k1 - k0 entries; QueuedContact::c is
-/// left for the caller to set). Sets live[k] to 1 if pair k touches, 0 if not; a pair that
-/// separated since the last step (live[k] was 1) gets its springs, reactions and overlap cleared
-/// in `out`. Returns the number queued.
+/// Tests the listed pairs tested[0..count) of a block, none of them live (position m in the
+/// block: pair k0 + m, between its first member owner[m] and second[k0 + m]), for contact
+/// (|x_i - x_j|^2 < (r_i + r_j)^2), two at a time, and appends the touching ones in that order to
+/// `queue` (room for `count` entries; QueuedContact::c is left for the caller to set), setting
+/// their live flag to 1. Returns the number queued.
 std::size_t queue_touching_pairs(const Particles& p, const std::int32_t* owner,
-                                 const std::int32_t* second, std::int32_t k0, std::int32_t k1,
-                                 std::uint8_t* live, const PairOutputs& out, QueuedContact* queue);
+                                 const std::int32_t* second, std::int32_t k0,
+                                 const std::int32_t* tested, std::size_t count,
+                                 std::uint8_t* live, QueuedContact* queue);
 
-/// Runs the contact kernel on the `count` touching pairs `contacts` (distinct pair indices k)
-/// of the particles `p` with time step dt [s]: updates each pair's springs, stores its
-/// reactions and overlap, and writes the force and torque on its first member to
-/// out.force_i[q] and out.torque_i[q] for queued contact q. kScalar and kSse2 give the same bits.
+/// Runs the contact kernel on the `count` queued pairs `contacts` (distinct pair indices k) of
+/// the particles `p` with time step dt [s]: for a pair that touches (the distance test of
+/// queue_touching_pairs), updates its springs, stores its reactions and overlap, and writes the
+/// force and torque on its first member to out.force_i[q] and out.torque_i[q] for queued
+/// contact q; a pair that does not touch (a live pair that separated) gets its springs,
+/// reactions and overlap cleared, zero force and torque, and live flag 0. kScalar and kSse2 give
+/// the same bits.
 void compute_queued_contacts(PairIsa isa, const Particles& p, const QueuedContact* contacts,
                              std::size_t count, double dt, const PairOutputs& out);
 

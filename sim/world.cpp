@@ -91,17 +91,23 @@ void World::kick_drift() {
   const double dt = model_.dt, h = 0.5 * model_.dt;
   const std::size_t n = p.size();
   const std::size_t par_min = model_.settings.parallel_min_particles;
-  // The largest displacement since the neighbor list was built, measured here while the
-  // positions are at hand (update_neighbors reads it instead of a pass of its own).
+  // Each particle's squared displacement since the neighbor list was built, measured here while
+  // the positions are at hand: update_neighbors takes the largest for the rebuild test, and
+  // pair_forces skips the pairs that cannot touch yet (NeighborList::clearance2).
   const bool listed = state_.neighbors.x_at_build.size() == n;
   const Vec3* const x_at_build = listed ? state_.neighbors.x_at_build.data() : nullptr;
+  if (listed) state_.moved2.resize(n);
+  double* const moved2 = state_.moved2.data();
   double max2 = 0.0;
 #pragma omp parallel for schedule(static) reduction(max : max2) if (n > par_min)
   for (std::size_t i = 0; i < n; ++i) {
     p.v[i] += (h / p.mass[i]) * p.force[i];
     p.w[i] += (h / p.inertia[i]) * p.torque[i];
     p.x[i] += dt * p.v[i];
-    if (listed) max2 = std::max(max2, (p.x[i] - x_at_build[i]).squaredNorm());
+    if (listed) {
+      moved2[i] = (p.x[i] - x_at_build[i]).squaredNorm();
+      max2 = std::max(max2, moved2[i]);
+    }
   }
   moved2_ = listed ? max2 : -1.0;
 }
@@ -117,22 +123,39 @@ void World::update_neighbors() {
   // checkpoint, a wall switched) or a wall has moved half a skin. Rebuilding them alone never
   // reorders the particles, so the results do not depend on when it happens (a resumed run stays
   // bit-identical to an uninterrupted one).
-  const NeighborList& nl = state_.neighbors;
-  const double moved2 = moved2_;
+  Particles& p = state_.particles;
+  NeighborList& nl = state_.neighbors;
+  const std::size_t n = p.size();
+  double moved2 = moved2_;
   moved2_ = -1.0;  // used once: the next call measures again unless kick_drift has
-  const bool rebuild = moved2 >= 0.0 && nl.start.size() == state_.particles.size() + 1
+  if (moved2 < 0.0 && nl.x_at_build.size() == n) {  // positions may have been set from outside
+    state_.moved2.resize(n);
+    moved2 = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      state_.moved2[i] = (p.x[i] - nl.x_at_build[i]).squaredNorm();
+      moved2 = std::max(moved2, state_.moved2[i]);
+    }
+  }
+  const bool rebuild = moved2 >= 0.0 && nl.start.size() == n + 1
                            ? 4.0 * moved2 > nl.skin * nl.skin  // NeighborList::needs_rebuild
-                           : nl.needs_rebuild(state_.particles);
+                           : nl.needs_rebuild(p);
   if (!rebuild) {
     if (!wall_candidates_current()) build_wall_candidates();
     return;
   }
-  build_neighbor_list(state_.particles, state_.neighbors, /*sort_particles=*/true);
-  const std::size_t np = state_.neighbors.pairs();
-  state_.reaction_force.resize(np);
-  state_.reaction_torque.resize(np);
-  state_.pair_overlap.resize(np);
-  state_.pair_live.assign(np, 1);  // unknown: the first force phase clears what does not touch
+  build_neighbor_list(p, nl, /*sort_particles=*/true);
+  state_.moved2.assign(n, 0.0);
+  // What a pair that did not touch last step must have: no springs, reactions or overlap. A pair
+  // with springs carried over from the old list is taken as touching (live): the force phase
+  // clears it if it does not.
+  const std::size_t np = nl.pairs();
+  state_.reaction_force.assign(np, Vec3::Zero());
+  state_.reaction_torque.assign(np, Vec3::Zero());
+  state_.pair_overlap.assign(np, 0.0);
+  state_.pair_live.resize(np);
+  for (std::size_t k = 0; k < np; ++k)
+    state_.pair_live[k] = nl.history[k].tangential != Vec3::Zero() ||
+                          nl.history[k].rolling != Vec3::Zero();
   build_wall_candidates();
 }
 
@@ -193,23 +216,28 @@ void World::pair_forces() {
   const std::size_t par_min = model_.settings.parallel_min_particles;
   const std::size_t np = nl.pairs();
   if (state_.pair_live.size() != np || state_.reaction_force.size() != np ||
-      nl.in_slot.size() != np || nl.in_particle.size() != np) {  // a state assembled elsewhere:
-                                                                 // nothing is known to be zero
+      nl.in_slot.size() != np || nl.in_particle.size() != np || nl.clearance2.size() != np) {
+    // A state assembled elsewhere (a restored checkpoint): nothing is known to be zero.
     index_incoming_slots(nl);
+    compute_clearances(nl, p);
     state_.reaction_force.assign(np, Vec3::Zero());
     state_.reaction_torque.assign(np, Vec3::Zero());
-    state_.pair_overlap.assign(np, 0.0);
+    state_.pair_overlap.resize(np, 0.0);
     state_.pair_live.assign(np, 1);
   }
-  // The particles are taken in blocks of kBlock. For each block: (1) its listed pairs are tested
-  // in list order; about half of them do not touch, and such a pair costs a distance test and
-  // nothing more unless it separated since the last step (pair_live); the touching ones are
-  // queued. (2) The kernel runs on the queue several contacts at a time (sim/pair_simd.hpp),
-  // which stores each pair's springs, reactions and overlap and each contact's force and torque
-  // on its first member. (3) Each particle sums gravity and the contacts it owns in list order;
-  // gather_forces() then adds the reactions of the pairs it is second in (stored in the second
-  // member's incoming slot). The sums' order is that of a one-contact-at-a-time loop and the
-  // same on any number of threads, so results stay bit-identical.
+  // The particles are taken in blocks of kBlock. For each block: (1) its listed pairs are split
+  // without a branch on the outcome: a pair that touched last step (pair_live; about half of
+  // them on a heap) is queued for the kernel, which tests it as it computes it and clears it if
+  // it separated; a pair that did not is skipped if neither particle has moved half the gap the
+  // pair had when the list was built (NeighborList::clearance2: it cannot touch yet), and
+  // distance-tested otherwise, the touching ones queued after the live ones (first touches, a
+  // few per step). (2) The kernel runs on the queue several contacts at a time
+  // (sim/pair_simd.hpp), which stores each pair's springs, reactions and overlap and each
+  // contact's force and torque on its first member. (3) Each particle sums gravity and the
+  // contacts it owns in list order (the two parts of the queue merged by pair index);
+  // gather_wall_forces() then adds the reactions of the pairs it is second in (stored in the
+  // second member's incoming slot). The sums' order is that of a one-contact-at-a-time loop over
+  // the list and the same on any number of threads, so results stay bit-identical.
   // Raw pointers: the stores below (some of them bytes) would otherwise make the compiler reload
   // every vector's data pointer after each of them.
   const double* const mass = p.mass.data();
@@ -219,6 +247,8 @@ void World::pair_forces() {
   const std::int32_t* const start = nl.start.data();
   const std::int32_t* const second = nl.second.data();
   const std::int32_t* const slot = nl.in_slot.data();
+  const double* const clearance2 = nl.clearance2.data();
+  const double* const moved2 = state_.moved2.data();
   ContactHistory* const history = nl.history.data();
   Vec3* const reaction_force = state_.reaction_force.data();
   Vec3* const reaction_torque = state_.reaction_torque.data();
@@ -230,7 +260,8 @@ void World::pair_forces() {
   {
     std::vector<QueuedContact> queue;
     std::vector<Vec3> queue_force, queue_torque;
-    std::vector<std::int32_t> owner;  // (listed pairs of the block) first member of each
+    std::vector<std::int32_t> owner;   // (listed pairs of the block) first member of each
+    std::vector<std::int32_t> tested;  // (listed pairs of the block) positions to test
     Vec3 block_force[kBlock], block_torque[kBlock];
 #pragma omp for schedule(dynamic, 8)
     for (std::size_t b = 0; b < blocks; ++b) {
@@ -241,6 +272,7 @@ void World::pair_forces() {
         queue.resize(listed);
         queue_force.resize(listed);
         queue_torque.resize(listed);
+        tested.resize(listed);
       }
       // The first member of each listed pair, without a loop per particle (whose varying
       // length the branch predictor cannot follow): a mark where each particle's pairs begin,
@@ -252,27 +284,54 @@ void World::pair_forces() {
         cur += owner[m];
         owner[m] = cur;
       }
+      // (1) Live pairs to the queue; the others to the distance test unless they cannot touch.
+      std::size_t live_queued = 0, to_test = 0;
+      for (std::size_t m = 0; m < listed; ++m) {
+        const std::int32_t k = k0 + static_cast<std::int32_t>(m);
+        const std::int32_t i = owner[m], j = second[k];
+        const std::size_t was_live = live[k];
+        queue[live_queued] = QueuedContact{k, i, j, nullptr};
+        live_queued += was_live;
+        tested[to_test] = static_cast<std::int32_t>(m);
+        const bool clear = std::max(moved2[i], moved2[j]) < clearance2[k];
+        to_test += static_cast<std::size_t>((was_live == 0) & !clear);
+      }
+      const std::size_t first_touches = queue_touching_pairs(
+          p, owner.data(), second, k0, tested.data(), to_test, live, queue.data() + live_queued);
+      const std::size_t queued = live_queued + first_touches;
+      // (2) The kernel.
       PairOutputs out;
       out.history = history;
       out.slot = slot;
       out.reaction_force = reaction_force;
       out.reaction_torque = reaction_torque;
       out.overlap = overlap;
+      out.live = live;
       out.force_i = queue_force.data();
       out.torque_i = queue_torque.data();
-      const std::size_t queued = queue_touching_pairs(p, owner.data(), second, k0, k1, live,
-                                                      out, queue.data());
       for (std::size_t q = 0; q < queued; ++q)
         queue[q].c = &table.c(material[queue[q].i], material[queue[q].j]);
       compute_queued_contacts(PairIsa::kSse2, p, queue.data(), queued, dt, out);
+      // (3) The sums, in list order.
       for (std::size_t i = i0; i < i1; ++i) {
         block_force[i - i0] = mass[i] * g;
         block_torque[i - i0].setZero();
       }
-      for (std::size_t q = 0; q < queued; ++q) {  // in list order: each particle's own order
+      auto add = [&](std::size_t q) {
         const std::size_t i = static_cast<std::size_t>(queue[q].i) - i0;
         block_force[i] += queue_force[q];
         block_torque[i] += queue_torque[q];
+      };
+      if (first_touches == 0) {
+        for (std::size_t q = 0; q < queued; ++q) add(q);
+      } else {
+        for (std::size_t a = 0, f = live_queued; a < live_queued || f < queued;) {
+          if (f == queued || (a < live_queued && queue[a].k < queue[f].k)) {
+            add(a++);
+          } else {
+            add(f++);
+          }
+        }
       }
       for (std::size_t i = i0; i < i1; ++i) {
         force[i] = block_force[i - i0];
@@ -426,7 +485,8 @@ std::size_t World::remove_particles(const std::vector<char>& remove) {
   state_.reaction_force.assign(np, Vec3::Zero());
   state_.reaction_torque.assign(np, Vec3::Zero());
   state_.pair_overlap.assign(np, 0.0);
-  state_.pair_live.assign(np, 1);
+  state_.pair_live.assign(np, 1);  // unknown: the next force phase clears what does not touch
+  state_.moved2.clear();           // measured again by the next force phase
   state_.forces_valid = false;
   state_.wall_candidates_valid = false;
   return removed;

@@ -68,10 +68,15 @@ struct State {
   HugeVector<Vec3> reaction_force;   // (pairs, by slot) force of the pair on its first member [N]
   HugeVector<Vec3> reaction_torque;  // (pairs, by slot) torque on its second member [N m]
   HugeVector<double> pair_overlap;   // (pairs) overlap / smaller radius, 0 if not touching
-  // (pairs) 0 only if the pair's history, reactions and overlap are known to be zero; a pair
-  // that does not touch costs a distance test and nothing else unless it touched last step.
-  // Set to 1 for every pair when the list is rebuilt, compacted or read from a checkpoint.
+  // (pairs) 1 if the pair touched in the last force phase (or may have: set to 1 for every pair
+  // when the list is compacted or read from a checkpoint, and for the pairs with springs when it
+  // is rebuilt); 0 only if the pair's history, reactions and overlap are zero. A live pair goes
+  // straight to the kernel, which clears it if it no longer touches; any other costs a distance
+  // test, or nothing if it cannot touch yet (NeighborList::clearance2).
   HugeVector<std::uint8_t> pair_live;
+  // (particles) squared displacement since the neighbor list was built, measured in each step's
+  // kick_drift (scratch for the force phase) [m^2].
+  HugeVector<double> moved2;
   // Wall candidates (scratch, rebuilt with the neighbor list, and alone when invalid or when a
   // wall has moved half a skin): the particles within 1.5 skins of an enabled wall, each with its
   // walls in increasing order (CSR). Only these are tested in wall_forces; every other particle
