@@ -18,7 +18,11 @@
 // Cost: a touching contact takes two square roots for all its stiffnesses and damping
 // coefficients (contact_stiffness: sqrt(R* delta), shared by the normal, tangential and rolling
 // springs, and sqrt(sqrt(R* delta) m*), from which both damping coefficients follow with
-// constant factors), and one per spring to keep its length when it is rotated.
+// constant factors), and one square root and one division per spring to keep its length when it
+// is rotated. Divisions are few because the divider, not the other arithmetic, bounds the
+// kernel's throughput when several contacts are computed at once (sim/pair_simd.hpp): the pair
+// geometry takes one for the normal, R*, m* and the overlap ratio (pair_input), a slipping
+// contact one for its force and spring (mindlin_tangential), a rolling spring at its cap one.
 #pragma once
 
 #include <Eigen/Core>
@@ -131,6 +135,7 @@ struct ContactInput {
   double a_i, a_j;   // lever arms [m] (a_j = 0 for a wall)
   Vec3 v_rel;        // velocity of i relative to j at the contact point [m/s]
   Vec3 w_i, w_j;     // angular velocities [rad/s] (w_j = 0 for a wall)
+  double overlap_ratio = 0.0;  // delta / min(r_i, r_j), for diagnostics only [-]
   double contact_diameter = 0.0;  // d_c: 4 R* for a pair, 2 R_i on a wall [m]; read only by
                                   // size-dependent rolling (ContactConstants::size_dependent_rolling)
 };
@@ -204,9 +209,13 @@ inline Vec3 mindlin_tangential(const ContactConstants& c, const ContactStiffness
   const double cap = c.mu_s * std::max(f_n, 0.0);
   // Compared squared: the square root is taken only when the contact slips.
   if (f.squaredNorm() > cap * cap) {
+    // One division for both cap / |F_t| and 1 / S_t: inv = 1 / (|F_t| S_t). (|F_t| = 0 or
+    // S_t = 0 only without overlap or motion, when F_t = 0: then F_t and the spring are zero.)
     const double fmag = f.norm();
-    f *= fmag > 0.0 ? cap / fmag : 0.0;
-    spring = k.s_t > 0.0 ? Vec3(-f / k.s_t) : Vec3::Zero();
+    const double denom = fmag * k.s_t;
+    const double inv = denom > 0.0 ? 1.0 / denom : 0.0;
+    f *= (cap * k.s_t) * inv;
+    spring = f * -(fmag * inv);
   }
   return f;
 }

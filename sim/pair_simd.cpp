@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace reposetwin::sim {
 namespace {
@@ -80,12 +81,29 @@ LaneArrays lane_arrays(const Particles& p, const PairOutputs& out) {
   out.torque_i[q] = o.torque_i;
   out.reaction_force[out.slot[e.k]] = o.force;
   out.reaction_torque[out.slot[e.k]] = o.torque_j;
-  out.overlap[e.k] = in.delta / std::min(p.radius[e.i], p.radius[e.j]);
+  out.overlap[e.k] = in.overlap_ratio;
 }
 
-// Two contacts per instruction (SSE2, the x86-64 baseline): the lane type V, its mask M and the
-// operations the kernel uses. Only IEEE add, subtract, multiply, divide and square root, never
-// a fused multiply-add (the baseline has none).
+/// What the lanes store for a queued pair k that does not touch (any more): its springs,
+/// reactions (at 3 times slot s3) and overlap cleared, zero force and torque for queue position
+/// q3 / 3, live flag 0.
+[[gnu::noinline]] void separate_lane(const LaneArrays& a, std::size_t k, std::size_t s3,
+                                     std::size_t q3) {
+  std::fill_n(a.history + 6 * k, 6, 0.0);
+  std::fill_n(a.reaction_force + s3, 3, 0.0);
+  std::fill_n(a.reaction_torque + s3, 3, 0.0);
+  std::fill_n(a.force_i + q3, 3, 0.0);
+  std::fill_n(a.torque_i + q3, 3, 0.0);
+  a.overlap[k] = 0.0;
+  a.live[k] = 0;
+}
+
+// The lanes, one namespace per instruction set: the lane type V, its mask M and the operations
+// the kernel uses. Only IEEE add, subtract, multiply, divide and square root, never a fused
+// multiply-add (neither target enables FMA), so every width gives the scalar kernel's bits.
+
+// Two contacts per instruction (SSE2, the x86-64 baseline).
+namespace sse2 {
 
 constexpr int kLanes = 2;
 struct V {
@@ -147,257 +165,7 @@ inline void store3(double* b, const std::size_t* ix, int valid, V x, V y, V z) {
   }
 }
 
-/// What the lanes store for a queued pair k that does not touch (any more): its springs,
-/// reactions (at 3 times slot s3) and overlap cleared, zero force and torque for queue position
-/// q3 / 3, live flag 0.
-[[gnu::noinline]] void separate_lane(const LaneArrays& a, std::size_t k, std::size_t s3,
-                                     std::size_t q3) {
-  std::fill_n(a.history + 6 * k, 6, 0.0);
-  std::fill_n(a.reaction_force + s3, 3, 0.0);
-  std::fill_n(a.reaction_torque + s3, 3, 0.0);
-  std::fill_n(a.force_i + q3, 3, 0.0);
-  std::fill_n(a.torque_i + q3, 3, 0.0);
-  a.overlap[k] = 0.0;
-  a.live[k] = 0;
-}
-
-// The kernel. Each line is the operation of the scalar kernel (pair_input, hertz_mindlin and the
-// functions it calls, sim/contact.hpp) in the same order; a three-term sum is written
-// (a0 + a1) + a2 because Eigen sums a Vector3d in that order.
-
-/// (a0 b0 + a1 b1) + a2 b2, as Eigen's dot product and squared norm of a Vector3d.
-[[gnu::always_inline]] inline V dot3(V a0, V a1, V a2, V b0, V b1, V b2) {
-  return (a0 * b0 + a1 * b1) + a2 * b2;
-}
-
-/// rotate_spring: the spring s rotated into the plane normal to n, keeping its length.
-[[gnu::always_inline]] inline void rotate_spring_lanes(V n0, V n1, V n2, V& s0, V& s1, V& s2) {
-  const V zero = bcast(0.0);
-  const V len2 = dot3(s0, s1, s2, s0, s1, s2);
-  const V sn = dot3(s0, s1, s2, n0, n1, n2);
-  const V p0 = s0 - sn * n0, p1 = s1 - sn * n1, p2 = s2 - sn * n2;
-  const V proj2 = dot3(p0, p1, p2, p0, p1, p2);
-  const V fac = select(proj2 > zero, vsqrt(len2 / proj2), zero);
-  const M nonzero = len2 > zero;
-  s0 = select(nonzero, p0 * fac, s0);
-  s1 = select(nonzero, p1 * fac, s1);
-  s2 = select(nonzero, p2 * fac, s2);
-}
-
-/// The contacts queued at positions q[0..kLanes) (the first `valid` of them real, the rest
-/// copies of the last real one, whose results are not stored).
-[[gnu::always_inline]] inline void contact_group(const LaneArrays& a, const QueuedContact* contacts,
-                                                 double dt_s, const std::int32_t* q, int valid) {
-  // Each lane's indices: particles i and j (and 3 i, 3 j into the Vec3 arrays), pair k (and
-  // 6 k into the histories), 3 times its reaction slot and 3 times its queue position.
-  std::size_t i1[kLanes], j1[kLanes], i3[kLanes], j3[kLanes], k1[kLanes], k6[kLanes], s3[kLanes],
-      q3[kLanes];
-  for (int l = 0; l < kLanes; ++l) {
-    const QueuedContact& e = contacts[q[l]];
-    i1[l] = static_cast<std::size_t>(e.i);
-    j1[l] = static_cast<std::size_t>(e.j);
-    i3[l] = 3 * i1[l];
-    j3[l] = 3 * j1[l];
-    k1[l] = static_cast<std::size_t>(e.k);
-    k6[l] = 6 * k1[l];
-    s3[l] = 3 * static_cast<std::size_t>(a.slot[k1[l]]);
-    q3[l] = 3 * static_cast<std::size_t>(q[l]);
-  }
-  // The pair constants: broadcast if every lane has the same material pair (a heap of one
-  // material), gathered lane by lane otherwise.
-  V hertz, nd, td, g_star, mu_s, mu_r, eta;
-  bool one_pair = true;
-  for (int l = 1; l < kLanes; ++l) one_pair &= contacts[q[l]].c == contacts[q[0]].c;
-  if (one_pair) {
-    const ContactConstants& c = *contacts[q[0]].c;
-    hertz = bcast(c.hertz_factor);
-    nd = bcast(c.normal_damping);
-    td = bcast(c.tangential_damping);
-    g_star = bcast(c.g_star);
-    mu_s = bcast(c.mu_s);
-    mu_r = bcast(c.mu_r);
-    eta = bcast(c.eta_r);
-  } else {
-    const double* f[kLanes];
-    auto gather = [&](double ContactConstants::*field) {
-      for (int l = 0; l < kLanes; ++l) f[l] = &(contacts[q[l]].c->*field);
-      return load1p(f);
-    };
-    hertz = gather(&ContactConstants::hertz_factor);
-    nd = gather(&ContactConstants::normal_damping);
-    td = gather(&ContactConstants::tangential_damping);
-    g_star = gather(&ContactConstants::g_star);
-    mu_s = gather(&ContactConstants::mu_s);
-    mu_r = gather(&ContactConstants::mu_r);
-    eta = gather(&ContactConstants::eta_r);
-  }
-  const V zero = bcast(0.0);
-  const V half = bcast(0.5);
-  const V dt = bcast(dt_s);
-
-  // pair_input: geometry and relative velocity at the contact point.
-  V xi0, xi1, xi2, xj0, xj1, xj2;
-  load3(a.x, i3, xi0, xi1, xi2);
-  load3(a.x, j3, xj0, xj1, xj2);
-  const V ri = load1(a.radius, i1), rj = load1(a.radius, j1);
-  const V d0 = xi0 - xj0, d1 = xi1 - xj1, d2 = xi2 - xj2;
-  const V cut = ri + rj;
-  const V dist2 = dot3(d0, d1, d2, d0, d1, d2);
-  // The distance test of queue_touching_pairs: a live pair may have separated since last step.
-  const int touch = mask_bits(not_ge(dist2, cut * cut));
-  const V dist = vsqrt(dist2);
-  const V n0 = d0 / dist, n1 = d1 / dist, n2 = d2 / dist;
-  const V delta = cut - dist;
-  const V r_eff = ri * rj / cut;
-  const V mi = load1(a.mass, i1), mj = load1(a.mass, j1);
-  const V m_eff = mi * mj / (mi + mj);
-  const V a_i = ri - half * delta;
-  const V a_j = rj - half * delta;
-  V wi0, wi1, wi2, wj0, wj1, wj2, vi0, vi1, vi2, vj0, vj1, vj2;
-  load3(a.w, i3, wi0, wi1, wi2);
-  load3(a.w, j3, wj0, wj1, wj2);
-  load3(a.v, i3, vi0, vi1, vi2);
-  load3(a.v, j3, vj0, vj1, vj2);
-  // w x n, component by component as Eigen's cross product.
-  const V ci0 = wi1 * n2 - wi2 * n1, ci1 = wi2 * n0 - wi0 * n2, ci2 = wi0 * n1 - wi1 * n0;
-  const V cj0 = wj1 * n2 - wj2 * n1, cj1 = wj2 * n0 - wj0 * n2, cj2 = wj0 * n1 - wj1 * n0;
-  const V vr0 = ((vi0 - vj0) - a_i * ci0) - a_j * cj0;
-  const V vr1 = ((vi1 - vj1) - a_i * ci1) - a_j * cj1;
-  const V vr2 = ((vi2 - vj2) - a_i * ci2) - a_j * cj2;
-
-  // contact_stiffness.
-  const V g8 = bcast(8.0) * g_star;
-  const V sqrt_rd = vsqrt(r_eff * delta);
-  const V root = vsqrt(sqrt_rd * m_eff);
-  const V s_t = g8 * sqrt_rd;
-  const V gamma_n = nd * root;
-  const V gamma_t = td * root;
-
-  // hertz_normal.
-  const V v_n = dot3(vr0, vr1, vr2, n0, n1, n2);
-  const V f_n = hertz * sqrt_rd * delta - gamma_n * v_n;
-  const V vt0 = vr0 - v_n * n0, vt1 = vr1 - v_n * n1, vt2 = vr2 - v_n * n2;
-  const V f_n_pos = max0(f_n);  // std::max(f_n, 0.0)
-
-  // mindlin_tangential.
-  V s0, s1, s2;
-  load3(a.history, k6, s0, s1, s2);
-  rotate_spring_lanes(n0, n1, n2, s0, s1, s2);
-  s0 = s0 + vt0 * dt;
-  s1 = s1 + vt1 * dt;
-  s2 = s2 + vt2 * dt;
-  const V neg_st = -s_t;
-  V f0 = neg_st * s0 - gamma_t * vt0;
-  V f1 = neg_st * s1 - gamma_t * vt1;
-  V f2 = neg_st * s2 - gamma_t * vt2;
-  const V cap = mu_s * f_n_pos;
-  const V fs2 = dot3(f0, f1, f2, f0, f1, f2);
-  const M slip = fs2 > cap * cap;
-  // The slip and the rolling cap are computed for every pair of lanes and selected, not
-  // branched on: in a heap either occurs in a fraction of the contacts that no predictor
-  // follows, and a mispredicted branch costs more than the square root and divisions it skips
-  // (bench/README.md, session 8).
-  {
-    const V fmag = vsqrt(fs2);
-    const V scale = select(fmag > zero, cap / fmag, zero);
-    const V g0 = f0 * scale, g1 = f1 * scale, g2 = f2 * scale;
-    const M st_pos = s_t > zero;
-    s0 = select(slip, select(st_pos, -g0 / s_t, zero), s0);
-    s1 = select(slip, select(st_pos, -g1 / s_t, zero), s1);
-    s2 = select(slip, select(st_pos, -g2 / s_t, zero), s2);
-    f0 = select(slip, g0, f0);
-    f1 = select(slip, g1, f1);
-    f2 = select(slip, g2, f2);
-  }
-  store3(a.history, k6, valid, s0, s1, s2);
-
-  // hertz_mindlin: force on i, torques of the tangential force.
-  const V force0 = f_n * n0 + f0, force1 = f_n * n1 + f1, force2 = f_n * n2 + f2;
-  const V nf0 = n1 * f2 - n2 * f1, nf1 = n2 * f0 - n0 * f2, nf2 = n0 * f1 - n1 * f0;
-  const V neg_ai = -a_i, neg_aj = -a_j;
-  V ti0 = neg_ai * nf0, ti1 = neg_ai * nf1, ti2 = neg_ai * nf2;
-  V tj0 = neg_aj * nf0, tj1 = neg_aj * nf1, tj2 = neg_aj * nf2;
-
-  // rolling_epsd.
-  V wr0 = wi0 - wj0, wr1 = wi1 - wj1, wr2 = wi2 - wj2;
-  const V wn = dot3(wr0, wr1, wr2, n0, n1, n2);
-  wr0 = wr0 - wn * n0;
-  wr1 = wr1 - wn * n1;
-  wr2 = wr2 - wn * n2;
-  V m0, m1, m2;
-  load3(a.history + 3, k6, m0, m1, m2);
-  rotate_spring_lanes(n0, n1, n2, m0, m1, m2);
-  const V k_r = s_t * r_eff * r_eff;
-  const V k_r_dt = k_r * dt;
-  m0 = m0 - k_r_dt * wr0;
-  m1 = m1 - k_r_dt * wr1;
-  m2 = m2 - k_r_dt * wr2;
-  const V rcap = mu_r * f_n_pos * r_eff;
-  const V ms2 = dot3(m0, m1, m2, m0, m1, m2);
-  const M at_cap = ms2 >= rcap * rcap;
-  {
-    const V mag = vsqrt(ms2);
-    const V scale = select(mag > zero, rcap / mag, zero);
-    m0 = select(at_cap, m0 * scale, m0);
-    m1 = select(at_cap, m1 * scale, m1);
-    m2 = select(at_cap, m2 * scale, m2);
-  }
-  V r0 = m0, r1 = m1, r2 = m2;  // the torque on i
-  store3(a.history + 3, k6, valid, m0, m1, m2);
-  const M damped = eta != zero;  // rolling_epsd: no dashpot if eta_r == 0
-  if (any(damped)) {
-    // pair_input's rolling inertia (0 unless eta_r > 0), then the dashpot below the cap.
-    const V one = bcast(1.0);
-    const V i_roll = select(eta > zero,
-                            one / (one / (load1(a.inertia, i1) + mi * ri * ri) +
-                                   one / (load1(a.inertia, j1) + mj * rj * rj)),
-                            zero);
-    const V damp = bcast(2.0) * eta * vsqrt(i_roll * k_r);
-    r0 = select(at_cap, m0, select(damped, m0 - damp * wr0, m0));
-    r1 = select(at_cap, m1, select(damped, m1 - damp * wr1, m1));
-    r2 = select(at_cap, m2, select(damped, m2 - damp * wr2, m2));
-  }
-  ti0 = ti0 + r0;
-  ti1 = ti1 + r1;
-  ti2 = ti2 + r2;
-  tj0 = tj0 - r0;
-  tj1 = tj1 - r1;
-  tj2 = tj2 - r2;
-
-  // The stores of pair_forces.
-  store3(a.force_i, q3, valid, force0, force1, force2);
-  store3(a.torque_i, q3, valid, ti0, ti1, ti2);
-  store3(a.reaction_force, s3, valid, force0, force1, force2);
-  store3(a.reaction_torque, s3, valid, tj0, tj1, tj2);
-  store1(a.overlap, k1, valid, delta / vmin(rj, ri));  // std::min(ri, rj)
-  const int stored = (1 << valid) - 1;  // the lanes whose results are stored
-  if ((touch & stored) != stored) {      // one of them separated (rare)
-    for (int l = 0; l < valid; ++l)
-      if (((touch >> l) & 1) == 0) separate_lane(a, k1[l], s3[l], q3[l]);
-  }
-}
-
-/// compute_queued_contacts on the lanes.
-void run_queue(const LaneArrays& a, const Particles& p, const QueuedContact* contacts,
-               std::size_t count, double dt, const PairOutputs& out) {
-  std::int32_t group[kLanes];
-  int g = 0;
-  for (std::size_t q = 0; q < count; ++q) {
-    if (!lanes_eligible(*contacts[q].c)) {
-      scalar_contact(p, contacts, q, dt, out);
-      continue;
-    }
-    group[g++] = static_cast<std::int32_t>(q);
-    if (g == kLanes) {
-      contact_group(a, contacts, dt, group, kLanes);
-      g = 0;
-    }
-  }
-  if (g > 0) {
-    for (int l = g; l < kLanes; ++l) group[l] = group[g - 1];
-    contact_group(a, contacts, dt, group, g);
-  }
-}
+#include "sim/pair_lanes.inc"
 
 /// queue_touching_pairs: the distance test of kLanes listed pairs at once, the touching ones
 /// appended to the queue without a branch on the outcome.
@@ -450,6 +218,102 @@ std::size_t scan_pairs(const LaneArrays& a, const std::int32_t* owner, const std
   return queued;
 }
 
+}  // namespace sse2
+
+// Four contacts per instruction (AVX, chosen at run time where the CPU has it).
+#pragma GCC push_options
+#pragma GCC target("avx")
+
+namespace avx {
+
+constexpr int kLanes = 4;
+struct V {
+  __m256d v;
+};
+struct M {
+  __m256d v;
+};
+inline V operator+(V a, V b) { return {_mm256_add_pd(a.v, b.v)}; }
+inline V operator-(V a, V b) { return {_mm256_sub_pd(a.v, b.v)}; }
+inline V operator*(V a, V b) { return {_mm256_mul_pd(a.v, b.v)}; }
+inline V operator/(V a, V b) { return {_mm256_div_pd(a.v, b.v)}; }
+inline V operator-(V a) { return {_mm256_xor_pd(a.v, _mm256_set1_pd(-0.0))}; }
+inline V vsqrt(V a) { return {_mm256_sqrt_pd(a.v)}; }
+inline V bcast(double s) { return {_mm256_set1_pd(s)}; }
+// The predicates of the scalar operators: > and >= are false if unordered, != is true.
+inline M operator>(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_GT_OQ)}; }
+inline M operator>=(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_GE_OQ)}; }
+inline M operator!=(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_NEQ_UQ)}; }
+inline M not_ge(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_NGE_UQ)}; }
+inline int mask_bits(M m) { return _mm256_movemask_pd(m.v); }
+inline V select(M m, V a, V b) { return {_mm256_blendv_pd(b.v, a.v, m.v)}; }
+inline bool any(M m) { return _mm256_movemask_pd(m.v) != 0; }
+inline V max0(V f) { return {_mm256_max_pd(_mm256_setzero_pd(), f.v)}; }
+inline V vmin(V a, V b) { return {_mm256_min_pd(a.v, b.v)}; }
+inline __m128d pair_of(const double* a, const double* b) {
+  return _mm_loadh_pd(_mm_load_sd(a), b);
+}
+inline V load1p(const double* const* p) {
+  return {_mm256_insertf128_pd(_mm256_castpd128_pd256(pair_of(p[0], p[1])), pair_of(p[2], p[3]),
+                               1)};
+}
+inline V load1(const double* b, const std::size_t* ix) {
+  return {_mm256_insertf128_pd(_mm256_castpd128_pd256(pair_of(b + ix[0], b + ix[1])),
+                               pair_of(b + ix[2], b + ix[3]), 1)};
+}
+inline void load3(const double* b, const std::size_t* ix, V& x, V& y, V& z) {
+  const double* p0 = b + ix[0];
+  const double* p1 = b + ix[1];
+  const double* p2 = b + ix[2];
+  const double* p3 = b + ix[3];
+  // lo = (x0, y0, x2, y2), hi = (x1, y1, x3, y3).
+  const __m256d lo =
+      _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p0)), _mm_loadu_pd(p2), 1);
+  const __m256d hi =
+      _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p1)), _mm_loadu_pd(p3), 1);
+  x.v = _mm256_unpacklo_pd(lo, hi);
+  y.v = _mm256_unpackhi_pd(lo, hi);
+  z.v = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair_of(p0 + 2, p1 + 2)),
+                             pair_of(p2 + 2, p3 + 2), 1);
+}
+inline void store1(double* b, const std::size_t* ix, int valid, V a) {
+  const __m128d lo = _mm256_castpd256_pd128(a.v), hi = _mm256_extractf128_pd(a.v, 1);
+  _mm_store_sd(b + ix[0], lo);
+  if (valid > 1) _mm_storeh_pd(b + ix[1], lo);
+  if (valid > 2) _mm_store_sd(b + ix[2], hi);
+  if (valid > 3) _mm_storeh_pd(b + ix[3], hi);
+}
+inline void store3(double* b, const std::size_t* ix, int valid, V x, V y, V z) {
+  const __m256d lo = _mm256_unpacklo_pd(x.v, y.v);  // (x0, y0, x2, y2)
+  const __m256d hi = _mm256_unpackhi_pd(x.v, y.v);  // (x1, y1, x3, y3)
+  const __m128d z01 = _mm256_castpd256_pd128(z.v), z23 = _mm256_extractf128_pd(z.v, 1);
+  _mm_storeu_pd(b + ix[0], _mm256_castpd256_pd128(lo));
+  _mm_store_sd(b + ix[0] + 2, z01);
+  if (valid > 1) {
+    _mm_storeu_pd(b + ix[1], _mm256_castpd256_pd128(hi));
+    _mm_storeh_pd(b + ix[1] + 2, z01);
+  }
+  if (valid > 2) {
+    _mm_storeu_pd(b + ix[2], _mm256_extractf128_pd(lo, 1));
+    _mm_store_sd(b + ix[2] + 2, z23);
+  }
+  if (valid > 3) {
+    _mm_storeu_pd(b + ix[3], _mm256_extractf128_pd(hi, 1));
+    _mm_storeh_pd(b + ix[3] + 2, z23);
+  }
+}
+
+#include "sim/pair_lanes.inc"
+
+}  // namespace avx
+
+#pragma GCC pop_options
+
+bool cpu_has_avx() {
+  static const bool has = __builtin_cpu_supports("avx");
+  return has;
+}
+
 }  // namespace
 
 std::size_t queue_touching_pairs(const Particles& p, const std::int32_t* owner,
@@ -460,17 +324,29 @@ std::size_t queue_touching_pairs(const Particles& p, const std::int32_t* owner,
   LaneArrays a;
   a.x = p.x.data()->data();
   a.radius = p.radius.data();
-  return scan_pairs(a, owner, second, k0, tested, count, live, queue);
+  return sse2::scan_pairs(a, owner, second, k0, tested, count, live, queue);
 }
 
 void compute_queued_contacts(PairIsa isa, const Particles& p, const QueuedContact* contacts,
                              std::size_t count, double dt, const PairOutputs& out) {
   if (count == 0) return;
-  if (isa == PairIsa::kScalar) {
-    for (std::size_t q = 0; q < count; ++q) scalar_contact(p, contacts, q, dt, out);
-    return;
+  switch (isa) {
+    case PairIsa::kScalar:
+      for (std::size_t q = 0; q < count; ++q) scalar_contact(p, contacts, q, dt, out);
+      return;
+    case PairIsa::kSse2:
+      sse2::run_queue(lane_arrays(p, out), p, contacts, count, dt, out);
+      return;
+    case PairIsa::kAvx:
+      if (!cpu_has_avx())
+        throw std::invalid_argument("compute_queued_contacts: isa kAvx, but this CPU has no AVX");
+      avx::run_queue(lane_arrays(p, out), p, contacts, count, dt, out);
+      return;
   }
-  run_queue(lane_arrays(p, out), p, contacts, count, dt, out);
 }
+
+bool pair_isa_available(PairIsa isa) { return isa != PairIsa::kAvx || cpu_has_avx(); }
+
+PairIsa best_pair_isa() { return cpu_has_avx() ? PairIsa::kAvx : PairIsa::kSse2; }
 
 }  // namespace reposetwin::sim

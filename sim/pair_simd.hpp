@@ -40,13 +40,19 @@ inline ContactInput pair_input(const Particles& p, const ContactConstants& c, st
                                std::size_t j) {
   const Vec3 d = p.x[i] - p.x[j];
   const double ri = p.radius[i], rj = p.radius[j];
-  const double cut = ri + rj;
+  const double mi = p.mass[i], mj = p.mass[j];
+  const double cut = ri + rj, msum = mi + mj, rmin = std::min(ri, rj);
   const double dist = std::sqrt(d.squaredNorm());
+  // One division for the normal d / |d|, R* = r_i r_j / (r_i + r_j), m* = m_i m_j / (m_i + m_j)
+  // and the overlap ratio delta / r_min: inv = 1 / (|d| (r_i + r_j) (m_i + m_j) r_min).
+  const double a = dist * cut, b = msum * rmin;
+  const double inv = 1.0 / (a * b);
   ContactInput in;
-  in.n = d / dist;
+  in.n = d * ((cut * b) * inv);
   in.delta = cut - dist;
-  in.r_eff = ri * rj / cut;
-  in.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
+  in.r_eff = (ri * rj) * ((dist * b) * inv);
+  in.m_eff = (mi * mj) * ((a * rmin) * inv);
+  in.overlap_ratio = in.delta * ((a * msum) * inv);
   // The rolling inertia is read only by the EPSD dashpot.
   in.i_roll = c.rolling == RollingModel::kEpsd && c.eta_r > 0.0
                   ? 1.0 / (1.0 / (p.inertia[i] + p.mass[i] * ri * ri) +
@@ -86,7 +92,14 @@ struct PairOutputs {
 enum class PairIsa {
   kScalar,  // one contact at a time (pair_input + hertz_mindlin): the reference
   kSse2,    // 2 contacts per instruction (SSE2, the x86-64 baseline)
+  kAvx,     // 4 contacts per instruction (only where the CPU has AVX)
 };
+
+/// Whether this CPU can run `isa`.
+bool pair_isa_available(PairIsa isa);
+
+/// The widest instruction set this CPU can run (kAvx or kSse2): what the engine uses.
+PairIsa best_pair_isa();
 
 /// Whether contacts of the material pair with constants `c` run in the lanes (EPSD rolling, no
 /// cohesion, no size-dependent rolling); the others take the scalar kernel.

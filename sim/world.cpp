@@ -254,6 +254,7 @@ void World::pair_forces() {
   Vec3* const reaction_torque = state_.reaction_torque.data();
   double* const overlap = state_.pair_overlap.data();
   std::uint8_t* const live = state_.pair_live.data();
+  const PairIsa isa = best_pair_isa();  // the same bits on any of them
   constexpr std::size_t kBlock = 64;  // particles: about 100 touching pairs on a settled heap
   const std::size_t blocks = (n + kBlock - 1) / kBlock;
 #pragma omp parallel if (n > par_min)
@@ -311,7 +312,7 @@ void World::pair_forces() {
       out.torque_i = queue_torque.data();
       for (std::size_t q = 0; q < queued; ++q)
         queue[q].c = &table.c(material[queue[q].i], material[queue[q].j]);
-      compute_queued_contacts(PairIsa::kSse2, p, queue.data(), queued, dt, out);
+      compute_queued_contacts(isa, p, queue.data(), queued, dt, out);
       // (3) The sums, in list order.
       for (std::size_t i = i0; i < i1; ++i) {
         block_force[i - i0] = mass[i] * g;

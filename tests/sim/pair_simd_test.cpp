@@ -180,7 +180,7 @@ void scalar_step(const Scene& s, std::size_t count, Results& r) {
     r.torque_i[q] = out.torque_i;
     r.reaction_force[s.slot[e.k]] = out.force;
     r.reaction_torque[s.slot[e.k]] = out.torque_j;
-    r.overlap[e.k] = in.delta / std::min(s.p.radius[e.i], s.p.radius[e.j]);
+    r.overlap[e.k] = in.overlap_ratio;
   }
 }
 
@@ -201,7 +201,11 @@ void expect_same(const Results& a, const Results& b, const std::string& what) {
   EXPECT_TRUE(same_bits(a.live, b.live)) << what << ": live flags";
 }
 
-std::vector<PairIsa> available_isas() { return {PairIsa::kScalar, PairIsa::kSse2}; }
+std::vector<PairIsa> available_isas() {
+  std::vector<PairIsa> isas{PairIsa::kScalar, PairIsa::kSse2};
+  if (pair_isa_available(PairIsa::kAvx)) isas.push_back(PairIsa::kAvx);
+  return isas;
+}
 
 const char* isa_name(PairIsa isa) {
   switch (isa) {
@@ -209,6 +213,8 @@ const char* isa_name(PairIsa isa) {
       return "scalar";
     case PairIsa::kSse2:
       return "sse2";
+    case PairIsa::kAvx:
+      return "avx";
   }
   return "?";
 }
@@ -331,7 +337,7 @@ TEST(PairSimd, QueuedPairsThatNoLongerTouchAreCleared) {
     ref.torque_i[q] = out.torque_i;
     ref.reaction_force[s.slot[e.k]] = out.force;
     ref.reaction_torque[s.slot[e.k]] = out.torque_j;
-    ref.overlap[e.k] = in.delta / std::min(s.p.radius[e.i], s.p.radius[e.j]);
+    ref.overlap[e.k] = in.overlap_ratio;
   }
   EXPECT_GT(separated, 250);
   EXPECT_LT(separated, 450);
