@@ -90,6 +90,7 @@ void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) 
   list.in_pairs.clear();
   list.in_slot.clear();
   list.in_particle.clear();
+  list.first.clear();
   list.clearance2.clear();
   list.x_at_build.assign(p.x.begin(), p.x.end());
   if (n == 0) return;
@@ -219,6 +220,10 @@ void index_incoming_slots(NeighborList& list) {
   for (std::size_t i = 0; i + 1 < list.in_start.size(); ++i)
     for (std::int32_t q = list.in_start[i]; q < list.in_start[i + 1]; ++q)
       list.in_particle[q] = static_cast<std::int32_t>(i);
+  list.first.resize(list.second.size());
+  for (std::size_t i = 0; i + 1 < list.start.size(); ++i)
+    for (std::int32_t k = list.start[i]; k < list.start[i + 1]; ++k)
+      list.first[k] = static_cast<std::int32_t>(i);
 }
 
 void compact_neighbor_list(NeighborList& list, const std::vector<char>& keep) {

@@ -36,6 +36,8 @@ struct NeighborList {
                                         // from in_pairs, not saved in checkpoints)
   HugeVector<std::int32_t> in_particle; // (pairs) the particle whose incoming list holds slot q,
                                         // the second member of pair in_pairs[q] (derived too)
+  HugeVector<std::int32_t> first;       // (pairs) the first member of pair k, the particle whose
+                                        // CSR range holds k (derived from start, not saved)
   HugeVector<Vec3> x_at_build;     // (n) positions at the last build [m]
   // (pairs) the square of a little less than half the gap between the pair's surfaces at the
   // last build, 0 if they were touching or nearly [m^2]. While neither particle has moved as far
@@ -55,8 +57,8 @@ struct NeighborList {
 /// that persist are kept.
 void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles);
 
-/// Derives list.in_slot (in_slot[in_pairs[q]] = q) and list.in_particle from list.in_pairs
-/// and list.in_start.
+/// Derives list.in_slot (in_slot[in_pairs[q]] = q), list.in_particle and list.first from
+/// list.in_pairs, list.in_start and list.start.
 void index_incoming_slots(NeighborList& list);
 
 /// Derives list.clearance2 from list.x_at_build and the radii of `p`.

@@ -216,7 +216,8 @@ void World::pair_forces() {
   const std::size_t par_min = model_.settings.parallel_min_particles;
   const std::size_t np = nl.pairs();
   if (state_.pair_live.size() != np || state_.reaction_force.size() != np ||
-      nl.in_slot.size() != np || nl.in_particle.size() != np || nl.clearance2.size() != np) {
+      nl.in_slot.size() != np || nl.in_particle.size() != np || nl.first.size() != np ||
+      nl.clearance2.size() != np) {
     // A state assembled elsewhere (a restored checkpoint): nothing is known to be zero.
     index_incoming_slots(nl);
     compute_clearances(nl, p);
@@ -245,6 +246,7 @@ void World::pair_forces() {
   Vec3* const force = state_.particles.force.data();
   Vec3* const torque = state_.particles.torque.data();
   const std::int32_t* const start = nl.start.data();
+  const std::int32_t* const first = nl.first.data();
   const std::int32_t* const second = nl.second.data();
   const std::int32_t* const slot = nl.in_slot.data();
   const double* const clearance2 = nl.clearance2.data();
@@ -261,7 +263,6 @@ void World::pair_forces() {
   {
     std::vector<QueuedContact> queue;
     std::vector<Vec3> queue_force, queue_torque;
-    std::vector<std::int32_t> owner;   // (listed pairs of the block) first member of each
     std::vector<std::int32_t> tested;  // (listed pairs of the block) positions to test
     Vec3 block_force[kBlock], block_torque[kBlock];
 #pragma omp for schedule(dynamic, 8)
@@ -275,16 +276,9 @@ void World::pair_forces() {
         queue_torque.resize(listed);
         tested.resize(listed);
       }
-      // The first member of each listed pair, without a loop per particle (whose varying
-      // length the branch predictor cannot follow): a mark where each particle's pairs begin,
-      // then a running sum.
-      owner.assign(listed + 1, 0);
-      for (std::size_t i = i0 + 1; i < i1; ++i) ++owner[static_cast<std::size_t>(start[i] - k0)];
-      std::int32_t cur = static_cast<std::int32_t>(i0);
-      for (std::size_t m = 0; m < listed; ++m) {
-        cur += owner[m];
-        owner[m] = cur;
-      }
+      // The block's pairs in one flat loop (a loop per particle, of varying length, would cost
+      // the branch predictor), each with its first member from the list.
+      const std::int32_t* const owner = first + k0;
       // (1) Live pairs to the queue; the others to the distance test unless they cannot touch.
       std::size_t live_queued = 0, to_test = 0;
       for (std::size_t m = 0; m < listed; ++m) {
@@ -298,7 +292,7 @@ void World::pair_forces() {
         to_test += static_cast<std::size_t>((was_live == 0) & !clear);
       }
       const std::size_t first_touches = queue_touching_pairs(
-          p, owner.data(), second, k0, tested.data(), to_test, live, queue.data() + live_queued);
+          p, owner, second, k0, tested.data(), to_test, live, queue.data() + live_queued);
       const std::size_t queued = live_queued + first_touches;
       // (2) The kernel.
       PairOutputs out;
