@@ -28,6 +28,7 @@
 // Usage: bench_sim [--quick] [--particles N] [--steps N] [--threads 1,2] [--rolling epsd|cdt]
 //                  [--rolling-damping ETA] [--settle N] [--relax N] [--settle-gravity G]
 //                  [--settle-threads N] [--write-liggghts DIR] [--seed S] [--heap FILE]
+//                  [--isa auto|scalar|sse2|avx|avx512vl]
 #include <omp.h>
 #include <time.h>
 
@@ -93,6 +94,7 @@ struct Options {
   std::string liggghts_dir;
   std::string heap_file;  // settled heap checkpoint: read if it exists, else written after settling
   std::uint64_t seed = 2024;
+  std::string isa = "auto";  // pair kernel instruction set: auto (the fastest) or a name
 };
 
 /// The model of the standard scene: one rock material (index 0) and the plate (index 1) with
@@ -344,9 +346,15 @@ struct RunResult {
 };
 
 /// Times `steps` steps of a copy of the settled world on `threads` threads.
-RunResult timed_run(const World& settled, int steps, int threads) {
+RunResult timed_run(const World& settled, int steps, int threads, const std::string& isa) {
   World w = settled;
   omp_set_num_threads(threads);
+  if (isa != "auto") {
+    for (reposetwin::sim::PairIsa k :
+         {reposetwin::sim::PairIsa::kScalar, reposetwin::sim::PairIsa::kSse2,
+          reposetwin::sim::PairIsa::kAvx, reposetwin::sim::PairIsa::kAvx512Vl})
+      if (isa == reposetwin::sim::pair_isa_name(k)) w.set_pair_isa(k);
+  }
   w.reset_profile();
   const std::int64_t builds0 = w.state().neighbors.builds;
   const std::size_t n = w.state().particles.size();
@@ -424,6 +432,10 @@ int main(int argc, char** argv) {
   app.add_option("--write-liggghts", o.liggghts_dir,
                  "write the settled heap and the matching LIGGGHTS input to this folder");
   app.add_option("--seed", o.seed, "seed of the sizes and jitter");
+  app.add_option("--isa", o.isa,
+                 "instruction set of the pair kernel: auto (the fastest this CPU has), scalar, "
+                 "sse2, avx or avx512vl (all give the same bits)")
+      ->check(CLI::IsMember({"auto", "scalar", "sse2", "avx", "avx512vl"}));
   app.add_option("--heap", o.heap_file,
                  "checkpoint of the settled heap: read instead of settling if the file exists, "
                  "else written after the settle (the same start for several builds; one file "
@@ -444,7 +456,9 @@ int main(int argc, char** argv) {
               << kDiameterMax * 1e3 << " mm, E " << kSoftYoungs << " Pa (softened), rolling "
               << o.rolling << " mu_r " << kRollingFriction << " eta_r " << o.rolling_damping
               << "; dt " << model.dt << " s (" << model.settings.rayleigh_fraction << " T_R), skin "
-              << world.state().neighbors.skin << " m\n";
+              << world.state().neighbors.skin << " m; pair kernel "
+              << (o.isa == "auto" ? reposetwin::sim::pair_isa_name(world.pair_isa()) : o.isa)
+              << "\n";
     const char* wait_policy = std::getenv("OMP_WAIT_POLICY");
     std::cout << "load average before: " << load_average()
               << "; OMP_WAIT_POLICY=" << (wait_policy ? wait_policy : "(unset)") << "\n";
@@ -517,7 +531,7 @@ int main(int argc, char** argv) {
     }
 
     std::vector<RunResult> results;
-    for (int t : o.threads) results.push_back(timed_run(world, o.steps, t));
+    for (int t : o.threads) results.push_back(timed_run(world, o.steps, t, o.isa));
     bool same = true;
     for (const RunResult& r : results) same = same && r.hash == results.front().hash;
     std::cout << "final states " << (same ? "identical" : "DIFFER") << " across thread counts\n";

@@ -226,91 +226,36 @@ std::size_t scan_pairs(const LaneArrays& a, const std::int32_t* owner, const std
 
 namespace avx {
 
-constexpr int kLanes = 4;
-struct V {
-  __m256d v;
-};
-struct M {
-  __m256d v;
-};
-inline V operator+(V a, V b) { return {_mm256_add_pd(a.v, b.v)}; }
-inline V operator-(V a, V b) { return {_mm256_sub_pd(a.v, b.v)}; }
-inline V operator*(V a, V b) { return {_mm256_mul_pd(a.v, b.v)}; }
-inline V operator/(V a, V b) { return {_mm256_div_pd(a.v, b.v)}; }
-inline V operator-(V a) { return {_mm256_xor_pd(a.v, _mm256_set1_pd(-0.0))}; }
-inline V vsqrt(V a) { return {_mm256_sqrt_pd(a.v)}; }
-inline V bcast(double s) { return {_mm256_set1_pd(s)}; }
-// The predicates of the scalar operators: > and >= are false if unordered, != is true.
-inline M operator>(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_GT_OQ)}; }
-inline M operator>=(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_GE_OQ)}; }
-inline M operator!=(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_NEQ_UQ)}; }
-inline M not_ge(V a, V b) { return {_mm256_cmp_pd(a.v, b.v, _CMP_NGE_UQ)}; }
-inline int mask_bits(M m) { return _mm256_movemask_pd(m.v); }
-inline V select(M m, V a, V b) { return {_mm256_blendv_pd(b.v, a.v, m.v)}; }
-inline bool any(M m) { return _mm256_movemask_pd(m.v) != 0; }
-inline V max0(V f) { return {_mm256_max_pd(_mm256_setzero_pd(), f.v)}; }
-inline V vmin(V a, V b) { return {_mm256_min_pd(a.v, b.v)}; }
-inline __m128d pair_of(const double* a, const double* b) {
-  return _mm_loadh_pd(_mm_load_sd(a), b);
-}
-inline V load1p(const double* const* p) {
-  return {_mm256_insertf128_pd(_mm256_castpd128_pd256(pair_of(p[0], p[1])), pair_of(p[2], p[3]),
-                               1)};
-}
-inline V load1(const double* b, const std::size_t* ix) {
-  return {_mm256_insertf128_pd(_mm256_castpd128_pd256(pair_of(b + ix[0], b + ix[1])),
-                               pair_of(b + ix[2], b + ix[3]), 1)};
-}
-inline void load3(const double* b, const std::size_t* ix, V& x, V& y, V& z) {
-  const double* p0 = b + ix[0];
-  const double* p1 = b + ix[1];
-  const double* p2 = b + ix[2];
-  const double* p3 = b + ix[3];
-  // lo = (x0, y0, x2, y2), hi = (x1, y1, x3, y3).
-  const __m256d lo =
-      _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p0)), _mm_loadu_pd(p2), 1);
-  const __m256d hi =
-      _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p1)), _mm_loadu_pd(p3), 1);
-  x.v = _mm256_unpacklo_pd(lo, hi);
-  y.v = _mm256_unpackhi_pd(lo, hi);
-  z.v = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair_of(p0 + 2, p1 + 2)),
-                             pair_of(p2 + 2, p3 + 2), 1);
-}
-inline void store1(double* b, const std::size_t* ix, int valid, V a) {
-  const __m128d lo = _mm256_castpd256_pd128(a.v), hi = _mm256_extractf128_pd(a.v, 1);
-  _mm_store_sd(b + ix[0], lo);
-  if (valid > 1) _mm_storeh_pd(b + ix[1], lo);
-  if (valid > 2) _mm_store_sd(b + ix[2], hi);
-  if (valid > 3) _mm_storeh_pd(b + ix[3], hi);
-}
-inline void store3(double* b, const std::size_t* ix, int valid, V x, V y, V z) {
-  const __m256d lo = _mm256_unpacklo_pd(x.v, y.v);  // (x0, y0, x2, y2)
-  const __m256d hi = _mm256_unpackhi_pd(x.v, y.v);  // (x1, y1, x3, y3)
-  const __m128d z01 = _mm256_castpd256_pd128(z.v), z23 = _mm256_extractf128_pd(z.v, 1);
-  _mm_storeu_pd(b + ix[0], _mm256_castpd256_pd128(lo));
-  _mm_store_sd(b + ix[0] + 2, z01);
-  if (valid > 1) {
-    _mm_storeu_pd(b + ix[1], _mm256_castpd256_pd128(hi));
-    _mm_storeh_pd(b + ix[1] + 2, z01);
-  }
-  if (valid > 2) {
-    _mm_storeu_pd(b + ix[2], _mm256_extractf128_pd(lo, 1));
-    _mm_store_sd(b + ix[2] + 2, z23);
-  }
-  if (valid > 3) {
-    _mm_storeu_pd(b + ix[3], _mm256_extractf128_pd(hi, 1));
-    _mm_storeh_pd(b + ix[3] + 2, z23);
-  }
-}
-
+#include "sim/pair_lanes_avx.inc"
 #include "sim/pair_lanes.inc"
 
 }  // namespace avx
 
 #pragma GCC pop_options
 
+// The same four lanes where the CPU has AVX-512VL: the same instructions on 256 bits, with 32
+// vector registers instead of 16.
+#pragma GCC push_options
+#pragma GCC target("avx2,avx512f,avx512vl")
+
+namespace avx512vl {
+
+#include "sim/pair_lanes_avx.inc"
+#include "sim/pair_lanes.inc"
+
+}  // namespace avx512vl
+
+#pragma GCC pop_options
+
 bool cpu_has_avx() {
   static const bool has = __builtin_cpu_supports("avx");
+  return has;
+}
+
+
+bool cpu_has_avx512vl() {
+  static const bool has =
+      __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
   return has;
 }
 
@@ -342,11 +287,45 @@ void compute_queued_contacts(PairIsa isa, const Particles& p, const QueuedContac
         throw std::invalid_argument("compute_queued_contacts: isa kAvx, but this CPU has no AVX");
       avx::run_queue(lane_arrays(p, out), p, contacts, count, dt, out);
       return;
+    case PairIsa::kAvx512Vl:
+      if (!cpu_has_avx512vl())
+        throw std::invalid_argument(
+            "compute_queued_contacts: isa kAvx512Vl, but this CPU has no AVX-512VL");
+      avx512vl::run_queue(lane_arrays(p, out), p, contacts, count, dt, out);
+      return;
   }
 }
 
-bool pair_isa_available(PairIsa isa) { return isa != PairIsa::kAvx || cpu_has_avx(); }
+bool pair_isa_available(PairIsa isa) {
+  switch (isa) {
+    case PairIsa::kScalar:
+    case PairIsa::kSse2:
+      return true;
+    case PairIsa::kAvx:
+      return cpu_has_avx();
+    case PairIsa::kAvx512Vl:
+      return cpu_has_avx512vl();
+  }
+  return false;
+}
 
-PairIsa best_pair_isa() { return cpu_has_avx() ? PairIsa::kAvx : PairIsa::kSse2; }
+PairIsa best_pair_isa() {
+  if (cpu_has_avx512vl()) return PairIsa::kAvx512Vl;
+  return cpu_has_avx() ? PairIsa::kAvx : PairIsa::kSse2;
+}
+
+const char* pair_isa_name(PairIsa isa) {
+  switch (isa) {
+    case PairIsa::kScalar:
+      return "scalar";
+    case PairIsa::kSse2:
+      return "sse2";
+    case PairIsa::kAvx:
+      return "avx";
+    case PairIsa::kAvx512Vl:
+      return "avx512vl";
+  }
+  return "?";
+}
 
 }  // namespace reposetwin::sim

@@ -93,13 +93,18 @@ enum class PairIsa {
   kScalar,  // one contact at a time (pair_input + hertz_mindlin): the reference
   kSse2,    // 2 contacts per instruction (SSE2, the x86-64 baseline)
   kAvx,     // 4 contacts per instruction (only where the CPU has AVX)
+  kAvx512Vl,  // the same 4 lanes with 32 vector registers (only where the CPU has AVX-512VL)
 };
 
 /// Whether this CPU can run `isa`.
 bool pair_isa_available(PairIsa isa);
 
-/// The widest instruction set this CPU can run (kAvx or kSse2): what the engine uses.
+/// The fastest instruction set this CPU can run (kAvx512Vl, kAvx or kSse2): what the engine
+/// uses unless told otherwise (World::set_pair_isa). All give the same bits.
 PairIsa best_pair_isa();
+
+/// "scalar", "sse2", "avx", "avx512vl".
+const char* pair_isa_name(PairIsa isa);
 
 /// Whether contacts of the material pair with constants `c` run in the lanes (EPSD rolling, no
 /// cohesion, no size-dependent rolling); the others take the scalar kernel.

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <stdexcept>
 #include <vector>
 
 #include "sim/pair_simd.hpp"
@@ -59,6 +60,13 @@ std::size_t World::add_particle(const Vec3& x, double radius, int material) {
 
 void World::set_wall_velocity(int wall, const Vec3& velocity) {
   state_.walls.at(wall).velocity = velocity;
+}
+
+void World::set_pair_isa(PairIsa isa) {
+  if (!pair_isa_available(isa))
+    throw std::invalid_argument(std::string("pair kernel: this CPU cannot run ") +
+                                pair_isa_name(isa));
+  pair_isa_ = isa;
 }
 
 void World::set_wall_enabled(int wall, bool enabled) {
@@ -256,7 +264,7 @@ void World::pair_forces() {
   Vec3* const reaction_torque = state_.reaction_torque.data();
   double* const overlap = state_.pair_overlap.data();
   std::uint8_t* const live = state_.pair_live.data();
-  const PairIsa isa = best_pair_isa();  // the same bits on any of them
+  const PairIsa isa = pair_isa_;  // the same bits with any of them
   constexpr std::size_t kBlock = 64;  // particles: about 100 touching pairs on a settled heap
   const std::size_t blocks = (n + kBlock - 1) / kBlock;
 #pragma omp parallel if (n > par_min)

@@ -25,6 +25,7 @@
 
 #include "sim/model.hpp"
 #include "sim/neighbor.hpp"
+#include "sim/pair_simd.hpp"
 #include "sim/particles.hpp"
 #include "sim/walls.hpp"
 
@@ -107,6 +108,11 @@ class World {
   void set_wall_velocity(int wall, const Vec3& velocity);
   void set_wall_enabled(int wall, bool enabled);
 
+  /// The instruction set of the pair kernel (default best_pair_isa(); every choice gives the
+  /// same bits). Throws std::invalid_argument if this CPU cannot run it.
+  void set_pair_isa(PairIsa isa);
+  PairIsa pair_isa() const { return pair_isa_; }
+
   /// Advances one time step.
   void step();
 
@@ -135,6 +141,7 @@ class World {
   Model model_;
   State state_;
   Profile profile_;
+  PairIsa pair_isa_ = best_pair_isa();
   // Largest squared displacement since the list was built, measured by kick_drift for the
   // update_neighbors that follows it; -1 if unknown (then update_neighbors measures) [m^2].
   double moved2_ = -1.0;

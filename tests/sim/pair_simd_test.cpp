@@ -204,20 +204,11 @@ void expect_same(const Results& a, const Results& b, const std::string& what) {
 std::vector<PairIsa> available_isas() {
   std::vector<PairIsa> isas{PairIsa::kScalar, PairIsa::kSse2};
   if (pair_isa_available(PairIsa::kAvx)) isas.push_back(PairIsa::kAvx);
+  if (pair_isa_available(PairIsa::kAvx512Vl)) isas.push_back(PairIsa::kAvx512Vl);
   return isas;
 }
 
-const char* isa_name(PairIsa isa) {
-  switch (isa) {
-    case PairIsa::kScalar:
-      return "scalar";
-    case PairIsa::kSse2:
-      return "sse2";
-    case PairIsa::kAvx:
-      return "avx";
-  }
-  return "?";
-}
+const char* isa_name(PairIsa isa) { return pair_isa_name(isa); }
 
 TEST(PairSimd, LanesGiveTheScalarKernelsBits) {
   const Model m = mixed_model();
