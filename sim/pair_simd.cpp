@@ -31,7 +31,8 @@ struct LaneArrays {
   double* torque_i = nullptr;          // (queued x 3) [N m]
 };
 
-LaneArrays lane_arrays(const Particles& p, const PairOutputs& out) {
+/// The particle arrays only (the pair outputs left null).
+LaneArrays lane_arrays(const Particles& p) {
   LaneArrays a;
   a.x = p.x.data()->data();
   a.v = p.v.data()->data();
@@ -39,6 +40,11 @@ LaneArrays lane_arrays(const Particles& p, const PairOutputs& out) {
   a.radius = p.radius.data();
   a.mass = p.mass.data();
   a.inertia = p.inertia.data();
+  return a;
+}
+
+LaneArrays lane_arrays(const Particles& p, const PairOutputs& out) {
+  LaneArrays a = lane_arrays(p);
   a.history = reinterpret_cast<double*>(out.history);
   a.slot = out.slot;
   a.reaction_force = out.reaction_force->data();
@@ -57,6 +63,47 @@ LaneArrays lane_arrays(const Particles& p, const PairOutputs& out) {
   out.reaction_torque[out.slot[k]].setZero();
   out.overlap[k] = 0.0;
   out.live[k] = 0;
+}
+
+/// The wall springs and contact results the lanes read and write (3 doubles per Vec3, 6 per
+/// ContactHistory; the history of particle i and wall w at 6 (i kMaxWalls + w)).
+struct WallLaneArrays {
+  const std::int32_t* particle = nullptr;
+  const std::int32_t* wall = nullptr;
+  const double* normal = nullptr;
+  const double* overlap = nullptr;
+  const double* wall_velocity = nullptr;
+  const ContactConstants* const* c = nullptr;
+  double* history = nullptr;
+  double* force = nullptr;
+  double* torque = nullptr;
+};
+
+static_assert(sizeof(WallHistory) == kMaxWalls * sizeof(ContactHistory),
+              "the lanes address the wall springs as one array of ContactHistory");
+
+WallLaneArrays wall_lane_arrays(Particles& p, WallContacts& wc) {
+  WallLaneArrays w;
+  w.particle = wc.particle.data();
+  w.wall = wc.wall.data();
+  w.normal = wc.normal.data()->data();
+  w.overlap = wc.overlap.data();
+  w.wall_velocity = wc.wall_velocity.data()->data();
+  w.c = wc.c.data();
+  w.history = reinterpret_cast<double*>(p.wall_history.data());
+  w.force = wc.force.data()->data();
+  w.torque = wc.torque.data()->data();
+  return w;
+}
+
+/// The scalar kernel on wall contact e.
+[[gnu::noinline]] void scalar_wall_contact(Particles& p, WallContacts& wc, std::size_t e,
+                                           double dt) {
+  const std::size_t i = static_cast<std::size_t>(wc.particle[e]);
+  const ContactOutput o = hertz_mindlin(*wc.c[e], wall_input(p, wc, e), dt,
+                                        p.wall_history[i][static_cast<std::size_t>(wc.wall[e])]);
+  wc.force[e] = o.force;
+  wc.torque[e] = o.torque_i;
 }
 
 /// The scalar kernel on queued contact q, with the stores of the pair loop.
@@ -292,6 +339,32 @@ void compute_queued_contacts(PairIsa isa, const Particles& p, const QueuedContac
         throw std::invalid_argument(
             "compute_queued_contacts: isa kAvx512Vl, but this CPU has no AVX-512VL");
       avx512vl::run_queue(lane_arrays(p, out), p, contacts, count, dt, out);
+      return;
+  }
+}
+
+void compute_wall_contacts(PairIsa isa, Particles& p, WallContacts& wc, double dt) {
+  const std::size_t count = wc.size();
+  wc.force.resize(count);
+  wc.torque.resize(count);
+  if (count == 0) return;
+  switch (isa) {
+    case PairIsa::kScalar:
+      for (std::size_t e = 0; e < count; ++e) scalar_wall_contact(p, wc, e, dt);
+      return;
+    case PairIsa::kSse2:
+      sse2::run_wall_queue(lane_arrays(p), wall_lane_arrays(p, wc), p, wc, count, dt);
+      return;
+    case PairIsa::kAvx:
+      if (!cpu_has_avx())
+        throw std::invalid_argument("compute_wall_contacts: isa kAvx, but this CPU has no AVX");
+      avx::run_wall_queue(lane_arrays(p), wall_lane_arrays(p, wc), p, wc, count, dt);
+      return;
+    case PairIsa::kAvx512Vl:
+      if (!cpu_has_avx512vl())
+        throw std::invalid_argument(
+            "compute_wall_contacts: isa kAvx512Vl, but this CPU has no AVX-512VL");
+      avx512vl::run_wall_queue(lane_arrays(p), wall_lane_arrays(p, wc), p, wc, count, dt);
       return;
   }
 }

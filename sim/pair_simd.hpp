@@ -21,6 +21,9 @@
 // scalar kernel at its place in the queue. Each lane reads its own pair's constants, so the two
 // lanes may hold different material pairs.
 //
+// Wall contacts (compute_wall_contacts) take the same kernel with the geometry of a wall
+// (wall_input): the caller finds the touching ones and their normals; the lanes do the rest.
+//
 // The force and torque of each contact on its first member are written per queued contact, not
 // summed here: the caller sums them per particle in list order, which keeps the sums, and so the
 // results, those of the one-contact-at-a-time loop.
@@ -28,6 +31,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "sim/contact.hpp"
 #include "sim/particles.hpp"
@@ -88,6 +92,58 @@ struct PairOutputs {
   Vec3* torque_i = nullptr;            // (queued) torque of each queued contact on i [N m]
 };
 
+/// Wall contacts queued for the kernel, as a struct of arrays: particle i touching wall w
+/// (wall_contact found the normal and the overlap).
+struct WallContacts {
+  std::vector<std::int32_t> particle;                 // i
+  std::vector<std::int32_t> wall;                     // w: springs in wall_history[i][w]
+  std::vector<Vec3> normal;                           // unit normal, wall to particle
+  std::vector<double> overlap;                        // > 0 [m]
+  std::vector<Vec3> wall_velocity;                    // [m/s]
+  std::vector<const ContactConstants*> c;             // (particle material, wall material)
+  std::vector<Vec3> force, torque;                    // results: on the particle [N], [N m]
+
+  std::size_t size() const { return particle.size(); }
+  void clear() {
+    particle.clear();
+    wall.clear();
+    normal.clear();
+    overlap.clear();
+    wall_velocity.clear();
+    c.clear();
+  }
+  void add(std::int32_t i, std::int32_t w, const Vec3& n, double delta, const Vec3& velocity,
+           const ContactConstants* constants) {
+    particle.push_back(i);
+    wall.push_back(w);
+    normal.push_back(n);
+    overlap.push_back(delta);
+    wall_velocity.push_back(velocity);
+    c.push_back(constants);
+  }
+};
+
+/// The contact input of wall contact e (the scalar reference the lanes reproduce): the wall is
+/// body j, neither turning nor with a lever arm; R* = r_i, m* = m_i.
+inline ContactInput wall_input(const Particles& p, const WallContacts& wc, std::size_t e) {
+  const std::size_t i = static_cast<std::size_t>(wc.particle[e]);
+  const double ri = p.radius[i];
+  ContactInput in;
+  in.n = wc.normal[e];
+  in.delta = wc.overlap[e];
+  in.r_eff = ri;
+  in.m_eff = p.mass[i];
+  in.i_roll = p.inertia[i] + p.mass[i] * ri * ri;
+  in.a_i = ri - in.delta;
+  in.a_j = 0.0;
+  in.w_i = p.w[i];
+  in.w_j = Vec3::Zero();
+  in.v_rel = p.v[i] - in.a_i * p.w[i].cross(in.n) - wc.wall_velocity[e];
+  in.contact_diameter = 2.0 * ri;  // the particle's diameter (size-dependent rolling)
+  in.overlap_ratio = in.delta / ri;
+  return in;
+}
+
 /// How compute_queued_contacts() runs the kernel.
 enum class PairIsa {
   kScalar,  // one contact at a time (pair_input + hertz_mindlin): the reference
@@ -95,6 +151,11 @@ enum class PairIsa {
   kAvx,     // 4 contacts per instruction (only where the CPU has AVX)
   kAvx512Vl,  // the same 4 lanes with 32 vector registers (only where the CPU has AVX-512VL)
 };
+
+/// Runs the kernel on the wall contacts `wc` with time step dt [s]: updates each contact's
+/// springs in p.wall_history and writes the force and torque on its particle to wc.force[e] and
+/// wc.torque[e]. Every isa gives the bits of wall_input + hertz_mindlin.
+void compute_wall_contacts(PairIsa isa, Particles& p, WallContacts& wc, double dt);
 
 /// Whether this CPU can run `isa`.
 bool pair_isa_available(PairIsa isa);

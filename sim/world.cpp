@@ -359,73 +359,68 @@ void World::gather_wall_forces(bool kick) {
   const Vec3* const reaction_torque = state_.reaction_torque.data();
   // Blocks of particles. In each, the reactions of the pairs the block's particles are second
   // in (stored contiguously by incoming slot) are added in one flat loop over the slots (a loop
-  // per particle, of 0 to 8 slots, would cost a mispredicted branch per particle); then each
-  // particle adds its wall contacts and takes the closing kick. Every particle's sum has the
-  // order of a loop over its own slots, whichever thread takes its block.
+  // per particle, of 0 to 8 slots, would cost a mispredicted branch per particle); then the
+  // wall contacts of the block's particles near an enabled wall are found, computed several at a
+  // time (sim/pair_simd.hpp) and added in particle and wall order; then each particle takes the
+  // closing kick. Every particle's sum has the order of a loop over its own slots and walls,
+  // whichever thread takes its block.
   constexpr std::size_t kBlock = 256;
   const std::size_t blocks = (n + kBlock - 1) / kBlock;
-#pragma omp parallel for schedule(static) if (n > par_min)
-  for (std::size_t b = 0; b < blocks; ++b) {
-    const std::size_t i0 = b * kBlock, i1 = std::min(n, i0 + kBlock);
-    Vec3 f[kBlock], tq[kBlock];
-    for (std::size_t i = i0; i < i1; ++i) {
-      f[i - i0] = p.force[i];
-      tq[i - i0] = p.torque[i];
-    }
-    for (std::int32_t q = in_start[i0]; q < in_start[i1]; ++q) {
-      const std::size_t i = static_cast<std::size_t>(in_particle[q]) - i0;
-      f[i] -= reaction_force[q];
-      tq[i] += reaction_torque[q];
-    }
-    // Wall contacts of the block's particles near an enabled wall (candidates in particle order).
-    for (std::size_t c = static_cast<std::size_t>(
-             std::lower_bound(cand.begin(), cand.end(), static_cast<std::int32_t>(i0)) -
-             cand.begin());
-         c < cand.size() && static_cast<std::size_t>(cand[c]) < i1; ++c) {
-      const std::size_t i = static_cast<std::size_t>(cand[c]);
-      for (std::int32_t q = state_.wall_cand_start[c]; q < state_.wall_cand_start[c + 1]; ++q)
-        add_wall_contact(i, state_.wall_cand_wall[q], table, dt, f[i - i0], tq[i - i0]);
-    }
-    for (std::size_t i = i0; i < i1; ++i) {
-      p.force[i] = f[i - i0];
-      p.torque[i] = tq[i - i0];
-      if (kick) {
-        p.v[i] += (h / p.mass[i]) * f[i - i0];
-        p.w[i] += (h / p.inertia[i]) * tq[i - i0];
+#pragma omp parallel if (n > par_min)
+  {
+    WallContacts wc;
+#pragma omp for schedule(static)
+    for (std::size_t b = 0; b < blocks; ++b) {
+      const std::size_t i0 = b * kBlock, i1 = std::min(n, i0 + kBlock);
+      Vec3 f[kBlock], tq[kBlock];
+      for (std::size_t i = i0; i < i1; ++i) {
+        f[i - i0] = p.force[i];
+        tq[i - i0] = p.torque[i];
+      }
+      for (std::int32_t q = in_start[i0]; q < in_start[i1]; ++q) {
+        const std::size_t i = static_cast<std::size_t>(in_particle[q]) - i0;
+        f[i] -= reaction_force[q];
+        tq[i] += reaction_torque[q];
+      }
+      // Wall contacts (candidates in particle order): a wall a candidate does not touch has its
+      // springs cleared.
+      wc.clear();
+      for (std::size_t c = static_cast<std::size_t>(
+               std::lower_bound(cand.begin(), cand.end(), static_cast<std::int32_t>(i0)) -
+               cand.begin());
+           c < cand.size() && static_cast<std::size_t>(cand[c]) < i1; ++c) {
+        const std::size_t i = static_cast<std::size_t>(cand[c]);
+        for (std::int32_t q = state_.wall_cand_start[c]; q < state_.wall_cand_start[c + 1]; ++q) {
+          const int w = state_.wall_cand_wall[q];
+          const WallSpec& spec = model_.walls[w];
+          const WallState& ws = state_.walls[w];
+          Vec3 normal;
+          double delta;
+          if (!wall_contact(spec, ws.offset, p.x[i], p.radius[i], &normal, &delta)) {
+            p.wall_history[i][w] = ContactHistory{};
+            continue;
+          }
+          wc.add(static_cast<std::int32_t>(i), w, normal, delta, ws.velocity,
+                 &table.c(p.material[i], spec.material));
+        }
+      }
+      compute_wall_contacts(pair_isa_, p, wc, dt);
+      for (std::size_t e = 0; e < wc.size(); ++e) {
+        const std::size_t i = static_cast<std::size_t>(wc.particle[e]) - i0;
+        f[i] += wc.force[e];
+        tq[i] += wc.torque[e];
+      }
+      for (std::size_t i = i0; i < i1; ++i) {
+        p.force[i] = f[i - i0];
+        p.torque[i] = tq[i - i0];
+        if (kick) {
+          p.v[i] += (h / p.mass[i]) * f[i - i0];
+          p.w[i] += (h / p.inertia[i]) * tq[i - i0];
+        }
       }
     }
   }
   state_.forces_valid = true;
-}
-
-void World::add_wall_contact(std::size_t i, int w, const PairTable& table, double dt, Vec3& f,
-                             Vec3& tq) {
-  Particles& p = state_.particles;
-  const WallSpec& spec = model_.walls[w];
-  const WallState& ws = state_.walls[w];
-  ContactHistory& h = p.wall_history[i][w];
-  Vec3 normal;
-  double delta;
-  if (!wall_contact(spec, ws.offset, p.x[i], p.radius[i], &normal, &delta)) {
-    h = ContactHistory{};
-    return;
-  }
-  const double ri = p.radius[i];
-  ContactInput in;
-  in.n = normal;
-  in.delta = delta;
-  in.r_eff = ri;
-  in.m_eff = p.mass[i];
-  in.i_roll = p.inertia[i] + p.mass[i] * ri * ri;
-  in.a_i = ri - delta;
-  in.a_j = 0.0;
-  in.w_i = p.w[i];
-  in.w_j = Vec3::Zero();
-  in.v_rel = p.v[i] - in.a_i * p.w[i].cross(normal) - ws.velocity;
-  in.contact_diameter = 2.0 * ri;  // the particle's diameter (size-dependent rolling)
-  const ContactOutput out = hertz_mindlin(table.c(p.material[i], spec.material), in, dt, h);
-  f += out.force;
-  tq += out.torque_i;
 }
 
 Diagnostics World::diagnose() const {

@@ -11,8 +11,9 @@
 //   5. gather_wall_forces, one pass over the particles (each particle's data read once):
 //                       each particle adds the stored reactions of the pairs it is second in
 //                       (contiguous, in a fixed order: deterministic), then its wall contacts
-//                       (the particles near an enabled wall, listed at rebuild), then takes the
-//                       closing kick v += dt/2 F/m, w += dt/2 T/I
+//                       (the particles near an enabled wall, listed at rebuild; the kernel in
+//                       lanes too, compute_wall_contacts), then takes the closing kick
+//                       v += dt/2 F/m, w += dt/2 T/I
 // (diagnose(): energy, overlap, NaN and escape checks, called by the runner every few steps.)
 // Each phase is timed into Profile, which the benchmark prints. No phase writes memory another
 // thread writes, and no floating-point sum depends on the thread count, so a run is
@@ -134,8 +135,6 @@ class World {
   void build_wall_candidates();
   void pair_forces();
   void gather_wall_forces(bool kick);
-  void add_wall_contact(std::size_t i, int wall, const PairTable& table, double dt, Vec3& force,
-                        Vec3& torque);
   void compute_forces();  // phases 3-5 without the kick (also used once before the first step)
 
   Model model_;

@@ -286,6 +286,64 @@ TEST(PairSimd, AllEligibleHeapLikeContactsOverManySteps) {
   }
 }
 
+TEST(PairSimd, WallContactsGiveTheScalarKernelsBits) {
+  // Random contacts of spheres with walls (several walls per sphere, every material pair of the
+  // mixed model, moving walls, springs from zero to sliding and at the rolling cap): every ISA
+  // must give the forces, torques and wall springs of wall_input + hertz_mindlin, bit for bit.
+  const Model m = mixed_model();
+  Rng rng(77);
+  Particles p;
+  WallContacts wc;
+  for (int b = 0; b < 1500; ++b) {
+    const int mi = static_cast<int>(rng.below(4));
+    const double r = rng.uniform(0.5e-3, 1e-3);
+    const std::size_t i = p.add(Vec3(rng.uniform(0, 0.01), rng.uniform(0, 0.01), r), r,
+                                m.materials[mi].density, mi, b);
+    p.v[i] = Vec3(rng.normal(0, 0.05), rng.normal(0, 0.05), rng.normal(0, 0.05));
+    p.w[i] = Vec3(rng.normal(0, 50), rng.normal(0, 50), rng.normal(0, 50));
+    for (int w = 0; w < kMaxWalls; ++w) {
+      if (rng.uniform() > 0.3) continue;
+      ContactHistory& h = p.wall_history[i][w];
+      if (rng.uniform() > 0.2) {  // else zero springs: first touch
+        h.tangential = log_uniform(rng, 1e-10, 1e-4) * random_unit(rng);
+        h.rolling = log_uniform(rng, 1e-11, 1e-4) * random_unit(rng);
+      }
+      const Vec3 velocity =
+          rng.uniform() < 0.5 ? Vec3::Zero()
+                              : Vec3(rng.normal(0, 0.01), rng.normal(0, 0.01), rng.normal(0, 0.01));
+      wc.add(static_cast<std::int32_t>(i), w, random_unit(rng), r * log_uniform(rng, 1e-7, 2e-2),
+             velocity, &m.table.c(mi, static_cast<int>(rng.below(4))));
+    }
+  }
+  ASSERT_GT(wc.size(), 2000u);
+  Particles ref = p;
+  WallContacts ref_wc = wc;
+  ref_wc.force.resize(wc.size());
+  ref_wc.torque.resize(wc.size());
+  int lanes = 0;
+  for (std::size_t e = 0; e < wc.size(); ++e) {
+    const ContactOutput out =
+        hertz_mindlin(*wc.c[e], wall_input(ref, wc, e), kDt,
+                      ref.wall_history[static_cast<std::size_t>(wc.particle[e])][wc.wall[e]]);
+    ref_wc.force[e] = out.force;
+    ref_wc.torque[e] = out.torque_i;
+    lanes += lanes_eligible(*wc.c[e]) ? 1 : 0;
+  }
+  EXPECT_GT(lanes, 500);
+  EXPECT_LT(lanes, static_cast<int>(wc.size()) - 500);
+  for (PairIsa isa : available_isas()) {
+    Particles q = p;
+    WallContacts r = wc;
+    compute_wall_contacts(isa, q, r, kDt);
+    EXPECT_TRUE(same_bits(r.force, ref_wc.force)) << isa_name(isa) << ": forces";
+    EXPECT_TRUE(same_bits(r.torque, ref_wc.torque)) << isa_name(isa) << ": torques";
+    EXPECT_EQ(std::memcmp(q.wall_history.data(), ref.wall_history.data(),
+                          p.size() * sizeof(WallHistory)),
+              0)
+        << isa_name(isa) << ": wall springs";
+  }
+}
+
 TEST(PairSimd, QueuedPairsThatNoLongerTouchAreCleared) {
   // Live pairs go to the kernel untested: the ones that separated since the last step (here a
   // third, among them pairs at contact distance to within a rounding, decided as the distance
