@@ -265,7 +265,7 @@ void World::pair_forces() {
   double* const overlap = state_.pair_overlap.data();
   std::uint8_t* const live = state_.pair_live.data();
   const PairIsa isa = pair_isa_;  // the same bits with any of them
-  constexpr std::size_t kBlock = 64;  // particles: about 100 touching pairs on a settled heap
+  constexpr std::size_t kBlock = 256;  // particles: about 400 touching pairs on a settled heap
   const std::size_t blocks = (n + kBlock - 1) / kBlock;
 #pragma omp parallel if (n > par_min)
   {
