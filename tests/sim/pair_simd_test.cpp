@@ -169,19 +169,21 @@ bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
 }
 
-/// One step of the reference, the scalar kernel, one contact after the other, on the first
-/// `count` contacts, carrying the springs in `r`.
+/// The reference, the scalar kernel, on queued contact q, carrying its springs in `r`.
+void scalar_contact_reference(const Scene& s, std::size_t q, Results& r) {
+  const QueuedContact& e = s.contacts[q];
+  const ContactInput in = pair_input(s.p, *e.c, e.i, e.j);
+  const ContactOutput out = hertz_mindlin(*e.c, in, kDt, r.history[e.k]);
+  r.force_i[q] = out.force;
+  r.torque_i[q] = out.torque_i;
+  r.reaction_force[s.slot[e.k]] = out.force;
+  r.reaction_torque[s.slot[e.k]] = out.torque_j;
+  r.overlap[e.k] = in.overlap_ratio;
+}
+
+/// One step of the reference, one contact after the other, on the first `count` contacts.
 void scalar_step(const Scene& s, std::size_t count, Results& r) {
-  for (std::size_t q = 0; q < count; ++q) {
-    const QueuedContact& e = s.contacts[q];
-    const ContactInput in = pair_input(s.p, *e.c, e.i, e.j);
-    const ContactOutput out = hertz_mindlin(*e.c, in, kDt, r.history[e.k]);
-    r.force_i[q] = out.force;
-    r.torque_i[q] = out.torque_i;
-    r.reaction_force[s.slot[e.k]] = out.force;
-    r.reaction_torque[s.slot[e.k]] = out.torque_j;
-    r.overlap[e.k] = in.overlap_ratio;
-  }
+  for (std::size_t q = 0; q < count; ++q) scalar_contact_reference(s, q, r);
 }
 
 /// The reference from fresh springs.
@@ -380,13 +382,7 @@ TEST(PairSimd, QueuedPairsThatNoLongerTouchAreCleared) {
       ref.live[e.k] = 0;
       continue;
     }
-    const ContactInput in = pair_input(s.p, *e.c, e.i, e.j);
-    const ContactOutput out = hertz_mindlin(*e.c, in, kDt, ref.history[e.k]);
-    ref.force_i[q] = out.force;
-    ref.torque_i[q] = out.torque_i;
-    ref.reaction_force[s.slot[e.k]] = out.force;
-    ref.reaction_torque[s.slot[e.k]] = out.torque_j;
-    ref.overlap[e.k] = in.overlap_ratio;
+    scalar_contact_reference(s, q, ref);
   }
   EXPECT_GT(separated, 250);
   EXPECT_LT(separated, 450);
