@@ -212,6 +212,15 @@ std::vector<PairIsa> available_isas() {
 
 const char* isa_name(PairIsa isa) { return pair_isa_name(isa); }
 
+/// Runs every ISA on all of s's contacts from fresh results and compares with `ref`.
+void expect_every_isa_gives(const Scene& s, const Results& ref) {
+  for (PairIsa isa : available_isas()) {
+    Results r(s);
+    compute_queued_contacts(isa, s.p, s.contacts.data(), s.contacts.size(), kDt, r.outputs(s));
+    expect_same(ref, r, isa_name(isa));
+  }
+}
+
 TEST(PairSimd, LanesGiveTheScalarKernelsBits) {
   const Model m = mixed_model();
   const Scene s = random_scene(m, 4003, 20261122);
@@ -246,11 +255,7 @@ TEST(PairSimd, LanesGiveTheScalarKernelsBits) {
   EXPECT_GT(lanes, 1000);
   EXPECT_GT(scalar, 1000);
 
-  for (PairIsa isa : available_isas()) {
-    Results r(s);
-    compute_queued_contacts(isa, s.p, s.contacts.data(), s.contacts.size(), kDt, r.outputs(s));
-    expect_same(ref, r, isa_name(isa));
-  }
+  expect_every_isa_gives(s, ref);
 }
 
 TEST(PairSimd, ShortQueuesFillPartOfTheLanesAndWriteNothingElse) {
@@ -386,11 +391,7 @@ TEST(PairSimd, QueuedPairsThatNoLongerTouchAreCleared) {
   }
   EXPECT_GT(separated, 250);
   EXPECT_LT(separated, 450);
-  for (PairIsa isa : available_isas()) {
-    Results r(s);
-    compute_queued_contacts(isa, s.p, s.contacts.data(), s.contacts.size(), kDt, r.outputs(s));
-    expect_same(ref, r, isa_name(isa));
-  }
+  expect_every_isa_gives(s, ref);
 }
 
 TEST(PairSimd, DistanceTestQueuesTheTouchingPairsInListOrder) {
