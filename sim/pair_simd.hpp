@@ -140,7 +140,6 @@ inline ContactInput wall_input(const Particles& p, const WallContacts& wc, std::
   in.w_j = Vec3::Zero();
   in.v_rel = p.v[i] - in.a_i * p.w[i].cross(in.n) - wc.wall_velocity[e];
   in.contact_diameter = 2.0 * ri;  // the particle's diameter (size-dependent rolling)
-  in.overlap_ratio = in.delta / ri;
   return in;
 }
 
