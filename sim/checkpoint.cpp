@@ -134,7 +134,7 @@ void read_checkpoint(World& world, const std::string& path) {
   if (nl.in_pairs.size() != np) r.fail("has an inconsistent neighbor list");
   for (std::int32_t k : nl.in_pairs)
     if (k < 0 || static_cast<std::size_t>(k) >= np) r.fail("has a pair index out of range");
-  index_incoming_slots(nl);
+  derive_list_indices(nl);
   compute_clearances(nl, s.particles);
   s.reaction_force.assign(np, Vec3::Zero());
   s.reaction_torque.assign(np, Vec3::Zero());

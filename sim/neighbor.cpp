@@ -61,15 +61,6 @@ Grid make_grid(const Particles& p, double skin) {
 
 }  // namespace
 
-bool NeighborList::needs_rebuild(const Particles& p) const {
-  const std::size_t n = p.size();
-  if (x_at_build.size() != n || start.size() != n + 1) return true;
-  double max2 = 0.0;
-#pragma omp parallel for reduction(max : max2) schedule(static) if (n > parallel_min)
-  for (std::size_t i = 0; i < n; ++i) max2 = std::max(max2, (p.x[i] - x_at_build[i]).squaredNorm());
-  return 4.0 * max2 > skin * skin;
-}
-
 void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) {
   const std::size_t n = p.size();
   ++list.builds;
@@ -207,12 +198,12 @@ void build_incoming(NeighborList& list, std::size_t n) {
   std::vector<std::int32_t> fill(list.in_start.begin(), list.in_start.end() - 1);
   for (std::size_t k = 0; k < list.second.size(); ++k)
     list.in_pairs[fill[list.second[k]]++] = static_cast<std::int32_t>(k);
-  index_incoming_slots(list);
+  derive_list_indices(list);
 }
 
 }  // namespace
 
-void index_incoming_slots(NeighborList& list) {
+void derive_list_indices(NeighborList& list) {
   list.in_slot.resize(list.in_pairs.size());
   for (std::size_t q = 0; q < list.in_pairs.size(); ++q)
     list.in_slot[list.in_pairs[q]] = static_cast<std::int32_t>(q);

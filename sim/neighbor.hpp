@@ -49,17 +49,20 @@ struct NeighborList {
   std::size_t parallel_min = 2000;  // fewer particles build on one thread
 
   std::size_t pairs() const { return second.size(); }
-  /// True when the list is missing or the displacement criterion is met.
-  bool needs_rebuild(const Particles& p) const;
+  /// True if the list was built for these n particles (else it must be built).
+  bool built_for(std::size_t n) const { return x_at_build.size() == n && start.size() == n + 1; }
+  /// The displacement criterion: true once some particle has moved more than half the skin
+  /// since the build (max_moved2: the largest squared displacement [m^2]).
+  bool needs_rebuild(double max_moved2) const { return 4.0 * max_moved2 > skin * skin; }
 };
 
 /// Rebuilds the list; sorts `p` by cell first when `sort_particles` is set. Histories of pairs
 /// that persist are kept.
 void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles);
 
-/// Derives list.in_slot (in_slot[in_pairs[q]] = q), list.in_particle and list.first from
-/// list.in_pairs, list.in_start and list.start.
-void index_incoming_slots(NeighborList& list);
+/// Derives the list's index arrays: in_slot (in_slot[in_pairs[q]] = q), in_particle and first,
+/// from in_pairs, in_start and start.
+void derive_list_indices(NeighborList& list);
 
 /// Derives list.clearance2 from list.x_at_build and the radii of `p`.
 void compute_clearances(NeighborList& list, const Particles& p);

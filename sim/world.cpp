@@ -134,9 +134,10 @@ void World::update_neighbors() {
   Particles& p = state_.particles;
   NeighborList& nl = state_.neighbors;
   const std::size_t n = p.size();
+  const bool built = nl.built_for(n);
   double moved2 = moved2_;
   moved2_ = -1.0;  // used once: the next call measures again unless kick_drift has
-  if (moved2 < 0.0 && nl.x_at_build.size() == n) {  // positions may have been set from outside
+  if (built && moved2 < 0.0) {  // not measured by kick_drift: positions may have been set
     state_.moved2.resize(n);
     moved2 = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
@@ -144,10 +145,7 @@ void World::update_neighbors() {
       moved2 = std::max(moved2, state_.moved2[i]);
     }
   }
-  const bool rebuild = moved2 >= 0.0 && nl.start.size() == n + 1
-                           ? 4.0 * moved2 > nl.skin * nl.skin  // NeighborList::needs_rebuild
-                           : nl.needs_rebuild(p);
-  if (!rebuild) {
+  if (built && !nl.needs_rebuild(moved2)) {
     if (!wall_candidates_current()) build_wall_candidates();
     return;
   }
@@ -227,7 +225,7 @@ void World::pair_forces() {
       nl.in_slot.size() != np || nl.in_particle.size() != np || nl.first.size() != np ||
       nl.clearance2.size() != np) {
     // A state assembled elsewhere (a restored checkpoint): nothing is known to be zero.
-    index_incoming_slots(nl);
+    derive_list_indices(nl);
     compute_clearances(nl, p);
     state_.reaction_force.assign(np, Vec3::Zero());
     state_.reaction_torque.assign(np, Vec3::Zero());
