@@ -1,18 +1,10 @@
 #include "sim/neighbor.hpp"
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
-#include <unordered_map>
 
 namespace reposetwin::sim {
 namespace {
-
-std::uint64_t pair_key(std::int64_t id_a, std::int64_t id_b) {
-  assert(id_a >= 0 && id_a < (std::int64_t{1} << 32) && id_b >= 0 &&
-         id_b < (std::int64_t{1} << 32));
-  return (static_cast<std::uint64_t>(id_a) << 32) | static_cast<std::uint64_t>(id_b);
-}
 
 void build_incoming(NeighborList& list, std::size_t n);
 
@@ -64,16 +56,15 @@ Grid make_grid(const Particles& p, double skin) {
 void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) {
   const std::size_t n = p.size();
   ++list.builds;
-  // 1. Remember the histories of the contacts that are active now, by stable ids.
-  std::unordered_map<std::uint64_t, ContactHistory> old;
-  if (list.start.size() == n + 1) {
-    for (std::size_t i = 0; i < n; ++i) {
-      for (std::int32_t k = list.start[i]; k < list.start[i + 1]; ++k) {
-        if (is_active(list.history[k])) old.emplace(pair_key(p.id[i], p.id[list.second[k]]),
-                                                    list.history[k]);
-      }
-    }
-  }
+  // 1. Keep the old list: the histories of the pairs that persist are carried over from it
+  // (step 4), found by their particles' old indices.
+  const bool carry = list.start.size() == n + 1;
+  list.old_start.swap(list.start);
+  list.old_second.swap(list.second);
+  list.old_history.swap(list.history);
+  const HugeVector<std::int32_t>& old_start = list.old_start;
+  const HugeVector<std::int32_t>& old_second = list.old_second;
+  const HugeVector<ContactHistory>& old_history = list.old_history;
   list.start.assign(n + 1, 0);
   list.second.clear();
   list.history.clear();
@@ -102,62 +93,90 @@ void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) 
     std::vector<std::int32_t> fill(cell_start.begin(), cell_start.end() - 1);
     for (std::size_t i = 0; i < n; ++i) order[fill[cell[i]]++] = i;
   }
+  // from_old[i]: the index particle i had before this build.
+  std::vector<std::size_t> from_old(n);
   if (sort_particles) {
     p.permute(order);
     list.x_at_build.assign(p.x.begin(), p.x.end());
+    from_old.swap(order);
+    order.resize(n);
     for (std::size_t k = 0; k < n; ++k) order[k] = k;
+  } else {
+    for (std::size_t k = 0; k < n; ++k) from_old[k] = k;
   }
   // order[k] = particle index of the k-th entry in cell order.
 
   // 3. Each particle collects its partners: no larger than itself, within 2 r_i + skin.
   const double skin = list.skin;
   auto for_each_partner = [&](std::size_t i, auto&& emit) {
-    int ix, iy, iz;
-    g.cell_of(p.x[i], &ix, &iy, &iz);
+    const Vec3 xi = p.x[i];
     const double ri = p.radius[i];
-    const int reach = static_cast<int>(std::ceil((2.0 * ri + skin) / g.h));
-    for (int z = std::max(0, iz - reach); z <= std::min(g.nz - 1, iz + reach); ++z) {
-      for (int y = std::max(0, iy - reach); y <= std::min(g.ny - 1, iy + reach); ++y) {
+    // The cells within 2 r_i + skin of x_i along each axis (the cells' lower edges are at
+    // origin + c h; cell_of truncates, which is floor for coordinates above the origin).
+    const double reach = 2.0 * ri + skin;
+    int lo[3], hi[3];
+    const int cells[3] = {g.nx, g.ny, g.nz};
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::clamp(static_cast<int>(std::floor((xi[a] - reach - g.origin[a]) / g.h)), 0,
+                         cells[a] - 1);
+      hi[a] = std::clamp(static_cast<int>(std::floor((xi[a] + reach - g.origin[a]) / g.h)), 0,
+                         cells[a] - 1);
+    }
+    for (int z = lo[2]; z <= hi[2]; ++z) {
+      for (int y = lo[1]; y <= hi[1]; ++y) {
         const int row = (z * g.ny + y) * g.nx;
-        const int c0 = row + std::max(0, ix - reach);
-        const int c1 = row + std::min(g.nx - 1, ix + reach);
-        for (std::int32_t k = cell_start[c0]; k < cell_start[c1 + 1]; ++k) {
+        for (std::int32_t k = cell_start[row + lo[0]]; k < cell_start[row + hi[0] + 1]; ++k) {
           const std::size_t j = order[k];
           const double rj = p.radius[j];
-          if (j == i || rj > ri || (rj == ri && j < i)) continue;
           const double cut = ri + rj + skin;
-          if ((p.x[i] - p.x[j]).squaredNorm() < cut * cut) emit(static_cast<std::int32_t>(j));
+          // Partners no larger than i (ties: the higher index); one branch, rarely taken.
+          const bool smaller = (rj < ri) | ((rj == ri) & (j > i));
+          if (smaller & ((xi - p.x[j]).squaredNorm() < cut * cut))
+            emit(static_cast<std::int32_t>(j));
         }
       }
     }
   };
-  std::vector<std::int32_t> count(n, 0);
-#pragma omp parallel for schedule(dynamic, 256) if (n > list.parallel_min)
-  for (std::size_t i = 0; i < n; ++i) {
-    std::int32_t c = 0;
-    for_each_partner(i, [&](std::int32_t) { ++c; });
-    count[i] = c;
+  // One search per particle, in chunks of consecutive particles, each chunk's partners
+  // collected apart and then copied into the CSR in particle order (whichever thread searched).
+  constexpr std::size_t kChunk = 256;
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  std::vector<std::vector<std::int32_t>> found(chunks);
+#pragma omp parallel for schedule(dynamic, 1) if (n > list.parallel_min)
+  for (std::size_t c = 0; c < chunks; ++c) {
+    std::vector<std::int32_t>& out = found[c];
+    for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+      const std::size_t from = out.size();
+      for_each_partner(i, [&](std::int32_t j) { out.push_back(j); });
+      std::sort(out.begin() + static_cast<std::ptrdiff_t>(from), out.end());
+      list.start[i + 1] = static_cast<std::int32_t>(out.size() - from);
+    }
   }
-  for (std::size_t i = 0; i < n; ++i) list.start[i + 1] = list.start[i] + count[i];
+  for (std::size_t i = 0; i < n; ++i) list.start[i + 1] += list.start[i];
   list.second.resize(list.start[n]);
   list.history.assign(list.start[n], ContactHistory{});
-#pragma omp parallel for schedule(dynamic, 256) if (n > list.parallel_min)
-  for (std::size_t i = 0; i < n; ++i) {
-    std::int32_t k = list.start[i];
-    for_each_partner(i, [&](std::int32_t j) { list.second[k++] = j; });
-    std::sort(list.second.begin() + list.start[i], list.second.begin() + list.start[i + 1]);
-  }
+#pragma omp parallel for schedule(static) if (n > list.parallel_min)
+  for (std::size_t c = 0; c < chunks; ++c)
+    std::copy(found[c].begin(), found[c].end(), list.second.begin() + list.start[c * kChunk]);
 
-  // 4. Carry histories over (a pair seen the other way round has its springs negated).
-  if (!old.empty()) {
+  // 4. Carry histories over from the old list (a pair listed the other way round there has its
+  // springs negated). Only springs that are not zero are copied.
+  if (carry) {
+    // The position of old pair (a, b) in the old list, or -1.
+    auto old_pair = [&](std::size_t a, std::size_t b) -> std::int32_t {
+      for (std::int32_t k = old_start[a]; k < old_start[a + 1]; ++k)
+        if (static_cast<std::size_t>(old_second[k]) == b) return k;
+      return -1;
+    };
+#pragma omp parallel for schedule(dynamic, 256) if (n > list.parallel_min)
     for (std::size_t i = 0; i < n; ++i) {
       for (std::int32_t k = list.start[i]; k < list.start[i + 1]; ++k) {
-        const std::int64_t a = p.id[i], b = p.id[list.second[k]];
-        if (auto it = old.find(pair_key(a, b)); it != old.end()) {
-          list.history[k] = it->second;
-        } else if (auto jt = old.find(pair_key(b, a)); jt != old.end()) {
-          list.history[k].tangential = -jt->second.tangential;
-          list.history[k].rolling = -jt->second.rolling;
+        const std::size_t a = from_old[i], b = from_old[static_cast<std::size_t>(list.second[k])];
+        if (const std::int32_t o = old_pair(a, b); o >= 0 && is_active(old_history[o])) {
+          list.history[k] = old_history[o];
+        } else if (const std::int32_t r = old_pair(b, a); r >= 0 && is_active(old_history[r])) {
+          list.history[k].tangential = -old_history[r].tangential;
+          list.history[k].rolling = -old_history[r].rolling;
         }
       }
     }
@@ -175,6 +194,7 @@ void compute_clearances(NeighborList& list, const Particles& p) {
   // Half the gap, less one part in a million: the margin covers the roundings of the distances
   // and displacements compared (a few parts in 1e16), so a skipped pair never touches.
   constexpr double kShrink = 0.5 * (1.0 - 1e-6);
+#pragma omp parallel for schedule(static) if (n > list.parallel_min)
   for (std::size_t i = 0; i < n; ++i) {
     for (std::int32_t k = list.start[i]; k < list.start[i + 1]; ++k) {
       const std::size_t j = static_cast<std::size_t>(list.second[k]);

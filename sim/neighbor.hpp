@@ -12,8 +12,9 @@
 //    same place) and the gather phase sums each particle's pairs in a fixed order, so forces are
 //    bit-identical whatever the number of threads.
 //  - Rebuild when the largest displacement since the last build exceeds half the skin. A rebuild
-//    sorts the particles by cell (memory locality) and carries every contact's history over by the
-//    particles' stable ids, so springs survive rebuilds and reorderings.
+//    sorts the particles by cell (memory locality) and carries every contact's history over from
+//    the old list (found by the particles' indices before the sort), so springs survive rebuilds
+//    and reorderings.
 #pragma once
 
 #include <cstdint>
@@ -45,6 +46,10 @@ struct NeighborList {
   // the centres are still farther apart than r_i + r_j. Derived from x_at_build and the radii
   // (compute_clearances), not saved in checkpoints.
   HugeVector<double> clearance2;
+  // (scratch) the list before the last build: read by the build to carry the springs over,
+  // and kept so that the next build reuses its storage (fresh memory costs page faults).
+  HugeVector<std::int32_t> old_start, old_second;
+  HugeVector<ContactHistory> old_history;
   std::int64_t builds = 0;          // number of rebuilds so far
   std::size_t parallel_min = 2000;  // fewer particles build on one thread
 

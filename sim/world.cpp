@@ -361,13 +361,14 @@ void World::gather_wall_forces(bool kick) {
   // wall contacts of the block's particles near an enabled wall are found, computed several at a
   // time (sim/pair_simd.hpp) and added in particle and wall order; then each particle takes the
   // closing kick. Every particle's sum has the order of a loop over its own slots and walls,
-  // whichever thread takes its block.
+  // whichever thread takes its block. The blocks are dealt out a few at a time, not in halves:
+  // the wall contacts gather in some of them (the plate's, all in the lowest layer).
   constexpr std::size_t kBlock = 256;
   const std::size_t blocks = (n + kBlock - 1) / kBlock;
 #pragma omp parallel if (n > par_min)
   {
     WallContacts wc;
-#pragma omp for schedule(static)
+#pragma omp for schedule(dynamic, 4)
     for (std::size_t b = 0; b < blocks; ++b) {
       const std::size_t i0 = b * kBlock, i1 = std::min(n, i0 + kBlock);
       Vec3 f[kBlock], tq[kBlock];
