@@ -61,6 +61,51 @@ TEST_P(NeighborOracle, PairsEqualBruteForce) {
 
 INSTANTIATE_TEST_SUITE_P(Sorted, NeighborOracle, ::testing::Values(false, true));
 
+// Springs survive a rebuild that reorders the particles: each pair keeps its springs, keyed by
+// the stable ids of its particles (the oracle), negated when the pair is listed the other way
+// round after the sort. Half the particles share one radius, so the index tie-break flips the
+// order of many pairs; a pair with zero springs stays zero.
+TEST(NeighborList, RebuildCarriesSpringsOverByParticle) {
+  Particles p = random_packing(3000, 0.25e-3, 2e-3, 0.03, 7);
+  for (std::size_t i = 0; i < p.size(); i += 2) p.radius[i] = 0.6e-3;
+  NeighborList nl;
+  nl.skin = 0.2e-3;
+  build_neighbor_list(p, nl, /*sort_particles=*/false);  // random order
+  Rng rng(11);
+  std::map<std::pair<std::int64_t, std::int64_t>, ContactHistory> want;  // (first id, second id)
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (std::int32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
+      ContactHistory h;
+      if (rng.uniform() < 0.8) {
+        h.tangential = Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * 1e-6;
+        h.rolling = Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * 1e-7;
+      }
+      nl.history[k] = h;
+      want[{p.id[i], p.id[nl.second[k]]}] = h;
+    }
+  build_neighbor_list(p, nl, /*sort_particles=*/true);
+  std::size_t same = 0, flipped = 0;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (std::int32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
+      const std::int64_t a = p.id[i], b = p.id[nl.second[k]];
+      const ContactHistory& got = nl.history[k];
+      if (auto it = want.find({a, b}); it != want.end()) {
+        EXPECT_EQ(got.tangential, it->second.tangential);
+        EXPECT_EQ(got.rolling, it->second.rolling);
+        ++same;
+      } else if (auto jt = want.find({b, a}); jt != want.end()) {
+        EXPECT_EQ(got.tangential, (-jt->second.tangential).eval());
+        EXPECT_EQ(got.rolling, (-jt->second.rolling).eval());
+        ++flipped;
+      } else {
+        ADD_FAILURE() << "pair (" << a << ", " << b << ") was not listed before the rebuild";
+      }
+    }
+  EXPECT_EQ(same + flipped, want.size());  // the particles did not move: the same pairs
+  EXPECT_GT(flipped, 100u);                // the tie-break flipped some (216)
+  EXPECT_GT(same, 500u);
+}
+
 TEST(NeighborForces, EqualADirectPairLoop) {
   // Random overlapping packing with random velocities: the world's forces (neighbor list,
   // per-pair results, gather) equal a direct O(N^2) loop over the contact kernel.
