@@ -185,25 +185,51 @@ inline double hertz_normal(const ContactConstants& c, const ContactStiffness& k,
   return c.hertz_factor * k.sqrt_rd * delta - k.gamma_n * v_n;  // v_n < 0 on approach: repels
 }
 
-/// Rotates an incremental spring into the tangent plane of the current normal n, keeping its
-/// length (one square root: the ratio of the squared lengths before and after).
-inline void rotate_spring(const Vec3& n, Vec3& spring) {
-  const double len2 = spring.squaredNorm();
+/// Largest x = (s.n)^2 / |s|^2 for which rotate_springs takes the series of the rescale factor.
+inline constexpr double kRotateSeriesMax = 1e-6;
+
+/// One spring of rotate_springs: s <- (s - sn n) f, with f = |s| / |s - sn n| taken from its
+/// series in x while x <= kRotateSeriesMax and `series_ok`, exactly otherwise.
+inline void rotate_spring(const Vec3& n, double sn, double len2, double x, bool series_ok,
+                          Vec3& spring) {
   if (len2 > 0.0) {
-    spring -= spring.dot(n) * n;
-    const double proj2 = spring.squaredNorm();
-    spring *= proj2 > 0.0 ? std::sqrt(len2 / proj2) : 0.0;
+    spring -= sn * n;
+    double f;
+    if (x <= kRotateSeriesMax && series_ok) {
+      f = (0.375 * x + 0.5) * x + 1.0;
+    } else {
+      const double proj2 = spring.squaredNorm();
+      f = proj2 > 0.0 ? std::sqrt(len2 / proj2) : 0.0;
+    }
+    spring *= f;
   }
 }
 
+/// Rotates both incremental springs of a contact (tangential s and rolling M) into the tangent
+/// plane of the current normal n, keeping their lengths (as LAMMPS' granular "rotate and
+/// rescale"): s <- (s - (s.n) n) f, f = |s| / |s - (s.n) n| = 1 / sqrt(1 - x), where
+/// x = (s.n)^2 / |s|^2 is the squared sine of the angle the normal turned through since the last
+/// step. For x <= kRotateSeriesMax (a normal turning less than 1e-3 rad in a step: nearly every
+/// contact) f = 1 + x/2 + 3x^2/8, whose truncation (5x^3/16 < 4e-19) is below a rounding, so both
+/// rescales cost one division and no square root; f is exact otherwise, and when the springs'
+/// squared lengths multiply to less than 1e-290 (the shared division would lose digits).
+inline void rotate_springs(const Vec3& n, ContactHistory& h) {
+  const double ls = h.tangential.squaredNorm(), lr = h.rolling.squaredNorm();
+  const double sn = h.tangential.dot(n), rn = h.rolling.dot(n);
+  const double gs = ls > 0.0 ? ls : 1.0, gr = lr > 0.0 ? lr : 1.0;
+  const double both = gs * gr;
+  const double inv = 1.0 / both;
+  const bool series_ok = both >= 1e-290;
+  rotate_spring(n, sn, ls, (sn * sn) * (gr * inv), series_ok, h.tangential);
+  rotate_spring(n, rn, lr, (rn * rn) * (gs * inv), series_ok, h.rolling);
+}
+
 /// Mindlin no-slip tangential force on an incremental spring with Coulomb cap (EDEM):
-///   F_t = -S_t s - gamma_t v_t with |F_t| <= mu_s F_n. The spring s is first rotated into the
-/// current tangent plane keeping its length; when the cap is reached the spring is truncated to
-/// -F_t / S_t (no damping in slip).
+///   F_t = -S_t s - gamma_t v_t with |F_t| <= mu_s F_n. The spring s has been rotated into the
+/// current tangent plane keeping its length (rotate_springs); when the cap is reached it is
+/// truncated to -F_t / S_t (no damping in slip).
 inline Vec3 mindlin_tangential(const ContactConstants& c, const ContactStiffness& k,
-                               const Vec3& n, const Vec3& v_t, double f_n, double dt,
-                               Vec3& spring) {
-  rotate_spring(n, spring);
+                               const Vec3& v_t, double f_n, double dt, Vec3& spring) {
   spring += v_t * dt;
   Vec3 f = -k.s_t * spring - k.gamma_t * v_t;
   const double cap = c.mu_s * std::max(f_n, 0.0);
@@ -230,14 +256,14 @@ inline Vec3 rolling_cdt(double mu_r, double f_n, double lever, const Vec3& w) {
 /// Type C, elastic-plastic spring-dashpot (Ai et al. 2011, eqs. 13-19; LIGGGHTS epsd2):
 ///   k_r = S_t R_r^2, M_k <- M_k - k_r w_r dt, |M_k| <= mu_r F_n R_r,
 ///   M_d = -2 eta_r sqrt(I_r k_r) w_r while |M_k| is below the cap (zero at the cap).
-/// Returns the torque on i; j receives its negative. `spring` is the torque M_k on i.
+/// Returns the torque on i; j receives its negative. `spring` is the torque M_k on i, rotated
+/// into the current tangent plane (rotate_springs).
 /// `mu_r` is the rolling coefficient in force (c.mu_r, or c.mu_r scaled by size).
 inline Vec3 rolling_epsd(const ContactConstants& c, const ContactStiffness& k, double mu_r,
                          const Vec3& n, double r_eff, double i_roll, const Vec3& w_i,
                          const Vec3& w_j, double f_n, double dt, Vec3& spring) {
   Vec3 w_r = w_i - w_j;
   w_r -= w_r.dot(n) * n;  // rolling only: remove the twist about n
-  rotate_spring(n, spring);
   const double k_r = k.s_t * r_eff * r_eff;
   spring -= k_r * dt * w_r;
   const double cap = mu_r * std::max(f_n, 0.0) * r_eff;
@@ -292,7 +318,8 @@ inline double rolling_size_factor(const ContactConstants& c, double contact_diam
   const double v_n = in.v_rel.dot(in.n);
   const double f_n = hertz_normal(c, k, in.delta, v_n);
   const Vec3 v_t = in.v_rel - v_n * in.n;
-  const Vec3 f_t = mindlin_tangential(c, k, in.n, v_t, f_n, dt, h.tangential);
+  rotate_springs(in.n, h);
+  const Vec3 f_t = mindlin_tangential(c, k, v_t, f_n, dt, h.tangential);
   out.normal = f_n;
   if (c.cohesive) {
     out.force = (f_n - sjkr_cohesion(c.cohesion_energy_density, in.r_eff, in.delta)) * in.n + f_t;

@@ -266,6 +266,41 @@ TEST(Convergence, HalvingTheStepConverges) {
   EXPECT_NEAR((h4 - kR) / (4 * kR), 0.79 * 0.79, 0.01);
 }
 
+// rotate_springs against the rotation itself: a spring in the tangent plane of a normal n0, the
+// normal then turned by an angle a about an axis in that plane, is rotated by the same angle
+// (Rodrigues' formula, the oracle) whenever it was perpendicular to the axis, for angles from
+// 1e-9 rad (the series) to 0.3 rad (the exact rescale); it ends in the new tangent plane with its
+// length kept, to a few roundings.
+TEST(Springs, RotateWithTheNormalKeepingTheirLength) {
+  const Vec3 n0 = Vec3(0.3, -0.5, 0.8).normalized();
+  const Vec3 axis = n0.cross(Vec3(1, 0, 0)).normalized();  // in the tangent plane of n0
+  const Vec3 t = axis.cross(n0);                           // perpendicular to the axis
+  for (double a : {1e-9, 1e-6, 3e-4, 1e-3, 1.5e-3, 1e-2, 0.3}) {
+    auto turn = [&](const Vec3& v) -> Vec3 {  // Rodrigues: v turned by a about the axis
+      return v * std::cos(a) + axis.cross(v) * std::sin(a) + axis * axis.dot(v) * (1 - std::cos(a));
+    };
+    const Vec3 n = turn(n0);
+    for (double len : {1e-9, 2e-5}) {
+      ContactHistory h;
+      h.tangential = len * t;
+      h.rolling = 3e-7 * t;
+      rotate_springs(n, h);
+      for (const auto& [got, length] : {std::pair{h.tangential, len}, std::pair{h.rolling, 3e-7}}) {
+        const Vec3 want = length * turn(t);
+        EXPECT_LE((got - want).norm(), 8e-16 * length) << "angle " << a;
+        EXPECT_LE(std::abs(got.norm() - length), 4e-16 * length) << "angle " << a;
+        EXPECT_LE(std::abs(got.dot(n)), 4e-16 * length) << "angle " << a;
+      }
+    }
+  }
+  // A spring along the normal has no tangential part: it becomes zero; zero springs stay zero.
+  ContactHistory h;
+  h.tangential = 1e-6 * n0;
+  rotate_springs(n0, h);
+  EXPECT_EQ(h.tangential, Vec3::Zero());
+  EXPECT_EQ(h.rolling, Vec3::Zero());
+}
+
 TEST(ModelValidation, RejectsBadParameters) {
   auto finalize_with = [](auto change) {
     Model m = make_model(PairParams{});

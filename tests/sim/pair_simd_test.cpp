@@ -108,6 +108,22 @@ Scene random_scene(const Model& m, int count, std::uint64_t seed) {
       h.tangential = Vec3(1e-6, 0, 0);  // along n: rotated to zero
     } else if (kind < 0.2) {
       // zero springs: first touch
+    } else if (kind < 0.5) {
+      // Springs in the last step's tangent plane, the normal having turned through a small angle
+      // since (1e-9 to 1e-2 rad): the rescale by its series and, beyond 1e-3 rad, exactly.
+      const Vec3 r = random_unit(rng);
+      const Vec3 t = (r - r.dot(n) * n).normalized();
+      auto turned = [&](double length) -> Vec3 {
+        const double angle = log_uniform(rng, 1e-9, 1e-2);
+        const Vec3 u = (n - n.dot(t) * t).normalized();
+        return length * (std::cos(angle) * t + std::sin(angle) * u);
+      };
+      h.tangential = turned(log_uniform(rng, 1e-10, 1e-4));
+      h.rolling = turned(log_uniform(rng, 1e-11, 1e-4));
+    } else if (kind < 0.52) {
+      // Springs so small that their squared lengths multiply to below 1e-290: rescaled exactly.
+      h.tangential = log_uniform(rng, 1e-160, 1e-150) * random_unit(rng);
+      h.rolling = log_uniform(rng, 1e-160, 1e-150) * random_unit(rng);
     } else {
       h.tangential = log_uniform(rng, 1e-10, 1e-4) * random_unit(rng);
       h.rolling = log_uniform(rng, 1e-11, 1e-4) * random_unit(rng);
@@ -228,12 +244,19 @@ TEST(PairSimd, LanesGiveTheScalarKernelsBits) {
 
   // The sample covers every case the lanes select between (counted on the reference).
   int first_touch = 0, sliding = 0, rolling_cap = 0, pulling = 0, lanes = 0, scalar = 0;
+  int series = 0, exact = 0, tiny = 0;  // rescales of the rotated springs (rotate_springs)
   for (std::size_t q = 0; q < s.contacts.size(); ++q) {
     const QueuedContact& e = s.contacts[q];
     const ContactConstants& c = *e.c;
     (lanes_eligible(c) ? lanes : scalar)++;
     if (s.history[e.k].tangential.squaredNorm() == 0.0) ++first_touch;
     const ContactInput in = pair_input(s.p, c, e.i, e.j);
+    for (const Vec3& spring : {s.history[e.k].tangential, s.history[e.k].rolling}) {
+      const double len2 = spring.squaredNorm(), sn = spring.dot(in.n);
+      if (len2 == 0.0) continue;
+      if (len2 < 1e-200) ++tiny;
+      (sn * sn <= kRotateSeriesMax * len2 ? series : exact)++;
+    }
     ContactHistory h = s.history[e.k];
     const ContactOutput out = hertz_mindlin(c, in, kDt, h);
     if (out.normal < 0.0) ++pulling;
@@ -246,14 +269,17 @@ TEST(PairSimd, LanesGiveTheScalarKernelsBits) {
   }
   std::printf(
       "contacts: %d first touch, %d sliding, %d at the rolling cap, %d pulling, %d in "
-      "lanes, %d scalar\n",
-      first_touch, sliding, rolling_cap, pulling, lanes, scalar);
+      "lanes, %d scalar; springs rescaled by the series %d, exactly %d, tiny %d\n",
+      first_touch, sliding, rolling_cap, pulling, lanes, scalar, series, exact, tiny);
   EXPECT_GT(first_touch, 100);
   EXPECT_GT(sliding, 100);
   EXPECT_GT(rolling_cap, 100);
   EXPECT_GT(pulling, 100);
   EXPECT_GT(lanes, 1000);
   EXPECT_GT(scalar, 1000);
+  EXPECT_GT(series, 1000);
+  EXPECT_GT(exact, 1000);
+  EXPECT_GT(tiny, 50);
 
   expect_every_isa_gives(s, ref);
 }
