@@ -146,7 +146,9 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
                                    std::to_string(s_.mu_grid[j]) + ", seed " +
                                    std::to_string(s_.seeds[r]) + ", in " +
                                    std::to_string(s_.max_pours) + " pour(s) (last: " +
-                                   o.sim_dir + "): the loop needs a pile at every grid point");
+                                   o.sim_dir +
+                                   (o.no_pile.empty() ? "" : "; its photographs: " + o.no_pile) +
+                                   "): the loop needs a pile at every grid point");
         clogged += o.clogged_pours;
         surf.raw[i][j].push_back(o);
         const double angle = twin_angle(o, s_.angle);

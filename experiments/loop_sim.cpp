@@ -184,9 +184,13 @@ json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
     if (v.keep_photos) j["photo"] = std::string(stem) + ".png";
     views.push_back(j);
   }
+  // A pile too small for any view (a few spheres through a jammed outlet) has no angle: the
+  // caller counts it as a pour that formed no pile.
   if (sides.empty())
-    throw std::runtime_error("no side view of the pile could be measured: " +
-                             views[0]["error"].get<std::string>());
+    return {{"error", "no side view of the pile could be measured: " +
+                          views[0]["error"].get<std::string>()},
+            {"views", views},
+            {"variant", v.key()}};
   const vision::SideSummary s = vision::combine_sides(sides);
   return {{"angle_deg", s.theta_deg.mean},
           {"angle_sd_deg", s.theta_deg.stddev},
@@ -317,13 +321,17 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     o.seed = requests[i].seed;
     if (photo_of[i].empty()) continue;
     const json& p = photo_result[photo_of[i]];
+    o.image_dir = (fs::path(dir_) / "cases" / photo_of[i]).string();
+    if (p.contains("error")) {
+      o.no_pile = p.at("error").get<std::string>();
+      continue;
+    }
     o.pile = true;
     o.angle_deg = p.at("angle_deg");
     o.flank_deg = p.value("flank_deg", std::numeric_limits<double>::quiet_NaN());
     o.height_mm = p.at("height_mm");
     o.diameter_mm = p.at("diameter_mm");
     o.positions_angle_deg = s.at("pile").value("theta_hd_deg", 0.0);
-    o.image_dir = (fs::path(dir_) / "cases" / photo_of[i]).string();
   }
   return out;
 }

@@ -57,7 +57,9 @@ struct SimRequest {
 
 /// What one simulation gave.
 struct SimOutcome {
-  bool pile = false;          // a pile formed (else the angle is 0 and H, D are 0)
+  bool pile = false;          // a pile formed and was measured (else the angle is 0, H, D 0)
+  std::string no_pile;        // when pile is false and a pile formed: why its photographs
+                              // could not be measured (too small for every view)
   double angle_deg = 0.0;     // vision atan(2H/D), mean over the side views [deg]
   double flank_deg = 0.0;     // vision flank-line angle, mean over the side views [deg]; NaN
                               // for a photograph cached by a version that did not record it
@@ -117,7 +119,8 @@ std::vector<std::string> resolved_overrides(const SimRequest& request);
 std::string fnv1a_hex(const std::string& text);
 
 /// Photographs a pile (centres, radii, material ids) with `variant`, measures it with the
-/// declared camera and returns {angle_deg, flank_deg, height_mm, diameter_mm, views[...]}. Writes the
+/// declared camera and returns {angle_deg, flank_deg, height_mm, diameter_mm, views[...]}, or
+/// {error, views[...]} if no view could be measured (a pile of a few spheres). Writes the
 /// photographs and their declared-camera sidecars into `out_dir` when keep_photos is set
 /// (names side_az000.png / .json ...). Uses OSMesa: call it in a worker, not before forking.
 nlohmann::json photograph_pile(const std::vector<Eigen::Vector3d>& positions,

@@ -10,6 +10,7 @@
 #include "experiments/loop.hpp"
 #include "experiments/loop_data.hpp"
 #include "experiments/loop_effects.hpp"
+#include "experiments/loop_sim.hpp"
 #include "experiments/provenance.hpp"
 
 namespace reposetwin::experiments {
@@ -109,8 +110,8 @@ TEST(LoopData, ATwinRunWithoutAPileStopsTheLoop) {
   s.mu_grid = {0.1, 0.3};
   s.seeds = {1, 2};
   s.angle = AngleMeasure::kParticles;
-  s.image.width_px = 320;
-  s.image.height_px = 240;
+  s.image.width_px = 640;
+  s.image.height_px = 480;
   s.image.side_views = 1;
   s.progress = false;
   s.html = false;
@@ -128,6 +129,30 @@ TEST(LoopData, ATwinRunWithoutAPileStopsTheLoop) {
         << what;
   }
   EXPECT_FALSE(fs::exists(out / "loop.json"));
+}
+
+// A scatter of small spheres on the plate (what a jammed outlet lets through) is too low for any
+// side view to find the pile's toes: photograph_pile returns the error, which the cache turns
+// into a pour without a pile (repeated, and named in the loop's error), not an exception that
+// would stop the whole batch.
+TEST(LoopData, APileNoViewCanMeasureIsReportedNotThrown) {
+  std::vector<Eigen::Vector3d> x;
+  for (int k = 0; k < 40; ++k) {
+    const double a = 0.157 * k, r = 0.02 * std::sqrt((k + 0.5) / 40.0);
+    x.emplace_back(r * std::cos(a), r * std::sin(a), 0.2e-3);
+  }
+  ImageVariant v;
+  v.width_px = 320;
+  v.height_px = 240;
+  v.side_views = 2;
+  const nlohmann::json got =
+      photograph_pile(x, std::vector<double>(x.size(), 0.2e-3), std::vector<int>(x.size(), 0), v,
+                      (fs::temp_directory_path() / "rt_tiny").string());
+  ASSERT_TRUE(got.contains("error")) << got.dump();
+  EXPECT_NE(got["error"].get<std::string>().find("no side view of the pile could be measured"),
+            std::string::npos);
+  EXPECT_FALSE(got.contains("angle_deg"));
+  EXPECT_EQ(got["views"].size(), 2u);
 }
 
 TEST(LoopData, BadInputNamesTheLineAndColumn) {
