@@ -11,8 +11,16 @@
 # LIGGGHTS: CPU time of "run N" minus that of "run 0" on the same data), which a shared machine's
 # load does not inflate; two-core figures exist only as wall time.
 #
+# Waiting (--wait): "spin" (the default, for an idle machine) leaves both sides as they come:
+# libgomp's default policy (a waiting thread spins a while, then sleeps) and Open MPI's busy
+# polling. "yield" (for a shared machine) makes waiting threads sleep (OMP_WAIT_POLICY=passive)
+# and ranks yield (mpi_yield_when_idle): there a spinning thread or rank keeps the core its
+# partner needs (our 2-thread run was up to 100x slower), but on an idle machine each of our
+# three parallel phases per step then waits ~0.1 ms for a sleeping thread to wake (bench/README.md,
+# session 9), which MPI's polling ranks never pay.
+#
 # Usage: bench/compare_liggghts.sh [--quick] [--particles N] [--steps N] [--rolling epsd|cdt]
-#                                  [--cores 1,2] [--build DIR] [--work DIR]
+#                                  [--cores 1,2] [--wait spin|yield] [--build DIR] [--work DIR]
 # This is a benchmark, not CI: it installs the Debian package liggghts if it is missing.
 set -euo pipefail
 
@@ -21,6 +29,7 @@ root="$(cd "${here}/.." && pwd)"
 build=/tmp/build-bench
 work=/tmp/reposetwin-liggghts
 cores=1,2
+wait=spin
 bench_args=()
 while [[ $# -gt 0 ]]; do
   case "$1" in
@@ -29,14 +38,19 @@ while [[ $# -gt 0 ]]; do
       [[ $# -ge 2 ]] || { echo "compare_liggghts.sh: $1 needs a value" >&2; exit 2; }
       bench_args+=("$1" "$2"); shift 2 ;;
     --cores) cores="$2"; shift 2 ;;
+    --wait) wait="$2"; shift 2 ;;
     --build) build="$2"; shift 2 ;;
     --work) work="$2"; shift 2 ;;
-    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,24p' "$0"; exit 0 ;;
     *) echo "compare_liggghts.sh: unknown option '$1'" >&2; exit 2 ;;
   esac
 done
 if ! [[ "${cores}" =~ ^[0-9]+(,[0-9]+)*$ ]]; then
   echo "compare_liggghts.sh: --cores must be a list like 1,2 (got '${cores}')" >&2
+  exit 2
+fi
+if [[ "${wait}" != spin && "${wait}" != yield ]]; then
+  echo "compare_liggghts.sh: --wait must be spin or yield (got '${wait}')" >&2
   exit 2
 fi
 
@@ -51,12 +65,14 @@ fi
 mpirun_args=()
 [[ "$(id -u)" -eq 0 ]] && mpirun_args+=(--allow-run-as-root)
 mpirun_args+=(--oversubscribe)
-# Waiting threads and ranks yield their core instead of spinning, on both sides. On a shared
-# 2-core machine a spinning OpenMP thread or MPI rank keeps the core its partner needs: with
-# libgomp's default policy our 2-thread run was up to 100x slower than with "passive".
-export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-passive}"
-mpirun_args+=(--mca mpi_yield_when_idle 1)
-echo "OMP_WAIT_POLICY=${OMP_WAIT_POLICY}; mpirun ${mpirun_args[*]}"
+# How waiting threads and ranks wait, the same on both sides (--wait, above).
+if [[ "${wait}" == yield ]]; then
+  export OMP_WAIT_POLICY=passive
+  mpirun_args+=(--mca mpi_yield_when_idle 1)
+else
+  unset OMP_WAIT_POLICY
+fi
+echo "wait ${wait}: OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-(libgomp default)}; mpirun ${mpirun_args[*]}"
 
 # 2. Our side: build, construct + settle the heap, write the LIGGGHTS input, time our run.
 [[ -d "${build}" ]] || cmake -S "${root}" -B "${build}" > /dev/null
