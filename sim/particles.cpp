@@ -15,12 +15,12 @@ void Particles::permute(const std::vector<std::size_t>& order) {
     if (placed[s] || order[s] == s) continue;
     // Along the cycle s <- order[s] <- order[order[s]] <- ... <- s, each place takes the value
     // of the next before that one is overwritten.
-#define REPOSETWIN_PERMUTE_FIELD(type, name, doc) \
-  {                                               \
-    type held = name[s];                          \
-    std::size_t i = s;                            \
-    for (; order[i] != s; i = order[i]) name[i] = name[order[i]]; \
-    name[i] = held;                               \
+#define REPOSETWIN_PERMUTE_FIELD(type, name, doc)                     \
+  {                                                                   \
+    type held = name[s];                                              \
+    std::size_t i = s;                                                \
+    for (; order[i] != s; i = order[i]) name[i] = name[order[i]];     \
+    name[i] = held;                                                   \
   }
     REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_PERMUTE_FIELD)
 #undef REPOSETWIN_PERMUTE_FIELD
