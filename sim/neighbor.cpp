@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 namespace reposetwin::sim {
 namespace {
@@ -99,10 +100,9 @@ void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) 
     p.permute(order);
     list.x_at_build.assign(p.x.begin(), p.x.end());
     from_old.swap(order);
-    order.resize(n);
-    for (std::size_t k = 0; k < n; ++k) order[k] = k;
+    std::iota(order.begin(), order.end(), std::size_t{0});
   } else {
-    for (std::size_t k = 0; k < n; ++k) from_old[k] = k;
+    std::iota(from_old.begin(), from_old.end(), std::size_t{0});
   }
   // order[k] = particle index of the k-th entry in cell order.
 
