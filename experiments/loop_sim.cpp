@@ -227,6 +227,13 @@ std::vector<SimOutcome> run_repouring(
   return out;
 }
 
+std::string sim_case_name(const std::string& scene_hash, const std::vector<std::string>& sets,
+                          const std::string& version) {
+  std::string key = scene_hash;
+  for (const auto& s : sets) key += "\n" + s;
+  return "sim_" + fnv1a_hex(key + "\ncode " + version);
+}
+
 SimCache::SimCache(std::string dir, SimCacheSettings settings)
     : dir_(fs::absolute(dir).lexically_normal().string()), settings_(settings) {
   fs::create_directories(dir_);
@@ -244,9 +251,7 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     SimJob job{r.test->scene_path, resolved_overrides(r), r.seed};
     if (!scene_hash.count(job.scene_path))
       scene_hash[job.scene_path] = fnv1a_hex(read_file(job.scene_path));
-    std::string key = scene_hash[job.scene_path];
-    for (const auto& s : job.sets) key += "\n" + s;
-    const std::string name = "sim_" + fnv1a_hex(key);
+    const std::string name = sim_case_name(scene_hash[job.scene_path], job.sets, code_version());
     sim_of[i] = name + "/seed_" + std::to_string(r.seed);
     if (sim_jobs.count(sim_of[i])) continue;
     sim_jobs[sim_of[i]] = job;

@@ -5,10 +5,12 @@
 // refits, synthetic datasets) is a pile run of one lab test's scene with a few extra overrides and
 // a seed, followed by a photograph and its vision measurement. Both steps are campaign runs
 // (run_batch) in one cache folder: a pile run is named by a hash of its scene file text, its
-// resolved overrides and its seed ("sim_<hash>/seed_<n>"), a photograph by the pile run's hash
-// and the image settings ("img_<hash>/seed_<n>"). A killed loop therefore resumes where it
-// stopped and nothing is ever computed twice, also across datasets that share conditions (the
-// tests share one cache). Measurement effects (camera height, lens distortion) only add
+// resolved overrides and the code version, and by its seed ("sim_<hash>/seed_<n>"), a
+// photograph by the pile run's hash and the image settings ("img_<hash>/seed_<n>"). A killed
+// loop therefore resumes where it stopped and nothing is ever computed twice, also across
+// datasets that share conditions (the tests share one cache); a new engine version simulates
+// afresh beside the old runs instead of reusing piles an older engine made (a change of rounding
+// alone re-draws every pile: bench/README.md, session 9). Measurement effects (camera height, lens distortion) only add
 // photographs of piles that already exist. All rendering and simulation happens in the pool's
 // forked workers, never in the calling process (OpenMP and OSMesa do not survive a fork).
 //
@@ -117,6 +119,11 @@ std::vector<std::string> resolved_overrides(const SimRequest& request);
 
 /// FNV-1a 64 of a text, as 16 hex digits.
 std::string fnv1a_hex(const std::string& text);
+
+/// The cache folder of a pile run: "sim_" and a hash of the scene text's hash, the resolved
+/// overrides (in order) and the code version.
+std::string sim_case_name(const std::string& scene_hash, const std::vector<std::string>& sets,
+                          const std::string& version);
 
 /// Photographs a pile (centres, radii, material ids) with `variant`, measures it with the
 /// declared camera and returns {angle_deg, flank_deg, height_mm, diameter_mm, views[...]}, or

@@ -155,6 +155,20 @@ TEST(LoopData, APileNoViewCanMeasureIsReportedNotThrown) {
   EXPECT_EQ(got["views"].size(), 2u);
 }
 
+// A pile run's cache folder changes with anything that changes the pile: the scene text, an
+// override, their order, and the engine's code version (a new version must not reuse piles an
+// older engine made); the same inputs give the same folder, so a killed loop resumes.
+TEST(LoopData, CachedPileRunsAreKeyedByCodeVersion) {
+  const std::vector<std::string> sets = {"a.b=1", "c.d=2"};
+  const std::string base = sim_case_name("0123", sets, "1.0+abc");
+  EXPECT_EQ(base.rfind("sim_", 0), 0u) << base;
+  EXPECT_EQ(base, sim_case_name("0123", sets, "1.0+abc"));
+  EXPECT_NE(base, sim_case_name("0123", sets, "1.0+abd"));
+  EXPECT_NE(base, sim_case_name("0124", sets, "1.0+abc"));
+  EXPECT_NE(base, sim_case_name("0123", {"a.b=1", "c.d=3"}, "1.0+abc"));
+  EXPECT_NE(base, sim_case_name("0123", {"c.d=2", "a.b=1"}, "1.0+abc"));
+}
+
 TEST(LoopData, BadInputNamesTheLineAndColumn) {
   const std::string head = "id,role,scene,mass_kg,W_mm,angle_deg\n";
   auto row = [&](const std::string& rest) { return head + "t1,calibrate," + kScene + "," + rest + "\n"; };
