@@ -4,10 +4,12 @@
 //   1. kick_drift       v += dt/2 F/m, w += dt/2 T/I, x += dt v      (forces of the last step)
 //   2. move_walls       prescribed wall motion (the lift)
 //   3. update_neighbors rebuild the Verlet list if a particle moved more than skin/2
-//   4. pair_forces      Hertz-Mindlin + rolling kernel once per touching pair, two pairs at a
-//                       time in SSE2 lanes (sim/pair_simd.hpp, bit-identical to the scalar
-//                       kernel); the pair's first member sums its own pairs (and gravity) in
-//                       list order, the reaction is stored in the second member's incoming slot
+//   4. pair_forces      Hertz-Mindlin + rolling kernel once per touching pair, 2 or 4 pairs at
+//                       a time in SSE2, AVX or AVX-512VL lanes (sim/pair_simd.hpp, bit-identical
+//                       to the scalar kernel); the pair's first member sums its own pairs (and
+//                       gravity) in list order, the reaction is stored in the second member's
+//                       incoming slot; each thread takes one contiguous range of particle blocks
+//                       (about the particles it moved in kick_drift, still in its cache)
 //   5. gather_wall_forces, one pass over the particles (each particle's data read once):
 //                       each particle adds the stored reactions of the pairs it is second in
 //                       (contiguous, in a fixed order: deterministic), then its wall contacts
