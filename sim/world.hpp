@@ -9,7 +9,8 @@
 //                       to the scalar kernel); the pair's first member sums its own pairs (and
 //                       gravity) in list order, the reaction is stored in the second member's
 //                       incoming slot; each thread takes one contiguous range of particle blocks
-//                       (about the particles it moved in kick_drift, still in its cache)
+//                       (about the particles it moved in kick_drift, still in its cache) of
+//                       about equal work, weighed by the pairs each block computed last step
 //   5. gather_wall_forces, one pass over the particles (each particle's data read once):
 //                       each particle adds the stored reactions of the pairs it is second in
 //                       (contiguous, in a fixed order: deterministic), then its wall contacts
@@ -146,6 +147,10 @@ class World {
   // Largest squared displacement since the list was built, measured by kick_drift for the
   // update_neighbors that follows it; -1 if unknown (then update_neighbors measures) [m^2].
   double moved2_ = -1.0;
+  // pair_forces' work estimate for the threads' ranges: each block's contacts computed by the
+  // kernel last step, and the cost before each block (scratch; results never depend on them).
+  std::vector<std::int32_t> block_queued_;
+  std::vector<double> block_cost_;
 };
 
 /// A SHA-256-free, portable 64-bit FNV-1a hash of the particle state (positions, velocities,
