@@ -128,5 +128,50 @@ TEST(World, RemovingParticlesKeepsTheRestConsistent) {
   EXPECT_EQ(w.diagnose().status, Status::kOk);
 }
 
+TEST(World, EachContactTakesItsMaterialPairsConstants) {
+  // Two approaching spheres, materials a and b of different stiffness and pair restitution:
+  // the force on the larger one is the scalar kernel's with the constants of the pair (a, b),
+  // whether the two materials differ or the world holds one material other than 0 (the pair
+  // loop's shortcut for a heap of one material).
+  PairParams soft;
+  soft.restitution = 0.3;
+  Model m = testing::make_model(soft, 46.8e6, Vec3::Zero());
+  m.materials[1].youngs_modulus = 4.0 * m.materials[0].youngs_modulus;
+  PairParams mixed = soft;
+  mixed.restitution = 0.6;
+  m.set_pair(0, 1, mixed);
+  PairParams stiff = soft;
+  stiff.restitution = 0.9;
+  m.set_pair(1, 1, stiff);
+  m.finalize(1e-3, 1.2e-3);
+  for (const auto& [ma, mb] : {std::pair{0, 1}, std::pair{1, 1}, std::pair{0, 0}}) {
+    World w(m);
+    w.add_particle(Vec3(0, 0, 0), 1.2e-3, ma);
+    w.add_particle(Vec3(2.19e-3, 0, 0), 1.0e-3, mb);
+    w.state().particles.v[1] = Vec3(-0.05, 0.01, 0.0);  // approaching, and sliding
+    // Twice: a first touch, then a live pair (the loop treats them apart).
+    w.refresh_forces();
+    w.refresh_forces();
+    const Particles& p = w.state().particles;
+    const std::size_t a = p.radius[0] > p.radius[1] ? 0 : 1, b = 1 - a;  // the larger first
+    ASSERT_EQ(p.material[a], ma);
+    const ContactConstants& c = m.table.c(ma, mb);
+    ContactHistory h;
+    hertz_mindlin(c, pair_input(p, c, a, b), m.dt, h);
+    const ContactOutput o = hertz_mindlin(c, pair_input(p, c, a, b), m.dt, h);
+    EXPECT_EQ(p.force[a], o.force) << "materials " << ma << ", " << mb;
+    EXPECT_EQ(p.force[b], -o.force) << "materials " << ma << ", " << mb;
+    // and not what the constants of the first material alone would give
+    const ContactConstants& c00 = m.table.c(0, 0);
+    ContactHistory h00;
+    hertz_mindlin(c00, pair_input(p, c00, a, b), m.dt, h00);
+    const ContactOutput o00 = hertz_mindlin(c00, pair_input(p, c00, a, b), m.dt, h00);
+    if (ma != 0 || mb != 0) {
+      EXPECT_GT((p.force[a] - o00.force).norm(), 0.05 * o00.force.norm())
+          << "materials " << ma << ", " << mb;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace reposetwin::sim
