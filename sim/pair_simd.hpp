@@ -148,7 +148,8 @@ enum class PairIsa {
   kScalar,  // one contact at a time (pair_input + hertz_mindlin): the reference
   kSse2,    // 2 contacts per instruction (SSE2, the x86-64 baseline)
   kAvx,     // 4 contacts per instruction (only where the CPU has AVX)
-  kAvx512Vl,  // the same 4 lanes with 32 vector registers (only where the CPU has AVX-512VL)
+  kAvx512Vl,  // the same 4 lanes with 32 vector registers and mask registers (only where the
+              // CPU has AVX-512VL)
 };
 
 /// Runs the kernel on the wall contacts `wc` with time step dt [s]: updates each contact's
