@@ -229,7 +229,7 @@ struct ContactCount {
 
 ContactCount count_contacts(const World& w) {
   ContactCount c;
-  for (double o : w.state().pair_overlap) c.pairs += o > 0.0 ? 1 : 0;
+  for (std::uint8_t live : w.state().pair_live) c.pairs += live;
   const auto& p = w.state().particles;
   for (std::size_t i = 0; i < p.size(); ++i) c.walls += p.x[i].z() < p.radius[i] ? 1 : 0;
   return c;

@@ -10,7 +10,10 @@
 namespace reposetwin::sim {
 namespace {
 
-constexpr char kMagic[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '1'};
+// Format 2 (session 10) dropped format 1's per-pair overlaps (now derived by World::diagnose);
+// format 1 is still read.
+constexpr char kMagic[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '2'};
+constexpr char kMagicFormat1[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '1'};
 
 class Writer {
  public:
@@ -63,7 +66,7 @@ class Reader {
 /// The state's contents in file order, for writing (const State) and reading (State): one list,
 /// so the reader cannot drift from the writer.
 template <class Archive, class StateT>
-void transfer_state(Archive& ar, StateT& s) {
+void transfer_state(Archive& ar, StateT& s, int format) {
 #define REPOSETWIN_TRANSFER_FIELD(type, name, doc) ar.vec(s.particles.name);
   REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_TRANSFER_FIELD)
 #undef REPOSETWIN_TRANSFER_FIELD
@@ -80,7 +83,10 @@ void transfer_state(Archive& ar, StateT& s) {
   ar.vec(s.neighbors.in_start);
   ar.vec(s.neighbors.in_pairs);
   ar.vec(s.neighbors.x_at_build);
-  ar.vec(s.pair_overlap);
+  if (format == 1) {  // each pair's overlap ratio: read and dropped
+    HugeVector<double> overlap;
+    ar.vec(overlap);
+  }
 }
 
 }  // namespace
@@ -95,7 +101,7 @@ void write_checkpoint(const World& world, const std::string& path) {
     Writer w(out);
     w.pod(world.model().dt);
     w.pod<std::uint64_t>(world.model().walls.size());
-    transfer_state(w, s);
+    transfer_state(w, s, 2);
     out.flush();
     if (!out) throw std::runtime_error(path + ": checkpoint write failed");
   }
@@ -110,7 +116,11 @@ void read_checkpoint(World& world, const std::string& path) {
   char magic[8];
   in.read(magic, sizeof magic);
   Reader r(in, path);
-  if (!in || std::memcmp(magic, kMagic, sizeof kMagic) != 0) r.fail("is not a ReposeTwin checkpoint");
+  if (!in) r.fail("is not a ReposeTwin checkpoint");
+  int format = 0;
+  if (std::memcmp(magic, kMagic, sizeof kMagic) == 0) format = 2;
+  if (std::memcmp(magic, kMagicFormat1, sizeof kMagicFormat1) == 0) format = 1;
+  if (format == 0) r.fail("is not a ReposeTwin checkpoint");
   double dt = 0.0;
   r.pod(dt);
   if (dt != world.model().dt) r.fail("was made with another time step");
@@ -118,7 +128,8 @@ void read_checkpoint(World& world, const std::string& path) {
   r.pod(nwalls);
   if (nwalls != world.model().walls.size()) r.fail("was made with another number of walls");
   State s;
-  transfer_state(r, s);
+  transfer_state(r, s, format);
+  if (in.peek() != std::ifstream::traits_type::eof()) r.fail("has data after its end");
   const std::size_t n = s.particles.x.size();
 #define REPOSETWIN_CHECK_FIELD(type, name, doc) \
   if (s.particles.name.size() != n) r.fail("has particle arrays of different lengths");
@@ -127,8 +138,7 @@ void read_checkpoint(World& world, const std::string& path) {
   NeighborList& nl = s.neighbors;
   if (s.walls.size() != nwalls) r.fail("has an inconsistent wall count");
   const std::size_t np = nl.second.size();
-  if (nl.history.size() != np || s.pair_overlap.size() != np)
-    r.fail("has an inconsistent neighbor list");
+  if (nl.history.size() != np) r.fail("has an inconsistent neighbor list");
   for (std::int32_t j : nl.second)
     if (j < 0 || static_cast<std::size_t>(j) >= n) r.fail("has a neighbor index out of range");
   if (nl.in_pairs.size() != np) r.fail("has an inconsistent neighbor list");

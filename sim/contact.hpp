@@ -135,7 +135,6 @@ struct ContactInput {
   double a_i, a_j;   // lever arms [m] (a_j = 0 for a wall)
   Vec3 v_rel;        // velocity of i relative to j at the contact point [m/s]
   Vec3 w_i, w_j;     // angular velocities [rad/s] (w_j = 0 for a wall)
-  double overlap_ratio = 0.0;  // delta / min(r_i, r_j) of a pair (pair_input), for diagnostics [-]
   double contact_diameter = 0.0;  // d_c: 4 R* for a pair, 2 R_i on a wall [m]; read only by
                                   // size-dependent rolling (ContactConstants::size_dependent_rolling)
 };

@@ -25,7 +25,6 @@ struct LaneArrays {
   const std::int32_t* slot = nullptr;  // (pairs)
   double* reaction_force = nullptr;    // (slots x 3) [N]
   double* reaction_torque = nullptr;   // (slots x 3) [N m]
-  double* overlap = nullptr;           // (pairs) [-]
   std::uint8_t* live = nullptr;        // (pairs)
   double* force_i = nullptr;           // (queued x 3) [N]
   double* torque_i = nullptr;          // (queued x 3) [N m]
@@ -49,19 +48,17 @@ LaneArrays lane_arrays(const Particles& p, const PairOutputs& out) {
   a.slot = out.slot;
   a.reaction_force = out.reaction_force->data();
   a.reaction_torque = out.reaction_torque->data();
-  a.overlap = out.overlap;
   a.live = out.live;
   a.force_i = out.force_i->data();
   a.torque_i = out.torque_i->data();
   return a;
 }
 
-/// Clears the springs, reactions and overlap of pair k, which separated since the last step.
+/// Clears the springs and reactions of pair k, which separated since the last step.
 [[gnu::noinline]] void clear_pair(const PairOutputs& out, std::int32_t k) {
   out.history[k] = ContactHistory{};
   out.reaction_force[out.slot[k]].setZero();
   out.reaction_torque[out.slot[k]].setZero();
-  out.overlap[k] = 0.0;
   out.live[k] = 0;
 }
 
@@ -128,11 +125,10 @@ WallLaneArrays wall_lane_arrays(Particles& p, WallContacts& wc) {
   out.torque_i[q] = o.torque_i;
   out.reaction_force[out.slot[e.k]] = o.force;
   out.reaction_torque[out.slot[e.k]] = o.torque_j;
-  out.overlap[e.k] = in.overlap_ratio;
 }
 
 /// What the lanes store for a queued pair k that does not touch (any more): its springs,
-/// reactions (at 3 times slot s3) and overlap cleared, zero force and torque for queue position
+/// reactions (at 3 times slot s3) cleared, zero force and torque for queue position
 /// q3 / 3, live flag 0.
 [[gnu::noinline]] void separate_lane(const LaneArrays& a, std::size_t k, std::size_t s3,
                                      std::size_t q3) {
@@ -141,7 +137,6 @@ WallLaneArrays wall_lane_arrays(Particles& p, WallContacts& wc) {
   std::fill_n(a.reaction_torque + s3, 3, 0.0);
   std::fill_n(a.force_i + q3, 3, 0.0);
   std::fill_n(a.torque_i + q3, 3, 0.0);
-  a.overlap[k] = 0.0;
   a.live[k] = 0;
 }
 
@@ -196,11 +191,6 @@ inline void load3(const double* b, const std::size_t* ix, V& x, V& y, V& z) {
   x.v = _mm_unpacklo_pd(u, w);
   y.v = _mm_unpackhi_pd(u, w);
   z.v = _mm_loadh_pd(_mm_load_sd(p0 + 2), p1 + 2);
-}
-/// Stores lane l (l < valid) to b[ix[l]].
-inline void store1(double* b, const std::size_t* ix, int valid, V a) {
-  _mm_store_sd(b + ix[0], a.v);
-  if (valid > 1) _mm_storeh_pd(b + ix[1], a.v);
 }
 /// Stores lane l (l < valid) to the 3 doubles at b + ix[l].
 inline void store3(double* b, const std::size_t* ix, int valid, V x, V y, V z) {

@@ -47,8 +47,10 @@ inline ContactInput pair_input(const Particles& p, const ContactConstants& c, st
   const double mi = p.mass[i], mj = p.mass[j];
   const double cut = ri + rj, msum = mi + mj, rmin = std::min(ri, rj);
   const double dist = std::sqrt(d.squaredNorm());
-  // One division for the normal d / |d|, R* = r_i r_j / (r_i + r_j), m* = m_i m_j / (m_i + m_j)
-  // and the overlap ratio delta / r_min: inv = 1 / (|d| (r_i + r_j) (m_i + m_j) r_min).
+  // One division for the normal d / |d|, R* = r_i r_j / (r_i + r_j) and m* = m_i m_j / (m_i +
+  // m_j): inv = 1 / (|d| (r_i + r_j) (m_i + m_j) r_min). (r_min served the overlap ratio
+  // delta / r_min the kernel stored until session 10; it stays in the product because taking it
+  // out would change the rounding of the other three.)
   const double a = dist * cut, b = msum * rmin;
   const double inv = 1.0 / (a * b);
   ContactInput in;
@@ -56,7 +58,6 @@ inline ContactInput pair_input(const Particles& p, const ContactConstants& c, st
   in.delta = cut - dist;
   in.r_eff = (ri * rj) * ((dist * b) * inv);
   in.m_eff = (mi * mj) * ((a * rmin) * inv);
-  in.overlap_ratio = in.delta * ((a * msum) * inv);
   // The rolling inertia is read only by the EPSD dashpot.
   in.i_roll = c.rolling == RollingModel::kEpsd && c.eta_r > 0.0
                   ? 1.0 / (1.0 / (p.inertia[i] + p.mass[i] * ri * ri) +
@@ -86,7 +87,6 @@ struct PairOutputs {
   const std::int32_t* slot = nullptr;  // (pairs) incoming slot of pair k
   Vec3* reaction_force = nullptr;      // (pairs, by slot) force of the pair on i [N]
   Vec3* reaction_torque = nullptr;     // (pairs, by slot) torque of the pair on j [N m]
-  double* overlap = nullptr;           // (pairs) overlap / smaller radius [-]
   std::uint8_t* live = nullptr;        // (pairs) set to 0 for a queued pair that does not touch
   Vec3* force_i = nullptr;             // (queued) force of each queued contact on i [N]
   Vec3* torque_i = nullptr;            // (queued) torque of each queued contact on i [N m]
@@ -185,10 +185,10 @@ std::size_t queue_touching_pairs(const Particles& p, const std::int32_t* owner,
 
 /// Runs the contact kernel on the `count` queued pairs `contacts` (distinct pair indices k) of
 /// the particles `p` with time step dt [s]: for a pair that touches (the distance test of
-/// queue_touching_pairs), updates its springs, stores its reactions and overlap, and writes the
-/// force and torque on its first member to out.force_i[q] and out.torque_i[q] for queued
-/// contact q; a pair that does not touch (a live pair that separated) gets its springs,
-/// reactions and overlap cleared, zero force and torque, and live flag 0. kScalar and kSse2 give
+/// queue_touching_pairs), updates its springs, stores its reactions, and writes the force and
+/// torque on its first member to out.force_i[q] and out.torque_i[q] for queued contact q; a pair
+/// that does not touch (a live pair that separated) gets its springs and reactions cleared, zero
+/// force and torque, and live flag 0. kScalar and kSse2 give
 /// the same bits.
 void compute_queued_contacts(PairIsa isa, const Particles& p, const QueuedContact* contacts,
                              std::size_t count, double dt, const PairOutputs& out);

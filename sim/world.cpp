@@ -162,13 +162,12 @@ void World::update_neighbors() {
   }
   build_neighbor_list(p, nl, /*sort_particles=*/true);
   state_.moved2.assign(n, 0.0);
-  // What a pair that did not touch last step must have: no springs, reactions or overlap. A pair
-  // with springs carried over from the old list is taken as touching (live): the force phase
-  // clears it if it does not.
+  // What a pair that did not touch last step must have: no springs or reactions. A pair with
+  // springs carried over from the old list is taken as touching (live): the force phase clears
+  // it if it does not.
   const std::size_t np = nl.pairs();
   state_.reaction_force.assign(np, Vec3::Zero());
   state_.reaction_torque.assign(np, Vec3::Zero());
-  state_.pair_overlap.assign(np, 0.0);
   state_.pair_live.resize(np);
   for (std::size_t k = 0; k < np; ++k)
     state_.pair_live[k] = nl.history[k].tangential != Vec3::Zero() ||
@@ -240,7 +239,6 @@ void World::pair_forces() {
     compute_clearances(nl, p);
     state_.reaction_force.assign(np, Vec3::Zero());
     state_.reaction_torque.assign(np, Vec3::Zero());
-    state_.pair_overlap.resize(np, 0.0);
     state_.pair_live.assign(np, 1);
   }
   // The particles are taken in blocks of kBlock. For each block: (1) its listed pairs are split
@@ -250,7 +248,7 @@ void World::pair_forces() {
   // pair had when the list was built (NeighborList::clearance2: it cannot touch yet), and
   // distance-tested otherwise, the touching ones queued after the live ones (first touches, a
   // few per step). (2) The kernel runs on the queue several contacts at a time
-  // (sim/pair_simd.hpp), which stores each pair's springs, reactions and overlap and each
+  // (sim/pair_simd.hpp), which stores each pair's springs and reactions and each
   // contact's force and torque on its first member. (3) Each particle sums gravity and the
   // contacts it owns in list order (the two parts of the queue merged by pair index);
   // gather_wall_forces() then adds the reactions of the pairs it is second in (stored in the
@@ -271,7 +269,6 @@ void World::pair_forces() {
   ContactHistory* const history = nl.history.data();
   Vec3* const reaction_force = state_.reaction_force.data();
   Vec3* const reaction_torque = state_.reaction_torque.data();
-  double* const overlap = state_.pair_overlap.data();
   std::uint8_t* const live = state_.pair_live.data();
   const PairIsa isa = pair_isa_;  // the same bits with any of them
   constexpr std::size_t kBlock = 256;  // particles: about 400 touching pairs on a settled heap
@@ -344,7 +341,6 @@ void World::pair_forces() {
       out.slot = slot;
       out.reaction_force = reaction_force;
       out.reaction_torque = reaction_torque;
-      out.overlap = overlap;
       out.live = live;
       out.force_i = queue_force.data();
       out.torque_i = queue_torque.data();
@@ -492,9 +488,21 @@ Diagnostics World::diagnose() const {
       }
     }
   }
-  for (double o : state_.pair_overlap) {
-    d.max_overlap_ratio = std::max(d.max_overlap_ratio, o);
-    if (o > 0.0) ++d.contacts;
+  // The pairs' overlaps from the positions (the force phase keeps none: a step stores only what
+  // the next one needs), by the kernel's touch test (|d|^2 < (r_i + r_j)^2).
+  const NeighborList& nl = state_.neighbors;
+  if (nl.built_for(p.size())) {
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      for (std::int32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
+        const std::size_t j = static_cast<std::size_t>(nl.second[k]);
+        const double cut = p.radius[i] + p.radius[j];
+        const double dist2 = (p.x[i] - p.x[j]).squaredNorm();
+        if (!(dist2 < cut * cut)) continue;
+        d.max_overlap_ratio = std::max(d.max_overlap_ratio, (cut - std::sqrt(dist2)) /
+                                                                std::min(p.radius[i], p.radius[j]));
+        ++d.contacts;
+      }
+    }
   }
   if (d.status == Status::kOk && d.max_overlap_ratio > model_.settings.max_overlap_ratio) {
     d.status = Status::kOverlap;
@@ -519,7 +527,6 @@ std::size_t World::remove_particles(const std::vector<char>& remove) {
   const std::size_t np = state_.neighbors.pairs();
   state_.reaction_force.assign(np, Vec3::Zero());
   state_.reaction_torque.assign(np, Vec3::Zero());
-  state_.pair_overlap.assign(np, 0.0);
   state_.pair_live.assign(np, 1);  // unknown: the next force phase clears what does not touch
   state_.moved2.clear();           // measured again by the next force phase
   state_.forces_valid = false;

@@ -72,10 +72,9 @@ struct State {
   // k), so gather_forces reads each particle's reactions contiguously.
   HugeVector<Vec3> reaction_force;   // (pairs, by slot) force of the pair on its first member [N]
   HugeVector<Vec3> reaction_torque;  // (pairs, by slot) torque on its second member [N m]
-  HugeVector<double> pair_overlap;   // (pairs) overlap / smaller radius, 0 if not touching
   // (pairs) 1 if the pair touched in the last force phase (or may have: set to 1 for every pair
   // when the list is compacted or read from a checkpoint, and for the pairs with springs when it
-  // is rebuilt); 0 only if the pair's history, reactions and overlap are zero. A live pair goes
+  // is rebuilt); 0 only if the pair's history and reactions are zero. A live pair goes
   // straight to the kernel, which clears it if it no longer touches; any other costs a distance
   // test, or nothing if it cannot touch yet (NeighborList::clearance2).
   HugeVector<std::uint8_t> pair_live;

@@ -172,8 +172,9 @@ TEST(NeighborForces, EqualADirectPairLoop) {
 
 TEST(NeighborForces, PairsThatDoNotTouchCarryNoSpringOrReaction) {
   // A pour in which contacts open and close: after every step, each listed pair that does not
-  // touch has zero springs, reaction and overlap (pair_live only skips clearing what is already
-  // clear), and each touching pair has its overlap; the reactions sit in the incoming slots.
+  // touch has zero springs and reactions and is not live (pair_live only skips clearing what is
+  // already clear), and each touching pair is live with a reaction; the reactions sit in the
+  // incoming slots.
   // 20 g: the spheres reach each other and the plate, collide and rebound within 2,000 steps.
   // Elastic contacts (e = 1): the normal force stays repulsive up to separation, so the caps do
   // not zero the springs in a contact's last step and only the clearing does.
@@ -197,14 +198,15 @@ TEST(NeighborForces, PairsThatDoNotTouchCarryNoSpringOrReaction) {
         const std::pair<std::int64_t, std::int64_t> ids{p.id[i], p.id[j]};
         if (touch) {
           now.insert(ids);
-          EXPECT_GT(st.pair_overlap[k], 0.0);
+          EXPECT_EQ(st.pair_live[k], 1);
+          EXPECT_GT(st.reaction_force[nl.in_slot[k]].norm(), 0.0);
           ++touching;
         } else {
           EXPECT_EQ(nl.history[k].tangential, Vec3::Zero());
           EXPECT_EQ(nl.history[k].rolling, Vec3::Zero());
           EXPECT_EQ(st.reaction_force[nl.in_slot[k]], Vec3::Zero());
           EXPECT_EQ(st.reaction_torque[nl.in_slot[k]], Vec3::Zero());
-          EXPECT_EQ(st.pair_overlap[k], 0.0);
+          EXPECT_EQ(st.pair_live[k], 0);
           if (was_touching.count(ids) != 0) ++separated;
         }
       }

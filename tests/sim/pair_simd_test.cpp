@@ -153,7 +153,6 @@ Scene random_scene(const Model& m, int count, std::uint64_t seed) {
 struct Results {
   std::vector<ContactHistory> history;
   std::vector<Vec3> reaction_force, reaction_torque, force_i, torque_i;
-  std::vector<double> overlap;
   std::vector<std::uint8_t> live;  // (pairs) all 1: every queued pair touched last step
 
   explicit Results(const Scene& s) : history(s.history) {
@@ -163,7 +162,6 @@ struct Results {
     reaction_torque.assign(n, sentinel);
     force_i.assign(n, sentinel);
     torque_i.assign(n, sentinel);
-    overlap.assign(n, -12345.0);
     live.assign(n, 1);
   }
   PairOutputs outputs(const Scene& s) {
@@ -172,7 +170,6 @@ struct Results {
     o.slot = s.slot.data();
     o.reaction_force = reaction_force.data();
     o.reaction_torque = reaction_torque.data();
-    o.overlap = overlap.data();
     o.live = live.data();
     o.force_i = force_i.data();
     o.torque_i = torque_i.data();
@@ -194,7 +191,6 @@ void scalar_contact_reference(const Scene& s, std::size_t q, Results& r) {
   r.torque_i[q] = out.torque_i;
   r.reaction_force[s.slot[e.k]] = out.force;
   r.reaction_torque[s.slot[e.k]] = out.torque_j;
-  r.overlap[e.k] = in.overlap_ratio;
 }
 
 /// One step of the reference, one contact after the other, on the first `count` contacts.
@@ -215,7 +211,6 @@ void expect_same(const Results& a, const Results& b, const std::string& what) {
   EXPECT_TRUE(same_bits(a.reaction_torque, b.reaction_torque)) << what << ": reaction torques";
   EXPECT_TRUE(same_bits(a.force_i, b.force_i)) << what << ": forces on i";
   EXPECT_TRUE(same_bits(a.torque_i, b.torque_i)) << what << ": torques on i";
-  EXPECT_TRUE(same_bits(a.overlap, b.overlap)) << what << ": overlaps";
   EXPECT_TRUE(same_bits(a.live, b.live)) << what << ": live flags";
 }
 
@@ -380,8 +375,8 @@ TEST(PairSimd, WallContactsGiveTheScalarKernelsBits) {
 TEST(PairSimd, QueuedPairsThatNoLongerTouchAreCleared) {
   // Live pairs go to the kernel untested: the ones that separated since the last step (here a
   // third, among them pairs at contact distance to within a rounding, decided as the distance
-  // definition does) must get their springs, reactions and overlap cleared, zero force and
-  // torque on i, and live flag 0; every other output must be the scalar kernel's, bit for bit.
+  // definition does) must get their springs and reactions cleared, zero force and torque on i,
+  // and live flag 0; every other output must be the scalar kernel's, bit for bit.
   const Model m = mixed_model();
   Scene s = random_scene(m, 1001, 5);
   Rng rng(6);
@@ -409,7 +404,6 @@ TEST(PairSimd, QueuedPairsThatNoLongerTouchAreCleared) {
       ref.reaction_torque[s.slot[e.k]].setZero();
       ref.force_i[q].setZero();
       ref.torque_i[q].setZero();
-      ref.overlap[e.k] = 0.0;
       ref.live[e.k] = 0;
       continue;
     }

@@ -5,6 +5,9 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
 
 #include "sim/checkpoint.hpp"
 #include "sim/random.hpp"
@@ -51,6 +54,35 @@ TEST(Checkpoint, ResumesBitIdentically) {
   for (int s = 0; s < 1500; ++s) b.step();
   EXPECT_EQ(state_hash(a.state()), state_hash(b.state()));
   EXPECT_EQ(a.state().step, b.state().step);
+  // A format-1 checkpoint (sessions 1-9: the same fields, then each pair's overlap ratio) is
+  // read too, its overlaps dropped.
+  {
+    World c = small_pour();
+    for (int s = 0; s < 1500; ++s) c.step();
+    write_checkpoint(c, path);
+    std::string bytes;
+    {
+      std::ifstream in(path, std::ios::binary);
+      bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    ASSERT_EQ(bytes.substr(0, 8), "RTWCKPT2");
+    bytes[7] = '1';
+    const std::uint64_t np = c.state().neighbors.pairs();
+    bytes.append(reinterpret_cast<const char*>(&np), sizeof np);
+    bytes.append(np * sizeof(double), '\0');
+    {
+      std::ofstream out(path, std::ios::binary | std::ios::trunc);
+      out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    }
+    World d = small_pour(0);
+    read_checkpoint(d, path);
+    EXPECT_EQ(state_hash(d.state()), state_hash(c.state()));
+    for (int s = 0; s < 500; ++s) {
+      c.step();
+      d.step();
+    }
+    EXPECT_EQ(state_hash(d.state()), state_hash(c.state()));
+  }
   // A corrupt file is refused with a message naming it.
   { std::FILE* f = std::fopen(path.c_str(), "wb"); std::fputs("garbage", f); std::fclose(f); }
   try {
@@ -102,6 +134,33 @@ TEST(Walls, ShellHoldsParticlesAndLiftsClear) {
     const double rho = std::hypot(x.x(), x.y());
     EXPECT_LT(rho, 0.005 + (0.015 - 0.005) * x.z() / 0.03 + 1e-4);
   }
+}
+
+TEST(Diagnostics, ReportsTheLargestOverlapAndTheContacts) {
+  // Three spheres of radii 1, 0.8 and 0.5 mm in a row, no walls: overlaps 0.05 mm (ratio 0.0625
+  // of the smaller, 0.8 mm) and 0.02 mm (0.04 of 0.5 mm); the first and the third apart.
+  Model m = testing::make_model(PairParams{}, 46.8e6, Vec3::Zero());
+  m.finalize(0.5e-3, 1e-3);
+  World w(m);
+  w.add_particle(Vec3(0, 0, 0), 1e-3, 0);
+  w.add_particle(Vec3(1.75e-3, 0, 0), 0.8e-3, 0);
+  w.add_particle(Vec3(1.75e-3 + 1.28e-3, 0, 0), 0.5e-3, 0);
+  w.refresh_forces();
+  Diagnostics d = w.diagnose();
+  EXPECT_EQ(d.contacts, 2u);
+  EXPECT_NEAR(d.max_overlap_ratio, 0.05 / 0.8, 1e-9);
+  EXPECT_EQ(d.status, Status::kOk);
+  // Pushed to an overlap of a quarter of the smaller radius: the run is stopped.
+  Particles& p = w.state().particles;  // (sorted by cell at the list's build)
+  std::size_t b = 0, c = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.radius[i] == 0.8e-3) b = i;
+    if (p.radius[i] == 0.5e-3) c = i;
+  }
+  p.x[c] = p.x[b] + Vec3(1.3e-3 - 0.125e-3, 0, 0);
+  d = w.diagnose();
+  EXPECT_NEAR(d.max_overlap_ratio, 0.25, 1e-9);
+  EXPECT_EQ(d.status, Status::kOverlap);
 }
 
 TEST(Diagnostics, ReportsNanAndEscape) {
