@@ -146,8 +146,7 @@ void read_checkpoint(World& world, const std::string& path) {
     if (k < 0 || static_cast<std::size_t>(k) >= np) r.fail("has a pair index out of range");
   derive_list_indices(nl);
   compute_clearances(nl, s.particles);
-  s.reaction_force.assign(np, Vec3::Zero());
-  s.reaction_torque.assign(np, Vec3::Zero());
+  s.reaction.assign(np, Reaction{});
   s.pair_live.assign(np, 1);
   nl.parallel_min = static_cast<std::size_t>(world.model().settings.parallel_min_particles);
   world.state() = std::move(s);

@@ -145,6 +145,13 @@ struct ContactHistory {
   Vec3 rolling = Vec3::Zero();     // EPSD spring torque acting on i [N m]
 };
 
+/// What a pair leaves for its second member, in that member's incoming slot (one record, so
+/// that storing it touches one or two cache lines, not up to four).
+struct Reaction {
+  Vec3 force = Vec3::Zero();   // the pair's force on its first member; the second takes minus it [N]
+  Vec3 torque = Vec3::Zero();  // the pair's torque on its second member [N m]
+};
+
 struct ContactOutput {
   Vec3 force;     // on i [N]
   Vec3 torque_i;  // on i [N m]

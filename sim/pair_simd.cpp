@@ -10,6 +10,8 @@ namespace reposetwin::sim {
 namespace {
 
 static_assert(sizeof(Vec3) == 3 * sizeof(double), "the lanes read a Vec3 as 3 doubles");
+static_assert(sizeof(Reaction) == 6 * sizeof(double),
+              "the lanes write a Reaction as force then torque, 3 doubles each");
 static_assert(sizeof(ContactHistory) == 6 * sizeof(double),
               "the lanes read a ContactHistory as tangential then rolling, 3 doubles each");
 
@@ -23,8 +25,7 @@ struct LaneArrays {
   const double* inertia = nullptr;     // (particles) [kg m^2]
   double* history = nullptr;           // (pairs x 6) tangential [m], rolling [N m]
   const std::int32_t* slot = nullptr;  // (pairs)
-  double* reaction_force = nullptr;    // (slots x 3) [N]
-  double* reaction_torque = nullptr;   // (slots x 3) [N m]
+  double* reaction = nullptr;          // (slots x 6) force [N], then torque [N m]
   std::uint8_t* live = nullptr;        // (pairs)
   double* force_i = nullptr;           // (queued x 3) [N]
   double* torque_i = nullptr;          // (queued x 3) [N m]
@@ -46,8 +47,7 @@ LaneArrays lane_arrays(const Particles& p, const PairOutputs& out) {
   LaneArrays a = lane_arrays(p);
   a.history = reinterpret_cast<double*>(out.history);
   a.slot = out.slot;
-  a.reaction_force = out.reaction_force->data();
-  a.reaction_torque = out.reaction_torque->data();
+  a.reaction = reinterpret_cast<double*>(out.reaction);
   a.live = out.live;
   a.force_i = out.force_i->data();
   a.torque_i = out.torque_i->data();
@@ -57,8 +57,7 @@ LaneArrays lane_arrays(const Particles& p, const PairOutputs& out) {
 /// Clears the springs and reactions of pair k, which separated since the last step.
 [[gnu::noinline]] void clear_pair(const PairOutputs& out, std::int32_t k) {
   out.history[k] = ContactHistory{};
-  out.reaction_force[out.slot[k]].setZero();
-  out.reaction_torque[out.slot[k]].setZero();
+  out.reaction[out.slot[k]] = Reaction{};
   out.live[k] = 0;
 }
 
@@ -123,18 +122,16 @@ WallLaneArrays wall_lane_arrays(Particles& p, WallContacts& wc) {
   const ContactOutput o = hertz_mindlin(*e.c, in, dt, out.history[e.k]);
   out.force_i[q] = o.force;
   out.torque_i[q] = o.torque_i;
-  out.reaction_force[out.slot[e.k]] = o.force;
-  out.reaction_torque[out.slot[e.k]] = o.torque_j;
+  out.reaction[out.slot[e.k]] = Reaction{o.force, o.torque_j};
 }
 
 /// What the lanes store for a queued pair k that does not touch (any more): its springs,
-/// reactions (at 3 times slot s3) cleared, zero force and torque for queue position
+/// reaction (at 6 times slot s6) cleared, zero force and torque for queue position
 /// q3 / 3, live flag 0.
-[[gnu::noinline]] void separate_lane(const LaneArrays& a, std::size_t k, std::size_t s3,
+[[gnu::noinline]] void separate_lane(const LaneArrays& a, std::size_t k, std::size_t s6,
                                      std::size_t q3) {
   std::fill_n(a.history + 6 * k, 6, 0.0);
-  std::fill_n(a.reaction_force + s3, 3, 0.0);
-  std::fill_n(a.reaction_torque + s3, 3, 0.0);
+  std::fill_n(a.reaction + s6, 6, 0.0);
   std::fill_n(a.force_i + q3, 3, 0.0);
   std::fill_n(a.torque_i + q3, 3, 0.0);
   a.live[k] = 0;

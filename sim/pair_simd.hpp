@@ -85,8 +85,7 @@ struct QueuedContact {
 struct PairOutputs {
   ContactHistory* history = nullptr;   // (pairs) springs of pair k, updated in place
   const std::int32_t* slot = nullptr;  // (pairs) incoming slot of pair k
-  Vec3* reaction_force = nullptr;      // (pairs, by slot) force of the pair on i [N]
-  Vec3* reaction_torque = nullptr;     // (pairs, by slot) torque of the pair on j [N m]
+  Reaction* reaction = nullptr;        // (pairs, by slot) what the pair leaves its second member
   std::uint8_t* live = nullptr;        // (pairs) set to 0 for a queued pair that does not touch
   Vec3* force_i = nullptr;             // (queued) force of each queued contact on i [N]
   Vec3* torque_i = nullptr;            // (queued) torque of each queued contact on i [N m]

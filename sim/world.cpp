@@ -166,8 +166,7 @@ void World::update_neighbors() {
   // springs carried over from the old list is taken as touching (live): the force phase clears
   // it if it does not.
   const std::size_t np = nl.pairs();
-  state_.reaction_force.assign(np, Vec3::Zero());
-  state_.reaction_torque.assign(np, Vec3::Zero());
+  state_.reaction.assign(np, Reaction{});
   state_.pair_live.resize(np);
   for (std::size_t k = 0; k < np; ++k)
     state_.pair_live[k] = nl.history[k].tangential != Vec3::Zero() ||
@@ -231,14 +230,13 @@ void World::pair_forces() {
   const std::size_t n = p.size();
   const std::size_t par_min = model_.settings.parallel_min_particles;
   const std::size_t np = nl.pairs();
-  if (state_.pair_live.size() != np || state_.reaction_force.size() != np ||
+  if (state_.pair_live.size() != np || state_.reaction.size() != np ||
       nl.in_slot.size() != np || nl.in_particle.size() != np || nl.first.size() != np ||
       nl.clearance2.size() != np) {
     // A state assembled elsewhere (a restored checkpoint): nothing is known to be zero.
     derive_list_indices(nl);
     compute_clearances(nl, p);
-    state_.reaction_force.assign(np, Vec3::Zero());
-    state_.reaction_torque.assign(np, Vec3::Zero());
+    state_.reaction.assign(np, Reaction{});
     state_.pair_live.assign(np, 1);
   }
   // The particles are taken in blocks of kBlock. For each block: (1) its listed pairs are split
@@ -267,8 +265,7 @@ void World::pair_forces() {
   const double* const clearance2 = nl.clearance2.data();
   const double* const moved2 = state_.moved2.data();
   ContactHistory* const history = nl.history.data();
-  Vec3* const reaction_force = state_.reaction_force.data();
-  Vec3* const reaction_torque = state_.reaction_torque.data();
+  Reaction* const reaction = state_.reaction.data();
   std::uint8_t* const live = state_.pair_live.data();
   const PairIsa isa = pair_isa_;  // the same bits with any of them
   constexpr std::size_t kBlock = 256;  // particles: about 400 touching pairs on a settled heap
@@ -339,8 +336,7 @@ void World::pair_forces() {
       PairOutputs out;
       out.history = history;
       out.slot = slot;
-      out.reaction_force = reaction_force;
-      out.reaction_torque = reaction_torque;
+      out.reaction = reaction;
       out.live = live;
       out.force_i = queue_force.data();
       out.torque_i = queue_torque.data();
@@ -387,8 +383,7 @@ void World::gather_wall_forces(bool kick) {
   const std::vector<std::int32_t>& cand = state_.wall_cand_particle;
   const std::int32_t* const in_start = nl.in_start.data();
   const std::int32_t* const in_particle = nl.in_particle.data();
-  const Vec3* const reaction_force = state_.reaction_force.data();
-  const Vec3* const reaction_torque = state_.reaction_torque.data();
+  const Reaction* const reaction = state_.reaction.data();
   // Blocks of particles. In each, the reactions of the pairs the block's particles are second
   // in (stored contiguously by incoming slot) are added in one flat loop over the slots (a loop
   // per particle, of 0 to 8 slots, would cost a mispredicted branch per particle); then the
@@ -412,8 +407,8 @@ void World::gather_wall_forces(bool kick) {
       }
       for (std::int32_t q = in_start[i0]; q < in_start[i1]; ++q) {
         const std::size_t i = static_cast<std::size_t>(in_particle[q]) - i0;
-        f[i] -= reaction_force[q];
-        tq[i] += reaction_torque[q];
+        f[i] -= reaction[q].force;
+        tq[i] += reaction[q].torque;
       }
       // Wall contacts (candidates in particle order): a wall a candidate does not touch has its
       // springs cleared.
@@ -525,8 +520,7 @@ std::size_t World::remove_particles(const std::vector<char>& remove) {
   state_.particles.keep(keep);
   compact_neighbor_list(state_.neighbors, keep);
   const std::size_t np = state_.neighbors.pairs();
-  state_.reaction_force.assign(np, Vec3::Zero());
-  state_.reaction_torque.assign(np, Vec3::Zero());
+  state_.reaction.assign(np, Reaction{});
   state_.pair_live.assign(np, 1);  // unknown: the next force phase clears what does not touch
   state_.moved2.clear();           // measured again by the next force phase
   state_.forces_valid = false;

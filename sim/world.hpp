@@ -70,8 +70,7 @@ struct State {
   // Per-pair results of the last force phase (scratch, sized with the neighbor list). The
   // reactions are stored in the order of the incoming lists (slot neighbors.in_slot[k] for pair
   // k), so gather_forces reads each particle's reactions contiguously.
-  HugeVector<Vec3> reaction_force;   // (pairs, by slot) force of the pair on its first member [N]
-  HugeVector<Vec3> reaction_torque;  // (pairs, by slot) torque on its second member [N m]
+  HugeVector<Reaction> reaction;  // (pairs, by slot)
   // (pairs) 1 if the pair touched in the last force phase (or may have: set to 1 for every pair
   // when the list is compacted or read from a checkpoint, and for the pairs with springs when it
   // is rebuilt); 0 only if the pair's history and reactions are zero. A live pair goes

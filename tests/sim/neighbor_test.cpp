@@ -199,13 +199,13 @@ TEST(NeighborForces, PairsThatDoNotTouchCarryNoSpringOrReaction) {
         if (touch) {
           now.insert(ids);
           EXPECT_EQ(st.pair_live[k], 1);
-          EXPECT_GT(st.reaction_force[nl.in_slot[k]].norm(), 0.0);
+          EXPECT_GT(st.reaction[nl.in_slot[k]].force.norm(), 0.0);
           ++touching;
         } else {
           EXPECT_EQ(nl.history[k].tangential, Vec3::Zero());
           EXPECT_EQ(nl.history[k].rolling, Vec3::Zero());
-          EXPECT_EQ(st.reaction_force[nl.in_slot[k]], Vec3::Zero());
-          EXPECT_EQ(st.reaction_torque[nl.in_slot[k]], Vec3::Zero());
+          EXPECT_EQ(st.reaction[nl.in_slot[k]].force, Vec3::Zero());
+          EXPECT_EQ(st.reaction[nl.in_slot[k]].torque, Vec3::Zero());
           EXPECT_EQ(st.pair_live[k], 0);
           if (was_touching.count(ids) != 0) ++separated;
         }

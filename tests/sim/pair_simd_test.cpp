@@ -152,14 +152,14 @@ Scene random_scene(const Model& m, int count, std::uint64_t seed) {
 /// Everything a run writes, prefilled with a sentinel so that a stray write shows.
 struct Results {
   std::vector<ContactHistory> history;
-  std::vector<Vec3> reaction_force, reaction_torque, force_i, torque_i;
+  std::vector<Reaction> reaction;
+  std::vector<Vec3> force_i, torque_i;
   std::vector<std::uint8_t> live;  // (pairs) all 1: every queued pair touched last step
 
   explicit Results(const Scene& s) : history(s.history) {
     const std::size_t n = s.contacts.size();
     const Vec3 sentinel = Vec3::Constant(-12345.0);
-    reaction_force.assign(n, sentinel);
-    reaction_torque.assign(n, sentinel);
+    reaction.assign(n, Reaction{sentinel, sentinel});
     force_i.assign(n, sentinel);
     torque_i.assign(n, sentinel);
     live.assign(n, 1);
@@ -168,8 +168,7 @@ struct Results {
     PairOutputs o;
     o.history = history.data();
     o.slot = s.slot.data();
-    o.reaction_force = reaction_force.data();
-    o.reaction_torque = reaction_torque.data();
+    o.reaction = reaction.data();
     o.live = live.data();
     o.force_i = force_i.data();
     o.torque_i = torque_i.data();
@@ -189,8 +188,7 @@ void scalar_contact_reference(const Scene& s, std::size_t q, Results& r) {
   const ContactOutput out = hertz_mindlin(*e.c, in, kDt, r.history[e.k]);
   r.force_i[q] = out.force;
   r.torque_i[q] = out.torque_i;
-  r.reaction_force[s.slot[e.k]] = out.force;
-  r.reaction_torque[s.slot[e.k]] = out.torque_j;
+  r.reaction[s.slot[e.k]] = Reaction{out.force, out.torque_j};
 }
 
 /// One step of the reference, one contact after the other, on the first `count` contacts.
@@ -207,8 +205,7 @@ Results scalar_reference(const Scene& s, std::size_t count) {
 
 void expect_same(const Results& a, const Results& b, const std::string& what) {
   EXPECT_TRUE(same_bits(a.history, b.history)) << what << ": springs differ";
-  EXPECT_TRUE(same_bits(a.reaction_force, b.reaction_force)) << what << ": reaction forces";
-  EXPECT_TRUE(same_bits(a.reaction_torque, b.reaction_torque)) << what << ": reaction torques";
+  EXPECT_TRUE(same_bits(a.reaction, b.reaction)) << what << ": reactions";
   EXPECT_TRUE(same_bits(a.force_i, b.force_i)) << what << ": forces on i";
   EXPECT_TRUE(same_bits(a.torque_i, b.torque_i)) << what << ": torques on i";
   EXPECT_TRUE(same_bits(a.live, b.live)) << what << ": live flags";
@@ -400,8 +397,7 @@ TEST(PairSimd, QueuedPairsThatNoLongerTouchAreCleared) {
     if ((s.p.x[e.i] - s.p.x[e.j]).squaredNorm() >= cut * cut) {
       ++separated;
       ref.history[e.k] = ContactHistory{};
-      ref.reaction_force[s.slot[e.k]].setZero();
-      ref.reaction_torque[s.slot[e.k]].setZero();
+      ref.reaction[s.slot[e.k]] = Reaction{};
       ref.force_i[q].setZero();
       ref.torque_i[q].setZero();
       ref.live[e.k] = 0;
