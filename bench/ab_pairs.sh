@@ -29,7 +29,8 @@ for f in "$a" "$b"; do
   fi
 done
 if [[ -z "$heap" ]]; then echo "ab_pairs.sh: --heap FILE is required" >&2; exit 2; fi
-if ! [[ "$threads" =~ ^[1-9][0-9]*$ && "$pairs" =~ ^[1-9][0-9]*$ && "$steps" =~ ^[1-9][0-9]*$ ]]; then
+positive='^[1-9][0-9]*$'
+if ! [[ "$threads" =~ $positive && "$pairs" =~ $positive && "$steps" =~ $positive ]]; then
   echo "ab_pairs.sh: --threads, --pairs and --steps must be positive integers" >&2
   exit 2
 fi
@@ -37,7 +38,7 @@ fi
 # One timed run: prints "seconds hash".
 run() {
   OMP_WAIT_POLICY=active "$1" --heap "$heap" --steps "$steps" --threads "$threads" 2>&1 |
-    sed -nE "s/.*threads ${threads}: [0-9]+ steps in ([0-9.]+) s wall.*state hash (0x[0-9a-f]+).*/\1 \2/p"
+    sed -nE "s/.*threads ${threads}: [0-9]+ steps in ([0-9.]+) s wall.*hash (0x[0-9a-f]+).*/\1 \2/p"
 }
 
 ratios=()
@@ -54,5 +55,6 @@ printf '%s\n' "${ratios[@]}" | sort -g | awk -v n="${#ratios[@]}" -v ha="$hash_a
     med = (n % 2) ? r[(n + 1) / 2] : (r[n / 2] + r[n / 2 + 1]) / 2
     printf "time(B) / time(A): median %.4f, quartiles %.4f-%.4f, range %.4f-%.4f (%d pairs)\n",
            med, r[int((n + 3) / 4)], r[int((3 * n + 3) / 4)], r[1], r[n], n
-    printf "state hash A %s, B %s%s\n", ha, hb, (ha == hb) ? " (the same bits)" : " (DIFFERENT bits)"
+    same = (ha == hb) ? " (the same bits)" : " (DIFFERENT bits)"
+    printf "state hash A %s, B %s%s\n", ha, hb, same
   }'

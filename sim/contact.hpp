@@ -148,7 +148,7 @@ struct ContactHistory {
 /// What a pair leaves for its second member, in that member's incoming slot (one record, so
 /// that storing it touches one or two cache lines, not up to four).
 struct Reaction {
-  Vec3 force = Vec3::Zero();   // the pair's force on its first member; the second takes minus it [N]
+  Vec3 force = Vec3::Zero();   // the pair's force on its first member (minus it on the second) [N]
   Vec3 torque = Vec3::Zero();  // the pair's torque on its second member [N m]
 };
 

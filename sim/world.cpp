@@ -270,8 +270,8 @@ void World::pair_forces() {
   const PairIsa isa = pair_isa_;  // the same bits with any of them
   constexpr std::size_t kBlock = 256;  // particles: about 400 touching pairs on a settled heap
   // The cost of each block, for the threads' ranges (first_block): a listed pair, a particle,
-  // and a pair the kernel computed last step (block_queued_), weighed 6 (the kernel takes about
-  // 27 ns per contact on the standard heap, the split a few ns per listed pair). Counting the
+  // and a pair the kernel computed last step (block_queued_), weighed 6 (on the standard heap
+  // the kernel takes several times as long per contact as the split per listed pair). Counting the
   // listed pairs alone left one of two threads waiting 3-5% of the loop: the share of listed
   // pairs that touch differs between blocks. The ranges only move work between threads; the
   // results do not depend on them.
@@ -493,8 +493,8 @@ Diagnostics World::diagnose() const {
         const double cut = p.radius[i] + p.radius[j];
         const double dist2 = (p.x[i] - p.x[j]).squaredNorm();
         if (!(dist2 < cut * cut)) continue;
-        d.max_overlap_ratio = std::max(d.max_overlap_ratio, (cut - std::sqrt(dist2)) /
-                                                                std::min(p.radius[i], p.radius[j]));
+        const double ratio = (cut - std::sqrt(dist2)) / std::min(p.radius[i], p.radius[j]);
+        d.max_overlap_ratio = std::max(d.max_overlap_ratio, ratio);
         ++d.contacts;
       }
     }
