@@ -3,10 +3,10 @@
 #include <memory>
 
 #include "apps/reposetwin/commands.hpp"
-#include "experiments/calibration.hpp"
-#include "experiments/campaign.hpp"
-#include "experiments/case_runner.hpp"
-#include "experiments/provenance.hpp"
+#include "experiments/calibration/calibration.hpp"
+#include "experiments/campaign/campaign.hpp"
+#include "experiments/campaign/case_runner.hpp"
+#include "experiments/io/provenance.hpp"
 
 namespace reposetwin::cli {
 namespace {

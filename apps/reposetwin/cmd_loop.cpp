@@ -1,4 +1,4 @@
-// reposetwin loop DATA.csv --out DIR: close the loop on measured data (experiments/loop.hpp).
+// reposetwin loop DATA.csv --out DIR: close the loop on measured data (experiments/loop/loop.hpp).
 // reposetwin loop-synth DESIGN.toml --out DIR: a synthetic lab dataset with hidden settings.
 #include <iostream>
 #include <memory>
@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
-#include "experiments/loop.hpp"
-#include "experiments/loop_synth.hpp"
-#include "experiments/toml_reader.hpp"
+#include "experiments/loop/loop.hpp"
+#include "experiments/loop/loop_synth.hpp"
+#include "experiments/io/input_error.hpp"
 
 namespace reposetwin::cli {
 
@@ -124,7 +124,7 @@ void add_loop_command(CLI::App& app) {
   auto* syn = app.add_subcommand(
       "loop-synth", "Make a synthetic lab dataset (CSV + photos) from the twin with hidden "
                     "settings; the hidden settings are not written");
-  syn->add_option("design", sargs->design, "Design file (TOML, see experiments/loop_synth.hpp)")
+  syn->add_option("design", sargs->design, "Design file (TOML, see experiments/loop/loop_synth.hpp)")
       ->required();
   syn->add_option("--out,-o", sargs->out, "Output folder")->capture_default_str();
   syn->add_option("--cache", sargs->cache, "Simulation cache (default: a hidden folder)");

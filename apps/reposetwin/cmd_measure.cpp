@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
-#include "experiments/provenance.hpp"
+#include "experiments/io/provenance.hpp"
 #include "vision/image.hpp"
 #include "vision/measure.hpp"
 

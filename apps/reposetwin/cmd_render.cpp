@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
-#include "experiments/pile_images.hpp"
+#include "experiments/photos/pile_images.hpp"
 
 namespace reposetwin::cli {
 

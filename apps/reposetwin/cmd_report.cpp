@@ -4,7 +4,7 @@
 #include <memory>
 
 #include "apps/reposetwin/commands.hpp"
-#include "experiments/report.hpp"
+#include "experiments/report/report.hpp"
 
 namespace reposetwin::cli {
 

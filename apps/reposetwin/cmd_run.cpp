@@ -3,8 +3,8 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
-#include "experiments/pile_test.hpp"
-#include "experiments/scene_overrides.hpp"
+#include "experiments/pile/pile_run.hpp"
+#include "experiments/io/scene_overrides.hpp"
 
 namespace reposetwin::cli {
 

@@ -2,7 +2,7 @@
 #include <memory>
 
 #include "apps/reposetwin/commands.hpp"
-#include "experiments/timestep_study.hpp"
+#include "experiments/calibration/timestep_study.hpp"
 
 namespace reposetwin::cli {
 

@@ -5,7 +5,7 @@
 #include <iostream>
 
 #include "apps/reposetwin/commands.hpp"
-#include "experiments/provenance.hpp"
+#include "experiments/io/provenance.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"ReposeTwin: a DEM digital twin of the angle-of-repose pile test"};

@@ -1,0 +1,129 @@
+#include "experiments/io/overrides.hpp"
+
+#include <cctype>
+#include <sstream>
+#include <stdexcept>
+
+namespace reposetwin::experiments {
+namespace {
+
+std::string where(std::string_view origin) {
+  return origin.empty() ? std::string("override") : std::string(origin);
+}
+
+bool is_index(const std::string& s) {
+  if (s.empty() || s.size() > 9) return false;
+  for (char c : s)
+    if (!std::isdigit(static_cast<unsigned char>(c))) return false;
+  return true;
+}
+
+std::string type_name(toml::node_type t) {
+  std::ostringstream os;
+  os << t;
+  return os.str();
+}
+
+// A copy of `value`, converted to float when it is an integer replacing a float.
+template <typename Sink>
+void store(const toml::node& value, toml::node_type existing, Sink&& sink) {
+  if (existing == toml::node_type::floating_point && value.is_integer()) {
+    sink(toml::value<double>(static_cast<double>(value.as_integer()->get())));
+    return;
+  }
+  value.visit([&](const auto& v) { sink(v); });
+}
+
+}  // namespace
+
+std::string toml_value_text(const toml::node& value) {
+  std::ostringstream os;
+  value.visit([&](const auto& v) { os << v; });
+  return os.str();
+}
+
+std::vector<std::string> split_dotted_key(std::string_view dotted_key, std::string_view origin) {
+  std::vector<std::string> parts;
+  std::string cur;
+  for (char c : dotted_key) {
+    if (c == '.') {
+      parts.push_back(cur);
+      cur.clear();
+    } else {
+      cur.push_back(c);
+    }
+  }
+  parts.push_back(cur);
+  for (const auto& p : parts)
+    if (p.empty())
+      throw std::invalid_argument(where(origin) + ": override key '" + std::string(dotted_key) +
+                                  "' is not a dotted key path (empty segment)");
+  return parts;
+}
+
+void apply_override(toml::table& doc, std::string_view dotted_key, const toml::node& value,
+                    std::string_view origin) {
+  const auto parts = split_dotted_key(dotted_key, origin);
+  const std::string key(dotted_key);
+  auto fail = [&](const std::string& why) -> std::invalid_argument {
+    return std::invalid_argument(where(origin) + ": override '" + key +
+                                 "' = " + toml_value_text(value) + ": " + why);
+  };
+
+  toml::node* parent = &doc;
+  std::string path;
+  for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+    const std::string& seg = parts[i];
+    toml::node* next = nullptr;
+    if (auto* t = parent->as_table()) {
+      next = t->get(seg);
+    } else if (auto* a = parent->as_array(); a && is_index(seg)) {
+      const std::size_t idx = std::stoul(seg);
+      if (idx >= a->size())
+        throw fail("index " + seg + " is out of range for '" + path + "' (" +
+                   std::to_string(a->size()) + " elements)");
+      next = a->get(idx);
+    }
+    path += (path.empty() ? "" : ".") + seg;
+    if (next == nullptr) throw fail("'" + path + "' does not exist in the scene");
+    if (!next->is_table() && !next->is_array())
+      throw fail("'" + path + "' is a " + type_name(next->type()) + ", not a table");
+    parent = next;
+  }
+
+  const std::string& leaf = parts.back();
+  if (auto* t = parent->as_table()) {
+    const toml::node* existing = t->get(leaf);
+    if (existing == nullptr) {
+      store(value, value.type(), [&](const auto& v) { t->insert_or_assign(leaf, v); });
+      return;
+    }
+    const bool int_to_float = existing->is_floating_point() && value.is_integer();
+    if (existing->type() != value.type() && !int_to_float)
+      throw fail("changes the type of '" + key + "' from " + type_name(existing->type()) + " to " +
+                 type_name(value.type()));
+    store(value, existing->type(), [&](const auto& v) { t->insert_or_assign(leaf, v); });
+    return;
+  }
+  auto* a = parent->as_array();
+  if (a == nullptr || !is_index(leaf))
+    throw fail("'" + path + "' is an array; '" + leaf + "' is not an index");
+  const std::size_t idx = std::stoul(leaf);
+  if (idx >= a->size())
+    throw fail("index " + leaf + " is out of range for '" + path + "' (" +
+               std::to_string(a->size()) + " elements)");
+  const toml::node* existing = a->get(idx);
+  const bool int_to_float = existing->is_floating_point() && value.is_integer();
+  if (existing->type() != value.type() && !int_to_float)
+    throw fail("changes the type of '" + key + "' from " + type_name(existing->type()) + " to " +
+               type_name(value.type()));
+  store(value, existing->type(),
+        [&](const auto& v) { a->replace(a->cbegin() + static_cast<std::ptrdiff_t>(idx), v); });
+}
+
+void apply_overrides(toml::table& doc, const toml::table& overrides, std::string_view origin) {
+  // toml::table iterates in key order, which puts "a" before "a.b".
+  for (const auto& [k, v] : overrides) apply_override(doc, k.str(), v, origin);
+}
+
+}  // namespace reposetwin::experiments

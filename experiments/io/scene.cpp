@@ -1,0 +1,368 @@
+#include "experiments/io/scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "experiments/io/provenance.hpp"
+#include "experiments/io/toml_reader.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::string num(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+sim::Material read_material(TableReader t, const std::string& name) {
+  sim::Material m;
+  m.name = name;
+  m.density = t.number("density_kg_m3", m.density);
+  m.youngs_modulus = t.number("youngs_modulus_pa", m.youngs_modulus);
+  m.poisson_ratio = t.number("poisson_ratio", m.poisson_ratio);
+  if (!(m.density > 0)) t.fail("density_kg_m3", "= " + num(m.density) + " must be positive");
+  if (!(m.youngs_modulus > 0))
+    t.fail("youngs_modulus_pa", "= " + num(m.youngs_modulus) + " must be positive");
+  if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5))
+    t.fail("poisson_ratio", "= " + num(m.poisson_ratio) + " must lie in (-1, 0.5)");
+  t.finish();
+  return m;
+}
+
+sim::PairParams read_contact(TableReader t) {
+  sim::PairParams p;
+  p.restitution = t.number("restitution", p.restitution);
+  p.friction = t.number("friction", p.friction);
+  p.rolling_friction = t.number("rolling_friction", p.rolling_friction);
+  p.rolling_damping = t.number("rolling_damping", p.rolling_damping);
+  const std::string model = t.string("rolling_model", "epsd");
+  const sim::RollingModelInfo* info = sim::find_rolling_model(model);
+  if (!info) {
+    std::string known;
+    for (const auto& row : sim::kRollingModels) known += " " + std::string(row.keyword);
+    t.fail("rolling_model", "= \"" + model + "\" is not a rolling model (known:" + known + ")");
+  }
+  p.rolling_model = info->model;
+  // Optional effects (off by default): simplified-JKR cohesion and size-dependent rolling.
+  p.cohesion_energy_density = t.number("cohesion_energy_density", p.cohesion_energy_density);
+  p.rolling_size_exponent = t.number("rolling_size_exponent", p.rolling_size_exponent);
+  p.rolling_reference_diameter =
+      t.number("rolling_reference_diameter_m", p.rolling_reference_diameter);
+  if (!(p.cohesion_energy_density >= 0 && std::isfinite(p.cohesion_energy_density)))
+    t.fail("cohesion_energy_density",
+           "= " + num(p.cohesion_energy_density) + " must be finite and not negative [J/m^3]");
+  if (!std::isfinite(p.rolling_size_exponent))
+    t.fail("rolling_size_exponent", "= " + num(p.rolling_size_exponent) + " must be finite");
+  if (!(p.rolling_reference_diameter >= 0 && std::isfinite(p.rolling_reference_diameter)))
+    t.fail("rolling_reference_diameter_m",
+           "= " + num(p.rolling_reference_diameter) + " must be finite and not negative [m]");
+  if (p.rolling_size_exponent != 0 && !(p.rolling_reference_diameter > 0))
+    t.fail("rolling_reference_diameter_m", "= " + num(p.rolling_reference_diameter) +
+                                               " must be positive when rolling_size_exponent = " +
+                                               num(p.rolling_size_exponent) + " is not 0");
+  if (!(p.restitution > 0 && p.restitution <= 1))
+    t.fail("restitution", "= " + num(p.restitution) + " must lie in (0, 1]");
+  if (!(p.friction >= 0)) t.fail("friction", "= " + num(p.friction) + " must not be negative");
+  if (!(p.rolling_friction >= 0))
+    t.fail("rolling_friction", "= " + num(p.rolling_friction) + " must not be negative");
+  if (!(p.rolling_damping >= 0))
+    t.fail("rolling_damping", "= " + num(p.rolling_damping) + " must not be negative");
+  t.finish();
+  return p;
+}
+
+/// The scene as read, with the optional contact effects written out in every [contacts.a-b]
+/// table (defaults included), so a run folder states whether cohesion or size-dependent rolling
+/// was on without knowing the parser's defaults.
+// The scene as run: every contact's defaults written out, and a sieve-table file's [psd] table
+// copied in as [sample.psd], so the text loads on its own from any folder (a psd_file path is
+// relative to the original scene's folder).
+std::string resolved_text(const toml::table& doc, const SceneConfig& s,
+                          const std::filesystem::path& dir) {
+  toml::table out = doc;
+  if (toml::table* sample = out["sample"].as_table()) {
+    if (const auto file = (*sample)["psd_file"].value<std::string>()) {
+      const std::filesystem::path p = dir / *file;
+      const toml::table psd_doc = parse_toml(read_file(p.string()), p.string());
+      if (const toml::table* psd = psd_doc["psd"].as_table()) {
+        sample->insert_or_assign("psd", *psd);
+        sample->erase("psd_file");
+      }
+    }
+  }
+  if (toml::table* contacts = out["contacts"].as_table()) {
+    for (auto& [key, node] : *contacts) {
+      toml::table* t = node.as_table();
+      const std::string name(key.str());
+      const auto dash = name.find('-');
+      const auto it = s.contacts.find({name.substr(0, dash), name.substr(dash + 1)});
+      if (!t || it == s.contacts.end()) continue;
+      const sim::PairParams& p = it->second;
+      t->insert_or_assign("cohesion_energy_density", p.cohesion_energy_density);
+      t->insert_or_assign("rolling_size_exponent", p.rolling_size_exponent);
+      t->insert_or_assign("rolling_reference_diameter_m", p.rolling_reference_diameter);
+    }
+  }
+  std::ostringstream os;
+  os << out;
+  return os.str();
+}
+
+/// Volume of the container's inside [m^3].
+double container_volume(const ContainerConfig& c) {
+  const double r0 = 0.5 * c.bottom_diameter, r1 = 0.5 * c.top_diameter;
+  return kPi / 3.0 * c.height * (r0 * r0 + r0 * r1 + r1 * r1);
+}
+
+}  // namespace
+
+SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
+  SceneConfig s;
+  s.file = file;
+  const std::filesystem::path dir =
+      file == "<embedded>" ? std::filesystem::current_path()
+                           : std::filesystem::absolute(file).parent_path();
+  TableReader root(doc, file);
+  {
+    TableReader t = *root.table("scene");
+    s.name = t.string("name");
+    s.description = t.string("description", "");
+    const std::int64_t seed = t.integer("seed", 1);
+    if (seed < 0) t.fail("seed", "= " + std::to_string(seed) + " must not be negative");
+    s.seed = static_cast<std::uint64_t>(seed);
+    t.finish();
+  }
+  {
+    TableReader t = *root.table("materials");
+    for (const std::string& name : t.keys()) s.materials.push_back(read_material(*t.table(name), name));
+    if (s.materials.empty()) t.fail("", "must define at least one material");
+    t.finish();
+  }
+  {
+    TableReader t = *root.table("sample");
+    s.mass = t.number("mass_kg");
+    if (!(s.mass > 0)) t.fail("mass_kg", "= " + num(s.mass) + " must be positive");
+    s.sample_material = t.string("material", s.sample_material);
+    material_index(s, s.sample_material, t.where("material"));
+    const bool has_file = t.has("psd_file"), has_inline = t.has("psd");
+    if (has_file == has_inline)
+      t.fail("psd_file", "or an inline [sample.psd] table is required (exactly one of them)");
+    try {
+      if (has_file) {
+        const std::filesystem::path p = dir / t.string("psd_file");
+        if (!std::filesystem::exists(p))
+          t.fail("psd_file", "= \"" + p.string() + "\" does not exist");
+        s.psd = read_psd_file(p.string());
+      } else {
+        t.mark_used("psd");
+        const toml::table* psd = doc["sample"]["psd"].as_table();
+        if (!psd) t.fail("psd", "must be a table");
+        s.psd = parse_psd_table(*psd, file, t.where("psd"));
+      }
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::invalid_argument& e) {  // the PSD reader names the file and key
+      throw InputError(e.what());
+    }
+    if (t.has("d_min_mm")) s.psd.spec.d_min = 1e-3 * t.number("d_min_mm");
+    if (t.has("d_max_mm")) s.psd.spec.d_max = 1e-3 * t.number("d_max_mm");
+    t.finish();
+    try {
+      sim::resolve_psd(s.psd.spec);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(file + ": sample.psd: " + e.what());
+    }
+  }
+  {
+    TableReader t = *root.table("contacts");
+    for (const std::string& key : t.keys()) {
+      const auto dash = key.find('-');
+      if (dash == std::string::npos)
+        t.fail(key, "must name two materials as \"a-b\"");
+      const std::string a = key.substr(0, dash), b = key.substr(dash + 1);
+      material_index(s, a, t.where(key));
+      material_index(s, b, t.where(key));
+      const sim::PairParams p = read_contact(*t.table(key));
+      s.contacts[{a, b}] = p;
+      s.contacts[{b, a}] = p;
+    }
+    t.finish();
+  }
+  {
+    TableReader t = *root.table("container");
+    ContainerConfig& c = s.container;
+    c.kind = t.string("kind", c.kind);
+    if (c.kind != "funnel" && c.kind != "cylinder")
+      t.fail("kind", "= \"" + c.kind + "\" must be \"funnel\" or \"cylinder\"");
+    c.material = t.string("material", c.material);
+    material_index(s, c.material, t.where("material"));
+    c.bottom_diameter = t.number("bottom_diameter_m", c.bottom_diameter);
+    c.top_diameter = c.kind == "cylinder" ? c.bottom_diameter : c.top_diameter;
+    if (c.kind == "funnel") c.top_diameter = t.number("top_diameter_m", c.top_diameter);
+    c.height = t.number("height_m", c.height);
+    c.gap = t.number("gap_m", c.gap);
+    if (!(c.bottom_diameter > 0))
+      t.fail("bottom_diameter_m", "= " + num(c.bottom_diameter) + " must be positive");
+    if (!(c.top_diameter >= c.bottom_diameter))
+      t.fail("top_diameter_m", "= " + num(c.top_diameter) + " must not be below the outlet");
+    if (!(c.height > 0)) t.fail("height_m", "= " + num(c.height) + " must be positive");
+    if (!(c.gap >= 0)) t.fail("gap_m", "= " + num(c.gap) + " must not be negative");
+    t.finish();
+    const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
+    if (psd.d_max >= c.bottom_diameter) {
+      throw InputError(file + ": sample d_max = " + num(psd.d_max * 1e3) +
+                       " mm does not pass the outlet container.bottom_diameter_m = " +
+                       num(c.bottom_diameter) + " m");
+    }
+    const double density = s.materials[material_index(s, s.sample_material, "sample")].density;
+    const double bulk = s.mass / (density * 0.6);  // loose bulk volume (solid fraction 0.6)
+    if (bulk > container_volume(c)) {
+      throw InputError(file + ": sample.mass_kg = " + num(s.mass) + " needs about " +
+                       num(bulk * 1e6) + " cm^3 of bulk volume, more than the container's " +
+                       num(container_volume(c) * 1e6) + " cm^3");
+    }
+  }
+  {
+    TableReader t = *root.table("plate");
+    s.plate_material = t.string("material", s.plate_material);
+    material_index(s, s.plate_material, t.where("material"));
+    t.finish();
+  }
+  for (const auto& [a, b] : {std::pair{s.sample_material, s.sample_material},
+                             std::pair{s.sample_material, s.container.material},
+                             std::pair{s.sample_material, s.plate_material}}) {
+    if (!s.contacts.count({a, b})) {
+      throw InputError(file + ": contacts." + a + "-" + b +
+                       " is missing: every contact the test uses must be declared");
+    }
+  }
+  if (auto t = root.table("procedure", true)) {
+    ProcedureConfig& p = s.procedure;
+    p.lift_speed = t->number("lift_speed_m_s", p.lift_speed);
+    p.settle_speed = t->number("settle_speed_m_s", p.settle_speed);
+    p.fill_settle_max = t->number("fill_settle_max_s", p.fill_settle_max);
+    p.final_settle_max = t->number("final_settle_max_s", p.final_settle_max);
+    p.max_time = t->number("max_time_s", p.max_time);
+    p.clog_window = t->number("clog_window_s", p.clog_window);
+    p.max_retained_fraction = t->number("max_retained_fraction", p.max_retained_fraction);
+    p.lattice_gap = t->number("lattice_gap", p.lattice_gap);
+    p.fill_max_speed = t->number("fill_max_speed_m_s", p.fill_max_speed);
+    if (!(p.fill_max_speed > 0))
+      t->fail("fill_max_speed_m_s", "= " + num(p.fill_max_speed) + " must be positive");
+    if (!(p.lift_speed > 0)) t->fail("lift_speed_m_s", "= " + num(p.lift_speed) + " must be positive");
+    if (!(p.settle_speed > 0))
+      t->fail("settle_speed_m_s", "= " + num(p.settle_speed) + " must be positive");
+    if (!(p.max_time > 0)) t->fail("max_time_s", "= " + num(p.max_time) + " must be positive");
+    if (!(p.clog_window > 0)) t->fail("clog_window_s", "= " + num(p.clog_window) + " must be positive");
+    if (!(p.max_retained_fraction >= 0 && p.max_retained_fraction < 1))
+      t->fail("max_retained_fraction",
+              "= " + num(p.max_retained_fraction) + " must be in [0, 1)");
+    if (!(p.lattice_gap >= 0)) t->fail("lattice_gap", "= " + num(p.lattice_gap) + " must not be negative");
+    t->finish();
+  }
+  // Escape limit scaled to the test: the fill lattice may stand well above a tall column.
+  s.settings.escape_distance = std::max(1.0, 10.0 * s.container.height);
+  if (auto t = root.table("numerics", true)) {
+    sim::Settings& n = s.settings;
+    n.rayleigh_fraction = t->number("rayleigh_fraction", n.rayleigh_fraction);
+    n.max_rayleigh_fraction = t->number("max_rayleigh_fraction", n.max_rayleigh_fraction);
+    n.time_step = t->number("time_step_s", n.time_step);
+    n.softened_youngs_modulus = t->number("softened_youngs_modulus_pa", n.softened_youngs_modulus);
+    n.skin = t->number("skin_m", n.skin);
+    n.threads = static_cast<int>(t->integer("threads", n.threads));
+    n.gravity.z() = -t->number("gravity_m_s2", -n.gravity.z());
+    n.max_overlap_ratio = t->number("max_overlap_ratio", n.max_overlap_ratio);
+    n.initial_overlap_tolerance =
+        t->number("initial_overlap_tolerance", n.initial_overlap_tolerance);
+    n.escape_distance = t->number("escape_distance_m", n.escape_distance);
+    if (n.time_step < 0) t->fail("time_step_s", "= " + num(n.time_step) + " must not be negative");
+    if (!(n.rayleigh_fraction > 0))
+      t->fail("rayleigh_fraction", "= " + num(n.rayleigh_fraction) + " must be positive");
+    if (n.softened_youngs_modulus < 0)
+      t->fail("softened_youngs_modulus_pa", "= " + num(n.softened_youngs_modulus) + " must not be negative");
+    if (n.threads < 0) t->fail("threads", "= " + std::to_string(n.threads) + " must not be negative");
+    t->finish();
+  }
+  if (auto t = root.table("output", true)) {
+    OutputConfig& o = s.output;
+    o.frame_interval = t->number("frame_interval_s", o.frame_interval);
+    o.checkpoint_interval = t->number("checkpoint_interval_s", o.checkpoint_interval);
+    o.progress_interval = t->number("progress_interval_s", o.progress_interval);
+    if (o.frame_interval < 0) t->fail("frame_interval_s", "= " + num(o.frame_interval) + " must not be negative");
+    if (!(o.checkpoint_interval > 0))
+      t->fail("checkpoint_interval_s", "= " + num(o.checkpoint_interval) + " must be positive");
+    t->finish();
+  }
+  if (auto t = root.table("measure", true)) {
+    sim::PileGeometrySettings& m = s.pile;
+    m.slice_azimuths = static_cast<int>(t->integer("slice_azimuths", m.slice_azimuths));
+    m.flank_low = t->number("flank_low", m.flank_low);
+    m.flank_high = t->number("flank_high", m.flank_high);
+    m.sectors = static_cast<int>(t->integer("sectors", m.sectors));
+    if (m.slice_azimuths < 8)
+      t->fail("slice_azimuths", "= " + std::to_string(m.slice_azimuths) + " must be at least 8");
+    if (!(m.flank_low >= 0 && m.flank_low < m.flank_high && m.flank_high <= 1))
+      t->fail("flank_low", "/ flank_high must satisfy 0 <= low < high <= 1");
+    t->finish();
+  }
+  root.finish();
+  {  // Validate the numerics now (time step against the stability limit, pair parameters).
+    const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
+    build_model(s, 0.5 * psd.d_min, 0.5 * psd.d_max);
+  }
+  s.resolved_toml = resolved_text(doc, s, dir);
+  return s;
+}
+
+SceneConfig parse_scene_text(const std::string& text, const std::string& file) {
+  return parse_scene_table(parse_toml(text, file), file);
+}
+
+SceneConfig parse_scene_file(const std::string& path) {
+  if (!std::filesystem::exists(path)) throw InputError(path + ": scene file does not exist");
+  return parse_scene_text(read_file(path), path);
+}
+
+int material_index(const SceneConfig& scene, const std::string& name, const std::string& key) {
+  for (std::size_t i = 0; i < scene.materials.size(); ++i)
+    if (scene.materials[i].name == name) return static_cast<int>(i);
+  throw InputError(scene.file + ": " + key + " = \"" + name + "\" is not a material in [materials]");
+}
+
+sim::Model build_model(const SceneConfig& scene, double r_min, double r_max) {
+  sim::Model m;
+  m.materials = scene.materials;
+  m.settings = scene.settings;
+  const int n = static_cast<int>(m.materials.size());
+  m.pairs.assign(n * n, sim::PairParams{});
+  for (const auto& [names, p] : scene.contacts)
+    m.set_pair(material_index(scene, names.first, "contacts"),
+               material_index(scene, names.second, "contacts"), p);
+  sim::WallSpec plate;
+  plate.name = "plate";
+  plate.kind = sim::WallKind::kPlane;
+  plate.material = material_index(scene, scene.plate_material, "plate.material");
+  m.walls.push_back(plate);
+  sim::WallSpec c;
+  c.name = scene.container.kind;
+  c.kind = sim::WallKind::kShell;
+  c.material = material_index(scene, scene.container.material, "container.material");
+  c.z_bottom = scene.container.gap;
+  c.z_top = scene.container.gap + scene.container.height;
+  c.r_bottom = 0.5 * scene.container.bottom_diameter;
+  c.r_top = 0.5 * scene.container.top_diameter;
+  m.walls.push_back(c);
+  try {
+    m.finalize(r_min, r_max);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(scene.file + ": " + e.what());
+  }
+  return m;
+}
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,126 @@
+#include "experiments/io/toml_reader.hpp"
+
+#include <sstream>
+
+namespace reposetwin::experiments {
+
+std::string show_node(const toml::node& node) {
+  std::ostringstream os;
+  if (const auto* s = node.as_string()) {
+    os << '"' << s->get() << '"';
+  } else if (const auto* t = node.as_table()) {
+    os << "{table with " << t->size() << " keys}";
+  } else {
+    node.visit([&os](const auto& v) { os << v; });
+  }
+  return os.str();
+}
+
+toml::table parse_toml(const std::string& text, const std::string& file) {
+  try {
+    return toml::parse(text, file);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << file << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
+       << e.description();
+    throw InputError(os.str());
+  }
+}
+
+TableReader::TableReader(const toml::table& table, std::string file, std::string path)
+    : table_(&table), file_(std::move(file)), path_(std::move(path)) {}
+
+std::string TableReader::where(const std::string& key) const {
+  return path_.empty() ? key : path_ + "." + key;
+}
+
+void TableReader::fail(const std::string& key, const std::string& what) const {
+  throw InputError(file_ + ": " + where(key) + " " + what);
+}
+
+bool TableReader::has(const std::string& key) const { return table_->contains(key); }
+
+const toml::node* TableReader::get(const std::string& key) {
+  used_.insert(key);
+  return table_->get(key);
+}
+
+double TableReader::number(const std::string& key, double fallback) {
+  const toml::node* n = get(key);
+  if (!n) return fallback;
+  if (auto v = n->value<double>(); v && (n->is_floating_point() || n->is_integer())) return *v;
+  fail(key, "must be a number, got " + show_node(*n));
+}
+
+double TableReader::number(const std::string& key) {
+  if (!has(key)) fail(key, "is required");
+  return number(key, 0.0);
+}
+
+std::int64_t TableReader::integer(const std::string& key, std::int64_t fallback) {
+  const toml::node* n = get(key);
+  if (!n) return fallback;
+  if (n->is_integer()) return *n->value<std::int64_t>();
+  fail(key, "must be an integer, got " + show_node(*n));
+}
+
+bool TableReader::boolean(const std::string& key, bool fallback) {
+  const toml::node* n = get(key);
+  if (!n) return fallback;
+  if (n->is_boolean()) return *n->value<bool>();
+  fail(key, "must be true or false, got " + show_node(*n));
+}
+
+std::string TableReader::string(const std::string& key, const std::string& fallback) {
+  const toml::node* n = get(key);
+  if (!n) return fallback;
+  if (n->is_string()) return *n->value<std::string>();
+  fail(key, "must be a string, got " + show_node(*n));
+}
+
+std::string TableReader::string(const std::string& key) {
+  if (!has(key)) fail(key, "is required");
+  return string(key, "");
+}
+
+std::vector<double> TableReader::numbers(const std::string& key) {
+  const toml::node* n = get(key);
+  if (!n) fail(key, "is required");
+  const toml::array* a = n->as_array();
+  if (!a) fail(key, "must be an array of numbers, got " + show_node(*n));
+  std::vector<double> out;
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    const toml::node& item = *a->get(i);
+    auto v = item.value<double>();
+    if (!v || !(item.is_floating_point() || item.is_integer()))
+      fail(key + "[" + std::to_string(i) + "]", "must be a number, got " + show_node(item));
+    out.push_back(*v);
+  }
+  return out;
+}
+
+std::optional<TableReader> TableReader::table(const std::string& key, bool optional) {
+  const toml::node* n = get(key);
+  if (!n) {
+    if (optional) return std::nullopt;
+    fail(key, "is required (a table)");
+  }
+  const toml::table* t = n->as_table();
+  if (!t) fail(key, "must be a table, got " + show_node(*n));
+  return TableReader(*t, file_, where(key));
+}
+
+std::vector<std::string> TableReader::keys() const {
+  std::vector<std::string> k;
+  for (const auto& [key, node] : *table_) k.emplace_back(key.str());
+  return k;
+}
+
+void TableReader::finish() const {
+  for (const auto& [key, node] : *table_) {
+    if (!used_.count(std::string(key.str())))
+      fail(std::string(key.str()), "is not a known key (value " + show_node(node) + ")");
+  }
+}
+
+}  // namespace reposetwin::experiments

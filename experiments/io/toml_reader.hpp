@@ -1,0 +1,63 @@
+// Strict reading of TOML tables into plain structs.
+//
+// Every scene and campaign file is read through TableReader: each key is read with its type
+// checked, and finish() rejects any key that was not read, so a typo is an error rather than a
+// silently ignored setting. Every message names the file, the dotted key and the value.
+#pragma once
+
+#include <toml++/toml.h>
+
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "experiments/io/input_error.hpp"
+
+namespace reposetwin::experiments {
+
+class TableReader {
+ public:
+  /// `path` is the dotted path of this table in the file ("" for the root).
+  TableReader(const toml::table& table, std::string file, std::string path = "");
+
+  bool has(const std::string& key) const;
+  double number(const std::string& key, double fallback);
+  double number(const std::string& key);  // required
+  std::int64_t integer(const std::string& key, std::int64_t fallback);
+  bool boolean(const std::string& key, bool fallback);
+  std::string string(const std::string& key, const std::string& fallback);
+  std::string string(const std::string& key);  // required
+  std::vector<double> numbers(const std::string& key);
+  /// A sub-table (required unless `optional`); nullopt if absent and optional.
+  std::optional<TableReader> table(const std::string& key, bool optional = false);
+  /// The keys of this table, in the file's (sorted) order.
+  std::vector<std::string> keys() const;
+  /// Marks a key as handled by someone else (for example a nested file reader).
+  void mark_used(const std::string& key) { used_.insert(key); }
+  const toml::table& raw() const { return *table_; }
+
+  /// Throws InputError for the first key that was never read.
+  void finish() const;
+
+  /// An error about `key` of this table.
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const;
+  std::string where(const std::string& key) const;
+  const std::string& file() const { return file_; }
+
+ private:
+  const toml::node* get(const std::string& key);
+  const toml::table* table_;
+  std::string file_;
+  std::string path_;
+  std::set<std::string> used_;
+};
+
+/// Parses TOML text; a syntax error becomes an InputError "file:line:column: description".
+toml::table parse_toml(const std::string& text, const std::string& file);
+
+/// The text of a TOML value for messages.
+std::string show_node(const toml::node& node);
+
+}  // namespace reposetwin::experiments

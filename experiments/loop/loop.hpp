@@ -1,0 +1,104 @@
+// Closing the loop: calibrate mu_r on measured lab tests, find the residual, trace it to a
+// candidate effect the base model lacks, add it, refit, and report the error before and after.
+//
+// Design note (see also loop_trace.hpp for the statistics and the acceptance rule).
+//  * Model. Following Kennedy and O'Hagan, measured angle = twin(conditions, mu_r, effects) +
+//    discrepancy + noise. The twin's angle is the vision angle of its own photographs of the pile,
+//    so measured and simulated angles come through the same measurement.
+//  * Baseline. Every test is simulated on a grid of mu_r values with several seeds (the same seeds
+//    for every test and grid point: common random numbers). Per test, a monotone fit of the angle
+//    against mu_r (calibration.hpp's fit_monotone) interpolates between the grid points; mu_r is
+//    the joint weighted least-squares value over the calibration tests (a fine scan of the fitted
+//    curves, so no linearisation), with its standard error from the curves' slopes. H and D are
+//    interpolated linearly. Predictions carry the seed standard error sd / sqrt(seeds); the noise
+//    of a residual is sqrt(sd^2 / repeats + sd^2 / seeds), sd the pooled seed spread of one pile.
+//  * Fingerprints. At the grid point nearest the calibrated mu_r, each available candidate is
+//    switched on at its probe value with the baseline's seeds; the fingerprint is the mean change
+//    of angle (and of H and D). Measurement candidates re-photograph the same piles. Fingerprints
+//    are computed once, on the baseline model, and reused in later iterations (first order): the
+//    residual after adding an effect is regressed on the same columns. A candidate whose
+//    fingerprint (RMS over the calibration tests) is below the seed standard error of a
+//    predicted angle is not traceable and is listed as unavailable: it could "explain" any
+//    residual only with an absurd strength.
+//  * Selection: loop_trace.hpp (WLS with the mu_r correction bounded to the grid, leave-one-
+//    test-out ranking, accept when |c| > 3 se and the LOO RMSE gain beats the seed noise).
+//  * Refit by simulation. The chosen effect's linear estimate p1 = off + c (probe - off) (clamped
+//    to its range) is simulated on the whole mu_r grid. The model becomes
+//    twin(mu_r, p) = (1 - t) twin_before(mu_r) + t twin_p1(mu_r), t = (p - off) / (p1 - off),
+//    i.e. linear in p between two simulated surfaces; (mu_r, t) are fitted jointly (t in closed
+//    form for each mu_r of the scan, t limited to [0, 3] and to the effect's range). Residuals
+//    are recomputed from this simulated model, and the loop repeats until no candidate is
+//    accepted or max_effects are in. If the refit's simulations cannot be measured (a pile too
+//    flat to photograph), the simulated value steps back halfway towards off, twice at most.
+//    A threshold effect (a plate that slides only below some friction) breaks the linear
+//    estimate: when the simulated response at the fingerprint's grid point misses the traced
+//    strength by more than half, the value is refined by secant steps between the known responses
+//    (off, probe, trials), twice at most, and the trial with the lowest calibration RMSE is kept.
+//    The simulations must confirm the tracing: an effect whose joint refit lands at t = 0, or
+//    whose simulated model does not lower the calibration RMSE by more than the seed standard
+//    error of a prediction, is not chosen (recorded under not_confirmed with the reason).
+//  * Caching and resuming: loop_sim.hpp. loop.json (atomic) is written last; an existing one is
+//    never overwritten without `force`.
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "experiments/campaign/campaign.hpp"
+#include "experiments/loop/loop_data.hpp"
+#include "experiments/loop/loop_effects.hpp"
+#include "experiments/loop/loop_sim.hpp"
+#include "experiments/loop/loop_trace.hpp"
+
+namespace reposetwin::experiments {
+
+/// Settings of the loop.
+struct LoopSettings {
+  std::string mu_key = "contacts.{sample}-{sample}.rolling_friction";  // calibrated scene key
+  AngleMeasure angle = AngleMeasure::kImage;  // the angle compared (lab_angles, twin_angle)
+  std::vector<double> mu_grid = {0.05, 0.15, 0.3, 0.5};  // mu_r grid, increasing [-]
+  std::vector<std::uint64_t> seeds = {1001, 1002, 1003};  // baseline seeds (common numbers)
+  ImageVariant image;                      // how the twin photographs its piles
+  AcceptanceRule rule;                     // significance and LOO thresholds
+  std::vector<std::string> candidates;     // registry names to try; empty = all
+  int max_effects = 2;                     // stop after adding this many effects
+  int max_pours = 3;                       // pours per pile when the funnel jams (new seeds)
+  double t_max = 3.0;                      // largest t = (p - off) / (p1 - off) of a refit [-]
+  int workers = 2;                         // concurrent simulations
+  bool progress = true;                    // progress lines on stderr
+  bool force = false;                      // overwrite a finished loop.json
+  bool html = true;                        // write index.html with gnuplot plots
+  std::string cache_dir;                   // simulation cache; default OUT/cache
+};
+
+/// The measured data as the loop compares them under `measure`. kImage: as read (the lab's
+/// atan(2H/D), typed or measured on its photos). kImageFlank: a test with photos takes the flank
+/// angle vision measured on them; a test with a typed angle (or H and D) keeps it, which assumes
+/// the lab pile is a full cone (flank = atan(2H/D)), as a protractor reading on a photo does.
+/// kParticles: the typed or photo-measured atan(2H/D). A test with photos records the value
+/// used in its photo_measurement ("compared_angle"). Throws InputError for kSlice (no lab
+/// counterpart) or a photo record without a flank angle.
+LabData lab_angles(const LabData& data, AngleMeasure measure);
+
+/// Where the lab's compared angles come from under `measure` (a sentence for loop.json).
+std::string lab_angle_source(AngleMeasure measure);
+
+/// The twin's angle of one simulation under `measure` (kImage: vision atan(2H/D); kImageFlank:
+/// vision flank; kParticles: atan(2H/D) from particle positions). Throws std::runtime_error for
+/// a photograph without a flank angle (cached by an older version) or for kSlice.
+double twin_angle(const SimOutcome& o, AngleMeasure measure);
+
+/// Runs the loop on measured data and writes OUT/loop.json (and OUT/index.html). Returns the
+/// loop.json content. Throws InputError when OUT already holds a finished loop.json and `force`
+/// is not set, when the data have fewer than three calibration tests, or when the grid or seeds
+/// are invalid; std::runtime_error when simulations fail.
+nlohmann::json run_loop(const LabData& data, const std::string& out_dir,
+                        const LoopSettings& settings = {});
+
+/// Writes OUT/index.html and its plots (gnuplot) from a loop.json. Throws std::runtime_error when
+/// a file cannot be written.
+void write_loop_html(const nlohmann::json& loop, const std::string& out_dir);
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,257 @@
+#include "experiments/loop/loop_effects.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+#include "experiments/io/overrides.hpp"
+#include "experiments/io/provenance.hpp"
+#include "experiments/io/scene_overrides.hpp"
+#include "experiments/io/toml_reader.hpp"
+#include "sim/psd.hpp"
+
+namespace reposetwin::experiments {
+using nlohmann::json;
+
+namespace {
+
+std::string num(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.12g", v);
+  std::string s = b;
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
+  return s;
+}
+
+std::vector<std::string> sets_of(const LabTest& t) {
+  std::vector<std::string> s;
+  for (const auto& [k, v] : t.overrides) s.push_back(k + "=" + v);
+  return s;
+}
+
+toml::table resolved_doc(const LabTest& t) {
+  toml::table doc = parse_toml(read_file(t.scene_path), t.scene_path);
+  for (const auto& [k, v] : t.overrides) {
+    toml::table value = toml::parse("v = " + v);
+    apply_override(doc, k, *value.get("v"), t.scene_path);
+  }
+  return doc;
+}
+
+// "contacts.{sample}-{plate}.friction" -> "contacts.rock-plate.friction" (or plate-rock, whichever
+// the scene file names).
+std::string resolve_key(const LabTest& t, const std::string& key) {
+  if (key.find('{') == std::string::npos) return key;
+  const SceneConfig scene = load_scene(t.scene_path, sets_of(t));
+  auto sub = [](std::string s, const std::string& from, const std::string& to) {
+    for (auto p = s.find(from); p != std::string::npos; p = s.find(from, p + to.size()))
+      s.replace(p, from.size(), to);
+    return s;
+  };
+  std::string k = sub(sub(key, "{sample}", scene.sample_material), "{plate}", scene.plate_material);
+  if (k.rfind("contacts.", 0) == 0) {
+    const auto dot = k.find('.', 9);
+    const std::string pair = k.substr(9, dot - 9);
+    const auto dash = pair.find('-');
+    const std::string swapped = pair.substr(dash + 1) + "-" + pair.substr(0, dash);
+    const toml::table doc = resolved_doc(t);
+    if (!doc["contacts"][pair] && doc["contacts"][swapped])
+      k = "contacts." + swapped + k.substr(dot);
+  }
+  return k;
+}
+
+}  // namespace
+
+const std::vector<CandidateEffect>& candidate_effects() {
+  static const std::vector<CandidateEffect> k = {
+      {"plate_friction", EffectKind::kPhysics, EffectApply::kSetScene,
+       "contacts.{sample}-{plate}.friction", 0.0, true, 0.15, 0.0, 1.5, "-",
+       "Sliding friction of the sample on the base plate differs from the declared value "
+       "(smooth or dusted board); shows most on small piles and as a step between plates.",
+       {}},
+      {"cohesion", EffectKind::kPhysics, EffectApply::kSetScene,
+       "contacts.{sample}-{sample}.cohesion_energy_density", 0.0, false, 10000.0, 0.0, 1e6,
+       "J/m^3",
+       "Cohesion between particles (simplified JKR, moisture or clay coating); steepens the "
+       "piles beyond what rolling friction reaches (on the loop's 3-5 layer test piles the "
+       "heavier ones most) and, strong enough, makes grains hang in the funnel.",
+       {}},
+      {"rolling_size", EffectKind::kPhysics, EffectApply::kSetScene,
+       "contacts.{sample}-{sample}.rolling_size_exponent", 0.0, false, 1.0, -3.0, 3.0, "-",
+       "Rolling resistance that varies with particle size, mu_r (d / d_ref)^alpha with d_ref "
+       "the calibration tests' typical grain (shape differs between fine and coarse grains); "
+       "shows between samples of different size bands (d_min, d_max).",
+       {{"contacts.{sample}-{sample}.rolling_reference_diameter_m", "{d_ref}"}}},
+      {"lift_speed", EffectKind::kPhysics, EffectApply::kFactorScene, "procedure.lift_speed_m_s",
+       1.0, false, 4.0, 0.1, 20.0, "x declared",
+       "The container was lifted faster (or slower) than declared; above a quasi-static "
+       "speed the angle drops.",
+       {}},
+      {"fines", EffectKind::kPhysics, EffectApply::kFactorScene, "sample.d_min_mm", 1.0, false,
+       0.7, 0.2, 1.0, "x declared d_min",
+       "Fines below the simulated cut-off d_min take part (d_min lowered by this factor).", {}},
+      {"camera_height", EffectKind::kMeasurement, EffectApply::kImageHeight,
+       "image.camera_height_m", 0.0, false, 0.005, 0.0, 1.0, "m",
+       "The photographs were taken from above plate level while measured as if level "
+       "(perspective grows with height over distance).",
+       {}},
+      {"lens_k1", EffectKind::kMeasurement, EffectApply::kImageK1, "image.k1", 0.0, false, -0.1,
+       -0.25, 0.25, "-",
+       "Radial lens distortion of the lab camera, measured as if undistorted.", {}},
+  };
+  return k;
+}
+
+const CandidateEffect& find_effect(const std::string& name) {
+  std::string known;
+  for (const auto& e : candidate_effects()) {
+    if (e.name == name) return e;
+    known += " " + e.name;
+  }
+  throw std::invalid_argument("unknown candidate effect \"" + name + "\" (known:" + known + ")");
+}
+
+double median_grain_diameter(const LabTest& t) {
+  const SceneConfig s = load_scene(t.scene_path, sets_of(t));
+  const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
+  const sim::SieveTable& table = s.psd.spec.table;
+  // Percent passing at the cut sizes; the simulated mass is what lies between them.
+  const double lo = sim::percent_passing(table, psd.d_min);
+  const double hi = sim::percent_passing(table, psd.d_max);
+  const double half = 0.5 * (lo + hi);
+  std::vector<double> size = {psd.d_min}, pass = {lo};
+  for (std::size_t k = 0; k < table.size.size(); ++k)
+    if (table.size[k] > psd.d_min && table.size[k] < psd.d_max) {
+      size.push_back(table.size[k]);
+      pass.push_back(table.passing[k]);
+    }
+  size.push_back(psd.d_max);
+  pass.push_back(hi);
+  for (std::size_t k = 0; k + 1 < size.size(); ++k)
+    if (pass[k + 1] >= half && pass[k + 1] > pass[k])
+      return size[k] + (half - pass[k]) / (pass[k + 1] - pass[k]) * (size[k + 1] - size[k]);
+  return psd.d_max;
+}
+
+double reference_grain_diameter(const std::vector<LabTest>& tests) {
+  if (tests.empty()) throw std::invalid_argument("reference_grain_diameter: no tests");
+  double log_sum = 0.0;
+  int n = 0;
+  for (const LabTest& t : tests)
+    if (t.role == "calibrate") log_sum += std::log(median_grain_diameter(t)), ++n;
+  if (n == 0)
+    for (const LabTest& t : tests) log_sum += std::log(median_grain_diameter(t)), ++n;
+  return std::exp(log_sum / n);
+}
+
+double scene_value(const LabTest& t, const std::string& key_pattern) {
+  const std::string key = resolve_key(t, key_pattern);
+  if (key == "sample.d_min_mm" || key == "procedure.lift_speed_m_s") {
+    const SceneConfig s = load_scene(t.scene_path, sets_of(t));
+    return key == "sample.d_min_mm" ? 1e3 * s.psd.spec.d_min : s.procedure.lift_speed;
+  }
+  const toml::table doc = resolved_doc(t);
+  const toml::node_view<const toml::node> n = doc.at_path(key);
+  if (auto v = n.value<double>()) return *v;
+  throw InputError(t.scene_path + " (test " + t.id + "): scene key " + key +
+                   " has no numeric value");
+}
+
+std::vector<std::string> split_keys(const std::string& keys) {
+  std::vector<std::string> out;
+  std::string k;
+  std::stringstream ss(keys);
+  while (std::getline(ss, k, ','))
+    if (!k.empty()) out.push_back(k);
+  return out;
+}
+
+void check_mu_key(const LabTest& test, const std::string& mu_key) {
+  const std::vector<std::string> keys = split_keys(mu_key);
+  if (keys.empty()) throw InputError("mu_key: no scene key given");
+  for (const std::string& k : keys) {
+    try {
+      (void)scene_value(test, k);
+    } catch (const std::exception& e) {
+      throw InputError("mu_key " + k + " (test " + test.id + "): " + e.what());
+    }
+  }
+}
+
+SimRequest make_request(const LabTest& test, const std::string& mu_key, double mu_r,
+                        std::uint64_t seed, const std::vector<EffectSetting>& effects,
+                        const ImageVariant& base_image) {
+  SimRequest r;
+  r.test = &test;
+  r.seed = seed;
+  r.image = base_image;
+  if (test.camera_height_m) {
+    r.image.camera_height_m = *test.camera_height_m;
+    r.image.declared_height_m = *test.camera_height_m;
+  }
+  for (const std::string& k : split_keys(mu_key)) r.extra.emplace_back(resolve_key(test, k), num(mu_r));
+  for (const EffectSetting& s : effects) {
+    const CandidateEffect& e = *s.effect;
+    switch (e.apply) {
+      case EffectApply::kSetScene:
+        r.extra.emplace_back(resolve_key(test, e.key), num(s.value));
+        for (const auto& [k, v] : e.companions) {
+          if (v != "{d_ref}") {
+            r.extra.emplace_back(resolve_key(test, k), v);
+            continue;
+          }
+          const double d_ref = test.reference_diameter_m > 0.0 ? test.reference_diameter_m
+                                                                : median_grain_diameter(test);
+          r.extra.emplace_back(resolve_key(test, k), num(d_ref));
+        }
+        break;
+      case EffectApply::kFactorScene:
+        r.extra.emplace_back(resolve_key(test, e.key), num(s.value * scene_value(test, e.key)));
+        break;
+      case EffectApply::kImageHeight:
+        r.image.camera_height_m = r.image.declared_height_m + s.value;
+        break;
+      case EffectApply::kImageK1:
+        r.image.k1 = r.image.declared_k1 + s.value;
+        break;
+    }
+  }
+  return r;
+}
+
+std::string effect_unavailable(const LabTest& test, const CandidateEffect& e) {
+  if (e.kind == EffectKind::kMeasurement) return "";
+  try {
+    if (e.key.find("{plate}") != std::string::npos) {
+      const SceneConfig s = load_scene(test.scene_path, sets_of(test));
+      if (s.plate_material == s.sample_material)
+        return "the plate is made of the sample's material (" + s.plate_material +
+               "), so its friction cannot differ";
+    }
+    // A factor on a declared value of 0 (no simulated cut-off d_min) changes nothing: its
+    // fingerprint would be zero and its simulations a waste.
+    if (e.apply == EffectApply::kFactorScene && scene_value(test, e.key) == 0.0)
+      return "the declared " + e.key + " is 0, so a factor on it changes nothing";
+    const SimRequest r = make_request(test, "contacts.{sample}-{sample}.rolling_friction", 0.1, 1,
+                                      {{&e, e.probe}}, ImageVariant{});
+    (void)load_scene(test.scene_path, resolved_overrides(r));
+  } catch (const std::exception& ex) {
+    return ex.what();
+  }
+  return "";
+}
+
+json to_json(const CandidateEffect& e) {
+  return {{"name", e.name},
+          {"kind", e.kind == EffectKind::kPhysics ? "physics" : "measurement"},
+          {"key", e.key},
+          {"off", e.off_from_scene ? json("scene value") : json(e.off)},
+          {"probe", e.probe},
+          {"range", {e.lo, e.hi}},
+          {"units", e.units},
+          {"description", e.description}};
+}
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,333 @@
+#include "experiments/loop/loop_sim.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <opencv2/core.hpp>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include "experiments/campaign/campaign.hpp"
+#include "experiments/io/overrides.hpp"
+#include "experiments/photos/pile_images.hpp"
+#include "experiments/pile/pile_run.hpp"
+#include "experiments/io/provenance.hpp"
+#include "experiments/io/scene.hpp"
+#include "experiments/io/toml_reader.hpp"
+#include "experiments/io/vtk_output.hpp"
+#include "render/output.hpp"
+#include "render/renderer.hpp"
+#include "render/scene.hpp"
+#include "vision/measure.hpp"
+
+namespace reposetwin::experiments {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string num(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.9g", v);
+  return b;
+}
+
+// A pile run: what its case function needs.
+struct SimJob {
+  std::string scene_path;
+  std::vector<std::string> sets;  // key=value, in order
+  std::uint64_t seed = 1;
+};
+
+// A photograph of a finished pile run.
+struct PhotoJob {
+  std::string sim_run_dir;  // absolute: <cache>/sim_<h>/seed_<n>/run
+  ImageVariant variant;
+};
+
+toml::table scene_doc(const SimJob& job) {
+  toml::table doc = parse_toml(read_file(job.scene_path), job.scene_path);
+  for (const std::string& s : job.sets) {
+    const auto eq = s.find('=');
+    toml::table v = toml::parse("v = " + s.substr(eq + 1));
+    apply_override(doc, s.substr(0, eq), *v.get("v"), job.scene_path);
+  }
+  if (toml::table* t = doc["scene"].as_table())
+    t->insert_or_assign("seed", static_cast<std::int64_t>(job.seed));
+  // The loop needs the final pile only: no frame series.
+  if (toml::table* o = doc["output"].as_table()) o->insert_or_assign("frame_interval_s", 0.0);
+  return doc;
+}
+
+Campaign cache_campaign(const std::string& dir) {
+  Campaign c;
+  c.name = "loop_cache";
+  c.file = dir;
+  c.scene_path = dir;
+  return c;
+}
+
+// run_batch with the cache's lock: another process (a parallel test) may hold the folder for a
+// while; wait for it instead of failing.
+std::vector<json> batch_with_retry(const std::string& dir, const std::vector<CaseSpec>& runs,
+                                   const CaseFn& fn, const RunnerSettings& rs) {
+  for (int attempt = 0;; ++attempt) {
+    try {
+      return run_batch(cache_campaign(dir), runs, dir, fn, rs);
+    } catch (const std::runtime_error& e) {
+      if (std::string(e.what()).find("another campaign process") == std::string::npos ||
+          attempt > 3600)
+        throw;
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    }
+  }
+}
+
+}  // namespace
+
+std::string ImageVariant::key() const {
+  std::ostringstream s;
+  s << width_px << "x" << height_px << "_v" << side_views << "_d" << num(distance_radii) << "_h"
+    << num(camera_height_m) << "_k" << num(k1) << "_dh" << num(declared_height_m) << "_dk"
+    << num(declared_k1) << "_n" << num(noise_sd) << "_s" << noise_seed
+    << (keep_photos ? "_keep" : "");
+  return s.str();
+}
+
+std::vector<std::string> resolved_overrides(const SimRequest& r) {
+  std::vector<std::string> out;
+  std::map<std::string, std::size_t> at;
+  auto add = [&](const std::string& k, const std::string& v) {
+    if (auto it = at.find(k); it != at.end()) {
+      out[it->second] = k + "=" + v;
+    } else {
+      at[k] = out.size();
+      out.push_back(k + "=" + v);
+    }
+  };
+  for (const auto& [k, v] : r.test->overrides) add(k, v);
+  for (const auto& [k, v] : r.extra) add(k, v);
+  return out;
+}
+
+json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
+                     const std::vector<double>& radii, const std::vector<int>& materials,
+                     const ImageVariant& v, const std::string& out_dir) {
+  if (v.side_views < 1) throw InputError("loop images: side_views must be at least 1");
+  render::Scene scene = centred_pile_scene(positions, radii, materials);
+  // The scale comes from the camera (sidecar), so no scale bar: the pile fills the frame
+  // (a 10-band bar is taller than a small pile and would shrink it to a few pixels).
+  scene.scale_reference.enabled = false;
+  render::Renderer renderer;
+  render::RenderOptions options;
+  options.tint_seed = v.noise_seed;
+  options.view = render::View::kSide;
+  render::LabCameraSettings cams;
+  cams.width_px = v.width_px;
+  cams.height_px = v.height_px;
+  cams.distance_radii = v.distance_radii;
+  cams.side_height_m = v.camera_height_m;
+  if (v.keep_photos) fs::create_directories(out_dir);
+  cv::RNG rng(v.noise_seed * 7919 + 17);
+  std::vector<vision::SideMeasurement> sides;
+  json views = json::array();
+  for (int k = 0; k < v.side_views; ++k) {
+    cams.azimuth_deg = 180.0 * k / v.side_views;
+    camera::Camera truth = render::lab_side_camera(scene, cams);
+    truth.intrinsics.k1 = v.k1;
+    // The lab's declared camera: same lens, distance and azimuth, its declared height and
+    // distortion (a lab that does not know its camera is high measures as if level).
+    camera::Camera declared = truth;
+    declared.extrinsics.position.z() = v.declared_height_m;
+    declared.extrinsics.look_at.z() = v.declared_height_m;
+    declared.intrinsics.k1 = v.declared_k1;
+    cv::Mat image = renderer.render(scene, truth, options);
+    if (v.noise_sd > 0.0) {
+      cv::Mat noise(image.size(), CV_32FC(image.channels()));
+      rng.fill(noise, cv::RNG::NORMAL, 0.0, v.noise_sd);
+      cv::Mat f;
+      image.convertTo(f, CV_32F);
+      f += noise;
+      f.convertTo(image, image.type());  // saturating
+    }
+    char stem[32];
+    std::snprintf(stem, sizeof stem, "side_az%03d", static_cast<int>(cams.azimuth_deg + 0.5));
+    const std::string base = (fs::path(out_dir) / stem).string();
+    if (v.keep_photos)
+      render::write_render(base, image, render::make_sidecar(scene, declared, options, nullptr));
+    json j;
+    try {
+      const vision::SideMeasurement m = vision::measure_side_camera(image, declared, {}, base);
+      sides.push_back(m);
+      j = vision::to_json(m);
+    } catch (const std::exception& e) {
+      // One view of a small pile may defeat the measurement; the others still count.
+      j = {{"error", e.what()}};
+    }
+    j["azimuth_deg"] = cams.azimuth_deg;
+    if (v.keep_photos) j["photo"] = std::string(stem) + ".png";
+    views.push_back(j);
+  }
+  // A pile too small for any view (a few spheres through a jammed outlet) has no angle: the
+  // caller counts it as a pour that formed no pile.
+  if (sides.empty())
+    return {{"error", "no side view of the pile could be measured: " +
+                          views[0]["error"].get<std::string>()},
+            {"views", views},
+            {"variant", v.key()}};
+  const vision::SideSummary s = vision::combine_sides(sides);
+  return {{"angle_deg", s.theta_deg.mean},
+          {"angle_sd_deg", s.theta_deg.stddev},
+          {"flank_deg", s.flank_deg.mean},
+          {"height_mm", 1e3 * s.height_m.mean},
+          {"diameter_mm", 1e3 * s.diameter_m.mean},
+          {"views", views},
+          {"variant", v.key()}};
+}
+
+std::vector<SimOutcome> run_repouring(
+    const std::vector<SimRequest>& requests, int max_pours,
+    const std::function<std::vector<SimOutcome>(const std::vector<SimRequest>&)>& run) {
+  if (max_pours < 1)
+    throw std::invalid_argument("loop: max_pours must be at least 1, got " +
+                                std::to_string(max_pours));
+  std::vector<SimOutcome> out = run(requests);
+  for (int pour = 1; pour < max_pours; ++pour) {
+    std::vector<std::size_t> again;
+    std::vector<SimRequest> repeat;
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      if (out[i].pile) continue;
+      again.push_back(i);
+      repeat.push_back(requests[i]);
+      repeat.back().seed = requests[i].seed + static_cast<std::uint64_t>(pour) * kRepourSeedStride;
+    }
+    if (again.empty()) break;
+    const std::vector<SimOutcome> got = run(repeat);
+    for (std::size_t k = 0; k < again.size(); ++k) {
+      out[again[k]] = got[k];
+      out[again[k]].clogged_pours = pour;
+    }
+  }
+  return out;
+}
+
+std::string sim_case_name(const std::string& scene_hash, const std::vector<std::string>& sets,
+                          const std::string& version) {
+  std::string key = scene_hash;
+  for (const auto& s : sets) key += "\n" + s;
+  return "sim_" + fnv1a_hex(key + "\ncode " + version);
+}
+
+SimCache::SimCache(std::string dir, SimCacheSettings settings)
+    : dir_(fs::absolute(dir).lexically_normal().string()), settings_(settings) {
+  fs::create_directories(dir_);
+}
+
+std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
+  // 1. Pile runs, one per distinct (scene text, overrides, seed).
+  std::map<std::string, SimJob> sim_jobs;  // case name -> job
+  std::vector<CaseSpec> sim_specs;
+  std::vector<std::string> sim_of(requests.size());
+  std::map<std::string, std::string> scene_hash;  // path -> hash of its text
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    const SimRequest& r = requests[i];
+    if (r.test == nullptr) throw std::invalid_argument("SimCache: request without a test");
+    SimJob job{r.test->scene_path, resolved_overrides(r), r.seed};
+    if (!scene_hash.count(job.scene_path))
+      scene_hash[job.scene_path] = fnv1a_hex(read_file(job.scene_path));
+    const std::string name = sim_case_name(scene_hash[job.scene_path], job.sets, code_version());
+    sim_of[i] = name + "/seed_" + std::to_string(r.seed);
+    if (sim_jobs.count(sim_of[i])) continue;
+    sim_jobs[sim_of[i]] = job;
+    CaseSpec spec;
+    spec.case_name = name;
+    spec.seed = r.seed;
+    spec.scene_path = job.scene_path;
+    spec.scene_hash = scene_hash[job.scene_path];
+    for (std::size_t k = 0; k < job.sets.size(); ++k)
+      spec.overrides.insert(std::to_string(k), job.sets[k]);
+    sim_specs.push_back(spec);
+  }
+  RunnerSettings rs;
+  rs.workers = settings_.workers;
+  rs.progress = settings_.progress;
+  rs.rank = std::nullopt;
+  for (const CaseSpec& s : sim_specs)
+    if (!fs::exists(fs::path(dir_) / s.relative_dir() / "result.json")) ++started_sims_;
+  const CaseFn sim_fn = [sim_jobs](const CaseSpec& spec, const std::string& case_dir) -> json {
+    const SimJob& job = sim_jobs.at(spec.id());
+    const SceneConfig scene = parse_scene_table(scene_doc(job), job.scene_path);
+    RunOptions opt;
+    opt.out_dir = (fs::path(case_dir) / "run").string();
+    opt.progress = false;
+    opt.threads = 1;
+    opt.extra_provenance = {{"loop_overrides", job.sets}};
+    const json run = run_pile_test_or_continue(scene, opt);  // a killed run continues
+    return {{"stop", run.at("stop")},
+            {"pile", run.at("pile")},
+            {"provenance", run.at("provenance")},
+            {"overrides", job.sets}};
+  };
+  const std::vector<json> sims = batch_with_retry(dir_, sim_specs, sim_fn, rs);
+  std::map<std::string, json> sim_result;
+  for (std::size_t k = 0; k < sim_specs.size(); ++k) sim_result[sim_specs[k].id()] = sims[k];
+
+  // 2. Photographs of the piles that formed.
+  std::map<std::string, PhotoJob> photo_jobs;
+  std::vector<CaseSpec> photo_specs;
+  std::vector<std::string> photo_of(requests.size());
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    if (sim_result[sim_of[i]].at("pile").at("status") != "ok") continue;
+    const ImageVariant& v = requests[i].image;
+    const std::string name = "img_" + fnv1a_hex(sim_of[i] + "\n" + v.key());
+    photo_of[i] = name + "/seed_" + std::to_string(requests[i].seed);
+    if (photo_jobs.count(photo_of[i])) continue;
+    photo_jobs[photo_of[i]] = {(fs::path(dir_) / "cases" / sim_of[i] / "run").string(), v};
+    CaseSpec spec;
+    spec.case_name = name;
+    spec.seed = requests[i].seed;
+    spec.scene_path = sim_of[i];
+    spec.scene_hash = v.key();
+    photo_specs.push_back(spec);
+  }
+  for (const CaseSpec& s : photo_specs)
+    if (!fs::exists(fs::path(dir_) / s.relative_dir() / "result.json")) ++started_photos_;
+  const CaseFn photo_fn = [photo_jobs](const CaseSpec& spec, const std::string& case_dir) -> json {
+    const PhotoJob& job = photo_jobs.at(spec.id());
+    const SnapshotParticles p = read_vtp((fs::path(job.sim_run_dir) / "final.vtp").string());
+    return photograph_pile(p.x, p.radius, p.material, job.variant, case_dir);
+  };
+  const std::vector<json> photos = batch_with_retry(dir_, photo_specs, photo_fn, rs);
+  std::map<std::string, json> photo_result;
+  for (std::size_t k = 0; k < photo_specs.size(); ++k) photo_result[photo_specs[k].id()] = photos[k];
+
+  std::vector<SimOutcome> out(requests.size());
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    const json& s = sim_result[sim_of[i]];
+    SimOutcome& o = out[i];
+    o.sim_dir = (fs::path(dir_) / "cases" / sim_of[i]).string();
+    o.provenance = s.at("provenance");
+    o.seed = requests[i].seed;
+    if (photo_of[i].empty()) continue;
+    const json& p = photo_result[photo_of[i]];
+    o.image_dir = (fs::path(dir_) / "cases" / photo_of[i]).string();
+    if (p.contains("error")) {
+      o.no_pile = p.at("error").get<std::string>();
+      continue;
+    }
+    o.pile = true;
+    o.angle_deg = p.at("angle_deg");
+    o.flank_deg = p.value("flank_deg", std::numeric_limits<double>::quiet_NaN());
+    o.height_mm = p.at("height_mm");
+    o.diameter_mm = p.at("diameter_mm");
+    o.positions_angle_deg = s.at("pile").value("theta_hd_deg", 0.0);
+  }
+  return out;
+}
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,135 @@
+// The loop's simulations: pile runs of lab tests with extra overrides and seeds, photographed
+// through a chosen camera, cached on disk and run on the campaign pool.
+//
+// Design note. Every simulated quantity of the loop (baseline grid, predictions, fingerprints,
+// refits, synthetic datasets) is a pile run of one lab test's scene with a few extra overrides and
+// a seed, followed by a photograph and its vision measurement. Both steps are campaign runs
+// (run_batch) in one cache folder: a pile run is named by a hash of its scene file text, its
+// resolved overrides and the code version, and by its seed ("sim_<hash>/seed_<n>"), a
+// photograph by the pile run's hash and the image settings ("img_<hash>/seed_<n>"). A killed
+// loop therefore resumes where it stopped and nothing is ever computed twice, also across
+// datasets that share conditions (the tests share one cache); a new engine version simulates
+// afresh beside the old runs instead of reusing piles an older engine made (a change of rounding
+// alone re-draws every pile: bench/README.md, session 9). Measurement effects (camera height, lens distortion) only add
+// photographs of piles that already exist. All rendering and simulation happens in the pool's
+// forked workers, never in the calling process (OpenMP and OSMesa do not survive a fork).
+//
+// A photograph is taken by the true camera (ImageVariant: height, distortion, distance, noise)
+// and measured with the camera the lab declares (level with the plate and undistorted unless
+// declared otherwise), which is how a lab's unknown camera elevation or lens distortion biases
+// its measured H, D and angle.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "experiments/io/hash.hpp"
+#include "experiments/loop/loop_data.hpp"
+
+namespace reposetwin::experiments {
+
+/// How a simulated pile is photographed and measured.
+struct ImageVariant {
+  int width_px = 960;              // [px]
+  int height_px = 720;             // [px]
+  int side_views = 2;              // azimuths over 180 degrees [-]
+  double distance_radii = 12.0;    // camera distance in pile radii [-]
+  double camera_height_m = 0.0;    // true camera height above the plate [m]
+  double k1 = 0.0;                 // true lens radial distortion [-]
+  double declared_height_m = 0.0;  // camera height the measurement assumes [m]
+  double declared_k1 = 0.0;        // distortion the measurement assumes [-]
+  double noise_sd = 0.0;           // Gaussian image noise, grey levels (0-255) [-]
+  std::uint64_t noise_seed = 1;    // seed of the noise and of the particle tint
+  bool keep_photos = false;        // write the PNGs and their declared-camera sidecars
+  /// A short text naming the settings (part of the photograph's cache key).
+  std::string key() const;
+};
+
+/// One simulation request: a lab test's scene with extra overrides and a seed, photographed.
+struct SimRequest {
+  const LabTest* test = nullptr;                              // conditions and base scene
+  std::vector<std::pair<std::string, std::string>> extra;     // dotted key -> TOML value text
+  std::uint64_t seed = 1;                                     // scene.seed
+  ImageVariant image;                                         // photograph settings
+};
+
+/// What one simulation gave.
+struct SimOutcome {
+  bool pile = false;          // a pile formed and was measured (else the angle is 0, H, D 0)
+  std::string no_pile;        // when pile is false and a pile formed: why its photographs
+                              // could not be measured (too small for every view)
+  double angle_deg = 0.0;     // vision atan(2H/D), mean over the side views [deg]
+  double flank_deg = 0.0;     // vision flank-line angle, mean over the side views [deg]; NaN
+                              // for a photograph cached by a version that did not record it
+  double height_mm = 0.0;     // vision H [mm]
+  double diameter_mm = 0.0;   // vision D [mm]
+  double positions_angle_deg = 0.0;  // atan(2H/D) from particle positions [deg]
+  std::string sim_dir;        // the pile run's folder
+  std::string image_dir;      // the photograph's folder
+  nlohmann::json provenance;  // the run's provenance (scene, seed, dt, softened E, version)
+  std::uint64_t seed = 0;     // the seed of the pour that gave this outcome
+  int clogged_pours = 0;      // earlier pours of the request that formed no pile (repeated)
+};
+
+/// Settings of the cache and pool.
+struct SimCacheSettings {
+  int workers = 2;        // concurrent runs [-]
+  bool progress = false;  // progress lines on stderr
+};
+
+/// The on-disk cache of loop simulations (see the design note).
+class SimCache {
+ public:
+  SimCache(std::string dir, SimCacheSettings settings = {});
+  /// Runs (or finds) every request and returns the outcomes in order. Throws std::runtime_error
+  /// naming the failed runs.
+  std::vector<SimOutcome> run(const std::vector<SimRequest>& requests);
+  /// Pile runs and photographs this object has started (not found finished).
+  int simulations_started() const { return started_sims_; }
+  int photos_started() const { return started_photos_; }
+  const std::string& dir() const { return dir_; }
+
+ private:
+  std::string dir_;
+  SimCacheSettings settings_;
+  int started_sims_ = 0;
+  int started_photos_ = 0;
+};
+
+/// Seed of the a-th repeat of a pour with seed s: s + a * kRepourSeedStride (far from the seed
+/// lists a user types, so a repeat never lands on another request's seed).
+constexpr std::uint64_t kRepourSeedStride = 1000000;
+
+/// Runs `requests` with `run` (SimCache::run, or a stand-in in tests) and repeats every pour
+/// that formed no pile with the next repeat seed, up to `max_pours` pours in all, as a lab
+/// repeats a pour whose funnel jammed. Each outcome records the seed of its pour and how many
+/// pours before it formed no pile; one that still formed none after max_pours is returned as it
+/// is (pile false), for the caller to decide. Throws std::invalid_argument for max_pours < 1.
+std::vector<SimOutcome> run_repouring(
+    const std::vector<SimRequest>& requests, int max_pours,
+    const std::function<std::vector<SimOutcome>(const std::vector<SimRequest>&)>& run);
+
+/// The resolved overrides of a request: the test's, then the extra ones (later keys win), as
+/// "key=value" strings in application order.
+std::vector<std::string> resolved_overrides(const SimRequest& request);
+
+/// The cache folder of a pile run: "sim_" and a hash of the scene text's hash, the resolved
+/// overrides (in order) and the code version.
+std::string sim_case_name(const std::string& scene_hash, const std::vector<std::string>& sets,
+                          const std::string& version);
+
+/// Photographs a pile (centres, radii, material ids) with `variant`, measures it with the
+/// declared camera and returns {angle_deg, flank_deg, height_mm, diameter_mm, views[...]}, or
+/// {error, views[...]} if no view could be measured (a pile of a few spheres). Writes the
+/// photographs and their declared-camera sidecars into `out_dir` when keep_photos is set
+/// (names side_az000.png / .json ...). Uses OSMesa: call it in a worker, not before forking.
+nlohmann::json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
+                               const std::vector<double>& radii, const std::vector<int>& materials,
+                               const ImageVariant& variant, const std::string& out_dir);
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,204 @@
+#include "experiments/loop/loop_synth.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+#include "experiments/loop/loop_effects.hpp"
+#include "experiments/io/provenance.hpp"
+#include "experiments/io/toml_reader.hpp"
+
+namespace reposetwin::experiments {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string num(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.10g", v);
+  return b;
+}
+
+}  // namespace
+
+SynthDesign read_synth_design(const std::string& path) {
+  const toml::table doc = parse_toml(read_file(path), path);
+  TableReader r(doc, path);
+  SynthDesign d;
+  const fs::path dir = fs::absolute(path).parent_path();
+  d.scene = (dir / r.string("scene")).lexically_normal().string();
+  if (!fs::exists(d.scene)) r.fail("scene", "= \"" + d.scene + "\" does not exist");
+  d.mu_key = r.string("mu_key", d.mu_key);
+  d.mu_r = r.number("mu_r", d.mu_r);
+  if (!(d.mu_r >= 0.0)) r.fail("mu_r", "= " + num(d.mu_r) + " must not be negative");
+  if (r.has("seeds")) {
+    d.seeds.clear();
+    for (double s : r.numbers("seeds")) {
+      if (!(s >= 0.0) || s != std::floor(s)) r.fail("seeds", "must hold whole numbers >= 0");
+      d.seeds.push_back(static_cast<std::uint64_t>(s));
+    }
+    if (d.seeds.empty()) r.fail("seeds", "must not be empty");
+  }
+  if (auto c = r.table("camera", true)) {
+    d.camera.distance_radii = c->number("distance_radii", d.camera.distance_radii);
+    d.camera.noise_sd = c->number("noise_sd", d.camera.noise_sd);
+    d.camera.width_px = static_cast<int>(c->integer("width_px", d.camera.width_px));
+    d.camera.height_px = static_cast<int>(c->integer("height_px", d.camera.height_px));
+    d.camera.side_views = static_cast<int>(c->integer("side_views", d.camera.side_views));
+    c->finish();
+  }
+  if (auto h = r.table("hidden", true)) {
+    for (const std::string& k : h->keys()) {
+      try {
+        (void)find_effect(k);
+      } catch (const std::invalid_argument& e) {
+        h->fail(k, e.what());
+      }
+      d.hidden.emplace_back(k, h->number(k));
+    }
+    h->finish();
+  }
+  r.mark_used("test");
+  const toml::array* tests = doc["test"].as_array();
+  if (!tests || tests->empty()) r.fail("test", "at least one [[test]] table is required");
+  std::set<std::string> columns, text_columns;
+  for (const auto& c : condition_columns())
+    (c.factor != 0.0 ? columns : text_columns).insert(c.column);
+  for (std::size_t i = 0; i < tests->size(); ++i) {
+    const toml::table* t = (*tests)[i].as_table();
+    if (!t) r.fail("test", "entry " + std::to_string(i) + " must be a table");
+    TableReader tr(*t, path, "test." + std::to_string(i));
+    SynthTest st;
+    st.id = tr.string("id");
+    st.role = tr.string("role", st.role);
+    for (const std::string& k : tr.keys()) {
+      if (k == "id" || k == "role") continue;
+      if (text_columns.count(k)) {
+        st.labels[k] = tr.string(k);
+        if (st.labels[k].empty() || st.labels[k].find_first_of(",\"\n") != std::string::npos)
+          tr.fail(k, "= \"" + st.labels[k] + "\" must be a non-empty name without , or \"");
+        continue;
+      }
+      if (!columns.count(k) && k.rfind("set:", 0) != 0)
+        tr.fail(k, "is not a condition column (docs/loop.md)");
+      st.conditions[k] = tr.number(k);
+    }
+    tr.finish();
+    d.tests.push_back(st);
+  }
+  r.finish();
+  return d;
+}
+
+std::string make_synthetic_dataset(const SynthDesign& d, const std::string& out_dir,
+                                   SimCache& cache) {
+  fs::create_directories(fs::path(out_dir) / "photos");
+  // The lab's scene file: a copy of the base scene (same text, so the cache is shared).
+  const fs::path scene_copy = fs::path(out_dir) / "scene.toml";
+  write_file_atomic(scene_copy.string(), read_file(d.scene));
+  std::vector<EffectSetting> effects;
+  for (const auto& [name, value] : d.hidden) effects.push_back({&find_effect(name), value});
+  // The tests as LabTest (conditions -> overrides) through the CSV reader's column table.
+  std::vector<LabTest> tests;
+  for (const SynthTest& st : d.tests) {
+    LabTest t;
+    t.id = st.id;
+    t.role = st.role;
+    t.scene_path = fs::absolute(scene_copy).lexically_normal().string();
+    for (const auto& [col, v] : st.conditions) {
+      std::string key;
+      double factor = 1.0;
+      if (col.rfind("set:", 0) == 0) {
+        key = col.substr(4);
+      } else {
+        for (const auto& c : condition_columns())
+          if (col == c.column) key = c.key, factor = c.factor;
+      }
+      if (key.empty()) throw InputError("synthetic design: unknown condition column " + col);
+      t.overrides.emplace_back(key, num(factor * v));
+      t.conditions[col] = v;
+    }
+    for (const auto& [col, v] : st.labels) {
+      std::string key;
+      for (const auto& c : condition_columns())
+        if (col == c.column && c.factor == 0.0) key = c.key;
+      if (key.empty()) throw InputError("synthetic design: unknown text condition column " + col);
+      t.overrides.emplace_back(key, "\"" + v + "\"");
+    }
+    tests.push_back(t);
+  }
+  // The same typical grain as the loop computes when it reads the CSV back (read_lab_csv), so a
+  // hidden size-dependent effect means what the loop's candidate means.
+  const double d_ref = reference_grain_diameter(tests);
+  for (LabTest& t : tests) t.reference_diameter_m = d_ref;
+  std::vector<SimRequest> req;
+  ImageVariant cam = d.camera;
+  cam.keep_photos = true;
+  for (const LabTest& t : tests)
+    for (std::uint64_t seed : d.seeds) {
+      ImageVariant v = cam;
+      v.noise_seed = seed;
+      req.push_back(make_request(t, d.mu_key, d.mu_r, seed, effects, v));
+    }
+  const std::vector<SimOutcome> out = cache.run(req);
+  // The CSV.
+  std::vector<std::string> cols, text_cols;
+  for (const SynthTest& st : d.tests) {
+    for (const auto& [c, v] : st.conditions)
+      if (std::find(cols.begin(), cols.end(), c) == cols.end()) cols.push_back(c);
+    for (const auto& [c, v] : st.labels)
+      if (std::find(text_cols.begin(), text_cols.end(), c) == text_cols.end())
+        text_cols.push_back(c);
+  }
+  std::ostringstream csv;
+  csv << "# Synthetic lab dataset made by reposetwin loop-synth: conditions, measured values and "
+         "photographs only.\n";
+  csv << "id,role,scene";
+  for (const auto& c : cols) csv << "," << c;
+  for (const auto& c : text_cols) csv << "," << c;
+  csv << ",repeats,H_mm,D_mm,angle_deg,photo\n";
+  std::size_t q = 0;
+  for (std::size_t i = 0; i < tests.size(); ++i) {
+    double h = 0.0, dd = 0.0, a = 0.0;
+    std::string photos;
+    for (std::size_t k = 0; k < d.seeds.size(); ++k, ++q) {
+      const SimOutcome& o = out[q];
+      if (!o.pile)
+        throw std::runtime_error("synthetic dataset: test " + tests[i].id + " seed " +
+                                 std::to_string(d.seeds[k]) + " formed no pile (" + o.sim_dir +
+                                 ")");
+      h += o.height_mm;
+      dd += o.diameter_mm;
+      a += o.angle_deg;
+      std::vector<fs::path> files;
+      for (const auto& entry : fs::directory_iterator(o.image_dir)) files.push_back(entry.path());
+      std::sort(files.begin(), files.end());
+      for (const fs::path& file : files) {
+        const std::string name = file.filename().string();
+        if (name.rfind("side_az", 0) != 0) continue;
+        const std::string to = tests[i].id + "_pile" + std::to_string(k + 1) + "_" + name;
+        fs::copy_file(file, fs::path(out_dir) / "photos" / to,
+                      fs::copy_options::overwrite_existing);
+        if (file.extension() == ".png")
+          photos += (photos.empty() ? "" : ";") + std::string("photos/") + to;
+      }
+    }
+    const double n = static_cast<double>(d.seeds.size());
+    csv << tests[i].id << "," << tests[i].role << ",scene.toml";
+    for (const auto& c : cols)
+      csv << "," << (d.tests[i].conditions.count(c) ? num(d.tests[i].conditions.at(c)) : "");
+    for (const auto& c : text_cols)
+      csv << "," << (d.tests[i].labels.count(c) ? d.tests[i].labels.at(c) : "");
+    csv << "," << d.seeds.size() << "," << num(h / n) << "," << num(dd / n) << "," << num(a / n)
+        << ",\"" << photos << "\"\n";
+  }
+  const std::string path = (fs::path(out_dir) / "measured.csv").string();
+  write_file_atomic(path, csv.str());
+  return path;
+}
+
+}  // namespace reposetwin::experiments

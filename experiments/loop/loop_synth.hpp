@@ -1,0 +1,71 @@
+// Synthetic lab datasets with an undeclared effect, to prove the loop (reposetwin loop-synth).
+//
+// Design note. A synthetic lab is the twin itself run with hidden settings: a true mu_r, effects
+// switched on (any registry row at any value), seeds the loop never uses, and photographs taken
+// by a different camera (distance, image noise, and for measurement effects its true height or
+// distortion) than the one the lab declares. Only what a lab has is written: the CSV of
+// conditions and measured values, the photographs and their declared-camera sidecars, and the
+// base scene as the lab's model of its test. The hidden settings stay in memory (the caller
+// knows them; the tests assert the loop finds them). Each test is repeated on several piles
+// (seeds), as labs repeat a test; the CSV's photo column lists all of its photographs and
+// `repeats` says how many piles they show.
+//
+// Design file (TOML, strict):
+//   scene = "tiny_scene.toml"             # base scene, relative to the design file
+//   mu_r = 0.2                            # hidden true mu_r
+//   seeds = [7001, 7002]                  # hidden pile seeds (one pile per seed and test)
+//   [camera]                              # hidden true camera (all optional)
+//   distance_radii = 15.0
+//   noise_sd = 3.0                        # grey levels
+//   width_px = 960
+//   height_px = 720
+//   side_views = 2
+//   [hidden]                              # hidden effects: registry name = value (optional)
+//   plate_friction = 0.1
+//   [[test]]                              # one per lab test; condition columns of docs/loop.md
+//   id = "m4_w20"
+//   role = "calibrate"
+//   mass_kg = 0.004
+//   W_mm = 20.0
+//   plate = "wood"                        # text columns (the plate material) as strings
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "experiments/loop/loop_sim.hpp"
+
+namespace reposetwin::experiments {
+
+/// One synthetic lab test.
+struct SynthTest {
+  std::string id;
+  std::string role = "calibrate";
+  std::map<std::string, double> conditions;  // numeric condition column (docs/loop.md) -> value
+  std::map<std::string, std::string> labels;  // text condition column ("plate") -> value
+};
+
+/// A synthetic dataset's design, hidden settings included.
+struct SynthDesign {
+  std::string scene;                       // absolute path of the base scene
+  std::string mu_key = "contacts.{sample}-{sample}.rolling_friction";
+  double mu_r = 0.2;                       // hidden true mu_r [-]
+  std::vector<std::uint64_t> seeds = {7001, 7002};  // hidden pile seeds
+  std::vector<std::pair<std::string, double>> hidden;  // registry name -> value
+  ImageVariant camera;                     // true camera (distance, noise, resolution)
+  std::vector<SynthTest> tests;
+};
+
+/// Reads a design file (see the design note). Throws InputError naming the file and key.
+SynthDesign read_synth_design(const std::string& path);
+
+/// Runs the hidden twin through `cache` and writes OUT/measured.csv, OUT/scene.toml and
+/// OUT/photos/. Returns the path of the CSV. Throws InputError for unknown effect names or
+/// condition columns, std::runtime_error when a run fails or forms no pile.
+std::string make_synthetic_dataset(const SynthDesign& design, const std::string& out_dir,
+                                   SimCache& cache);
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,100 @@
+#include "experiments/photos/lab_photos.hpp"
+
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+
+#include "experiments/io/input_error.hpp"
+
+namespace reposetwin::experiments {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// Restores OpenCV's thread count when the measurement ends, also by an exception.
+class SingleOpenCvThread {
+ public:
+  SingleOpenCvThread() : old_(cv::getNumThreads()) { cv::setNumThreads(1); }
+  ~SingleOpenCvThread() { cv::setNumThreads(old_); }
+  SingleOpenCvThread(const SingleOpenCvThread&) = delete;
+  SingleOpenCvThread& operator=(const SingleOpenCvThread&) = delete;
+
+ private:
+  int old_;
+};
+
+std::string number_text(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
+                                       const LabPhotoScale& scale, const LabPhotoFields& fields) {
+  if (photos.empty()) throw InputError(fields.photo + ": no photo given");
+  vision::ScaleSpec common;
+  if (!scale.camera_json.empty()) {
+    try {
+      common = vision::scale_from_sidecar(scale.camera_json);
+    } catch (const std::exception& e) {
+      throw InputError(fields.camera + ": " + e.what());
+    }
+    common.search_marker = false;
+  } else if (scale.mm_per_px) {
+    if (!(*scale.mm_per_px > 0.0))
+      throw InputError(fields.mm_per_px + ": " + number_text(*scale.mm_per_px) +
+                       " must be positive");
+    common.mm_per_px = *scale.mm_per_px;
+    common.search_marker = false;
+  }
+  const bool declared_scale = !scale.camera_json.empty() || scale.mm_per_px.has_value();
+  const SingleOpenCvThread one_thread;
+  std::vector<vision::SideMeasurement> views;
+  json unmeasured = json::array();
+  for (const std::string& p : photos) {
+    const cv::Mat image = cv::imread(p, cv::IMREAD_COLOR);
+    if (image.empty()) throw InputError(fields.photo + ": \"" + p + "\" cannot be read as an image");
+    vision::ScaleSpec this_scale = common;
+    const fs::path sidecar = fs::path(p).replace_extension(".json");
+    const bool own_sidecar = !declared_scale && fs::exists(sidecar);
+    if (own_sidecar) {  // a render-style sidecar next to the photo gives its camera
+      try {
+        this_scale = vision::scale_from_sidecar(sidecar.string());
+      } catch (const std::exception& e) {
+        throw InputError(fields.photo + ": sidecar " + e.what());
+      }
+      this_scale.search_marker = false;
+    }
+    try {
+      views.push_back(vision::measure_side(image, this_scale, {}, p));
+    } catch (const std::exception& e) {
+      // A photo without any scale source is an error at once; with several photos of one test,
+      // one that cannot be measured is recorded and the others still count.
+      const bool no_scale = !declared_scale && !own_sidecar;
+      if (no_scale || photos.size() == 1)
+        throw InputError(fields.photo + ": " + e.what() +
+                         (no_scale ? " (give the photo's scale: a " + fields.camera_name +
+                                         " sidecar JSON or " + fields.mm_per_px_name + ")"
+                                   : std::string()));
+      unmeasured.push_back({{"photo", p}, {"error", e.what()}});
+    }
+  }
+  if (views.empty())
+    throw InputError(fields.photo + ": none of the " + std::to_string(photos.size()) +
+                     " photos could be measured (" + unmeasured[0]["error"].get<std::string>() +
+                     ")");
+  LabPhotoMeasurement m;
+  m.summary = vision::combine_sides(views);
+  m.record = vision::to_json(m.summary);
+  m.record["views"] = json::array();
+  for (const auto& v : views) m.record["views"].push_back(vision::to_json(v));
+  m.record["unmeasured"] = unmeasured;
+  return m;
+}
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,237 @@
+// The loop's measured-data CSV: a good file is read into tests with their overrides, and every
+// kind of bad input gives an error naming the file, the line and the column.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include "experiments/loop/loop.hpp"
+#include "experiments/loop/loop_data.hpp"
+#include "experiments/loop/loop_effects.hpp"
+#include "experiments/loop/loop_sim.hpp"
+#include "experiments/io/provenance.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+namespace fs = std::filesystem;
+
+const std::string kScene = std::string(REPOSETWIN_SOURCE_DIR) + "/data/loop/tiny_scene.toml";
+
+// Writes `body` (after a header) as a CSV in a fresh folder and returns its path.
+std::string write_csv(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_loop_data_test";
+  fs::create_directories(dir);
+  const fs::path p = dir / (name + ".csv");
+  write_file_atomic(p.string(), text);
+  return p.string();
+}
+
+// The error message of reading `text`, or "" if it reads.
+std::string error_of(const std::string& name, const std::string& text) {
+  try {
+    (void)read_lab_csv(write_csv(name, text));
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(LoopData, AGoodFileBecomesTestsWithOverrides) {
+  const std::string csv = write_csv(
+      "good",
+      "# comment line\n"
+      "id,role,scene,mass_g,W_mm,lift_speed_m_s,set:contacts.rock-plate.friction,H_mm,D_mm,"
+      "angle_deg,repeats\n"
+      "a,calibrate," + kScene + ",6,20,0.05,0.3,10,40,,2\n"
+      "b,validate," + kScene + ",4,25,,,,,27.5,\n");
+  const LabData d = read_lab_csv(csv);
+  ASSERT_EQ(d.tests.size(), 2u);
+  const LabTest& a = d.tests[0];
+  EXPECT_EQ(a.id, "a");
+  EXPECT_EQ(a.line, 3);
+  EXPECT_EQ(a.repeats, 2);
+  // The angle from H and D: atan(2H/D).
+  EXPECT_NEAR(a.angle_deg, std::atan(0.5) * 180.0 / M_PI, 1e-12);
+  EXPECT_NEAR(a.conditions.at("mass_g"), 6.0, 1e-12);
+  // The condition columns became scene keys in SI units.
+  EXPECT_NEAR(scene_value(a, "sample.mass_kg"), 0.006, 1e-15);
+  EXPECT_NEAR(scene_value(a, "container.bottom_diameter_m"), 0.020, 1e-15);
+  EXPECT_NEAR(scene_value(a, "contacts.rock-plate.friction"), 0.3, 1e-15);
+  EXPECT_NEAR(scene_value(d.tests[1], "contacts.{sample}-{plate}.friction"), 0.5, 1e-15);
+  EXPECT_NEAR(d.tests[1].angle_deg, 27.5, 1e-12);
+  EXPECT_FALSE(d.tests[1].height_mm.has_value());
+}
+
+// A calibrated parameter may be several scene keys set together (rock-rock and rock-plate rolling
+// friction, as the Table 3 calibrations do); each takes the same mu_r, and a key the test's scene
+// does not have is an error naming the key and the test.
+TEST(LoopData, TheCalibratedParameterMaySetSeveralKeys) {
+  const LabData d = read_lab_csv(
+      write_csv("mukey", "id,role,scene,angle_deg\nt1,calibrate," + kScene + ",30\n"));
+  const LabTest& t = d.tests.at(0);
+  const std::string both =
+      "contacts.{sample}-{sample}.rolling_friction,contacts.{sample}-{plate}.rolling_friction";
+  const SimRequest r = make_request(t, both, 0.37, 5, {}, ImageVariant{});
+  std::map<std::string, std::string> set(r.extra.begin(), r.extra.end());
+  ASSERT_EQ(set.size(), 2u);
+  EXPECT_EQ(std::stod(set.at("contacts.rock-rock.rolling_friction")), 0.37);
+  EXPECT_EQ(std::stod(set.at("contacts.rock-plate.rolling_friction")), 0.37);
+  EXPECT_NO_THROW(check_mu_key(t, both));
+  // One key alone sets only that key.
+  EXPECT_EQ(make_request(t, "contacts.{sample}-{sample}.rolling_friction", 0.2, 5, {},
+                         ImageVariant{})
+                .extra.size(),
+            1u);
+  try {
+    check_mu_key(t, "contacts.{sample}-{sample}.rolling_friction,contacts.rock-rock.rolling_fric");
+    ADD_FAILURE() << "a misspelt key was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("contacts.rock-rock.rolling_fric"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("t1"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(check_mu_key(t, ","), std::invalid_argument);
+}
+
+// A twin run that forms no pile (the outlet clogs) has no angle: the pour is repeated with a new
+// seed, and when every pour jams the loop stops with an error naming the test and the grid point
+// instead of averaging a 0 deg "angle" into the test's curve.
+TEST(LoopData, ATwinRunWithoutAPileStopsTheLoop) {
+  const std::string csv = write_csv(
+      "clogging", "id,role,scene,W_mm,mass_g,angle_deg\n"
+                  "a,calibrate," + kScene + ",20,6,25\n"
+                  "b,calibrate," + kScene + ",20,8,26\n"
+                  "narrow,calibrate," + kScene + ",5,6,27\n");
+  const fs::path out = fs::temp_directory_path() / "reposetwin_loop_clog_test";
+  fs::remove_all(out);
+  LoopSettings s;
+  s.mu_grid = {0.1, 0.3};
+  s.seeds = {1, 2};
+  s.angle = AngleMeasure::kParticles;
+  s.image.width_px = 640;
+  s.image.height_px = 480;
+  s.image.side_views = 1;
+  s.progress = false;
+  s.html = false;
+  s.max_pours = 2;
+  try {
+    (void)run_loop(read_lab_csv(csv), out.string(), s);
+    ADD_FAILURE() << "the loop ran on a test whose twin clogs";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("test narrow formed no pile"), std::string::npos) << what;
+    EXPECT_NE(what.find("mu_r 0.1"), std::string::npos) << what;
+    EXPECT_NE(what.find("in 2 pour(s)"), std::string::npos) << what;
+    // The last pour named is the repeat, with its own seed.
+    EXPECT_NE(what.find("seed_" + std::to_string(1 + kRepourSeedStride)), std::string::npos)
+        << what;
+  }
+  EXPECT_FALSE(fs::exists(out / "loop.json"));
+}
+
+// A scatter of small spheres on the plate (what a jammed outlet lets through) is too low for any
+// side view to find the pile's toes: photograph_pile returns the error, which the cache turns
+// into a pour without a pile (repeated, and named in the loop's error), not an exception that
+// would stop the whole batch.
+TEST(LoopData, APileNoViewCanMeasureIsReportedNotThrown) {
+  std::vector<Eigen::Vector3d> x;
+  for (int k = 0; k < 40; ++k) {
+    const double a = 0.157 * k, r = 0.02 * std::sqrt((k + 0.5) / 40.0);
+    x.emplace_back(r * std::cos(a), r * std::sin(a), 0.2e-3);
+  }
+  ImageVariant v;
+  v.width_px = 320;
+  v.height_px = 240;
+  v.side_views = 2;
+  const nlohmann::json got =
+      photograph_pile(x, std::vector<double>(x.size(), 0.2e-3), std::vector<int>(x.size(), 0), v,
+                      (fs::temp_directory_path() / "rt_tiny").string());
+  ASSERT_TRUE(got.contains("error")) << got.dump();
+  EXPECT_NE(got["error"].get<std::string>().find("no side view of the pile could be measured"),
+            std::string::npos);
+  EXPECT_FALSE(got.contains("angle_deg"));
+  EXPECT_EQ(got["views"].size(), 2u);
+}
+
+// A pile run's cache folder changes with anything that changes the pile: the scene text, an
+// override, their order, and the engine's code version (a new version must not reuse piles an
+// older engine made); the same inputs give the same folder, so a killed loop resumes.
+TEST(LoopData, CachedPileRunsAreKeyedByCodeVersion) {
+  const std::vector<std::string> sets = {"a.b=1", "c.d=2"};
+  const std::string base = sim_case_name("0123", sets, "1.0+abc");
+  EXPECT_EQ(base.rfind("sim_", 0), 0u) << base;
+  EXPECT_EQ(base, sim_case_name("0123", sets, "1.0+abc"));
+  EXPECT_NE(base, sim_case_name("0123", sets, "1.0+abd"));
+  EXPECT_NE(base, sim_case_name("0124", sets, "1.0+abc"));
+  EXPECT_NE(base, sim_case_name("0123", {"a.b=1", "c.d=3"}, "1.0+abc"));
+  EXPECT_NE(base, sim_case_name("0123", {"c.d=2", "a.b=1"}, "1.0+abc"));
+}
+
+TEST(LoopData, BadInputNamesTheLineAndColumn) {
+  const std::string head = "id,role,scene,mass_kg,W_mm,angle_deg\n";
+  auto row = [&](const std::string& rest) { return head + "t1,calibrate," + kScene + "," + rest + "\n"; };
+  std::string e = error_of("missing", "id,role,mass_kg,angle_deg\nt1,calibrate,0.006,30\n");
+  EXPECT_NE(e.find("required column \"scene\""), std::string::npos) << e;
+  e = error_of("nonnumber", row("heavy,20,30"));
+  EXPECT_NE(e.find("line 2 (test t1), column mass_kg"), std::string::npos) << e;
+  EXPECT_NE(e.find("\"heavy\" is not a number"), std::string::npos) << e;
+  e = error_of("angle", row("0.006,20,95"));
+  EXPECT_NE(e.find("column angle_deg"), std::string::npos) << e;
+  EXPECT_NE(e.find("outside (0, 90)"), std::string::npos) << e;
+  e = error_of("noangle", head + "t1,calibrate," + kScene + ",0.006,20,\n");
+  EXPECT_NE(e.find("no measured value"), std::string::npos) << e;
+  e = error_of("unknown", "id,role,scene,angel_deg\nt1,calibrate," + kScene + ",30\n");
+  EXPECT_NE(e.find("unknown column \"angel_deg\""), std::string::npos) << e;
+  e = error_of("role", head + "t1,fit," + kScene + ",0.006,20,30\n");
+  EXPECT_NE(e.find("column role"), std::string::npos) << e;
+  e = error_of("dup", row("0.006,20,30") + "t1,calibrate," + kScene + ",0.006,20,31\n");
+  EXPECT_NE(e.find("appears twice"), std::string::npos) << e;
+  e = error_of("fields", head + "t1,calibrate," + kScene + ",0.006\n");
+  EXPECT_NE(e.find("4 fields for 6 columns"), std::string::npos) << e;
+  e = error_of("noscene", head + "t1,calibrate,nowhere.toml,0.006,20,30\n");
+  EXPECT_NE(e.find("column scene"), std::string::npos) << e;
+}
+
+TEST(LoopData, ATestTheEngineCannotBuildNamesItsColumn) {
+  // A scene key that does not exist and a plate material that does not exist.
+  std::string e = error_of("badkey", "id,role,scene,set:contacts.rock-plate.fricton,angle_deg\n"
+                                     "t1,calibrate," + kScene + ",0.3,30\n");
+  EXPECT_NE(e.find("column set:contacts.rock-plate.fricton"), std::string::npos) << e;
+  EXPECT_NE(e.find("cannot build"), std::string::npos) << e;
+  e = error_of("badplate", "id,role,scene,plate,angle_deg\nt1,calibrate," + kScene + ",glass,30\n");
+  EXPECT_NE(e.find("line 2 (test t1), column plate"), std::string::npos) << e;
+  e = error_of("badmass", "id,role,scene,mass_kg,angle_deg\nt1,calibrate," + kScene + ",-1,30\n");
+  EXPECT_NE(e.find("column mass_kg"), std::string::npos) << e;
+}
+
+TEST(LoopData, PhotosWithoutAUsableScaleAreRejected) {
+  // An image with no pile, no sidecar and no scale marker; then one that does not exist.
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_loop_data_test";
+  fs::create_directories(dir);
+  {
+    std::ofstream f(dir / "blank.pgm", std::ios::binary);
+    f << "P5\n64 48\n255\n" << std::string(64 * 48, char(200));
+  }
+  std::string e = error_of("photo", "id,role,scene,photo\nt1,calibrate," + kScene + ",blank.pgm\n");
+  EXPECT_NE(e.find("line 2 (test t1), column photo"), std::string::npos) << e;
+  EXPECT_NE(e.find("photo_camera sidecar JSON or mm_per_px"), std::string::npos) << e;
+  e = error_of("nophoto", "id,role,scene,photo\nt1,calibrate," + kScene + ",missing.png\n");
+  EXPECT_NE(e.find("cannot be read"), std::string::npos) << e;
+  e = error_of("badscale",
+               "id,role,scene,photo,mm_per_px\nt1,calibrate," + kScene + ",blank.pgm,-2\n");
+  EXPECT_NE(e.find("column mm_per_px"), std::string::npos) << e;
+}
+
+TEST(LoopData, CsvFieldsFollowQuotes) {
+  const auto f = split_csv_line("a,\"b,c\",\"d\"\"e\",", "x");
+  ASSERT_EQ(f.size(), 4u);
+  EXPECT_EQ(f[1], "b,c");
+  EXPECT_EQ(f[2], "d\"e");
+  EXPECT_EQ(f[3], "");
+  EXPECT_THROW(split_csv_line("a,\"b", "x"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments

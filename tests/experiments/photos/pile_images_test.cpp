@@ -1,0 +1,106 @@
+// Renders of a pile measured by vision agree with the particle-position measurement of the
+// same pile (within 1 degree), and the image angle follows the pile's true angle.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "../../support/cone_pile.hpp"
+#include "experiments/photos/pile_images.hpp"
+#include "sim/pile_geometry.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+namespace fs = std::filesystem;
+
+class RenderedCone : public ::testing::TestWithParam<double> {};
+
+TEST_P(RenderedCone, ImageAngleAgreesWithParticleMeasurement) {
+  const double angle_deg = GetParam();
+  const double big_r = 0.04;  // base radius [m]
+  const double h = big_r * std::tan(angle_deg * 3.14159265358979 / 180.0);
+  const test_support::Spheres s = test_support::make_cone(h, big_r, 0.002, -0.001, 1e-3, 5, 0.3);
+  const sim::PileGeometry g = sim::measure_pile(s.x, s.r);
+  ASSERT_EQ(g.status, sim::PileStatus::kOk);
+  // One folder per angle: ctest runs the two instances side by side, and a shared folder let one
+  // remove the other's files mid-test.
+  const fs::path dir = fs::temp_directory_path() /
+                       ("reposetwin_rendered_cone_" + std::to_string(static_cast<int>(angle_deg)));
+  fs::remove_all(dir);
+  ImageSettings settings;
+  settings.width_px = 960;
+  settings.height_px = 540;
+  settings.side_views = 2;
+  const nlohmann::json m =
+      render_and_measure(s.x, s.r, std::vector<int>(s.r.size(), 0), dir.string(), settings);
+  const double image_theta = m["theta_deg"];
+  EXPECT_NEAR(image_theta, g.theta_hd * 180.0 / 3.14159265358979, 1.0);
+  EXPECT_NEAR(image_theta, angle_deg, 1.0);
+  EXPECT_NEAR(m["height_m"].get<double>(), h, 0.02 * h);
+  EXPECT_NEAR(m["top"]["D_circle_m"].get<double>(), 2 * big_r, 0.03 * 2 * big_r);
+  EXPECT_TRUE(fs::exists(dir / "side_az000.png"));
+  EXPECT_TRUE(fs::exists(dir / "side_az000.json"));
+  EXPECT_TRUE(fs::exists(dir / "side_az000.measured.png"));
+  EXPECT_TRUE(fs::exists(dir / "measurement.json"));
+}
+
+INSTANTIATE_TEST_SUITE_P(Angles, RenderedCone, ::testing::Values(25.0, 35.0));
+
+// Every side view of the lab's photographs reads the same pile: at 45 and 135 deg azimuth the
+// level camera sees the square plate's corner and two of its side faces, which must not be
+// taken for a visible top face with the pile's toes on it. (A vision change of session 4 did
+// that: on sample-3 piles those two views read H 64-76 mm for 47-59 mm, atan(2H/D) +9 deg.)
+TEST(RenderedConeViews, EveryAzimuthReadsTheConesHeightAndWidth) {
+  const double big_r = 0.04;  // base radius [m]
+  const double h = big_r * std::tan(30.0 * 3.14159265358979 / 180.0);
+  const test_support::Spheres s = test_support::make_cone(h, big_r, 0.0, 0.0, 1e-3, 5, 0.3);
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_rendered_cone_views";
+  fs::remove_all(dir);
+  ImageSettings settings;  // the lab's defaults: 1920 x 1080, four side views (0-135 deg)
+  settings.top_view = false;
+  const nlohmann::json m =
+      render_and_measure(s.x, s.r, std::vector<int>(s.r.size(), 0), dir.string(), settings);
+  ASSERT_EQ(m["side_views"].size(), 4u);
+  // D: the views agree within 2%; against the cone's 80 mm they read about 83.7 mm (the toes
+  // carried down the flank's slope through the bottom layer's outline, a known bias), so 6%.
+  const double d_mean = m["diameter_m"].get<double>();
+  for (const nlohmann::json& v : m["side_views"]) {
+    EXPECT_NEAR(v["H_m"].get<double>(), h, 0.03 * h) << v["azimuth_deg"];
+    EXPECT_NEAR(v["D_m"].get<double>(), d_mean, 0.02 * d_mean) << v["azimuth_deg"];
+    EXPECT_NEAR(v["D_m"].get<double>(), 2 * big_r, 0.06 * 2 * big_r) << v["azimuth_deg"];
+  }
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
+
+#include "../../support/tiny_scene.hpp"
+#include "experiments/pile/pile_run.hpp"
+#include "experiments/io/scene.hpp"
+#include "experiments/io/input_error.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+
+TEST(RenderRun, FinalPileAndChosenFramesArePhotographed) {
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_render_run";
+  fs::remove_all(dir);
+  RunOptions opt;
+  opt.out_dir = (dir / "run").string();
+  opt.progress = false;
+  run_pile_test(parse_scene_text(test_support::kTinyScene, (dir / "tiny.toml").string()), opt);
+  ImageSettings s;
+  s.width_px = 640;
+  s.height_px = 360;
+  s.side_views = 2;
+  const nlohmann::json m = render_and_measure_run(opt.out_dir, s);
+  EXPECT_GT(m["theta_deg"].get<double>(), 5.0);
+  EXPECT_EQ(m["provenance"]["seed"], 1);
+  EXPECT_TRUE(fs::exists(dir / "run" / "images" / "side_az000.png"));
+  render_and_measure_run(opt.out_dir, s, "frames/frame_00000.vtp");
+  EXPECT_TRUE(fs::exists(dir / "run" / "images" / "frame_00000" / "measurement.json"));
+  EXPECT_THROW(render_and_measure_run(opt.out_dir, s, "frames/nope.vtp"), InputError);
+  EXPECT_THROW(render_and_measure_run((dir / "empty").string(), s), InputError);
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
