@@ -3,11 +3,71 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "experiments/pile/pile_run.hpp"
+#include "experiments/io/json_fields.hpp"
 #include "experiments/io/scene.hpp"
+#include "experiments/pile/pile_run.hpp"
 
 namespace reposetwin::experiments {
 using nlohmann::json;
+
+json to_json(const CaseResult& r) {
+  json out = {{"stop", to_json(r.stop)},
+              {"pile", to_json(r.pile)},
+              {"particles", to_json(r.particles)},
+              {"performance", to_json(r.performance)},
+              {"provenance", to_json(r.provenance)},
+              {"psd_fines_fraction", r.psd_fines_fraction},
+              {"run_dir", r.run_dir}};
+  if (r.image)
+    out["image"] = {{"theta_deg", r.image->theta_deg}, {"theta_sd_deg", r.image->theta_sd_deg},
+                    {"height_m", r.image->height_m},   {"diameter_m", r.image->diameter_m},
+                    {"flank_deg", r.image->flank_deg}, {"images", r.image->images}};
+  return out;
+}
+
+CaseResult case_result_from_json(const json& j) {
+  const json& res = j.contains("result") ? j.at("result") : j;
+  try {
+    CaseResult r;
+    r.stop = stop_from_json(res.at("stop"));
+    r.pile = pile_measure_from_json(res.at("pile"));
+    r.particles = particle_counts_from_json(res.value("particles", json::object()));
+    r.performance = run_performance_from_json(res.value("performance", json::object()));
+    r.provenance = run_provenance_from_json(res.value("provenance", json::object()));
+    r.psd_fines_fraction = res.value("psd_fines_fraction", 0.0);
+    r.run_dir = res.value("run_dir", std::string("run"));
+    if (res.contains("image")) {
+      const json& m = res.at("image");
+      r.image =
+          CaseImages{json_number(m, "theta_deg"), json_number(m, "theta_sd_deg"),
+                     json_number(m, "height_m"),  json_number(m, "diameter_m"),
+                     json_number(m, "flank_deg"), m.value("images", std::string("run/images"))};
+    }
+    return r;
+  } catch (const json::exception& e) {
+    throw std::invalid_argument(std::string("not a pile case's result: ") + e.what());
+  }
+}
+
+namespace {
+
+CaseResult case_result_of(const PileRun& run) {
+  CaseResult r;
+  r.stop = run.stop;
+  r.pile = run.pile;
+  r.particles = run.particles;
+  r.performance = run.performance;
+  r.provenance = run.provenance;
+  r.psd_fines_fraction = run.psd.fines_fraction_not_simulated;
+  return r;
+}
+
+CaseImages case_images_of(const json& m) {
+  return {json_number(m, "theta_deg"), json_number(m, "theta_sd_deg"), json_number(m, "height_m"),
+          json_number(m, "diameter_m"), json_number(m, "flank_deg")};
+}
+
+}  // namespace
 
 CaseFn pile_case_fn(const CaseRunSettings& settings) {
   return [settings](const CaseSpec& spec, const std::string& case_dir) -> json {
@@ -20,56 +80,37 @@ CaseFn pile_case_fn(const CaseRunSettings& settings) {
     opt.progress = false;
     opt.threads = settings.threads;
     opt.extra_provenance = {{"campaign_case", spec.id()}};
-    const json run = run_pile_test_or_continue(scene, opt);
-    json out = {{"stop", run.at("stop")},
-                {"pile", run.at("pile")},
-                {"particles", run.at("particles")},
-                {"performance", run.at("performance")},
-                {"provenance", run.at("provenance")},
-                {"psd_fines_fraction", run.at("psd").at("fines_fraction_not_simulated")},
-                {"run_dir", "run"}};
-    if (settings.images && run.at("pile").at("status") == "ok") {
-      const json m = render_and_measure_run(opt.out_dir, settings.image);
-      out["image"] = {{"theta_deg", m.at("theta_deg")},
-                      {"theta_sd_deg", m.at("theta_sd_deg")},
-                      {"height_m", m.at("height_m")},
-                      {"diameter_m", m.at("diameter_m")},
-                      {"flank_deg", m.at("flank_deg")},
-                      {"images", "run/images"}};
-    }
-    return out;
+    const std::optional<PileRun> run = run_pile_test_or_continue(scene, opt);
+    if (!run) throw std::logic_error(opt.out_dir + ": a case run has no stop limit, yet stopped");
+    CaseResult r = case_result_of(*run);
+    if (settings.images && run->pile_ok())
+      r.image = case_images_of(render_and_measure_run(*run, opt.out_dir, settings.image));
+    return to_json(r);
   };
 }
 
 bool case_made_no_pile(const json& r) {
-  const json& res = r.contains("result") ? r.at("result") : r;
-  return res.contains("pile") && res["pile"].value("status", std::string()) == "no pile";
+  return case_result_from_json(r).pile.status == sim::PileStatus::kNoPile;
 }
 
-double case_angle_deg(const json& r, AngleMeasure measure) {
-  const json& res = r.contains("result") ? r.at("result") : r;
-  if (res.contains("stop")) {
-    const std::string reason = res.at("stop").value("reason", std::string());
-    if (reason.rfind("physics", 0) == 0)
-      throw std::runtime_error("the run stopped on a physics failure (" + reason + ": " +
-                               res.at("stop").value("detail", std::string()) +
-                               "), so it has no angle; " + res.value("run_dir", std::string()));
-  }
-  if (case_made_no_pile(res)) return 0.0;
+double case_angle_deg(const json& j, AngleMeasure measure) {
+  const CaseResult r = case_result_from_json(j);
+  if (r.stop.is_physics())
+    throw std::runtime_error("the run stopped on a physics failure (" + stop_reason_text(r.stop) +
+                             ": " + r.stop.detail + "), so it has no angle; " + r.run_dir);
+  if (r.pile.status == sim::PileStatus::kNoPile) return 0.0;
   switch (measure) {
     case AngleMeasure::kImage:
-      if (res.contains("image")) return res.at("image").at("theta_deg");
-      return res.at("pile").at("theta_hd_deg");
+      return r.image ? r.image->theta_deg : r.pile.theta_hd_deg;
     case AngleMeasure::kImageFlank:
-      if (!res.contains("image"))
+      if (!r.image)
         throw std::runtime_error("the image flank angle needs the run's photographs, and " +
-                                 res.value("run_dir", std::string("this run")) +
-                                 " has none (run without --no-images)");
-      return res.at("image").at("flank_deg");
+                                 r.run_dir + " has none (run without --no-images)");
+      return r.image->flank_deg;
     case AngleMeasure::kParticles:
-      return res.at("pile").at("theta_hd_deg");
+      return r.pile.theta_hd_deg;
     case AngleMeasure::kSlice:
-      return res.at("pile").at("slice_angle_mean_deg");
+      return r.pile.slice_angle_mean_deg;
   }
   throw std::logic_error("case_angle_deg: unknown angle measure");
 }

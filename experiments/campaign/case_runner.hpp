@@ -3,20 +3,51 @@
 // The campaign runner (campaign.hpp) knows nothing of piles: it hands a CaseSpec and a folder to
 // a case function. pile_case_fn() is that function for the pile test: it builds the case's scene
 // (overrides and seed applied), runs it into CASE_DIR/run, photographs and measures the pile,
-// and returns the numbers a report or a calibration needs: the particle-position angles, the
-// image angle, the stop reason and the provenance.
+// and returns a CaseResult: the particle-position angles, the image angle, the stop reason and
+// the provenance. The runner stores it as JSON (to_json), and calibration and reports read it
+// back with case_result_from_json.
 #pragma once
+
+#include <optional>
+#include <string>
 
 #include "experiments/campaign/campaign.hpp"
 #include "experiments/photos/pile_images.hpp"
+#include "experiments/pile/pile_record.hpp"
 
 namespace reposetwin::experiments {
 
 struct CaseRunSettings {
-  bool images = true;           // render and measure the final pile (vision angle)
-  ImageSettings image;          // cameras and resolution
-  int threads = 1;              // OpenMP threads per run (the pool runs runs side by side)
+  bool images = true;   // render and measure the final pile (vision angle)
+  ImageSettings image;  // cameras and resolution
+  int threads = 1;      // OpenMP threads per run (the pool runs runs side by side)
 };
+
+/// What the twin's photographs of a case's pile measured: the side views' mean.
+struct CaseImages {
+  double theta_deg = 0.0;             // atan(2H/D) [deg]
+  double theta_sd_deg = 0.0;          // its spread over the side views [deg]
+  double height_m = 0.0;              // H [m]
+  double diameter_m = 0.0;            // D [m]
+  double flank_deg = 0.0;             // flank-line angle [deg]
+  std::string images = "run/images";  // the photographs' folder, relative to the case folder
+};
+
+/// One case's outcome (the "result" of its result.json).
+struct CaseResult {
+  RunStop stop;
+  PileMeasure pile;
+  ParticleCounts particles;
+  RunPerformance performance;
+  RunProvenance provenance;
+  double psd_fines_fraction = 0.0;  // mass fraction of the PSD below d_min, not simulated [-]
+  std::string run_dir = "run";      // the pile run's folder, relative to the case folder
+  std::optional<CaseImages> image;  // absent: not photographed (--no-images, or no pile)
+};
+nlohmann::json to_json(const CaseResult& r);
+/// Reads a case result, or a run's whole result.json (its "result" member); std::invalid_argument
+/// when the JSON is not a case result.
+CaseResult case_result_from_json(const nlohmann::json& j);
 
 CaseFn pile_case_fn(const CaseRunSettings& settings);
 

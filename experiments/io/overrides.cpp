@@ -4,6 +4,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "experiments/io/input_error.hpp"
+
 namespace reposetwin::experiments {
 namespace {
 
@@ -124,6 +126,31 @@ void apply_override(toml::table& doc, std::string_view dotted_key, const toml::n
 void apply_overrides(toml::table& doc, const toml::table& overrides, std::string_view origin) {
   // toml::table iterates in key order, which puts "a" before "a.b".
   for (const auto& [k, v] : overrides) apply_override(doc, k.str(), v, origin);
+}
+
+Override parse_override(std::string_view text, std::string_view origin) {
+  const auto eq = text.find('=');
+  if (eq == std::string_view::npos || eq == 0)
+    throw InputError(where(origin) + " \"" + std::string(text) + "\": expected dotted.key=value");
+  return {std::string(text.substr(0, eq)), std::string(text.substr(eq + 1))};
+}
+
+void apply_overrides(toml::table& doc, const std::vector<Override>& overrides,
+                     std::string_view origin) {
+  for (const Override& o : overrides) {
+    toml::table value_doc;
+    try {
+      value_doc = toml::parse("v = " + o.value);
+    } catch (const toml::parse_error& e) {
+      throw InputError(where(origin) + " \"" + o.key + "=" + o.value +
+                       "\": the value is not a TOML value (" + std::string(e.description()) + ")");
+    }
+    try {
+      apply_override(doc, o.key, *value_doc.get("v"), origin);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(e.what());
+    }
+  }
 }
 
 }  // namespace reposetwin::experiments

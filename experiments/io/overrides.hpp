@@ -36,6 +36,23 @@ void apply_override(toml::table& doc, std::string_view dotted_key, const toml::n
 /// ("sample.mass_kg").
 void apply_overrides(toml::table& doc, const toml::table& overrides, std::string_view origin = {});
 
+/// One override as a user writes it on a command line or in a measured-data row: the dotted key
+/// and the value in TOML syntax ("0.1", "\"epsd\"", "[1, 2]").
+struct Override {
+  std::string key;    // dotted key path, e.g. "contacts.rock-rock.rolling_friction"
+  std::string value;  // TOML value text
+};
+
+/// Parses "dotted.key=value". Throws InputError naming `origin` (e.g. "--set") and the text when
+/// the '=' or the key is missing.
+Override parse_override(std::string_view text, std::string_view origin);
+
+/// Applies `overrides` to `doc` in order; each value text is parsed as TOML first. Throws
+/// InputError naming `origin`, the key and the value when a value is not TOML or does not apply
+/// (see apply_override).
+void apply_overrides(toml::table& doc, const std::vector<Override>& overrides,
+                     std::string_view origin);
+
 /// Renders a TOML value in TOML syntax for error messages and case names ("0.1", "\"x\"", "[1,
 /// 2]").
 std::string toml_value_text(const toml::node& value);

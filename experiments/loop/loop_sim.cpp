@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <limits>
 #include <map>
-#include <opencv2/core.hpp>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -14,15 +13,12 @@
 
 #include "experiments/campaign/campaign.hpp"
 #include "experiments/io/overrides.hpp"
-#include "experiments/photos/pile_images.hpp"
-#include "experiments/pile/pile_run.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/scene.hpp"
 #include "experiments/io/toml_reader.hpp"
 #include "experiments/io/vtk_output.hpp"
-#include "render/output.hpp"
-#include "render/renderer.hpp"
-#include "render/scene.hpp"
+#include "experiments/photos/photographs.hpp"
+#include "experiments/pile/pile_run.hpp"
 #include "vision/measure.hpp"
 
 namespace reposetwin::experiments {
@@ -52,11 +48,9 @@ struct PhotoJob {
 
 toml::table scene_doc(const SimJob& job) {
   toml::table doc = parse_toml(read_file(job.scene_path), job.scene_path);
-  for (const std::string& s : job.sets) {
-    const auto eq = s.find('=');
-    toml::table v = toml::parse("v = " + s.substr(eq + 1));
-    apply_override(doc, s.substr(0, eq), *v.get("v"), job.scene_path);
-  }
+  std::vector<Override> overrides;
+  for (const std::string& s : job.sets) overrides.push_back(parse_override(s, job.scene_path));
+  apply_overrides(doc, overrides, job.scene_path);
   if (toml::table* t = doc["scene"].as_table())
     t->insert_or_assign("seed", static_cast<std::int64_t>(job.seed));
   // The loop needs the final pile only: no frame series.
@@ -119,73 +113,46 @@ json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
                      const std::vector<double>& radii, const std::vector<int>& materials,
                      const ImageVariant& v, const std::string& out_dir) {
   if (v.side_views < 1) throw InputError("loop images: side_views must be at least 1");
-  render::Scene scene = centred_pile_scene(positions, radii, materials);
+  PhotoSettings s;
+  s.width_px = v.width_px;
+  s.height_px = v.height_px;
+  s.side_views = v.side_views;
+  s.top_view = false;
+  s.distance_radii = v.distance_radii;
+  s.camera_height_m = v.camera_height_m;
+  s.k1 = v.k1;
+  s.declared_height_m = v.declared_height_m;
+  s.declared_k1 = v.declared_k1;
+  s.noise_sd = v.noise_sd;
+  s.noise_seed = v.noise_seed;
+  s.tint_seed = v.noise_seed;
   // The scale comes from the camera (sidecar), so no scale bar: the pile fills the frame
   // (a 10-band bar is taller than a small pile and would shrink it to a few pixels).
-  scene.scale_reference.enabled = false;
-  render::Renderer renderer;
-  render::RenderOptions options;
-  options.tint_seed = v.noise_seed;
-  options.view = render::View::kSide;
-  render::LabCameraSettings cams;
-  cams.width_px = v.width_px;
-  cams.height_px = v.height_px;
-  cams.distance_radii = v.distance_radii;
-  cams.side_height_m = v.camera_height_m;
-  if (v.keep_photos) fs::create_directories(out_dir);
-  cv::RNG rng(v.noise_seed * 7919 + 17);
-  std::vector<vision::SideMeasurement> sides;
+  s.scale_reference = false;
+  s.write_photos = v.keep_photos;
+  s.write_overlays = false;
+  s.views_must_measure = false;  // a small pile's pours are repeated when no view measures
+  const PilePhotos photos = photograph_pile(PileSpheres{positions, radii, materials}, s, out_dir);
   json views = json::array();
-  for (int k = 0; k < v.side_views; ++k) {
-    cams.azimuth_deg = 180.0 * k / v.side_views;
-    camera::Camera truth = render::lab_side_camera(scene, cams);
-    truth.intrinsics.k1 = v.k1;
-    // The lab's declared camera: same lens, distance and azimuth, its declared height and
-    // distortion (a lab that does not know its camera is high measures as if level).
-    camera::Camera declared = truth;
-    declared.extrinsics.position.z() = v.declared_height_m;
-    declared.extrinsics.look_at.z() = v.declared_height_m;
-    declared.intrinsics.k1 = v.declared_k1;
-    cv::Mat image = renderer.render(scene, truth, options);
-    if (v.noise_sd > 0.0) {
-      cv::Mat noise(image.size(), CV_32FC(image.channels()));
-      rng.fill(noise, cv::RNG::NORMAL, 0.0, v.noise_sd);
-      cv::Mat f;
-      image.convertTo(f, CV_32F);
-      f += noise;
-      f.convertTo(image, image.type());  // saturating
-    }
-    char stem[32];
-    std::snprintf(stem, sizeof stem, "side_az%03d", static_cast<int>(cams.azimuth_deg + 0.5));
-    const std::string base = (fs::path(out_dir) / stem).string();
-    if (v.keep_photos)
-      render::write_render(base, image, render::make_sidecar(scene, declared, options, nullptr));
-    json j;
-    try {
-      const vision::SideMeasurement m = vision::measure_side_camera(image, declared, {}, base);
-      sides.push_back(m);
-      j = vision::to_json(m);
-    } catch (const std::exception& e) {
-      // One view of a small pile may defeat the measurement; the others still count.
-      j = {{"error", e.what()}};
-    }
-    j["azimuth_deg"] = cams.azimuth_deg;
-    if (v.keep_photos) j["photo"] = std::string(stem) + ".png";
+  for (const SideView& view : photos.sides) {
+    json j = view.measured ? vision::to_json(*view.measured) : json{{"error", view.error}};
+    j["azimuth_deg"] = view.azimuth_deg;
+    if (v.keep_photos) j["photo"] = view.stem + ".png";
     views.push_back(j);
   }
   // A pile too small for any view (a few spheres through a jammed outlet) has no angle: the
   // caller counts it as a pour that formed no pile.
-  if (sides.empty())
+  if (!photos.summary)
     return {{"error", "no side view of the pile could be measured: " +
                           views[0]["error"].get<std::string>()},
             {"views", views},
             {"variant", v.key()}};
-  const vision::SideSummary s = vision::combine_sides(sides);
-  return {{"angle_deg", s.theta_deg.mean},
-          {"angle_sd_deg", s.theta_deg.stddev},
-          {"flank_deg", s.flank_deg.mean},
-          {"height_mm", 1e3 * s.height_m.mean},
-          {"diameter_mm", 1e3 * s.diameter_m.mean},
+  const vision::SideSummary& m = *photos.summary;
+  return {{"angle_deg", m.theta_deg.mean},
+          {"angle_sd_deg", m.theta_deg.stddev},
+          {"flank_deg", m.flank_deg.mean},
+          {"height_mm", 1e3 * m.height_m.mean},
+          {"diameter_mm", 1e3 * m.diameter_m.mean},
           {"views", views},
           {"variant", v.key()}};
 }
@@ -267,10 +234,12 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     opt.progress = false;
     opt.threads = 1;
     opt.extra_provenance = {{"loop_overrides", job.sets}};
-    const json run = run_pile_test_or_continue(scene, opt);  // a killed run continues
-    return {{"stop", run.at("stop")},
-            {"pile", run.at("pile")},
-            {"provenance", run.at("provenance")},
+    // A killed run continues from its checkpoint.
+    const std::optional<PileRun> run = run_pile_test_or_continue(scene, opt);
+    if (!run) throw std::logic_error(opt.out_dir + ": a loop run has no stop limit, yet stopped");
+    return {{"stop", to_json(run->stop)},
+            {"pile", to_json(run->pile)},
+            {"provenance", to_json(run->provenance)},
             {"overrides", job.sets}};
   };
   const std::vector<json> sims = batch_with_retry(dir_, sim_specs, sim_fn, rs);

@@ -10,7 +10,7 @@
 // loop therefore resumes where it stopped and nothing is ever computed twice, also across
 // datasets that share conditions (the tests share one cache); a new engine version simulates
 // afresh beside the old runs instead of reusing piles an older engine made (a change of rounding
-// alone re-draws every pile: bench/README.md, session 9). Measurement effects (camera height, lens distortion) only add
+// alone re-draws every pile). Measurement effects (camera height, lens distortion) only add
 // photographs of piles that already exist. All rendering and simulation happens in the pool's
 // forked workers, never in the calling process (OpenMP and OSMesa do not survive a fork).
 //
@@ -123,8 +123,10 @@ std::vector<std::string> resolved_overrides(const SimRequest& request);
 std::string sim_case_name(const std::string& scene_hash, const std::vector<std::string>& sets,
                           const std::string& version);
 
-/// Photographs a pile (centres, radii, material ids) with `variant`, measures it with the
-/// declared camera and returns {angle_deg, flank_deg, height_mm, diameter_mm, views[...]}, or
+/// Photographs a pile (centres, radii, material ids) with `variant` through the one photo
+/// pipeline (photos/photographs.hpp: the true camera renders, the declared camera measures; a
+/// view vision cannot measure is recorded and the others count) and returns the loop's record
+/// {angle_deg, flank_deg, height_mm, diameter_mm, views[...]}, or
 /// {error, views[...]} if no view could be measured (a pile of a few spheres). Writes the
 /// photographs and their declared-camera sidecars into `out_dir` when keep_photos is set
 /// (names side_az000.png / .json ...). Uses OSMesa: call it in a worker, not before forking.

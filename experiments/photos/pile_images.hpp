@@ -2,19 +2,19 @@
 //
 // Design note. A pile's angle is compared with the lab's only when both come from the same
 // kind of image through the same measurement. render_and_measure() photographs the final pile
-// from the side at several azimuths and from the top (render/, lab-like cameras and scale
-// reference), measures every image with vision/ through its known camera (perspective
-// corrected), writes each PNG with its sidecar and an annotated overlay, and combines the side
-// views into a mean and spread. The pile is first centred on the camera axis, as a lab centres
-// its camera on the pile.
+// with photographs.hpp's one pipeline (side views at several azimuths and the top, lab-like
+// cameras and scale reference, every image measured by vision/ through its known camera),
+// writes each PNG with its sidecar and an annotated overlay, and records it all in
+// measurement.json, the file a campaign run, `reposetwin render` and the reports share.
 #pragma once
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "render/scene.hpp"
+#include "experiments/photos/photographs.hpp"
 
 namespace reposetwin::experiments {
 
@@ -29,23 +29,28 @@ struct ImageSettings {
   std::uint64_t tint_seed = 1;    // particle tint seed
 };
 
-/// The render scene of a pile: the spheres moved so the footprint centre is on the camera axis,
-/// on a plate wider than the footprint (1.3 x its radius), as a lab sets up its photograph.
-/// `shift`, when given, receives the footprint centre that was moved to the axis [m].
-render::Scene centred_pile_scene(const std::vector<Eigen::Vector3d>& positions,
-                                 const std::vector<double>& radii,
-                                 const std::vector<int>& materials,
-                                 Eigen::Vector2d* shift = nullptr);
+/// Photographs the pile (photographs.hpp, with the settings above: every side view must be
+/// measured) into `out_dir` (side_az000.png/.json/.measured.png, ..., top.png,
+/// measurement.json) and returns the measurement JSON: per-view results, the side summary
+/// (theta mean and spread), the top footprint, and the settings and provenance. `centre` is the
+/// pile's footprint centre when the caller has measured it (a run's PileMeasure).
+nlohmann::json render_and_measure(const PileSpheres& pile, const std::string& out_dir,
+                                  const ImageSettings& settings,
+                                  const nlohmann::json& provenance = nlohmann::json::object(),
+                                  std::optional<Eigen::Vector2d> centre = std::nullopt);
 
-/// Renders and measures the pile of spheres (centres [m], radii [m], material ids) into
-/// `out_dir` (side_az000.png/.json/.measured.png, ..., top.png, measurement.json) and returns
-/// the measurement JSON: per-view results, the side summary (theta mean and spread), the top
-/// footprint, and the settings and provenance.
+/// The same for spheres given as three arrays (centres [m], radii [m], material ids).
 nlohmann::json render_and_measure(const std::vector<Eigen::Vector3d>& positions,
                                   const std::vector<double>& radii,
                                   const std::vector<int>& materials, const std::string& out_dir,
                                   const ImageSettings& settings,
                                   const nlohmann::json& provenance = nlohmann::json::object());
+
+/// The same for a run just finished in this process: its final spheres are photographed from
+/// memory into RUN_DIR/images (a run read back from its files, which has none, from final.vtp).
+/// Throws InputError when the run formed no pile.
+nlohmann::json render_and_measure_run(const PileRun& run, const std::string& run_dir,
+                                      const ImageSettings& settings);
 
 /// The same for a finished run folder: reads RUN_DIR/final.vtp (or `frame`, a snapshot of the
 /// run's series such as "frames/frame_00012.vtp") and result.json (provenance), writes

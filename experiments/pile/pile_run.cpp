@@ -8,10 +8,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <sstream>
 
-#include "experiments/io/provenance.hpp"
 #include "experiments/io/input_error.hpp"
+#include "experiments/io/provenance.hpp"
 #include "experiments/io/vtk_output.hpp"
 #include "sim/checkpoint.hpp"
 #include "sim/psd.hpp"
@@ -24,17 +25,20 @@ using nlohmann::json;
 
 namespace {
 
-constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
 constexpr int kPlate = 0, kContainer = 1;
 
 enum class Phase { kFill, kLift, kSettle, kDone };
 
 const char* phase_name(Phase p) {
   switch (p) {
-    case Phase::kFill: return "fill";
-    case Phase::kLift: return "lift";
-    case Phase::kSettle: return "settle";
-    case Phase::kDone: return "done";
+    case Phase::kFill:
+      return "fill";
+    case Phase::kLift:
+      return "lift";
+    case Phase::kSettle:
+      return "settle";
+    case Phase::kDone:
+      return "done";
   }
   return "?";
 }
@@ -46,37 +50,47 @@ Phase phase_from(const std::string& s) {
   return Phase::kDone;
 }
 
-/// The controller's own state: saved beside each engine checkpoint.
+/// The controller's own state: saved beside each engine checkpoint (controller.json).
 struct Controller {
   Phase phase = Phase::kFill;
-  double phase_start = 0.0;        // [s]
-  double lift_start = -1.0;        // [s]
-  double lift_end = -1.0;          // [s]
-  std::int64_t inside_last = -1;   // particles inside the container at the last check
-  double inside_changed = 0.0;     // when that count last changed [s]
-  double next_frame = 0.0;         // [s]
+  double phase_start = 0.0;       // [s]
+  double lift_start = -1.0;       // [s]
+  double lift_end = -1.0;         // [s]
+  std::int64_t inside_last = -1;  // particles inside the container at the last check
+  double inside_changed = 0.0;    // when that count last changed [s]
+  double next_frame = 0.0;        // [s]
   int frames = 0;
-  double ke_threshold = 0.0;       // KE per particle below which the pile is settled [J]
-  double r_min = 0.0, r_max = 0.0; // particle radii the model was built for [m]
-  double wall_seconds = 0.0;       // wall time of earlier sessions of this run [s]
-  double max_overlap_seen = 0.0;   // largest overlap / smaller radius at any check [-]
-  std::int64_t retained = 0;       // particles left in the container and lifted away with it
-  double retained_mass = 0.0;      // their mass [kg]
-  std::string stop_reason;         // set when done
-  std::string stop_detail;
-  json psd = json::object();       // PSD sampling summary
-  json events = json::array();     // phase changes with their times
+  double ke_threshold = 0.0;        // KE per particle below which the pile is settled [J]
+  double r_min = 0.0, r_max = 0.0;  // particle radii the model was built for [m]
+  double wall_seconds = 0.0;        // wall time of earlier sessions of this run [s]
+  double max_overlap_seen = 0.0;    // largest overlap / smaller radius at any check [-]
+  std::int64_t retained = 0;        // particles left in the container and lifted away with it
+  double retained_mass = 0.0;       // their mass [kg]
+  RunStop stop;                     // why the run ended (when phase is kDone)
+  PsdRecord psd;                    // the PSD sampling
+  std::vector<RunEvent> events;     // phase changes with their times
 
   json to_json() const {
-    return {{"phase", phase_name(phase)}, {"phase_start", phase_start},
-            {"lift_start", lift_start},   {"lift_end", lift_end},
-            {"inside_last", inside_last}, {"inside_changed", inside_changed},
-            {"next_frame", next_frame},   {"frames", frames},
-            {"ke_threshold", ke_threshold}, {"r_min", r_min},
-            {"r_max", r_max},             {"wall_seconds", wall_seconds}, {"max_overlap_seen", max_overlap_seen},
-            {"stop_reason", stop_reason}, {"stop_detail", stop_detail},
-            {"retained", retained},       {"retained_mass", retained_mass},
-            {"psd", psd},                 {"events", events}};
+    using experiments::to_json;
+    return {{"phase", phase_name(phase)},
+            {"phase_start", phase_start},
+            {"lift_start", lift_start},
+            {"lift_end", lift_end},
+            {"inside_last", inside_last},
+            {"inside_changed", inside_changed},
+            {"next_frame", next_frame},
+            {"frames", frames},
+            {"ke_threshold", ke_threshold},
+            {"r_min", r_min},
+            {"r_max", r_max},
+            {"wall_seconds", wall_seconds},
+            {"max_overlap_seen", max_overlap_seen},
+            {"stop_reason", phase == Phase::kDone ? stop_reason_text(stop) : ""},
+            {"stop_detail", stop.detail},
+            {"retained", retained},
+            {"retained_mass", retained_mass},
+            {"psd", to_json(psd)},
+            {"events", to_json(events)}};
   }
   static Controller from_json(const json& j) {
     Controller c;
@@ -93,40 +107,16 @@ struct Controller {
     c.r_max = j.at("r_max");
     c.wall_seconds = j.at("wall_seconds");
     c.max_overlap_seen = j.at("max_overlap_seen");
-    c.stop_reason = j.at("stop_reason");
-    c.stop_detail = j.at("stop_detail");
-    // Checkpoints written before the retained-material rule have none retained.
+    if (!j.at("stop_reason").get<std::string>().empty())
+      c.stop = stop_from_json({{"reason", j.at("stop_reason")}, {"detail", j.at("stop_detail")}});
+    // Controller files from before the retained-material rule have none retained.
     c.retained = j.value("retained", std::int64_t{0});
     c.retained_mass = j.value("retained_mass", 0.0);
-    c.psd = j.at("psd");
-    c.events = j.at("events");
+    c.psd = psd_record_from_json(j.at("psd"));
+    c.events = run_events_from_json(j.at("events"));
     return c;
   }
 };
-
-json psd_json(const sim::PsdSummary& s, const PsdFile& file) {
-  json intervals = json::array();
-  for (const auto& iv : s.intervals)
-    intervals.push_back({{"lower_mm", iv.lower * 1e3}, {"upper_mm", iv.upper * 1e3},
-                         {"target_mass_fraction", iv.target_mass_fraction},
-                         {"drawn_mass_fraction", iv.drawn_mass_fraction}, {"count", iv.count}});
-  return {{"source", file.source},
-          {"name", file.name},
-          {"provenance", file.provenance},
-          {"assumption", file.assumption},
-          {"target_mass_kg", s.target_mass},
-          {"simulated_target_mass_kg", s.simulated_target_mass},
-          {"drawn_mass_kg", s.drawn_mass},
-          {"count", s.count},
-          {"d_min_mm", s.d_min * 1e3},
-          {"d_max_mm", s.d_max * 1e3},
-          {"d_min_drawn_mm", s.d_min_drawn * 1e3},
-          {"d_max_drawn_mm", s.d_max_drawn * 1e3},
-          {"fines_fraction_not_simulated", s.fines_fraction},
-          {"scalped_fraction", s.scalped_fraction},
-          {"fines_policy", sim::to_string(s.fines)},
-          {"intervals", intervals}};
-}
 
 /// Radius of the container's inside at height z above its lower rim [m].
 double container_radius(const ContainerConfig& c, double z_rel) {
@@ -183,378 +173,413 @@ std::int64_t count_inside(const sim::World& world, const ContainerConfig& c) {
   return std::count(in.begin(), in.end(), 1);
 }
 
+PileSpheres spheres_of(const sim::Particles& p) {
+  return {{p.x.begin(), p.x.end()},
+          {p.radius.begin(), p.radius.end()},
+          {p.material.begin(), p.material.end()}};
+}
+
 std::string eta_text(double seconds) {
   if (!std::isfinite(seconds) || seconds < 0) return "?";
   std::ostringstream os;
   const long s = static_cast<long>(seconds);
-  if (s >= 3600) os << s / 3600 << "h" << (s % 3600) / 60 << "m";
-  else if (s >= 60) os << s / 60 << "m" << s % 60 << "s";
-  else os << s << "s";
+  if (s >= 3600)
+    os << s / 3600 << "h" << (s % 3600) / 60 << "m";
+  else if (s >= 60)
+    os << s / 60 << "m" << s % 60 << "s";
+  else
+    os << s << "s";
   return os.str();
 }
 
-}  // namespace
+/// One pile test from its folder to its record: the phases of RunOptions' design note, each a
+/// method, run() their table of contents.
+class PileRunner {
+ public:
+  PileRunner(const SceneConfig& scene, const RunOptions& opt)
+      : scene_(scene), opt_(opt), out_(opt.out_dir), wall0_(std::chrono::steady_clock::now()) {}
 
-json pile_json(const sim::PileGeometry& g) {
-  json slices = json::array();
-  for (const auto& s : g.slices)
-    slices.push_back({{"azimuth_deg", s.azimuth * kRadToDeg},
-                      {"valid", s.valid},
-                      {"angle_deg", s.angle * kRadToDeg},
-                      {"equal_area_angle_deg", s.equal_area_angle * kRadToDeg}});
-  return {{"status", sim::to_string(g.status)},
-          {"method_hd", "theta = atan(2H/D), H = top of the highest pile particle, D = 2 x median "
-                        "over azimuth sectors of the footprint's furthest reach"},
-          {"method_slice", "protractor: line fit to each flank between 20% and 80% of H on "
-                           "vertical slices through the pile centre, averaged over azimuths"},
-          {"height_m", g.height},
-          {"base_diameter_m", g.base_diameter},
-          {"theta_hd_deg", g.theta_hd * kRadToDeg},
-          {"slice_angle_mean_deg", g.slice_angle_mean * kRadToDeg},
-          {"slice_angle_sd_deg", g.slice_angle_sd * kRadToDeg},
-          {"flank_angle_sd_deg", g.flank_angle_sd * kRadToDeg},
-          {"valid_slices", g.valid_slices},
-          {"equal_area_angle_deg", g.equal_area_angle * kRadToDeg},
-          {"centre_of_mass_angle_deg", g.centre_of_mass_angle * kRadToDeg},
-          {"centre_m", {g.centre.x(), g.centre.y()}},
-          {"pile_count", g.pile_count},
-          {"footprint_count", g.footprint_count},
-          {"stray_count", g.stray_count},
-          {"median_diameter_m", g.median_diameter},
-          {"slices", slices}};
-}
+  std::optional<PileRun> run() {
+    prepare_folder();
+    const bool resuming = load_controller_or_sample();
+    build_world();
+    if (resuming)
+      resume_from_checkpoint();
+    else
+      fill_and_check();
+    provenance_ = make_provenance();
+    if (!resuming && scene_.output.frame_interval > 0) write_frame();
+    if (!advance_until_done()) return std::nullopt;  // checkpointed; --resume continues
+    return finish();
+  }
 
-json run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
-  const fs::path out(opt.out_dir);
-  const fs::path result_path = out / "result.json";
-  const fs::path ckpt_path = out / "checkpoint.bin";
-  const fs::path ctrl_path = out / "controller.json";
-  if (fs::exists(result_path) && !opt.force && !opt.resume) {
-    throw InputError(result_path.string() +
-                     ": a finished result is already there; pass --force to overwrite it");
+ private:
+  fs::path path(const char* name) const { return out_ / name; }
+  double wall_now() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
   }
-  if (fs::exists(result_path) && opt.resume && !opt.force) {
-    throw InputError(result_path.string() + ": the run is already finished; nothing to resume");
+  const sim::State& state() const { return world_->state(); }
+  void event(const std::string& what) { ctl_.events.push_back(run_event(state().time, what)); }
+  void end(StopReason reason, const std::string& detail) {
+    ctl_.stop = {reason, sim::Status::kOk, detail};
+    ctl_.phase = Phase::kDone;
   }
-  if (opt.force && !opt.resume) {  // start clean: no stale result may look like this run's
-    for (const char* f : {"result.json", "final.vtp", "checkpoint.bin", "controller.json",
-                          "series.pvd", "scene.resolved.toml"})
-      fs::remove(out / f);
-    fs::remove_all(out / "frames");
-    fs::remove_all(out / "images");
-  }
-  fs::create_directories(out / "frames");
-  const auto wall0 = std::chrono::steady_clock::now();
-  auto wall_now = [&]() {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  };
 
-  // The sample (deterministic from the seed) and the model built for its sizes.
-  const int mat = material_index(scene, scene.sample_material, "sample.material");
-  Controller ctl;
-  std::vector<double> diameters;
-  const bool resuming = opt.resume && fs::exists(ckpt_path) && fs::exists(ctrl_path);
-  if (opt.resume && !resuming)
-    throw InputError(out.string() + ": no checkpoint to resume from (checkpoint.bin, controller.json)");
-  if (resuming) {
-    try {
-      ctl = Controller::from_json(json::parse(read_file(ctrl_path.string())));
-    } catch (const std::exception& e) {
-      throw ResumeError(ctrl_path.string() + ": cannot resume from it: " + e.what());
+  // A finished result is never overwritten without force; force starts from a clean folder.
+  void prepare_folder() {
+    const fs::path result = path("result.json");
+    if (fs::exists(result) && !opt_.force && !opt_.resume)
+      throw InputError(result.string() +
+                       ": a finished result is already there; pass --force to overwrite it");
+    if (fs::exists(result) && opt_.resume && !opt_.force)
+      throw InputError(result.string() + ": the run is already finished; nothing to resume");
+    if (opt_.force && !opt_.resume) {  // no stale result may look like this run's
+      for (const char* f : {"result.json", "final.vtp", "checkpoint.bin", "controller.json",
+                            "series.pvd", "scene.resolved.toml"})
+        fs::remove(path(f));
+      fs::remove_all(path("frames"));
+      fs::remove_all(path("images"));
     }
-  } else {
-    sim::Rng rng(scene.seed);
+    fs::create_directories(path("frames"));
+  }
+
+  // The sample is deterministic from the seed; a resumed run takes it from its controller file.
+  bool load_controller_or_sample() {
+    material_ = material_index(scene_, scene_.sample_material, "sample.material");
+    const bool resuming =
+        opt_.resume && fs::exists(path("checkpoint.bin")) && fs::exists(path("controller.json"));
+    if (opt_.resume && !resuming)
+      throw InputError(out_.string() +
+                       ": no checkpoint to resume from (checkpoint.bin, controller.json)");
+    if (resuming) {
+      try {
+        ctl_ = Controller::from_json(json::parse(read_file(path("controller.json").string())));
+      } catch (const std::exception& e) {
+        throw ResumeError(path("controller.json").string() +
+                          ": cannot resume from it: " + e.what());
+      }
+      return true;
+    }
+    sim::Rng rng(scene_.seed);
     sim::PsdSample sample;
     try {
-      sample = sim::sample_psd(scene.psd.spec, scene.mass, scene.materials[mat].density, rng);
+      sample =
+          sim::sample_psd(scene_.psd.spec, scene_.mass, scene_.materials[material_].density, rng);
     } catch (const std::invalid_argument& e) {
-      throw InputError(scene.file + ": sample: " + e.what());
+      throw InputError(scene_.file + ": sample: " + e.what());
     }
-    diameters = sample.diameter;
-    ctl.psd = psd_json(sample.summary, scene.psd);
-    ctl.r_min = 0.5 * sample.summary.d_min_drawn;
-    ctl.r_max = 0.5 * sample.summary.d_max_drawn;
+    diameters_ = sample.diameter;
+    const PsdFile& f = scene_.psd;
+    ctl_.psd = psd_record(sample.summary, f.source, f.name, f.provenance, f.assumption);
+    ctl_.r_min = 0.5 * sample.summary.d_min_drawn;
+    ctl_.r_max = 0.5 * sample.summary.d_max_drawn;
+    return false;
   }
-  sim::Settings settings = scene.settings;
-  if (opt.threads > 0) settings.threads = opt.threads;
-  SceneConfig sc = scene;
-  sc.settings = settings;
-  sim::World world(build_model(sc, ctl.r_min, ctl.r_max));
-  const sim::Model& model = world.model();
-  const double dt = model.dt;
 
-  PvdSeries series((out / "series.pvd").string());
-  if (resuming) {
+  void build_world() {
+    settings_ = scene_.settings;
+    if (opt_.threads > 0) settings_.threads = opt_.threads;
+    SceneConfig sc = scene_;
+    sc.settings = settings_;
+    world_ = std::make_unique<sim::World>(build_model(sc, ctl_.r_min, ctl_.r_max));
+    series_ = std::make_unique<PvdSeries>(path("series.pvd").string());
+  }
+
+  void resume_from_checkpoint() {
     try {
-      sim::read_checkpoint(world, ckpt_path.string());
-      series.load();
+      sim::read_checkpoint(*world_, path("checkpoint.bin").string());
+      series_->load();
     } catch (const std::exception& e) {
       throw ResumeError(std::string("cannot resume: ") + e.what());
     }
-    ctl.events.push_back({{"event", "resumed"},
-                          {"t", world.state().time},
-                          {"code_version", code_version()}});
-    series.truncate_after(world.state().time);
-  } else {
-    write_file_atomic((out / "scene.resolved.toml").string(), scene.resolved_toml);
-    fill_container(world, scene, diameters, mat);
-    world.refresh_forces();
-    const sim::Diagnostics d0 = world.diagnose();
-    if (d0.max_overlap_ratio > settings.initial_overlap_tolerance) {
-      throw InputError(scene.file + ": the initial packing overlaps by " +
+    ctl_.events.push_back(run_event(state().time, "resumed", std::nullopt, code_version()));
+    series_->truncate_after(state().time);
+  }
+
+  void fill_and_check() {
+    write_file_atomic(path("scene.resolved.toml").string(), scene_.resolved_toml);
+    fill_container(*world_, scene_, diameters_, material_);
+    world_->refresh_forces();
+    const sim::Diagnostics d0 = world_->diagnose();
+    if (d0.max_overlap_ratio > settings_.initial_overlap_tolerance) {
+      throw InputError(scene_.file + ": the initial packing overlaps by " +
                        std::to_string(d0.max_overlap_ratio) + " of a radius, above " +
                        "numerics.initial_overlap_tolerance = " +
-                       std::to_string(settings.initial_overlap_tolerance));
+                       std::to_string(settings_.initial_overlap_tolerance));
     }
     double m_mean = 0.0;
-    for (double m : world.state().particles.mass) m_mean += m;
-    m_mean /= std::max<std::size_t>(1, world.state().particles.size());
-    ctl.ke_threshold = 0.5 * m_mean * scene.procedure.settle_speed * scene.procedure.settle_speed;
-    ctl.events.push_back({{"t", 0.0}, {"event", "filled"}, {"particles", world.state().particles.size()}});
+    for (double m : state().particles.mass) m_mean += m;
+    m_mean /= std::max<std::size_t>(1, state().particles.size());
+    const double v = scene_.procedure.settle_speed;
+    ctl_.ke_threshold = 0.5 * m_mean * v * v;
+    const auto n = static_cast<std::int64_t>(state().particles.size());
+    ctl_.events.push_back(run_event(0.0, "filled", n));
+  }
+
+  RunProvenance make_provenance() const {
+    const sim::Model& model = world_->model();
+    RunProvenance p;
+    p.scene_file = scene_.file;
+    p.scene_name = scene_.name;
+    p.seed = scene_.seed;
+    p.code_version = code_version();
+    p.time_step_s = model.dt;
+    p.rayleigh_time_s = model.rayleigh_time;
+    if (settings_.softened_youngs_modulus > 0)
+      p.softened_youngs_modulus_pa = settings_.softened_youngs_modulus;
+    p.youngs_modulus_real_pa = scene_.materials[material_].youngs_modulus;
+    p.threads = settings_.threads > 0 ? settings_.threads : omp_get_max_threads();
+    p.created_utc = utc_now();
+    p.extra = opt_.extra_provenance;
+    return p;
   }
 
   // The sample as filled (a resumed run may already have lifted some away with the container).
-  const std::size_t n0 = world.state().particles.size() + static_cast<std::size_t>(ctl.retained);
-  const int threads = settings.threads > 0 ? settings.threads : omp_get_max_threads();
-  json provenance = {
-      {"scene_file", scene.file},
-      {"scene_name", scene.name},
-      {"seed", scene.seed},
-      {"code_version", code_version()},
-      {"time_step_s", dt},
-      {"rayleigh_time_s", model.rayleigh_time},
-      {"rayleigh_fraction", dt / model.rayleigh_time},
-      {"softened_youngs_modulus_pa", settings.softened_youngs_modulus > 0
-                                         ? json(settings.softened_youngs_modulus)
-                                         : json(nullptr)},
-      {"youngs_modulus_real_pa", scene.materials[mat].youngs_modulus},
-      {"threads", threads},
-      {"rolling_models", json::array()},
-      {"created_utc", utc_now()}};
-  for (const auto& row : sim::kRollingModels)
-    provenance["rolling_models"].push_back({{"keyword", row.keyword}, {"torque", row.torque},
-                                            {"radius", row.radius},
-                                            {"angular_velocity", row.angular_velocity}});
-  for (auto it = opt.extra_provenance.begin(); it != opt.extra_provenance.end(); ++it)
-    provenance[it.key()] = it.value();
+  std::int64_t initial_count() const {
+    return static_cast<std::int64_t>(state().particles.size()) + ctl_.retained;
+  }
 
-  // Checks run every few milliseconds of simulated time, not every step.
-  const std::int64_t check_every = std::max<std::int64_t>(1, std::llround(0.002 / dt));
-  double last_ckpt_wall = 0.0, last_progress_wall = 0.0;
-  const std::int64_t step0 = world.state().step;
-  auto save_checkpoint = [&]() {
-    Controller c = ctl;
-    c.wall_seconds = ctl.wall_seconds + wall_now();
-    sim::write_checkpoint(world, ckpt_path.string());
-    write_json_atomic(ctrl_path.string(), c.to_json());
-  };
-  auto write_frame = [&]() {
-    char name[64];
-    std::snprintf(name, sizeof name, "frames/frame_%05d.vtp", ctl.frames++);
-    write_vtp((out / name).string(), world.state().particles);
-    series.add(world.state().time, name);
-  };
-  auto ke_per_particle = [&](const sim::Diagnostics& d) {
-    return d.kinetic_energy / std::max<std::size_t>(1, world.state().particles.size());
-  };
-  auto event = [&](const std::string& what) {
-    ctl.events.push_back({{"t", world.state().time}, {"event", what}});
-  };
-  if (!resuming && scene.output.frame_interval > 0) write_frame();
-
-  bool stopped_early = false;
-  while (ctl.phase != Phase::kDone) {
-    world.step();
-    const sim::State& st = world.state();
-    const double t = st.time;
-    if (scene.output.frame_interval > 0 && t >= ctl.next_frame) {
-      ctl.next_frame = t + scene.output.frame_interval;
-      write_frame();
-    }
-    if ((st.step - step0) % check_every != 0) continue;
-
-    if (ctl.phase == Phase::kFill) {
-      // Filling is preparation, not the test: the sample is lowered gently, as a lab fills the
-      // funnel by hand, so soft particles do not hit the bottom at free-fall speed.
-      const double cap = scene.procedure.fill_max_speed;
-      for (sim::Vec3& v : world.state().particles.v) {
-        const double s = v.norm();
-        if (s > cap) v *= cap / s;
+  // Steps the engine; the controller looks every few milliseconds of simulated time, not every
+  // step. Returns false when a wall-time or step limit stopped the run (checkpointed).
+  bool advance_until_done() {
+    const std::int64_t check_every =
+        std::max<std::int64_t>(1, std::llround(0.002 / world_->model().dt));
+    step0_ = state().step;
+    n0_ = initial_count();
+    double last_ckpt_wall = 0.0;
+    while (ctl_.phase != Phase::kDone) {
+      world_->step();
+      if (scene_.output.frame_interval > 0 && state().time >= ctl_.next_frame) {
+        ctl_.next_frame = state().time + scene_.output.frame_interval;
+        write_frame();
+      }
+      if ((state().step - step0_) % check_every != 0) continue;
+      if (!check_phase()) break;  // a physics stop
+      const double wall = wall_now();
+      report_progress(wall);
+      if (ctl_.phase != Phase::kDone && wall - last_ckpt_wall > scene_.output.checkpoint_interval) {
+        last_ckpt_wall = wall;
+        save_checkpoint();
+      }
+      const bool wall_up = opt_.stop_after_wall_s > 0 && wall > opt_.stop_after_wall_s;
+      const bool steps_up =
+          opt_.stop_after_steps > 0 && state().step - step0_ >= opt_.stop_after_steps;
+      if ((wall_up || steps_up) && ctl_.phase != Phase::kDone) {
+        save_checkpoint();
+        return false;
       }
     }
-    const sim::Diagnostics d = world.diagnose();
-    ctl.max_overlap_seen = std::max(ctl.max_overlap_seen, d.max_overlap_ratio);
+    return true;
+  }
+
+  // One look of the controller: the engine's health, then the phase's own rule. Returns false
+  // when the engine reported trouble (the run ends at once).
+  bool check_phase() {
+    if (ctl_.phase == Phase::kFill) cap_fill_speeds();
+    const sim::Diagnostics d = world_->diagnose();
+    ctl_.max_overlap_seen = std::max(ctl_.max_overlap_seen, d.max_overlap_ratio);
     if (d.status != sim::Status::kOk) {
-      ctl.stop_reason = std::string("physics: ") + sim::status_name(d.status);
-      ctl.stop_detail = d.detail;
-      ctl.phase = Phase::kDone;
-      break;
+      ctl_.stop = {StopReason::kPhysics, d.status, d.detail};
+      ctl_.phase = Phase::kDone;
+      return false;
     }
-    const double ke = ke_per_particle(d);
-    const double in_phase = t - ctl.phase_start;
-    switch (ctl.phase) {
+    const double ke = d.kinetic_energy / std::max<std::size_t>(1, state().particles.size());
+    ke_last_ = ke;
+    const double in_phase = state().time - ctl_.phase_start;
+    switch (ctl_.phase) {
       case Phase::kFill:
-        if ((ke < ctl.ke_threshold && in_phase > 0.05) || in_phase > scene.procedure.fill_settle_max) {
-          if (in_phase > scene.procedure.fill_settle_max) event("fill settling reached its time limit");
-          world.set_wall_velocity(kContainer, sim::Vec3(0, 0, scene.procedure.lift_speed));
-          ctl.phase = Phase::kLift;
-          ctl.phase_start = ctl.lift_start = t;
-          ctl.inside_last = count_inside(world, scene.container);
-          ctl.inside_changed = t;
-          event("lift started");
-        }
+        check_fill(ke, in_phase);
         break;
-      case Phase::kLift: {
-        const std::int64_t inside = count_inside(world, scene.container);
-        const bool flow_stopped = inside != 0 && inside == ctl.inside_last &&
-                                  t - ctl.inside_changed > scene.procedure.clog_window &&
-                                  st.walls[kContainer].offset.z() > 4.0 * ctl.r_max;
-        const bool little_left = static_cast<double>(inside) <=
-                                 scene.procedure.max_retained_fraction * static_cast<double>(n0);
-        if (inside == 0 || (flow_stopped && little_left)) {
-          std::string what = "container empty; removed";
-          if (inside > 0) {
-            // The flow has stopped with a little material left inside (cohesive grains on the
-            // wall): it stays in the container, which is lifted away with it, as in the lab.
-            const std::vector<char> in = inside_mask(world, scene.container);
-            for (std::size_t i = 0; i < in.size(); ++i)
-              if (in[i]) ctl.retained_mass += st.particles.mass[i];
-            ctl.retained += static_cast<std::int64_t>(world.remove_particles(in));
-            what = "flow stopped; " + std::to_string(ctl.retained) +
-                   " particles stayed in the container and were lifted away with it";
-          }
-          world.set_wall_velocity(kContainer, sim::Vec3::Zero());
-          world.set_wall_enabled(kContainer, false);
-          ctl.phase = Phase::kSettle;
-          ctl.phase_start = ctl.lift_end = t;
-          event(what);
-        } else if (inside != ctl.inside_last) {
-          ctl.inside_last = inside;
-          ctl.inside_changed = t;
-        } else if (flow_stopped) {
-          ctl.stop_reason = "clogged";
-          ctl.stop_detail = "no pile: " + std::to_string(inside) + " particles lodged";
-          ctl.phase = Phase::kDone;
-        }
+      case Phase::kLift:
+        check_lift();
         break;
-      }
       case Phase::kSettle:
-        if (ke < ctl.ke_threshold && in_phase > 0.1) {
-          ctl.stop_reason = "settled";
-          ctl.stop_detail = "kinetic energy per particle below the threshold";
-          ctl.phase = Phase::kDone;
-        } else if (in_phase > scene.procedure.final_settle_max) {
-          ctl.stop_reason = "settle time limit";
-          ctl.stop_detail = "kinetic energy per particle still above the threshold";
-          ctl.phase = Phase::kDone;
-        }
+        check_settle(ke, in_phase);
         break;
       case Phase::kDone:
         break;
     }
-    if (ctl.phase != Phase::kDone && t > scene.procedure.max_time) {
-      ctl.stop_reason = "time limit";
-      ctl.stop_detail = std::string("phase ") + phase_name(ctl.phase) + " at the time limit";
-      ctl.phase = Phase::kDone;
-    }
-    const double wall = wall_now();
-    if (opt.progress && wall - last_progress_wall > scene.output.progress_interval) {
-      last_progress_wall = wall;
-      const double steps_done = static_cast<double>(st.step - step0);
-      const double rate = steps_done * static_cast<double>(st.particles.size()) / std::max(wall, 1e-9);
-      // Remaining simulated time: the rest of the lift (by the fill height) plus settling.
-      double remaining = 1.0;
-      if (ctl.phase == Phase::kFill) remaining += 0.1 + scene.container.height / scene.procedure.lift_speed * 0.5;
-      if (ctl.phase == Phase::kLift) {
-        double top = 0;
-        for (const sim::Vec3& x : st.particles.x) top = std::max(top, x.z());
-        remaining += std::max(0.0, top - scene.container.gap - st.walls[kContainer].offset.z()) /
-                     scene.procedure.lift_speed;
-      }
-      const double sim_rate = (t - (step0 * dt)) / std::max(wall, 1e-9);
-      std::fprintf(stderr,
-                   "%s: %-6s step %lld  t=%.3f s  %zu particles  KE/N=%.2e J  inside=%lld  "
-                   "%.2e particle-steps/s  ETA %s\n",
-                   scene.name.c_str(), phase_name(ctl.phase), static_cast<long long>(st.step), t,
-                   st.particles.size(), ke, static_cast<long long>(ctl.inside_last), rate,
-                   eta_text(remaining / std::max(sim_rate, 1e-12)).c_str());
-    }
-    if (ctl.phase != Phase::kDone && wall - last_ckpt_wall > scene.output.checkpoint_interval) {
-      last_ckpt_wall = wall;
-      save_checkpoint();
-    }
-    const bool wall_up = opt.stop_after_wall_s > 0 && wall > opt.stop_after_wall_s;
-    const bool steps_up = opt.stop_after_steps > 0 && st.step - step0 >= opt.stop_after_steps;
-    if ((wall_up || steps_up) && ctl.phase != Phase::kDone) {
-      save_checkpoint();
-      stopped_early = true;
-      break;
-    }
+    if (ctl_.phase != Phase::kDone && state().time > scene_.procedure.max_time)
+      end(StopReason::kTimeLimit,
+          std::string("phase ") + phase_name(ctl_.phase) + " at the time limit");
+    return true;
   }
-  if (stopped_early) return json{{"stopped", "time or step limit; resume with --resume"}};
 
-  // Measure the pile from the particle positions.
-  const sim::State& st = world.state();
-  json pile;
-  if (ctl.stop_reason == "clogged") {
-    pile = {{"status", "no pile"}, {"detail", ctl.stop_detail}, {"theta_hd_deg", 0.0},
-            {"slice_angle_mean_deg", 0.0}, {"lodged_particles", ctl.inside_last}};
-  } else {
-    pile = pile_json(sim::measure_pile(st.particles.x, st.particles.radius, scene.pile));
+  // Filling is preparation, not the test: the sample is lowered gently, as a lab fills the
+  // funnel by hand, so soft particles do not hit the bottom at free-fall speed.
+  void cap_fill_speeds() {
+    const double cap = scene_.procedure.fill_max_speed;
+    for (sim::Vec3& v : world_->state().particles.v) {
+      const double s = v.norm();
+      if (s > cap) v *= cap / s;
+    }
   }
-  write_vtp((out / "final.vtp").string(), st.particles);
-  write_frame();  // the series always ends with the final state
-  save_checkpoint();
-  const double wall_total = ctl.wall_seconds + wall_now();
-  const double steps = static_cast<double>(st.step);
-  json result = {
-      {"provenance", provenance},
-      {"stop", {{"reason", ctl.stop_reason}, {"detail", ctl.stop_detail}}},
-      {"pile", pile},
-      {"psd", ctl.psd},
-      {"particles",
-       {{"initial", n0},
-        {"final", st.particles.size()},
-        {"retained_in_container", ctl.retained},
-        {"retained_mass_kg", ctl.retained_mass}}},
-      {"procedure",
-       {{"lift_speed_m_s", scene.procedure.lift_speed},
-        {"lift_start_s", ctl.lift_start},
-        {"lift_end_s", ctl.lift_end},
-        {"clog_window_s", scene.procedure.clog_window},
-        {"max_retained_fraction", scene.procedure.max_retained_fraction},
-        {"end_s", st.time},
-        {"ke_threshold_j", ctl.ke_threshold},
-        {"container", {{"kind", scene.container.kind},
-                       {"bottom_diameter_m", scene.container.bottom_diameter},
-                       {"top_diameter_m", scene.container.top_diameter},
-                       {"height_m", scene.container.height}}},
-        {"events", ctl.events}}},
-      {"performance",
-       {{"steps", st.step},
-        {"wall_s", wall_total},
-        {"particle_steps_per_s", steps * static_cast<double>(n0) / std::max(wall_total, 1e-9)},
-        {"neighbor_builds", st.neighbors.builds},
-        {"max_overlap_ratio_seen", ctl.max_overlap_seen}}},
-      {"files", {{"final_snapshot", "final.vtp"}, {"series", "series.pvd"},
-                 {"checkpoint", "checkpoint.bin"}, {"scene", "scene.resolved.toml"}}}};
-  write_json_atomic(result_path.string(), result);
-  if (opt.progress) {
-    std::fprintf(stderr, "%s: %s (%s) after %.3f s simulated, %.1f s wall; wrote %s\n",
-                 scene.name.c_str(), ctl.stop_reason.c_str(), ctl.stop_detail.c_str(), st.time,
-                 wall_total, result_path.string().c_str());
+
+  void check_fill(double ke, double in_phase) {
+    const double limit = scene_.procedure.fill_settle_max;
+    if (!((ke < ctl_.ke_threshold && in_phase > 0.05) || in_phase > limit)) return;
+    if (in_phase > limit) event("fill settling reached its time limit");
+    world_->set_wall_velocity(kContainer, sim::Vec3(0, 0, scene_.procedure.lift_speed));
+    ctl_.phase = Phase::kLift;
+    ctl_.phase_start = ctl_.lift_start = state().time;
+    ctl_.inside_last = count_inside(*world_, scene_.container);
+    ctl_.inside_changed = state().time;
+    event("lift started");
   }
-  return result;
+
+  // The container rises until it is empty. If the count inside stops changing, the flow has
+  // stopped: with a little material left (cohesive grains on the wall) the container takes it
+  // away, as in the lab; with more, the outlet has clogged and there is no pile.
+  void check_lift() {
+    const ProcedureConfig& pc = scene_.procedure;
+    const double t = state().time;
+    const std::int64_t inside = count_inside(*world_, scene_.container);
+    const bool flow_stopped = inside != 0 && inside == ctl_.inside_last &&
+                              t - ctl_.inside_changed > pc.clog_window &&
+                              state().walls[kContainer].offset.z() > 4.0 * ctl_.r_max;
+    const bool little_left =
+        static_cast<double>(inside) <= pc.max_retained_fraction * static_cast<double>(n0_);
+    if (inside == 0 || (flow_stopped && little_left)) {
+      std::string what = "container empty; removed";
+      if (inside > 0) {
+        lift_away_retained();
+        what = "flow stopped; " + std::to_string(ctl_.retained) +
+               " particles stayed in the container and were lifted away with it";
+      }
+      world_->set_wall_velocity(kContainer, sim::Vec3::Zero());
+      world_->set_wall_enabled(kContainer, false);
+      ctl_.phase = Phase::kSettle;
+      ctl_.phase_start = ctl_.lift_end = t;
+      event(what);
+    } else if (inside != ctl_.inside_last) {
+      ctl_.inside_last = inside;
+      ctl_.inside_changed = t;
+    } else if (flow_stopped) {
+      end(StopReason::kClogged, "no pile: " + std::to_string(inside) + " particles lodged");
+    }
+  }
+
+  void lift_away_retained() {
+    const std::vector<char> in = inside_mask(*world_, scene_.container);
+    for (std::size_t i = 0; i < in.size(); ++i)
+      if (in[i]) ctl_.retained_mass += state().particles.mass[i];
+    ctl_.retained += static_cast<std::int64_t>(world_->remove_particles(in));
+  }
+
+  void check_settle(double ke, double in_phase) {
+    if (ke < ctl_.ke_threshold && in_phase > 0.1)
+      end(StopReason::kSettled, "kinetic energy per particle below the threshold");
+    else if (in_phase > scene_.procedure.final_settle_max)
+      end(StopReason::kSettleTimeLimit, "kinetic energy per particle still above the threshold");
+  }
+
+  void report_progress(double wall) {
+    if (!opt_.progress || wall - last_progress_wall_ <= scene_.output.progress_interval) return;
+    last_progress_wall_ = wall;
+    const sim::State& st = state();
+    const double dt = world_->model().dt;
+    const double steps_done = static_cast<double>(st.step - step0_);
+    const double rate =
+        steps_done * static_cast<double>(st.particles.size()) / std::max(wall, 1e-9);
+    // Remaining simulated time: the rest of the lift (by the fill height) plus settling.
+    const ProcedureConfig& pc = scene_.procedure;
+    double remaining = 1.0;
+    if (ctl_.phase == Phase::kFill)
+      remaining += 0.1 + scene_.container.height / pc.lift_speed * 0.5;
+    if (ctl_.phase == Phase::kLift) {
+      double top = 0;
+      for (const sim::Vec3& x : st.particles.x) top = std::max(top, x.z());
+      remaining += std::max(0.0, top - scene_.container.gap - st.walls[kContainer].offset.z()) /
+                   pc.lift_speed;
+    }
+    const double sim_rate = (st.time - (step0_ * dt)) / std::max(wall, 1e-9);
+    std::fprintf(stderr,
+                 "%s: %-6s step %lld  t=%.3f s  %zu particles  KE/N=%.2e J  inside=%lld  "
+                 "%.2e particle-steps/s  ETA %s\n",
+                 scene_.name.c_str(), phase_name(ctl_.phase), static_cast<long long>(st.step),
+                 st.time, st.particles.size(), ke_last_, static_cast<long long>(ctl_.inside_last),
+                 rate, eta_text(remaining / std::max(sim_rate, 1e-12)).c_str());
+  }
+
+  void save_checkpoint() {
+    Controller c = ctl_;
+    c.wall_seconds = ctl_.wall_seconds + wall_now();
+    sim::write_checkpoint(*world_, path("checkpoint.bin").string());
+    write_json_atomic(path("controller.json").string(), c.to_json());
+  }
+
+  void write_frame() {
+    char name[64];
+    std::snprintf(name, sizeof name, "frames/frame_%05d.vtp", ctl_.frames++);
+    write_vtp((out_ / name).string(), state().particles);
+    series_->add(state().time, name);
+  }
+
+  // The pile measured from the particle positions, the final files and the record.
+  PileRun finish() {
+    const sim::State& st = state();
+    PileRun r;
+    r.pile =
+        ctl_.stop.reason == StopReason::kClogged
+            ? clogged_pile(ctl_.inside_last, ctl_.stop.detail)
+            : pile_measure(sim::measure_pile(st.particles.x, st.particles.radius, scene_.pile));
+    write_vtp(path("final.vtp").string(), st.particles);
+    write_frame();  // the series always ends with the final state
+    save_checkpoint();
+    const double wall_total = ctl_.wall_seconds + wall_now();
+    r.provenance = provenance_;
+    r.stop = ctl_.stop;
+    r.psd = ctl_.psd;
+    r.particles = {n0_, static_cast<std::int64_t>(st.particles.size()), ctl_.retained,
+                   ctl_.retained_mass};
+    const ProcedureConfig& pc = scene_.procedure;
+    const ContainerConfig& c = scene_.container;
+    r.procedure = {pc.lift_speed,     ctl_.lift_start,          ctl_.lift_end,     st.time,
+                   pc.clog_window,    pc.max_retained_fraction, ctl_.ke_threshold, c.kind,
+                   c.bottom_diameter, c.top_diameter,           c.height,          ctl_.events};
+    r.performance = {
+        st.step, wall_total,
+        static_cast<double>(st.step) * static_cast<double>(n0_) / std::max(wall_total, 1e-9),
+        st.neighbors.builds, ctl_.max_overlap_seen};
+    write_json_atomic(path("result.json").string(), to_json(r));
+    r.final_spheres = spheres_of(st.particles);
+    if (opt_.progress)
+      std::fprintf(stderr, "%s: %s (%s) after %.3f s simulated, %.1f s wall; wrote %s\n",
+                   scene_.name.c_str(), stop_reason_text(r.stop).c_str(), r.stop.detail.c_str(),
+                   st.time, wall_total, path("result.json").string().c_str());
+    return r;
+  }
+
+  const SceneConfig& scene_;
+  const RunOptions& opt_;
+  const fs::path out_;
+  const std::chrono::steady_clock::time_point wall0_;
+  int material_ = 0;
+  Controller ctl_;
+  std::vector<double> diameters_;  // the sample as drawn (a fresh run only) [m]
+  sim::Settings settings_;
+  std::unique_ptr<sim::World> world_;
+  std::unique_ptr<PvdSeries> series_;
+  RunProvenance provenance_;
+  std::int64_t step0_ = 0;           // step at the start of this session
+  std::int64_t n0_ = 0;              // the sample as filled [-]
+  double last_progress_wall_ = 0.0;  // [s]
+  double ke_last_ = 0.0;             // KE per particle at the last check [J]
+};
+
+}  // namespace
+
+std::optional<PileRun> run_pile_test(const SceneConfig& scene, const RunOptions& opt) {
+  return PileRunner(scene, opt).run();
 }
 
-json run_pile_test_or_continue(const SceneConfig& scene, const RunOptions& opt) {
+std::optional<PileRun> run_pile_test_or_continue(const SceneConfig& scene, const RunOptions& opt) {
   const fs::path out(opt.out_dir);
   std::error_code ec;
   if (fs::is_regular_file(out / "result.json", ec)) {
     try {
-      json done = json::parse(read_file((out / "result.json").string()));
-      if (done.contains("stop") && done.contains("pile")) return done;
-    } catch (const std::exception&) {
+      return pile_run_from_json(json::parse(read_file((out / "result.json").string())));
+    } catch (const std::exception&) {  // a damaged or foreign file: run again
     }
   }
   if (fs::is_regular_file(out / "checkpoint.bin", ec) &&

@@ -19,10 +19,12 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "experiments/io/scene.hpp"
+#include "experiments/pile/pile_record.hpp"
 
 namespace reposetwin::experiments {
 
@@ -45,10 +47,11 @@ class ResumeError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Runs the scene's pile test into opt.out_dir and returns the result JSON (also written to
-/// out_dir/result.json). Throws InputError for bad input (including a finished result that
-/// would be overwritten without force).
-nlohmann::json run_pile_test(const SceneConfig& scene, const RunOptions& opt);
+/// Runs the scene's pile test into opt.out_dir and returns its record (also written to
+/// out_dir/result.json), or nothing when opt's wall-time or step limit stopped it first (it is
+/// checkpointed; resume continues it). Throws InputError for bad input (including a finished
+/// result that would be overwritten without force).
+std::optional<PileRun> run_pile_test(const SceneConfig& scene, const RunOptions& opt);
 
 /// Runs the pile test in opt.out_dir, continuing what an interrupted attempt left there (for
 /// campaigns and the loop's cache, whose runs may be killed or lose their machine): a finished
@@ -56,9 +59,6 @@ nlohmann::json run_pile_test(const SceneConfig& scene, const RunOptions& opt);
 /// uninterrupted run), anything else is cleared and run afresh. A checkpoint that cannot be
 /// resumed (ResumeError: damaged, or written by an incompatible version) is cleared too and the
 /// run started again, never half-mixed.
-nlohmann::json run_pile_test_or_continue(const SceneConfig& scene, const RunOptions& opt);
-
-/// The pile measurement as JSON, angles in degrees (shared with reports).
-nlohmann::json pile_json(const sim::PileGeometry& g);
+std::optional<PileRun> run_pile_test_or_continue(const SceneConfig& scene, const RunOptions& opt);
 
 }  // namespace reposetwin::experiments

@@ -47,8 +47,8 @@ INSTANTIATE_TEST_SUITE_P(Angles, RenderedCone, ::testing::Values(25.0, 35.0));
 
 // Every side view of the lab's photographs reads the same pile: at 45 and 135 deg azimuth the
 // level camera sees the square plate's corner and two of its side faces, which must not be
-// taken for a visible top face with the pile's toes on it. (A vision change of session 4 did
-// that: on sample-3 piles those two views read H 64-76 mm for 47-59 mm, atan(2H/D) +9 deg.)
+// taken for a visible top face with the pile's toes on it (which on sample-3 piles would read
+// H 64-76 mm for 47-59 mm, atan(2H/D) +9 deg).
 TEST(RenderedConeViews, EveryAzimuthReadsTheConesHeightAndWidth) {
   const double big_r = 0.04;  // base radius [m]
   const double h = big_r * std::tan(30.0 * 3.14159265358979 / 180.0);

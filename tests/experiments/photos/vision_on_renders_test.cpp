@@ -1,9 +1,9 @@
 // Vision on the twin's own renders of piles placed by hand, so the truth is the geometry placed:
 // the plate is z = 0, the apex top is at the cone's height, and the outermost sphere's reach
 // sets the footprint. The photographs are taken the way the loop takes them
-// (experiments/loop_sim.cpp photograph_pile): the pile centred on a plate 1.3 x its radius, no
-// scale bar, 960 x 720 px, 12 pile radii away, and measured through the camera the lab declares
-// (level with the plate) even when the true camera stands higher.
+// (experiments/photos/photographs.cpp): the pile centred on a plate 1.3 x its radius, no scale
+// bar, 960 x 720 px, 12 pile radii away, and measured through the camera the lab declares (level
+// with the plate) even when the true camera stands higher.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -62,10 +62,10 @@ struct Photo {
 };
 
 // Renders the side view at `azimuth_deg` with the camera `height_m` above the plate, as the
-// loop does (experiments/loop_sim.cpp photograph_pile).
+// loop does (experiments/photos/photographs.cpp photograph_pile).
 Photo photograph(const Spheres& s, double height_m, double azimuth_deg) {
   std::vector<Eigen::Vector3d> x(s.x.begin(), s.x.end());
-  render::Scene scene = centred_pile_scene(x, s.r, std::vector<int>(s.r.size(), 0));
+  render::Scene scene = centred_pile_scene({x, s.r, std::vector<int>(s.r.size(), 0)});
   scene.scale_reference.enabled = false;
   render::LabCameraSettings cams;
   cams.width_px = 960;

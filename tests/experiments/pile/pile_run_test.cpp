@@ -14,6 +14,13 @@
 
 namespace reposetwin::experiments {
 namespace {
+
+// The run's record as its result.json reads (the assertions below read the file's fields).
+nlohmann::json run_json(const SceneConfig& scene, const RunOptions& opt) {
+  const std::optional<PileRun> run = run_pile_test(scene, opt);
+  if (!run) throw std::runtime_error("the run stopped at a limit");
+  return to_json(*run);
+}
 namespace fs = std::filesystem;
 
 /// A tiny scene: `mass` of 3-4 mm spheres through a funnel of outlet `w` (tens of particles).
@@ -85,7 +92,7 @@ TEST(PileTest, TinyPileSettlesAndIsMeasured) {
   RunOptions opt;
   opt.out_dir = (dir / "run").string();
   opt.progress = false;
-  const nlohmann::json r = run_pile_test(scene, opt);
+  const nlohmann::json r = run_json(scene, opt);
   EXPECT_EQ(r["stop"]["reason"], "settled") << r["stop"].dump();
   EXPECT_GT(r["pile"]["theta_hd_deg"].get<double>(), 5.0);
   EXPECT_LT(r["pile"]["theta_hd_deg"].get<double>(), 60.0);
@@ -112,7 +119,7 @@ TEST(PileTest, NarrowOutletClogsAndReportsNoPile) {
   RunOptions opt;
   opt.out_dir = (dir / "run").string();
   opt.progress = false;
-  const nlohmann::json r = run_pile_test(scene, opt);
+  const nlohmann::json r = run_json(scene, opt);
   EXPECT_EQ(r["stop"]["reason"], "clogged") << r["stop"].dump();
   EXPECT_NE(r["stop"]["detail"].get<std::string>().find("particles lodged"), std::string::npos);
   EXPECT_EQ(r["pile"]["theta_hd_deg"], 0.0);
@@ -151,7 +158,7 @@ cohesion_energy_density = 50000.0
   RunOptions opt;
   opt.progress = false;
   opt.out_dir = (dir / "lifted").string();
-  const nlohmann::json r = run_pile_test(scene_from(scene_text(0.15), dir), opt);
+  const nlohmann::json r = run_json(scene_from(scene_text(0.15), dir), opt);
   EXPECT_EQ(r["stop"]["reason"], "settled") << r["stop"].dump();
   const std::int64_t n0 = r["particles"]["initial"], n1 = r["particles"]["final"];
   const std::int64_t kept = r["particles"]["retained_in_container"];
@@ -164,7 +171,7 @@ cohesion_energy_density = 50000.0
   // Declared stricter: the same run (same bits up to the decision) is a clog of that many grains.
   opt.out_dir = (dir / "strict").string();
   const double strict = 0.5 * static_cast<double>(kept) / static_cast<double>(n0);
-  const nlohmann::json c = run_pile_test(scene_from(scene_text(strict), dir), opt);
+  const nlohmann::json c = run_json(scene_from(scene_text(strict), dir), opt);
   EXPECT_EQ(c["stop"]["reason"], "clogged") << c["stop"].dump();
   EXPECT_EQ(c["pile"]["lodged_particles"], kept);
   EXPECT_EQ(c["particles"]["retained_in_container"], 0);
@@ -176,15 +183,15 @@ TEST(PileTest, InterruptedRunResumesToTheSameResult) {
   RunOptions full;
   full.out_dir = (dir / "full").string();
   full.progress = false;
-  const nlohmann::json a = run_pile_test(scene, full);
+  const nlohmann::json a = run_json(scene, full);
   RunOptions part = full;
   part.out_dir = (dir / "part").string();
   part.stop_after_steps = 2000;
-  const nlohmann::json stopped = run_pile_test(scene, part);
-  ASSERT_TRUE(stopped.contains("stopped")) << "the run finished before the interruption";
+  const std::optional<PileRun> stopped = run_pile_test(scene, part);
+  ASSERT_FALSE(stopped.has_value()) << "the run finished before the interruption";
   part.stop_after_steps = 0;
   part.resume = true;
-  const nlohmann::json b = run_pile_test(scene, part);
+  const nlohmann::json b = run_json(scene, part);
   EXPECT_EQ(a["pile"]["height_m"], b["pile"]["height_m"]);
   EXPECT_EQ(a["pile"]["theta_hd_deg"], b["pile"]["theta_hd_deg"]);
   EXPECT_EQ(a["performance"]["steps"], b["performance"]["steps"]);

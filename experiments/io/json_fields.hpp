@@ -1,0 +1,18 @@
+// Reading numbers back from result files. JSON has no NaN: nlohmann writes a NaN (an angle
+// vision could not fit, say) as null, so a reader must take null back as NaN, or a result that
+// was written could not be read again.
+#pragma once
+
+#include <limits>
+#include <nlohmann/json.hpp>
+
+namespace reposetwin::experiments {
+
+/// j[key] as a double: NaN for null, `fallback` when the key is absent.
+inline double json_number(const nlohmann::json& j, const char* key, double fallback = 0.0) {
+  const auto it = j.find(key);
+  if (it == j.end()) return fallback;
+  return it->is_null() ? std::numeric_limits<double>::quiet_NaN() : it->get<double>();
+}
+
+}  // namespace reposetwin::experiments

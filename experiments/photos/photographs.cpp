@@ -1,0 +1,134 @@
+#include "experiments/photos/photographs.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "experiments/io/input_error.hpp"
+#include "render/output.hpp"
+#include "render/renderer.hpp"
+#include "sim/pile_geometry.hpp"
+
+namespace reposetwin::experiments {
+namespace fs = std::filesystem;
+
+render::Scene centred_pile_scene(const PileSpheres& pile, std::optional<Eigen::Vector2d> centre,
+                                 Eigen::Vector2d* shift) {
+  if (!centre) {
+    const sim::PileGeometry g = sim::measure_pile(pile.x, pile.radius);
+    centre = Eigen::Vector2d(g.centre.x(), g.centre.y());
+  }
+  render::Scene scene;
+  scene.positions = pile.x;
+  for (Eigen::Vector3d& x : scene.positions) {
+    x.x() -= centre->x();
+    x.y() -= centre->y();
+  }
+  if (shift) *shift = *centre;
+  scene.radii = pile.radius;
+  scene.material_ids = pile.material;
+  // The plate is as large as the lab's board must be: wider than the pile's footprint.
+  scene.plate.half_size_m =
+      std::max(scene.plate.half_size_m, 1.3 * render::pile_extent(scene).radius_m);
+  return scene;
+}
+
+namespace {
+
+// The side camera the measurement assumes: the true one unless the settings declare another
+// height or distortion (a lab that does not know its camera is high measures as if level).
+camera::Camera declared_camera(const camera::Camera& truth, const PhotoSettings& s) {
+  camera::Camera declared = truth;
+  if (s.declared_height_m) {
+    declared.extrinsics.position.z() = *s.declared_height_m;
+    declared.extrinsics.look_at.z() = *s.declared_height_m;
+  }
+  if (s.declared_k1) declared.intrinsics.k1 = *s.declared_k1;
+  return declared;
+}
+
+void add_noise(cv::Mat& image, double sd, cv::RNG& rng) {
+  cv::Mat noise(image.size(), CV_32FC(image.channels()));
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, sd);
+  cv::Mat f;
+  image.convertTo(f, CV_32F);
+  f += noise;
+  f.convertTo(image, image.type());  // saturating
+}
+
+std::string side_stem(double azimuth_deg) {
+  char stem[32];
+  std::snprintf(stem, sizeof stem, "side_az%03d", static_cast<int>(azimuth_deg + 0.5));
+  return stem;
+}
+
+}  // namespace
+
+PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
+                           const std::string& out_dir, const nlohmann::json& provenance,
+                           std::optional<Eigen::Vector2d> centre) {
+  if (s.side_views < 1) throw InputError("images: side_views must be at least 1");
+  PilePhotos photos;
+  render::Scene scene = centred_pile_scene(pile, centre, &photos.centre_shift);
+  scene.scale_reference.enabled = s.scale_reference;
+  if (s.write_photos || s.write_overlays) fs::create_directories(out_dir);
+  render::Renderer renderer;
+  render::RenderOptions options;
+  options.tint_seed = s.tint_seed;
+  options.view = render::View::kSide;
+  render::LabCameraSettings cams;
+  cams.width_px = s.width_px;
+  cams.height_px = s.height_px;
+  cams.distance_radii = s.distance_radii;
+  cams.side_height_m = s.camera_height_m;
+  cv::RNG rng(s.noise_seed * 7919 + 17);
+  std::vector<vision::SideMeasurement> measured;
+  for (int k = 0; k < s.side_views; ++k) {
+    cams.azimuth_deg = 180.0 * k / s.side_views;
+    camera::Camera truth = render::lab_side_camera(scene, cams);
+    truth.intrinsics.k1 = s.k1;
+    const camera::Camera declared = declared_camera(truth, s);
+    SideView view;
+    view.azimuth_deg = cams.azimuth_deg;
+    view.stem = side_stem(cams.azimuth_deg);
+    const std::string base = (fs::path(out_dir) / view.stem).string();
+    cv::Mat image = renderer.render(scene, truth, options);
+    if (s.noise_sd > 0.0) add_noise(image, s.noise_sd, rng);
+    if (s.write_photos)
+      render::write_render(base, image, render::make_sidecar(scene, declared, options, provenance));
+    try {
+      view.measured = vision::measure_side_camera(image, declared, {}, base + ".png");
+      measured.push_back(*view.measured);
+      if (s.write_overlays)
+        cv::imwrite(base + ".measured.png", vision::draw_side_overlay(image, *view.measured));
+    } catch (const std::exception& e) {
+      if (s.views_must_measure) throw;
+      view.error = e.what();  // one view of a small pile may defeat vision; the others count
+    }
+    photos.sides.push_back(std::move(view));
+  }
+  if (!measured.empty()) photos.summary = vision::combine_sides(measured);
+  photos.gl = renderer.gl_description();
+  if (!s.top_view) return photos;
+  options.view = render::View::kTop;
+  const camera::Camera cam = render::lab_top_camera(scene, cams);
+  const std::string base = (fs::path(out_dir) / "top").string();
+  const cv::Mat image = renderer.render(scene, cam, options);
+  if (s.write_photos)
+    render::write_render(base, image, render::make_sidecar(scene, cam, options, provenance));
+  photos.top_taken = true;
+  try {
+    photos.top = vision::measure_top_camera(image, cam, {}, base + ".png");
+    if (s.write_overlays)
+      cv::imwrite(base + ".measured.png", vision::draw_top_overlay(image, *photos.top));
+  } catch (const std::exception& e) {
+    // The footprint is a secondary quantity (the angle comes from the side views): a top view
+    // that cannot be measured (a thin, patchy pile) is reported, not fatal.
+    photos.top_error = e.what();
+  }
+  return photos;
+}
+
+}  // namespace reposetwin::experiments
