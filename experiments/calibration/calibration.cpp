@@ -303,10 +303,9 @@ CalibrationResult calibrate_observations(const std::vector<Observation>& observa
   return r;
 }
 
-CalibrationResult calibrate_batch(const SimulateBatchFn& simulate, const Target& target,
-                                  const CalibrationSettings& s) {
-  validate_target(target);
-  check_bootstrap(s.bootstrap);
+namespace {
+
+void check_driver_settings(const CalibrationSettings& s, int reserve) {
   if (!std::isfinite(s.mu_r_lo) || !std::isfinite(s.mu_r_hi) || s.mu_r_lo < 0.0 ||
       s.mu_r_hi <= s.mu_r_lo)
     throw std::invalid_argument("calibration: mu_r range [" + num(s.mu_r_lo) + ", " +
@@ -317,27 +316,29 @@ CalibrationResult calibrate_batch(const SimulateBatchFn& simulate, const Target&
   if (!std::isfinite(s.tolerance_deg) || s.tolerance_deg <= 0.0)
     throw std::invalid_argument("calibration: tolerance_deg = " + num(s.tolerance_deg) +
                                 " must be > 0");
-  const int reserve = s.confirm_bracket ? 2 * s.seeds_per_point : 0;  // for the confirmation
   if (s.max_simulations < 2 * s.seeds_per_point + reserve)
     throw std::invalid_argument(
         "calibration: max_simulations = " + std::to_string(s.max_simulations) + " is below the " +
         std::to_string(2 * s.seeds_per_point + reserve) + " needed for the range ends" +
         (s.confirm_bracket ? " and the confirmation" : ""));
-  if (!simulate) throw std::invalid_argument("calibration: no simulate callback");
+}
 
-  const int k = s.seeds_per_point;
-  std::vector<Observation> obs;
-  auto count_at = [&](double mu) {
-    return static_cast<std::uint64_t>(
-        std::count_if(obs.begin(), obs.end(), [&](const Observation& o) { return o.mu_r == mu; }));
-  };
-  auto run = [&](const std::vector<double>& mus) {
+// The driver's observations and the callback that adds to them: each call runs seeds_per_point
+// seeds at every mu_r asked for, continuing the seeds a point already has.
+class ObservationLog {
+ public:
+  ObservationLog(const SimulateBatchFn& simulate, const CalibrationSettings& s)
+      : simulate_(simulate), s_(s) {}
+
+  void run(const std::vector<double>& mus) {
     std::vector<std::pair<double, std::uint64_t>> batch;
     for (double mu : mus) {
-      const std::uint64_t done = count_at(mu);
-      for (int j = 0; j < k; ++j) batch.emplace_back(mu, s.first_seed + done + j);
+      const auto done = static_cast<std::uint64_t>(std::count_if(
+          obs.begin(), obs.end(), [&](const Observation& o) { return o.mu_r == mu; }));
+      for (int j = 0; j < s_.seeds_per_point; ++j)
+        batch.emplace_back(mu, s_.first_seed + done + j);
     }
-    const auto angles = simulate(batch);
+    const auto angles = simulate_(batch);
     if (angles.size() != batch.size())
       throw std::runtime_error("calibration: simulate returned " + std::to_string(angles.size()) +
                                " angles for " + std::to_string(batch.size()) + " runs");
@@ -348,12 +349,94 @@ CalibrationResult calibrate_batch(const SimulateBatchFn& simulate, const Target&
                                  num(angles[i]) + " outside [0, 90] deg");
       obs.push_back({batch[i].first, batch[i].second, angles[i]});
     }
-  };
-  auto budget_left = [&] { return s.max_simulations - reserve - static_cast<int>(obs.size()); };
+  }
 
-  run({s.mu_r_lo, s.mu_r_hi});
+  std::vector<Observation> obs;
+
+ private:
+  const SimulateBatchFn& simulate_;
+  const CalibrationSettings& s_;
+};
+
+// The fitted points around the calibrated mu_r: pts[ia].mu_r <= mu <= pts[ib].mu_r.
+struct Bracket {
+  std::size_t ia = 0, ib = 0;
+  double span_deg = 0.0;  // fitted angle change across the bracket [deg]
+};
+
+Bracket bracket_of(const MonotoneFit& fit, double mu) {
+  const auto& pts = fit.points;
+  std::size_t ib = 0;
+  while (ib < pts.size() && pts[ib].mu_r < mu) ++ib;
+  const std::size_t ia = (ib < pts.size() && pts[ib].mu_r == mu) ? ib : ib - 1;
+  return {ia, ib, pts[ib].fitted_deg - pts[ia].fitted_deg};
+}
+
+// Confirmation: the search stopped because the bracket points' data looked good enough, so
+// those data are biased towards optimism. Fresh seeds at the bracket points replace them in the
+// final fit (on synthetic tests this restores the 95% interval's coverage).
+CalibrationResult confirm_bracket(ObservationLog& log, const MonotoneFit& fit, const Bracket& b,
+                                  const Target& target, const CalibrationSettings& s,
+                                  CalibrationStatus status, const std::string& budget_note) {
+  const auto& pts = fit.points;
+  std::vector<double> bracket = {pts[b.ia].mu_r};
+  if (pts[b.ib].mu_r != pts[b.ia].mu_r) bracket.push_back(pts[b.ib].mu_r);
+  const std::size_t searched = log.obs.size();
+  log.run(bracket);
+  if (bracket.size() == 1) log.run(bracket);  // the same number of fresh runs either way
+  std::vector<Observation> kept, excluded;
+  for (std::size_t i = 0; i < log.obs.size(); ++i) {
+    const bool at_bracket =
+        std::find(bracket.begin(), bracket.end(), log.obs[i].mu_r) != bracket.end();
+    (at_bracket && i < searched ? excluded : kept).push_back(log.obs[i]);
+  }
+  CalibrationResult fin = calibrate_observations(kept, target, s.bootstrap);
+  fin.simulations = static_cast<int>(log.obs.size());
+  fin.excluded = std::move(excluded);
+  if (fin.mu_r) {
+    fin.status = status;
+    fin.message += budget_note + "; confirmed with fresh seeds at the bracket points";
+  }
+  return fin;
+}
+
+// The next mu_r to run. Splitting the bracket only helps while its expected angle span
+// (wide-baseline slope of the fit, from one point beyond each side, times its width) exceeds
+// the noise of a point mean; below that, new points crowd together and their noisy means make
+// the interpolant steep, so more seeds go to the nearest bracket point instead.
+double next_mu_r(const CalibrationResult& r, const Bracket& b, const CalibrationSettings& s) {
+  const auto& pts = r.fit.points;
+  const double mu = *r.mu_r;
+  const std::size_t wa = b.ia > 0 ? b.ia - 1 : b.ia, wb = b.ib + 1 < pts.size() ? b.ib + 1 : b.ib;
+  const double wide_slope =
+      pts[wb].mu_r > pts[wa].mu_r
+          ? (pts[wb].fitted_deg - pts[wa].fitted_deg) / (pts[wb].mu_r - pts[wa].mu_r)
+          : 0.0;
+  const double point_se = r.fit.noise_sd_deg / std::sqrt(static_cast<double>(s.seeds_per_point));
+  const bool resolvable = wide_slope * (pts[b.ib].mu_r - pts[b.ia].mu_r) > 2.0 * point_se;
+  if (b.span_deg > 2.0 * s.tolerance_deg && resolvable) {
+    const double lo = pts[b.ia].mu_r, hi = pts[b.ib].mu_r, w = hi - lo;
+    return std::clamp(mu, lo + 0.25 * w, hi - 0.25 * w);
+  }
+  return (mu - pts[b.ia].mu_r <= pts[b.ib].mu_r - mu) ? pts[b.ia].mu_r : pts[b.ib].mu_r;
+}
+
+}  // namespace
+
+CalibrationResult calibrate_batch(const SimulateBatchFn& simulate, const Target& target,
+                                  const CalibrationSettings& s) {
+  validate_target(target);
+  check_bootstrap(s.bootstrap);
+  const int reserve = s.confirm_bracket ? 2 * s.seeds_per_point : 0;  // for the confirmation
+  check_driver_settings(s, reserve);
+  if (!simulate) throw std::invalid_argument("calibration: no simulate callback");
+  const int k = s.seeds_per_point;
+  ObservationLog log(simulate, s);
+  auto budget_left = [&] { return s.max_simulations - reserve - static_cast<int>(log.obs.size()); };
+
+  log.run({s.mu_r_lo, s.mu_r_hi});
   for (;;) {
-    CalibrationResult r = calibrate_observations(obs, target, s.bootstrap);
+    CalibrationResult r = calibrate_observations(log.obs, target, s.bootstrap);
     const auto& pts = r.fit.points;
     if (!r.mu_r) {
       // Outside the reachable range: only worth more seeds if the noise could explain the gap.
@@ -362,73 +445,31 @@ CalibrationResult calibrate_batch(const SimulateBatchFn& simulate, const Target&
       const double se = r.fit.noise_sd_deg / std::sqrt(static_cast<double>(end.n));
       if (r.fit.noise_dof > 0 && std::abs(target.angle_deg - end.fitted_deg) < 2.0 * se &&
           budget_left() >= k) {
-        run({end.mu_r});
+        log.run({end.mu_r});
         continue;
       }
       return r;
     }
-    const double mu = *r.mu_r;
-    std::size_t ib = 0;
-    while (ib < pts.size() && pts[ib].mu_r < mu) ++ib;
-    const std::size_t ia = (ib < pts.size() && pts[ib].mu_r == mu) ? ib : ib - 1;
-    const double span = pts[ib].fitted_deg - pts[ia].fitted_deg;
+    const Bracket b = bracket_of(r.fit, *r.mu_r);
     const bool converged =
-        span <= 2.0 * s.tolerance_deg && r.fitted_angle_halfwidth_deg <= s.tolerance_deg;
-    if (converged || budget_left() < k) {
-      const CalibrationStatus status =
-          converged ? CalibrationStatus::kCalibrated : CalibrationStatus::kBudgetSpent;
-      const std::string budget_note = converged
-                                          ? std::string()
-                                          : "; budget of " + std::to_string(s.max_simulations) +
-                                                " simulations spent before the tolerance of " +
-                                                num(s.tolerance_deg) + " deg was met";
-      if (!s.confirm_bracket) {
-        r.status = status;
-        r.message += budget_note +
-                     "; not confirmed: on synthetic tests this 95% interval held the truth "
-                     "about 87% of the time";
-        return r;
-      }
-      // Confirmation: the search stopped because the bracket points' data looked good enough,
-      // so those data are biased towards optimism. Fresh seeds at the bracket points replace them
-      // in the final fit (on synthetic tests this restores the 95% interval's coverage).
-      std::vector<double> bracket = {pts[ia].mu_r};
-      if (pts[ib].mu_r != pts[ia].mu_r) bracket.push_back(pts[ib].mu_r);
-      const std::size_t searched = obs.size();
-      run(bracket);
-      if (bracket.size() == 1) run(bracket);  // the same number of fresh runs either way
-      std::vector<Observation> kept, excluded;
-      for (std::size_t i = 0; i < obs.size(); ++i) {
-        const bool at_bracket =
-            std::find(bracket.begin(), bracket.end(), obs[i].mu_r) != bracket.end();
-        (at_bracket && i < searched ? excluded : kept).push_back(obs[i]);
-      }
-      CalibrationResult fin = calibrate_observations(kept, target, s.bootstrap);
-      fin.simulations = static_cast<int>(obs.size());
-      fin.excluded = std::move(excluded);
-      if (fin.mu_r) {
-        fin.status = status;
-        fin.message += budget_note + "; confirmed with fresh seeds at the bracket points";
-      }
-      return fin;
+        b.span_deg <= 2.0 * s.tolerance_deg && r.fitted_angle_halfwidth_deg <= s.tolerance_deg;
+    if (!converged && budget_left() >= k) {
+      log.run({next_mu_r(r, b, s)});
+      continue;
     }
-    // Splitting the bracket only helps while its expected angle span (wide-baseline slope of the
-    // fit, from one point beyond each side, times its width) exceeds the noise of a point mean;
-    // below that, new points crowd together and their noisy means make the interpolant steep.
-    const std::size_t wa = ia > 0 ? ia - 1 : ia, wb = ib + 1 < pts.size() ? ib + 1 : ib;
-    const double wide_slope =
-        pts[wb].mu_r > pts[wa].mu_r
-            ? (pts[wb].fitted_deg - pts[wa].fitted_deg) / (pts[wb].mu_r - pts[wa].mu_r)
-            : 0.0;
-    const double point_se = r.fit.noise_sd_deg / std::sqrt(static_cast<double>(k));
-    const bool resolvable = wide_slope * (pts[ib].mu_r - pts[ia].mu_r) > 2.0 * point_se;
-    if (span > 2.0 * s.tolerance_deg && resolvable) {
-      const double a = pts[ia].mu_r, b = pts[ib].mu_r, w = b - a;
-      run({std::clamp(mu, a + 0.25 * w, b - 0.25 * w)});
-    } else {
-      const double nearest = (mu - pts[ia].mu_r <= pts[ib].mu_r - mu) ? pts[ia].mu_r : pts[ib].mu_r;
-      run({nearest});
-    }
+    const CalibrationStatus status =
+        converged ? CalibrationStatus::kCalibrated : CalibrationStatus::kBudgetSpent;
+    const std::string budget_note =
+        converged ? std::string()
+                  : "; budget of " + std::to_string(s.max_simulations) +
+                        " simulations spent before the tolerance of " + num(s.tolerance_deg) +
+                        " deg was met";
+    if (s.confirm_bracket) return confirm_bracket(log, r.fit, b, target, s, status, budget_note);
+    r.status = status;
+    r.message += budget_note +
+                 "; not confirmed: on synthetic tests this 95% interval held the truth about 87% "
+                 "of the time";
+    return r;
   }
 }
 
