@@ -90,7 +90,8 @@ CaseFn pile_case_fn(const CaseRunSettings& settings) {
 }
 
 bool case_made_no_pile(const json& r) {
-  return case_result_from_json(r).pile.status == sim::PileStatus::kNoPile;
+  const PileMeasure pile = case_result_from_json(r).pile;
+  return pile.status == sim::PileStatus::kNoPile && !pile.not_measured;
 }
 
 double case_angle_deg(const json& j, AngleMeasure measure) {
@@ -98,7 +99,7 @@ double case_angle_deg(const json& j, AngleMeasure measure) {
   if (r.stop.is_physics())
     throw std::runtime_error("the run stopped on a physics failure (" + stop_reason_text(r.stop) +
                              ": " + r.stop.detail + "), so it has no angle; " + r.run_dir);
-  if (r.pile.status == sim::PileStatus::kNoPile) return 0.0;
+  if (r.pile.status == sim::PileStatus::kNoPile) return 0.0;  // a clogged outlet
   switch (measure) {
     case AngleMeasure::kImage:
       return r.image ? r.image->theta_deg : r.pile.theta_hd_deg;

@@ -1,13 +1,20 @@
 #include "experiments/io/provenance.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
-#include <unistd.h>
+
+#include "experiments/io/input_error.hpp"
 
 namespace reposetwin::experiments {
 
@@ -20,6 +27,31 @@ std::string utc_now() {
   return buf;
 }
 
+namespace {
+
+// Writes all of `text` to `fd` and flushes it to the disk; false on any failure.
+bool write_all_and_sync(int fd, const std::string& text) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += static_cast<std::size_t>(n);
+  }
+  return ::fsync(fd) == 0;
+}
+
+// Makes a rename in `dir` durable: without it a crash can leave the old name after the new
+// file's data reached the disk.
+void sync_folder(const std::filesystem::path& dir) {
+  const int fd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
+}  // namespace
+
 void write_file_atomic(const std::string& path, const std::string& text) {
   namespace fs = std::filesystem;
   const fs::path target(path);
@@ -27,18 +59,40 @@ void write_file_atomic(const std::string& path, const std::string& text) {
   if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);
   const fs::path tmp =
       target.parent_path() / (target.filename().string() + ".tmp." + std::to_string(::getpid()));
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error(path + ": cannot open for writing");
-    out << text;
-    out.flush();
-    if (!out) throw std::runtime_error(path + ": write failed");
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0)
+    throw std::runtime_error(path + ": cannot open for writing (" + std::strerror(errno) + ")");
+  const bool written = write_all_and_sync(fd, text);
+  const int saved = errno;
+  ::close(fd);
+  if (!written) {
+    fs::remove(tmp, ec);  // a full disk must not leave the temporary behind
+    throw std::runtime_error(path + ": write failed (" + std::strerror(saved) + ")");
   }
   fs::rename(tmp, target, ec);
   if (ec) {
     fs::remove(tmp, ec);
     throw std::runtime_error(path + ": cannot move the finished file into place");
   }
+  sync_folder(target.parent_path());
+}
+
+FolderLock::FolderLock(const std::string& dir, const std::string& name, const std::string& what) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  const std::string p = (std::filesystem::path(dir) / name).string();
+  fd_ = ::open(p.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw std::runtime_error(p + ": cannot open the lock file");
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd_);
+    fd_ = -1;
+    throw InputError(dir + ": " + what + " is already running in this folder (" + p +
+                     " is locked); wait for it or use another folder");
+  }
+}
+
+FolderLock::~FolderLock() {
+  if (fd_ >= 0) ::close(fd_);
 }
 
 void write_json_atomic(const std::string& path, const nlohmann::json& j) {

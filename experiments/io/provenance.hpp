@@ -16,12 +16,29 @@ std::string code_version();
 /// UTC time now, ISO 8601 ("2026-11-22T01:02:03Z").
 std::string utc_now();
 
-/// Writes `text` to `path` atomically (temporary file + rename). Throws std::runtime_error
-/// naming the path on failure. Creates missing parent folders.
+/// Writes `text` to `path` atomically: a temporary file in the same folder, flushed to the disk
+/// (fsync) before the rename that publishes it, so a reader, or the machine after a crash, sees
+/// the old file or the whole new one. The temporary is removed on failure (a full disk). Throws
+/// std::runtime_error naming the path. Creates missing parent folders.
 void write_file_atomic(const std::string& path, const std::string& text);
 
 /// Writes JSON (indented) atomically.
 void write_json_atomic(const std::string& path, const nlohmann::json& j);
+
+/// An exclusive lock on a folder, held while the object lives and released by the kernel when
+/// the process ends, even by SIGKILL: two processes never write one run or campaign folder.
+class FolderLock {
+ public:
+  /// Locks DIR/NAME (created with DIR). Throws InputError naming the folder and `what` ("a
+  /// pile run") when another process holds it.
+  FolderLock(const std::string& dir, const std::string& name, const std::string& what);
+  ~FolderLock();
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
 
 /// Reads a whole text file; throws std::runtime_error naming the path if it cannot.
 std::string read_file(const std::string& path);

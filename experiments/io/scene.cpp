@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <sstream>
 
 #include "experiments/io/provenance.hpp"
@@ -11,7 +12,10 @@
 namespace reposetwin::experiments {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+// Limits beyond which a value is a typo, not an experiment.
+constexpr double kMinGrains = 10.0;    // grains of the largest size in a sample [-]
+constexpr double kMaxLiftSpeed = 1.0;  // [m/s]
+constexpr double kMaxGravity = 100.0;  // [m/s^2]
 
 std::string num(double v) {
   std::ostringstream os;
@@ -116,7 +120,7 @@ std::string resolved_text(const toml::table& doc, const SceneConfig& s,
 /// Volume of the container's inside [m^3].
 double container_volume(const ContainerConfig& c) {
   const double r0 = 0.5 * c.bottom_diameter, r1 = 0.5 * c.top_diameter;
-  return kPi / 3.0 * c.height * (r0 * r0 + r0 * r1 + r1 * r1);
+  return std::numbers::pi / 3.0 * c.height * (r0 * r0 + r0 * r1 + r1 * r1);
 }
 
 }  // namespace
@@ -124,9 +128,9 @@ double container_volume(const ContainerConfig& c) {
 SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
   SceneConfig s;
   s.file = file;
-  const std::filesystem::path dir =
-      file == "<embedded>" ? std::filesystem::current_path()
-                           : std::filesystem::absolute(file).parent_path();
+  const std::filesystem::path dir = file == "<embedded>"
+                                        ? std::filesystem::current_path()
+                                        : std::filesystem::absolute(file).parent_path();
   TableReader root(doc, file);
   {
     TableReader t = *root.table("scene");
@@ -139,7 +143,8 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
   }
   {
     TableReader t = *root.table("materials");
-    for (const std::string& name : t.keys()) s.materials.push_back(read_material(*t.table(name), name));
+    for (const std::string& name : t.keys())
+      s.materials.push_back(read_material(*t.table(name), name));
     if (s.materials.empty()) t.fail("", "must define at least one material");
     t.finish();
   }
@@ -169,21 +174,33 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
     } catch (const std::invalid_argument& e) {  // the PSD reader names the file and key
       throw InputError(e.what());
     }
-    if (t.has("d_min_mm")) s.psd.spec.d_min = 1e-3 * t.number("d_min_mm");
-    if (t.has("d_max_mm")) s.psd.spec.d_max = 1e-3 * t.number("d_max_mm");
+    for (const char* key : {"d_min_mm", "d_max_mm"}) {
+      if (!t.has(key)) continue;
+      const double d = t.number(key);
+      if (!(d > 0 && std::isfinite(d))) t.fail(key, "= " + num(d) + " must be a positive size");
+      (std::string(key) == "d_min_mm" ? s.psd.spec.d_min : s.psd.spec.d_max) = 1e-3 * d;
+    }
     t.finish();
+    sim::ResolvedPsd resolved;
     try {
-      sim::resolve_psd(s.psd.spec);
+      resolved = sim::resolve_psd(s.psd.spec);
     } catch (const std::invalid_argument& e) {
       throw InputError(file + ": sample.psd: " + e.what());
     }
+    // A sample of a few grains is no pile, and the sampler could only round it up to one grain
+    // many times its mass.
+    const double density = s.materials[material_index(s, s.sample_material, "")].density;
+    const double grain = density * std::numbers::pi / 6.0 * std::pow(resolved.d_max, 3);
+    if (s.mass < kMinGrains * grain)
+      t.fail("mass_kg", "= " + num(s.mass) + " kg is " + num(s.mass / grain) +
+                            " grains of the largest size (" + num(1e3 * resolved.d_max) + " mm, " +
+                            num(grain) + " kg each); a pile needs at least " + num(kMinGrains));
   }
   {
     TableReader t = *root.table("contacts");
     for (const std::string& key : t.keys()) {
       const auto dash = key.find('-');
-      if (dash == std::string::npos)
-        t.fail(key, "must name two materials as \"a-b\"");
+      if (dash == std::string::npos) t.fail(key, "must name two materials as \"a-b\"");
       const std::string a = key.substr(0, dash), b = key.substr(dash + 1);
       material_index(s, a, t.where(key));
       material_index(s, b, t.where(key));
@@ -254,15 +271,18 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
     p.fill_max_speed = t->number("fill_max_speed_m_s", p.fill_max_speed);
     if (!(p.fill_max_speed > 0))
       t->fail("fill_max_speed_m_s", "= " + num(p.fill_max_speed) + " must be positive");
-    if (!(p.lift_speed > 0)) t->fail("lift_speed_m_s", "= " + num(p.lift_speed) + " must be positive");
+    if (!(p.lift_speed > 0 && p.lift_speed <= kMaxLiftSpeed))
+      t->fail("lift_speed_m_s", "= " + num(p.lift_speed) + " m/s must be in (0, " +
+                                    num(kMaxLiftSpeed) + "] (the lab lifts at 0.01)");
     if (!(p.settle_speed > 0))
       t->fail("settle_speed_m_s", "= " + num(p.settle_speed) + " must be positive");
     if (!(p.max_time > 0)) t->fail("max_time_s", "= " + num(p.max_time) + " must be positive");
-    if (!(p.clog_window > 0)) t->fail("clog_window_s", "= " + num(p.clog_window) + " must be positive");
+    if (!(p.clog_window > 0))
+      t->fail("clog_window_s", "= " + num(p.clog_window) + " must be positive");
     if (!(p.max_retained_fraction >= 0 && p.max_retained_fraction < 1))
-      t->fail("max_retained_fraction",
-              "= " + num(p.max_retained_fraction) + " must be in [0, 1)");
-    if (!(p.lattice_gap >= 0)) t->fail("lattice_gap", "= " + num(p.lattice_gap) + " must not be negative");
+      t->fail("max_retained_fraction", "= " + num(p.max_retained_fraction) + " must be in [0, 1)");
+    if (!(p.lattice_gap >= 0))
+      t->fail("lattice_gap", "= " + num(p.lattice_gap) + " must not be negative");
     t->finish();
   }
   // Escape limit scaled to the test: the fill lattice may stand well above a tall column.
@@ -270,7 +290,6 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
   if (auto t = root.table("numerics", true)) {
     sim::Settings& n = s.settings;
     n.rayleigh_fraction = t->number("rayleigh_fraction", n.rayleigh_fraction);
-    n.max_rayleigh_fraction = t->number("max_rayleigh_fraction", n.max_rayleigh_fraction);
     n.time_step = t->number("time_step_s", n.time_step);
     n.softened_youngs_modulus = t->number("softened_youngs_modulus_pa", n.softened_youngs_modulus);
     n.skin = t->number("skin_m", n.skin);
@@ -281,11 +300,29 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
         t->number("initial_overlap_tolerance", n.initial_overlap_tolerance);
     n.escape_distance = t->number("escape_distance_m", n.escape_distance);
     if (n.time_step < 0) t->fail("time_step_s", "= " + num(n.time_step) + " must not be negative");
-    if (!(n.rayleigh_fraction > 0))
-      t->fail("rayleigh_fraction", "= " + num(n.rayleigh_fraction) + " must be positive");
+    // The stability guard (max_rayleigh_fraction) is the engine's, not a scene key.
+    if (!(n.rayleigh_fraction > 0 && n.rayleigh_fraction <= n.max_rayleigh_fraction))
+      t->fail("rayleigh_fraction", "= " + num(n.rayleigh_fraction) + " must be in (0, " +
+                                       num(n.max_rayleigh_fraction) +
+                                       "]: above it the explicit integration is unstable");
+    const double g = -n.gravity.z();
+    if (!(std::isfinite(g) && std::abs(g) <= kMaxGravity))
+      t->fail("gravity_m_s2", "= " + num(g) + " must be finite and at most " + num(kMaxGravity) +
+                                  " m/s^2 in size (the lab's is 9.81)");
+    if (!(n.initial_overlap_tolerance >= 0 && std::isfinite(n.initial_overlap_tolerance)))
+      t->fail("initial_overlap_tolerance",
+              "= " + num(n.initial_overlap_tolerance) + " must not be negative");
+    if (!(n.max_overlap_ratio > 0 && n.max_overlap_ratio <= 1))
+      t->fail("max_overlap_ratio", "= " + num(n.max_overlap_ratio) + " must be in (0, 1]");
+    if (!(n.escape_distance > 0 && std::isfinite(n.escape_distance)))
+      t->fail("escape_distance_m", "= " + num(n.escape_distance) + " must be positive");
+    if (!(n.skin >= 0 && std::isfinite(n.skin)))
+      t->fail("skin_m", "= " + num(n.skin) + " must not be negative");
     if (n.softened_youngs_modulus < 0)
-      t->fail("softened_youngs_modulus_pa", "= " + num(n.softened_youngs_modulus) + " must not be negative");
-    if (n.threads < 0) t->fail("threads", "= " + std::to_string(n.threads) + " must not be negative");
+      t->fail("softened_youngs_modulus_pa",
+              "= " + num(n.softened_youngs_modulus) + " must not be negative");
+    if (n.threads < 0)
+      t->fail("threads", "= " + std::to_string(n.threads) + " must not be negative");
     t->finish();
   }
   if (auto t = root.table("output", true)) {
@@ -293,7 +330,8 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
     o.frame_interval = t->number("frame_interval_s", o.frame_interval);
     o.checkpoint_interval = t->number("checkpoint_interval_s", o.checkpoint_interval);
     o.progress_interval = t->number("progress_interval_s", o.progress_interval);
-    if (o.frame_interval < 0) t->fail("frame_interval_s", "= " + num(o.frame_interval) + " must not be negative");
+    if (o.frame_interval < 0)
+      t->fail("frame_interval_s", "= " + num(o.frame_interval) + " must not be negative");
     if (!(o.checkpoint_interval > 0))
       t->fail("checkpoint_interval_s", "= " + num(o.checkpoint_interval) + " must be positive");
     t->finish();
@@ -304,6 +342,7 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
     m.flank_low = t->number("flank_low", m.flank_low);
     m.flank_high = t->number("flank_high", m.flank_high);
     m.sectors = static_cast<int>(t->integer("sectors", m.sectors));
+    if (m.sectors < 4) t->fail("sectors", "= " + std::to_string(m.sectors) + " must be at least 4");
     if (m.slice_azimuths < 8)
       t->fail("slice_azimuths", "= " + std::to_string(m.slice_azimuths) + " must be at least 8");
     if (!(m.flank_low >= 0 && m.flank_low < m.flank_high && m.flank_high <= 1))
@@ -331,7 +370,8 @@ SceneConfig parse_scene_file(const std::string& path) {
 int material_index(const SceneConfig& scene, const std::string& name, const std::string& key) {
   for (std::size_t i = 0; i < scene.materials.size(); ++i)
     if (scene.materials[i].name == name) return static_cast<int>(i);
-  throw InputError(scene.file + ": " + key + " = \"" + name + "\" is not a material in [materials]");
+  throw InputError(scene.file + ": " + key + " = \"" + name +
+                   "\" is not a material in [materials]");
 }
 
 sim::Model build_model(const SceneConfig& scene, double r_min, double r_max) {

@@ -15,6 +15,9 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 
+// The status of a pile record whose run ended in no pile to measure (a physics stop).
+constexpr const char* kNotMeasured = "not measured";
+
 constexpr const char* kMethodHd =
     "theta = atan(2H/D), H = top of the highest pile particle, D = 2 x median over azimuth "
     "sectors of the footprint's furthest reach";
@@ -117,7 +120,20 @@ PileMeasure clogged_pile(std::int64_t lodged, const std::string& detail) {
   return p;
 }
 
+PileMeasure unmeasured_pile(const std::string& detail) {
+  PileMeasure p;
+  p.status = sim::PileStatus::kNoPile;
+  p.not_measured = true;
+  p.detail = detail;
+  return p;
+}
+
 json to_json(const PileMeasure& p) {
+  if (p.not_measured)
+    return {{"status", kNotMeasured},
+            {"detail", p.detail},
+            {"theta_hd_deg", 0.0},
+            {"slice_angle_mean_deg", 0.0}};
   if (p.clogged)
     return {{"status", sim::to_string(p.status)},
             {"detail", p.detail},
@@ -151,6 +167,8 @@ json to_json(const PileMeasure& p) {
 }
 
 PileMeasure pile_measure_from_json(const json& j) {
+  if (j.value("status", std::string()) == kNotMeasured)
+    return unmeasured_pile(j.value("detail", std::string()));
   if (j.contains("lodged_particles"))
     return clogged_pile(j.at("lodged_particles").get<std::int64_t>(),
                         j.value("detail", std::string()));

@@ -61,6 +61,8 @@ struct PileSliceRecord {
 struct PileMeasure {
   sim::PileStatus status = sim::PileStatus::kNoPile;
   bool clogged = false;               // the outlet clogged: only status, detail, lodged are set
+  bool not_measured = false;          // the run ended in a state that is no pile (a physics stop):
+                                      // only status (kNoPile) and detail are set
   std::int64_t lodged = 0;            // particles lodged in the container (clogged) [-]
   std::string detail;                 // why there is no pile (clogged)
   double height_m = 0.0;              // H [m]
@@ -82,6 +84,8 @@ struct PileMeasure {
 PileMeasure pile_measure(const sim::PileGeometry& g);
 /// The record of a clogged outlet.
 PileMeasure clogged_pile(std::int64_t lodged, const std::string& detail);
+/// The record of a run that ended in no pile to measure (a physics stop), saying why.
+PileMeasure unmeasured_pile(const std::string& detail);
 nlohmann::json to_json(const PileMeasure& p);
 PileMeasure pile_measure_from_json(const nlohmann::json& j);
 
@@ -196,7 +200,9 @@ struct PileRun {
   /// run read back from its result.json.
   PileSpheres final_spheres;
   /// True when the pile's geometry was measured in full ("ok": not clogged, flanks found).
-  bool pile_ok() const { return !pile.clogged && pile.status == sim::PileStatus::kOk; }
+  bool pile_ok() const {
+    return !pile.clogged && !pile.not_measured && pile.status == sim::PileStatus::kOk;
+  }
 };
 nlohmann::json to_json(const PileRun& r);
 /// Reads a result.json; std::invalid_argument (nlohmann's errors are rethrown as such) naming

@@ -11,6 +11,7 @@
 #include <memory>
 #include <sstream>
 
+#include "experiments/io/hash.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/vtk_output.hpp"
@@ -66,6 +67,9 @@ struct Controller {
   double max_overlap_seen = 0.0;    // largest overlap / smaller radius at any check [-]
   std::int64_t retained = 0;        // particles left in the container and lifted away with it
   double retained_mass = 0.0;       // their mass [kg]
+  std::string scene_hash;           // FNV-1a of the resolved scene the run was started from
+  std::string code_version;         // the engine that wrote this state
+  std::int64_t step = -1;           // the engine step of the checkpoint written with it
   RunStop stop;                     // why the run ended (when phase is kDone)
   PsdRecord psd;                    // the PSD sampling
   std::vector<RunEvent> events;     // phase changes with their times
@@ -87,6 +91,9 @@ struct Controller {
             {"max_overlap_seen", max_overlap_seen},
             {"stop_reason", phase == Phase::kDone ? stop_reason_text(stop) : ""},
             {"stop_detail", stop.detail},
+            {"scene_fnv1a", scene_hash},
+            {"code_version", code_version},
+            {"step", step},
             {"retained", retained},
             {"retained_mass", retained_mass},
             {"psd", to_json(psd)},
@@ -109,6 +116,10 @@ struct Controller {
     c.max_overlap_seen = j.at("max_overlap_seen");
     if (!j.at("stop_reason").get<std::string>().empty())
       c.stop = stop_from_json({{"reason", j.at("stop_reason")}, {"detail", j.at("stop_detail")}});
+    // Controller files written before these stamps have none, and are not checked.
+    c.scene_hash = j.value("scene_fnv1a", std::string());
+    c.code_version = j.value("code_version", std::string());
+    c.step = j.value("step", std::int64_t{-1});
     // Controller files from before the retained-material rule have none retained.
     c.retained = j.value("retained", std::int64_t{0});
     c.retained_mass = j.value("retained_mass", 0.0);
@@ -203,10 +214,12 @@ class PileRunner {
     prepare_folder();
     const bool resuming = load_controller_or_sample();
     build_world();
-    if (resuming)
+    if (resuming) {
       resume_from_checkpoint();
-    else
+    } else {
       fill_and_check();
+      start_clean_folder();  // only now: --force deletes nothing for inputs that fail
+    }
     provenance_ = make_provenance();
     if (!resuming && scene_.output.frame_interval > 0) write_frame();
     if (!advance_until_done()) return std::nullopt;  // checkpointed; --resume continues
@@ -225,15 +238,21 @@ class PileRunner {
     ctl_.phase = Phase::kDone;
   }
 
-  // A finished result is never overwritten without force; force starts from a clean folder.
+  // One process per run folder; a finished result is never overwritten without force.
   void prepare_folder() {
+    lock_.emplace(out_.string(), ".run.lock", "another pile run");
     const fs::path result = path("result.json");
     if (fs::exists(result) && !opt_.force && !opt_.resume)
       throw InputError(result.string() +
                        ": a finished result is already there; pass --force to overwrite it");
     if (fs::exists(result) && opt_.resume && !opt_.force)
       throw InputError(result.string() + ": the run is already finished; nothing to resume");
-    if (opt_.force && !opt_.resume) {  // no stale result may look like this run's
+  }
+
+  // A fresh run whose inputs have passed every check: with force, no stale result may look
+  // like this run's; the resolved scene is the folder's first file.
+  void start_clean_folder() {
+    if (opt_.force) {
       for (const char* f : {"result.json", "final.vtp", "checkpoint.bin", "controller.json",
                             "series.pvd", "scene.resolved.toml"})
         fs::remove(path(f));
@@ -241,6 +260,7 @@ class PileRunner {
       fs::remove_all(path("images"));
     }
     fs::create_directories(path("frames"));
+    write_file_atomic(path("scene.resolved.toml").string(), scene_.resolved_toml);
   }
 
   // The sample is deterministic from the seed; a resumed run takes it from its controller file.
@@ -258,8 +278,10 @@ class PileRunner {
         throw ResumeError(path("controller.json").string() +
                           ": cannot resume from it: " + e.what());
       }
+      check_same_scene_and_engine();
       return true;
     }
+    ctl_.scene_hash = fnv1a_hex(scene_.resolved_toml);
     sim::Rng rng(scene_.seed);
     sim::PsdSample sample;
     try {
@@ -274,6 +296,22 @@ class PileRunner {
     ctl_.r_min = 0.5 * sample.summary.d_min_drawn;
     ctl_.r_max = 0.5 * sample.summary.d_max_drawn;
     return false;
+  }
+
+  // A checkpoint continues only the run that wrote it: another scene (an edited file, another
+  // --set) or another engine would finish a run whose result no single input describes.
+  void check_same_scene_and_engine() const {
+    const std::string here = fnv1a_hex(scene_.resolved_toml);
+    if (!ctl_.scene_hash.empty() && ctl_.scene_hash != here)
+      throw ResumeError(out_.string() +
+                        ": the checkpoint was made from another scene (resolved "
+                        "scene hash " +
+                        ctl_.scene_hash + ", this run's is " + here +
+                        "); run it again from the start with --force instead of --resume");
+    if (!ctl_.code_version.empty() && ctl_.code_version != code_version())
+      throw ResumeError(out_.string() + ": the checkpoint was written by engine " +
+                        ctl_.code_version + ", this is " + code_version() +
+                        "; run it again from the start with --force instead of --resume");
   }
 
   void build_world() {
@@ -292,12 +330,17 @@ class PileRunner {
     } catch (const std::exception& e) {
       throw ResumeError(std::string("cannot resume: ") + e.what());
     }
+    // checkpoint.bin and controller.json are renamed into place one after the other: a kill
+    // between the two renames leaves them from different moments, which their stamps show.
+    if (ctl_.step >= 0 && ctl_.step != state().step)
+      throw ResumeError(out_.string() + ": checkpoint.bin is at step " +
+                        std::to_string(state().step) + " but controller.json at step " +
+                        std::to_string(ctl_.step) + " (interrupted while checkpointing)");
     ctl_.events.push_back(run_event(state().time, "resumed", std::nullopt, code_version()));
     series_->truncate_after(state().time);
   }
 
   void fill_and_check() {
-    write_file_atomic(path("scene.resolved.toml").string(), scene_.resolved_toml);
     fill_container(*world_, scene_, diameters_, material_);
     world_->refresh_forces();
     const sim::Diagnostics d0 = world_->diagnose();
@@ -504,6 +547,8 @@ class PileRunner {
   void save_checkpoint() {
     Controller c = ctl_;
     c.wall_seconds = ctl_.wall_seconds + wall_now();
+    c.code_version = code_version();
+    c.step = state().step;
     sim::write_checkpoint(*world_, path("checkpoint.bin").string());
     write_json_atomic(path("controller.json").string(), c.to_json());
   }
@@ -519,10 +564,13 @@ class PileRunner {
   PileRun finish() {
     const sim::State& st = state();
     PileRun r;
-    r.pile =
-        ctl_.stop.reason == StopReason::kClogged
-            ? clogged_pile(ctl_.inside_last, ctl_.stop.detail)
-            : pile_measure(sim::measure_pile(st.particles.x, st.particles.radius, scene_.pile));
+    // After a physics stop the state is not a pile (positions may not even be finite).
+    if (ctl_.stop.is_physics())
+      r.pile = unmeasured_pile("the run stopped on a physics failure: " + ctl_.stop.detail);
+    else if (ctl_.stop.reason == StopReason::kClogged)
+      r.pile = clogged_pile(ctl_.inside_last, ctl_.stop.detail);
+    else
+      r.pile = pile_measure(sim::measure_pile(st.particles.x, st.particles.radius, scene_.pile));
     write_vtp(path("final.vtp").string(), st.particles);
     write_frame();  // the series always ends with the final state
     save_checkpoint();
@@ -560,6 +608,7 @@ class PileRunner {
   sim::Settings settings_;
   std::unique_ptr<sim::World> world_;
   std::unique_ptr<PvdSeries> series_;
+  std::optional<FolderLock> lock_;
   RunProvenance provenance_;
   std::int64_t step0_ = 0;           // step at the start of this session
   std::int64_t n0_ = 0;              // the sample as filled [-]

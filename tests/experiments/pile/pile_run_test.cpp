@@ -7,13 +7,15 @@
 #include <filesystem>
 #include <fstream>
 
+#include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/scene.hpp"
 #include "experiments/io/scene_overrides.hpp"
-#include "experiments/io/input_error.hpp"
 
 namespace reposetwin::experiments {
 namespace {
+
+namespace fs = std::filesystem;
 
 // The run's record as its result.json reads (the assertions below read the file's fields).
 nlohmann::json run_json(const SceneConfig& scene, const RunOptions& opt) {
@@ -21,7 +23,6 @@ nlohmann::json run_json(const SceneConfig& scene, const RunOptions& opt) {
   if (!run) throw std::runtime_error("the run stopped at a limit");
   return to_json(*run);
 }
-namespace fs = std::filesystem;
 
 /// A tiny scene: `mass` of 3-4 mm spheres through a funnel of outlet `w` (tens of particles).
 std::string tiny_scene(double mass, double w, const std::string& extra = "") {
