@@ -23,7 +23,7 @@ void add_run_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--set", args->sets, "Override a scene key: dotted.key=value (repeatable)");
   cmd->add_option("--threads", args->run.threads, "OpenMP threads (0: the scene's setting)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, 4096));
   cmd->add_flag("--force", args->run.force, "Overwrite a finished result in the run folder");
   cmd->add_flag("--resume", args->run.resume, "Continue from the run folder's checkpoint");
   cmd->add_flag("--quiet,-q", args->quiet, "No progress lines");
