@@ -384,3 +384,83 @@ TEST(ClumpWorld, RemovingAComponentRemovesItsWholeClump) {
 
 }  // namespace
 }  // namespace reposetwin::sim
+
+namespace reposetwin::sim {
+namespace {
+
+/// A dumbbell of two spheres of radius r with centres 2a apart, lying with its axis along the
+/// downhill direction of an incline of angle theta (gravity tilted, as contact_test.cpp's
+/// incline), both spheres on the plate at their static overlap. Friction mu_s, no rolling law
+/// (the dumbbell cannot roll along its axis without lifting a sphere).
+struct Incline {
+  World world;
+  double mass;
+};
+Incline dumbbell_on_incline(double theta, double mu_s, double r, double a) {
+  const double g = 9.81;
+  PairParams pair;
+  pair.restitution = 0.5;
+  pair.friction = mu_s;
+  pair.rolling_model = RollingModel::kNone;
+  Model m = testing::make_model(pair, 46.8e6, Vec3(g * std::sin(theta), 0, -g * std::cos(theta)));
+  m.walls.push_back(testing::plate());
+  const int t = m.add_clump_template({"dumbbell", {Vec3(-a, 0, 0), Vec3(a, 0, 0)}, {r, r}});
+  m.finalize(r, r);
+  const double mass = m.materials[0].density * m.clumps[t].volume;
+  const double e_star = 1.0 / (2.0 * (1 - 0.19 * 0.19) / 46.8e6);
+  const double fn = 0.5 * mass * g * std::cos(theta);
+  const double delta = std::pow(3.0 * fn / (4.0 * e_star * std::sqrt(r)), 2.0 / 3.0);
+  World w(m);
+  w.add_clump(t, Vec3(0, 0, r - delta), m.clumps[t].axes.conjugate(), 0);
+  return {std::move(w), mass};
+}
+
+TEST(ClumpIncline, DumbbellStaysSlidesOrTipsAsFrictionAndGeometryPredict) {
+  // Along its axis the dumbbell slides once tan(theta) > mu_s, at a = g (sin theta - mu_s cos
+  // theta), and tips over its lower sphere once the vertical through its centre of mass leaves
+  // the lower contact, tan(theta) > a / r (centre of mass r above the plate, a uphill of it).
+  const double r = 1e-3, pi = kPi;
+  // Long (a/r = 0.9, tipping at 42 deg) and mu_s = 0.466 (sliding at 25 deg).
+  for (double deg : {22.0, 28.0}) {
+    const double theta = deg * pi / 180.0;
+    Incline in = dumbbell_on_incline(theta, 0.466, r, 0.9 * r);
+    World& w = in.world;
+    const Bodies& b = w.state().bodies;
+    while (w.state().time < 0.02) w.step();
+    const double x1 = b.x[0].x(), v1 = b.v[0].x(), t1 = w.state().time;
+    while (w.state().time < 0.07) w.step();
+    const double accel = (b.v[0].x() - v1) / (w.state().time - t1);
+    const double tilt = std::abs((b.q[0] * Vec3::UnitX()).z());  // the axis' rise
+    const double expect = 9.81 * (std::sin(theta) - 0.466 * std::cos(theta));
+    std::printf("  a/r 0.9, mu_s 0.466, %.0f deg: moved %.3e m, acceleration %.4f m/s^2 "
+                "(expected %.4f if sliding), axis rise %.1e\n",
+                deg, b.x[0].x() - x1, accel, expect, tilt);
+    if (deg < 25.0) {
+      EXPECT_LT(std::abs(b.x[0].x() - x1), 1e-7) << deg;
+    } else {
+      EXPECT_NEAR(accel / expect, 1.0, 0.02) << deg;
+    }
+    EXPECT_LT(tilt, 1e-3) << deg;  // both spheres stay down
+  }
+  // Short (a/r = 0.5, tipping at 26.6 deg) on a rough plate (mu_s 1, sliding at 45 deg).
+  for (double deg : {24.0, 29.0}) {
+    const double theta = deg * pi / 180.0;
+    Incline in = dumbbell_on_incline(theta, 1.0, r, 0.5 * r);
+    World& w = in.world;
+    const Bodies& b = w.state().bodies;
+    double tilt = 0.0;  // the largest angle of the axis to the plate (tipped: it turns over)
+    while (w.state().time < 0.1) {
+      w.step();
+      tilt = std::max(tilt, std::asin(std::min(1.0, std::abs((b.q[0] * Vec3::UnitX()).z()))));
+    }
+    std::printf("  a/r 0.5, mu_s 1, %.0f deg: axis rose to %.2e rad\n", deg, tilt);
+    if (deg < 26.6) {
+      EXPECT_LT(tilt, 5e-3) << deg;  // (the loads of the two contacts differ: elastic tilt)
+    } else {
+      EXPECT_GT(tilt, 0.5) << deg;  // tipped over
+    }
+  }
+}
+
+}  // namespace
+}  // namespace reposetwin::sim
