@@ -124,28 +124,49 @@ void World::set_body_velocity(std::size_t b, const Vec3& v, const Vec3& w) {
   }
   if (!state_.body_components.indexed_for(bodies.size()))
     index_body_components(state_.particles, bodies.size(), state_.body_components);
-  place_components(b, /*positions=*/false);
+  move_components(b);
 }
 
-void World::place_components(std::size_t b, bool positions) {
+void World::place_components(std::size_t b, const Mat3& rot, double* moved2) {
+  const Bodies& bodies = state_.bodies;
+  Particles& p = state_.particles;
+  const BodyComponents& bc = state_.body_components;
+  const Vec3* const x_at_build = state_.neighbors.x_at_build.data();
+  const std::int32_t c0 = bc.start[b], c1 = bc.start[b + 1];
+  if (c1 - c0 == 1) {  // a one-sphere clump: the body's values themselves
+    const std::size_t i = static_cast<std::size_t>(bc.particle[c0]);
+    p.x[i] = bodies.x[b];
+    p.v[i] = bodies.v[b];
+    p.w[i] = bodies.w[b];
+    if (moved2) moved2[i] = (p.x[i] - x_at_build[i]).squaredNorm();
+    return;
+  }
+  const Vec3* const offsets =
+      model_.clumps[static_cast<std::size_t>(bodies.shape[b])].offsets.data();
+  for (std::int32_t k = c0; k < c1; ++k) {
+    const std::size_t i = static_cast<std::size_t>(bc.particle[k]);
+    const Vec3 r = rot * offsets[k - c0];
+    p.x[i] = bodies.x[b] + r;
+    p.v[i] = bodies.v[b] + bodies.w[b].cross(r);
+    p.w[i] = bodies.w[b];
+    if (moved2) moved2[i] = (p.x[i] - x_at_build[i]).squaredNorm();
+  }
+}
+
+void World::move_components(std::size_t b) {
   const Bodies& bodies = state_.bodies;
   Particles& p = state_.particles;
   const BodyComponents& bc = state_.body_components;
   const std::int32_t c0 = bc.start[b], c1 = bc.start[b + 1];
-  if (c1 - c0 == 1) {  // a one-sphere clump: the body's values themselves
+  if (c1 - c0 == 1) {
     const std::size_t i = static_cast<std::size_t>(bc.particle[c0]);
-    if (positions) p.x[i] = bodies.x[b];
     p.v[i] = bodies.v[b];
     p.w[i] = bodies.w[b];
     return;
   }
-  const ClumpTemplate& t = model_.clumps[static_cast<std::size_t>(bodies.shape[b])];
-  const Mat3 rot = bodies.q[b].toRotationMatrix();
   for (std::int32_t k = c0; k < c1; ++k) {
     const std::size_t i = static_cast<std::size_t>(bc.particle[k]);
-    const Vec3 r = rot * t.offsets[static_cast<std::size_t>(k - c0)];
-    if (positions) p.x[i] = bodies.x[b] + r;
-    p.v[i] = bodies.v[b] + bodies.w[b].cross(r);
+    p.v[i] = bodies.v[b] + bodies.w[b].cross(p.x[i] - bodies.x[b]);
     p.w[i] = bodies.w[b];
   }
 }
@@ -224,6 +245,11 @@ void World::kick_drift_bodies() {
     index_body_components(state_.particles, nb, state_.body_components);
   const double dt = model_.dt, h = 0.5 * model_.dt;
   const std::size_t par_min = model_.settings.parallel_min_particles;
+  // kick_drift measured the components' displacements from their motion as spheres: they are
+  // measured again from their places on the bodies (when kick_drift measured at all: else
+  // update_neighbors does), and the largest is taken again over every particle.
+  const bool measure = moved2_ >= 0.0;
+  double* const moved2 = measure ? state_.moved2.data() : nullptr;
 #pragma omp parallel for schedule(static) if (nb > par_min)
   for (std::size_t b = 0; b < nb; ++b) {
     bodies.v[b] += (h / bodies.mass[b]) * bodies.force[b];
@@ -239,20 +265,16 @@ void World::kick_drift_bodies() {
     } else {
       bodies.l[b] += h * bodies.torque[b];
       free_rotor_drift(bodies.q[b], bodies.l[b], bodies.inertia[b], dt);
-      bodies.w[b] = body_angular_velocity(bodies.q[b], bodies.l[b], bodies.inertia[b]);
     }
-    place_components(b, /*positions=*/true);
+    const Mat3 rot = bodies.q[b].toRotationMatrix();
+    if (!bodies.spherical(b))
+      bodies.w[b] = rot * (rot.transpose() * bodies.l[b]).cwiseQuotient(bodies.inertia[b]);
+    place_components(b, rot, moved2);
   }
-  // kick_drift measured the components' displacements from their motion as spheres: measured
-  // again from their places on the bodies, and the largest taken again over every particle.
-  if (moved2_ < 0.0) return;  // not measured (no list): update_neighbors measures
-  const Particles& p = state_.particles;
-  const Vec3* const x_at_build = state_.neighbors.x_at_build.data();
-  double* const moved2 = state_.moved2.data();
-  for (std::int32_t i : state_.body_components.particle)
-    moved2[i] = (p.x[i] - x_at_build[i]).squaredNorm();
+  if (!measure) return;
+  const std::size_t n = state_.particles.size();
   double max2 = 0.0;
-  for (std::size_t i = 0; i < p.size(); ++i) max2 = std::max(max2, moved2[i]);
+  for (std::size_t i = 0; i < n; ++i) max2 = std::max(max2, moved2[i]);
   moved2_ = max2;
 }
 
@@ -297,7 +319,7 @@ void World::gather_bodies(bool kick) {
       bodies.l[b] += h * tq;
       bodies.w[b] = body_angular_velocity(bodies.q[b], bodies.l[b], bodies.inertia[b]);
     }
-    place_components(b, /*positions=*/false);
+    move_components(b);
   }
 }
 

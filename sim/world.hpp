@@ -166,7 +166,12 @@ class World {
   void gather_wall_forces(bool kick);
   void kick_drift_bodies();
   void gather_bodies(bool kick);
-  void place_components(std::size_t b, bool positions);
+  // Sets body b's components' positions x + rot b_c, velocities v + w x r and angular
+  // velocities w (rot: the body's rotation matrix) and, if moved2 is given, their squared
+  // displacements since the list's build; move_components sets the velocities only, from the
+  // components' positions.
+  void place_components(std::size_t b, const Mat3& rot, double* moved2);
+  void move_components(std::size_t b);
   void compute_forces();  // phases 3-6 without the kick (also used once before the first step)
 
   Model model_;
