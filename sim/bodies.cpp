@@ -21,6 +21,18 @@ void Bodies::keep(const std::vector<char>& flags) {
 #undef REPOSETWIN_KEEP_BODY_FIELD
 }
 
+void Bodies::permute(const std::vector<std::int32_t>& order) {
+  assert(order.size() == size());
+#define REPOSETWIN_PERMUTE_BODY_FIELD(type, name, doc)                        \
+  {                                                                           \
+    HugeVector<type> tmp(order.size());                                       \
+    for (std::size_t b = 0; b < order.size(); ++b) tmp[b] = name[order[b]];   \
+    name.swap(tmp);                                                           \
+  }
+  REPOSETWIN_BODY_FIELDS(REPOSETWIN_PERMUTE_BODY_FIELD)
+#undef REPOSETWIN_PERMUTE_BODY_FIELD
+}
+
 void index_body_components(const Particles& p, std::size_t bodies, BodyComponents& bc) {
   bc.start.assign(bodies + 1, 0);
   for (std::size_t i = 0; i < p.size(); ++i) {

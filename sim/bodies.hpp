@@ -3,8 +3,10 @@
 // Design note. A clump's component spheres are ordinary particles (sim/particles.hpp) that carry
 // the index of their body and their place in its template; the neighbor list, the contact kernels
 // and the walls see only particles. What is the body's own, its centre of mass, orientation,
-// momenta and the sums of its components' forces, lives here, one entry per body, in the order
-// the bodies were added (bodies are never reordered; removing some keeps the others' order).
+// momenta and the sums of its components' forces, lives here, one entry per body. The bodies are
+// reordered with the particles at each neighbor-list build, by the place of their first component
+// in the particle arrays (World::order_bodies), so that the bodies' phases walk the particle
+// arrays in order rather than at random; ids stay.
 // REPOSETWIN_BODY_FIELDS names every per-body array once; resizing, compaction and checkpoints
 // iterate it (as REPOSETWIN_PARTICLE_FIELDS). The components of each body are found through
 // BodyComponents, derived from the particles after every reordering.
@@ -50,6 +52,9 @@ struct Bodies {
 
   /// Keeps the bodies whose flag is true, in order.
   void keep(const std::vector<char>& flags);
+
+  /// Reorders every field by `order` (new index k takes old index order[k]).
+  void permute(const std::vector<std::int32_t>& order);
 
   /// A spherical top (I1 = I2 = I3 exactly, a one-sphere clump): its angular velocity is its
   /// state and it is kicked as a sphere, w += dt/2 T / I, which keeps a one-sphere clump's

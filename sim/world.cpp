@@ -236,6 +236,35 @@ void World::kick_drift() {
   moved2_ = listed ? max2 : -1.0;
 }
 
+void World::order_bodies() {
+  Particles& p = state_.particles;
+  Bodies& bodies = state_.bodies;
+  const std::size_t nb = bodies.size();
+  // The bodies in the order of their first component in the (just sorted) particle arrays.
+  std::vector<std::int32_t> order;
+  order.reserve(nb);
+  std::vector<char> seen(nb, 0);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const std::int32_t b = p.body[i];
+    if (b >= 0 && !seen[static_cast<std::size_t>(b)]) {
+      seen[static_cast<std::size_t>(b)] = 1;
+      order.push_back(b);
+    }
+  }
+  bool identity = true;
+  for (std::size_t k = 0; k < nb && identity; ++k)
+    identity = order[k] == static_cast<std::int32_t>(k);
+  if (!identity) {
+    bodies.permute(order);
+    std::vector<std::int32_t> new_index(nb);
+    for (std::size_t k = 0; k < nb; ++k)
+      new_index[static_cast<std::size_t>(order[k])] = static_cast<std::int32_t>(k);
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (p.body[i] >= 0) p.body[i] = new_index[static_cast<std::size_t>(p.body[i])];
+  }
+  index_body_components(p, nb, state_.body_components);
+}
+
 void World::kick_drift_bodies() {
   Bodies& bodies = state_.bodies;
   const std::size_t nb = bodies.size();
@@ -353,8 +382,7 @@ void World::update_neighbors() {
     return;
   }
   build_neighbor_list(p, nl, /*sort_particles=*/true);
-  if (state_.bodies.size() > 0)  // the components have moved in the arrays
-    index_body_components(p, state_.bodies.size(), state_.body_components);
+  if (state_.bodies.size() > 0) order_bodies();  // the components have moved in the arrays
   state_.moved2.assign(n, 0.0);
   // What a pair that did not touch last step must have: no springs or reactions. A pair with
   // springs carried over from the old list is taken as touching (live): the force phase clears

@@ -126,7 +126,8 @@ class World {
 
   /// Inserts a clump of template `shape` (Model::clumps) at rest with its centre of mass at x
   /// and orientation q (body to world; normalised here), its components of `material`; returns
-  /// the body's index. Its components are particles with the body's index.
+  /// the body's index (valid until the next rebuild, which reorders the bodies with the
+  /// particles; Bodies::id is stable). Its components are particles with the body's index.
   std::size_t add_clump(int shape, const Vec3& x, const Quat& q, int material);
 
   /// Sets a body's velocity [m/s] and world-frame angular velocity [rad/s] (and so its angular
@@ -165,6 +166,7 @@ class World {
   void pair_forces();
   void gather_wall_forces(bool kick);
   void kick_drift_bodies();
+  void order_bodies();  // after the particles' sort: bodies by their first component's index
   void gather_bodies(bool kick);
   // Sets body b's components' positions x + rot b_c, velocities v + w x r and angular
   // velocities w (rot: the body's rotation matrix) and, if moved2 is given, their squared
