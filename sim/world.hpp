@@ -2,6 +2,10 @@
 //
 // Design note. step() reads as the table of contents of one velocity-Verlet step:
 //   1. kick_drift       v += dt/2 F/m, w += dt/2 T/I, x += dt v      (forces of the last step)
+//   1b. kick_drift_bodies  only with clumps (sim/bodies.hpp): the bodies' opening kick
+//                       v += dt/2 F/M, L += dt/2 T and drift (the rotation by the free-rotor
+//                       splitting, sim/clump.hpp); each component is placed at x + R(q) b with
+//                       v + w x r and w, and its displacement measured for the rebuild test
 //   2. move_walls       prescribed wall motion (the lift)
 //   3. update_neighbors rebuild the Verlet list if a particle moved more than skin/2
 //   4. pair_forces      Hertz-Mindlin + rolling kernel once per touching pair, 2 or 4 pairs at
@@ -17,17 +21,14 @@
 //                       (the particles near an enabled wall, listed at rebuild; the kernel in
 //                       lanes too, compute_wall_contacts), then takes the closing kick
 //                       v += dt/2 F/m, w += dt/2 T/I
-//   6. gather_bodies    only with clumps (sim/bodies.hpp): each body sums its components' forces
-//                       and torques (r x F + T) in template order, takes the closing kick
+//   6. gather_bodies    only with clumps: each body sums its components' forces and torques
+//                       (r x F + T) in template order, gravity once, takes the closing kick
 //                       v += dt/2 F/M, L += dt/2 T, and sets its components' velocities
-//                       v + w x r and angular velocities w.
-// Clumps add one more phase between 1 and 2: kick_drift_bodies, the bodies' opening kick and
-// drift (the rotation by the free-rotor splitting, sim/clump.hpp), which then places each
-// component at x + R(q) b with the body's motion and measures its displacement for the rebuild
-// test. Components are ordinary particles for phases 3-5 (pairs of one body are never listed), so
-// phases 1 and 5 also move and kick them as spheres; phases 1b and 6 overwrite that with the
-// body's motion. Without clumps both phases do nothing and the spheres' bits are those of an
-// engine without clumps.
+//                       v + w x r and angular velocities w
+// Components are ordinary particles for phases 3-5 (pairs of one body are never listed, and a
+// rebuild reorders the bodies with their components), so phases 1 and 5 also move and kick them
+// as spheres; phases 1b and 6 overwrite that with the body's motion. Without clumps both do
+// nothing and the spheres' bits are those of an engine without clumps.
 // (diagnose(): energy, overlap, NaN and escape checks, called by the runner every few steps.)
 // Each phase is timed into Profile, which the benchmark prints. No phase writes memory another
 // thread writes, and no floating-point sum depends on the thread count, so a run is
