@@ -10,9 +10,10 @@
 namespace reposetwin::sim {
 namespace {
 
-// Format 2 (session 10) dropped format 1's per-pair overlaps (now derived by World::diagnose);
-// format 1 is still read.
-constexpr char kMagic[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '2'};
+// Format 3 adds the clumps: the particles' clump fields and the bodies. Formats 1 and 2 (spheres
+// only; format 1 with per-pair overlaps, now derived by World::diagnose) are still read.
+constexpr char kMagic[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '3'};
+constexpr char kMagicFormat2[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '2'};
 constexpr char kMagicFormat1[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '1'};
 
 class Writer {
@@ -68,8 +69,17 @@ class Reader {
 template <class Archive, class StateT>
 void transfer_state(Archive& ar, StateT& s, int format) {
 #define REPOSETWIN_TRANSFER_FIELD(type, name, doc) ar.vec(s.particles.name);
-  REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_TRANSFER_FIELD)
+  REPOSETWIN_PARTICLE_CORE_FIELDS(REPOSETWIN_TRANSFER_FIELD)
+  if (format >= 3) {
+    REPOSETWIN_PARTICLE_CLUMP_FIELDS(REPOSETWIN_TRANSFER_FIELD)
+  }
 #undef REPOSETWIN_TRANSFER_FIELD
+  if (format >= 3) {
+#define REPOSETWIN_TRANSFER_BODY_FIELD(type, name, doc) ar.vec(s.bodies.name);
+    REPOSETWIN_BODY_FIELDS(REPOSETWIN_TRANSFER_BODY_FIELD)
+#undef REPOSETWIN_TRANSFER_BODY_FIELD
+    ar.pod(s.next_body_id);
+  }
   ar.pod(s.time);
   ar.pod(s.step);
   ar.pod(s.next_id);
@@ -101,7 +111,7 @@ void write_checkpoint(const World& world, const std::string& path) {
     Writer w(out);
     w.pod(world.model().dt);
     w.pod<std::uint64_t>(world.model().walls.size());
-    transfer_state(w, s, 2);
+    transfer_state(w, s, 3);
     out.flush();
     if (!out) throw std::runtime_error(path + ": checkpoint write failed");
   }
@@ -118,7 +128,8 @@ void read_checkpoint(World& world, const std::string& path) {
   Reader r(in, path);
   if (!in) r.fail("is not a ReposeTwin checkpoint");
   int format = 0;
-  if (std::memcmp(magic, kMagic, sizeof kMagic) == 0) format = 2;
+  if (std::memcmp(magic, kMagic, sizeof kMagic) == 0) format = 3;
+  if (std::memcmp(magic, kMagicFormat2, sizeof kMagicFormat2) == 0) format = 2;
   if (std::memcmp(magic, kMagicFormat1, sizeof kMagicFormat1) == 0) format = 1;
   if (format == 0) r.fail("is not a ReposeTwin checkpoint");
   double dt = 0.0;
@@ -131,10 +142,35 @@ void read_checkpoint(World& world, const std::string& path) {
   transfer_state(r, s, format);
   if (in.peek() != std::ifstream::traits_type::eof()) r.fail("has data after its end");
   const std::size_t n = s.particles.x.size();
+  if (format < 3) {  // spheres only
+    s.particles.body.assign(n, -1);
+    s.particles.component.assign(n, -1);
+  }
 #define REPOSETWIN_CHECK_FIELD(type, name, doc) \
   if (s.particles.name.size() != n) r.fail("has particle arrays of different lengths");
   REPOSETWIN_PARTICLE_FIELDS(REPOSETWIN_CHECK_FIELD)
 #undef REPOSETWIN_CHECK_FIELD
+  const std::size_t nb = s.bodies.x.size();
+#define REPOSETWIN_CHECK_BODY_FIELD(type, name, doc) \
+  if (s.bodies.name.size() != nb) r.fail("has body arrays of different lengths");
+  REPOSETWIN_BODY_FIELDS(REPOSETWIN_CHECK_BODY_FIELD)
+#undef REPOSETWIN_CHECK_BODY_FIELD
+  for (std::size_t b = 0; b < nb; ++b) {
+    const std::int32_t shape = s.bodies.shape[b];
+    if (shape < 0 || static_cast<std::size_t>(shape) >= world.model().clumps.size())
+      r.fail("has a body whose clump template is not in the model");
+  }
+  try {
+    index_body_components(s.particles, nb, s.body_components);
+  } catch (const std::logic_error&) {
+    r.fail("has inconsistent clump components");
+  }
+  for (std::size_t b = 0; b < nb; ++b) {
+    const std::size_t k = static_cast<std::size_t>(s.body_components.start[b + 1] -
+                                                   s.body_components.start[b]);
+    if (k != world.model().clumps[static_cast<std::size_t>(s.bodies.shape[b])].size())
+      r.fail("has a body whose components do not match its template");
+  }
   NeighborList& nl = s.neighbors;
   if (s.walls.size() != nwalls) r.fail("has an inconsistent wall count");
   const std::size_t np = nl.second.size();

@@ -1,7 +1,8 @@
 // Checkpoints: the whole State in one binary file, from which a run resumes bit-identically.
 //
-// The particle arrays are written by iterating the particle field list, so a new field is saved
-// without touching this code. The neighbor list (with every contact's spring history) is saved
+// The particle and body arrays are written by iterating their field lists, so a new field is
+// saved without touching this code. (The clump templates are the Model's, not saved: the resumed
+// world must be built with the same templates.) The neighbor list (with every contact's spring history) is saved
 // as it is, so the resumed run rebuilds it at exactly the same steps as an uninterrupted one.
 // Files are written to a temporary name and renamed into place (never half a checkpoint).
 #pragma once

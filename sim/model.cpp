@@ -35,6 +35,11 @@ void Model::set_pair(int a, int b, const PairParams& p) {
   pairs[b * n + a] = p;
 }
 
+int Model::add_clump_template(const ClumpShape& shape, const MassPropertySettings& settings) {
+  clumps.push_back(make_clump_template(shape, settings));
+  return static_cast<int>(clumps.size()) - 1;
+}
+
 double Model::youngs_modulus_used(int m) const {
   return settings.softened_youngs_modulus > 0.0 ? settings.softened_youngs_modulus
                                                 : materials[m].youngs_modulus;

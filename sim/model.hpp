@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/clump.hpp"
 #include "sim/contact.hpp"
 
 namespace reposetwin::sim {
@@ -91,6 +92,7 @@ struct Model {
   std::vector<Material> materials;
   std::vector<PairParams> pairs;  // n x n, row-major, symmetric
   std::vector<WallSpec> walls;
+  std::vector<ClumpTemplate> clumps;  // clump templates (add_clump_template), in the body frame
   Settings settings;
 
   // Derived by finalize():
@@ -102,6 +104,12 @@ struct Model {
 
   /// Sets the parameters of the pair (a, b) and (b, a).
   void set_pair(int a, int b, const PairParams& p);
+
+  /// Validates a clump shape, derives its template (sim/clump.hpp: mass properties, principal
+  /// frame) and appends it to `clumps`; returns its index. Throws std::invalid_argument for a
+  /// bad shape (make_clump_template). The components' radii must lie within the radii passed to
+  /// finalize().
+  int add_clump_template(const ClumpShape& shape, const MassPropertySettings& settings = {});
 
   /// Young's modulus in use for material m (softened if asked) [Pa].
   double youngs_modulus_used(int m) const;

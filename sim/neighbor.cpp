@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <type_traits>
 
 namespace reposetwin::sim {
 namespace {
@@ -106,9 +107,15 @@ void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) 
   }
   // order[k] = particle index of the k-th entry in cell order.
 
-  // 3. Each particle collects its partners: no larger than itself, within 2 r_i + skin.
+  // 3. Each particle collects its partners: no larger than itself, within 2 r_i + skin, and not
+  // of its own clump. The clump test is compiled only into the search of a world with clumps
+  // (kClumps), so a world of spheres runs the search it always did.
   const double skin = list.skin;
-  auto for_each_partner = [&](std::size_t i, auto&& emit) {
+  const std::int32_t* const body = p.body.data();
+  bool clumps = false;
+  for (std::size_t i = 0; i < n && !clumps; ++i) clumps = body[i] >= 0;
+  auto for_each_partner = [&](std::size_t i, auto clumps_tag, auto&& emit) {
+    constexpr bool kClumps = decltype(clumps_tag)::value;
     const Vec3 xi = p.x[i];
     const double ri = p.radius[i];
     // The cells within 2 r_i + skin of x_i along each axis (the cells' lower edges are at
@@ -131,8 +138,14 @@ void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) 
           const double cut = ri + rj + skin;
           // Partners no larger than i (ties: the higher index); one branch, rarely taken.
           const bool smaller = (rj < ri) | ((rj == ri) & (j > i));
-          if (smaller & ((xi - p.x[j]).squaredNorm() < cut * cut))
-            emit(static_cast<std::int32_t>(j));
+          if constexpr (kClumps) {
+            const bool other = (body[i] < 0) | (body[i] != body[j]);
+            if (smaller & other & ((xi - p.x[j]).squaredNorm() < cut * cut))
+              emit(static_cast<std::int32_t>(j));
+          } else {
+            if (smaller & ((xi - p.x[j]).squaredNorm() < cut * cut))
+              emit(static_cast<std::int32_t>(j));
+          }
         }
       }
     }
@@ -147,7 +160,12 @@ void build_neighbor_list(Particles& p, NeighborList& list, bool sort_particles) 
     std::vector<std::int32_t>& out = found[c];
     for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
       const std::size_t from = out.size();
-      for_each_partner(i, [&](std::int32_t j) { out.push_back(j); });
+      auto emit = [&](std::int32_t j) { out.push_back(j); };
+      if (clumps) {
+        for_each_partner(i, std::true_type{}, emit);
+      } else {
+        for_each_partner(i, std::false_type{}, emit);
+      }
       std::sort(out.begin() + static_cast<std::ptrdiff_t>(from), out.end());
       list.start[i + 1] = static_cast<std::int32_t>(out.size() - from);
     }
@@ -277,6 +295,7 @@ std::vector<std::pair<std::int32_t, std::int32_t>> brute_force_pairs(const Parti
   std::vector<std::pair<std::int32_t, std::int32_t>> out;
   for (std::size_t i = 0; i < p.size(); ++i) {
     for (std::size_t j = i + 1; j < p.size(); ++j) {
+      if (p.body[i] >= 0 && p.body[i] == p.body[j]) continue;  // one clump's components
       const double cut = p.radius[i] + p.radius[j] + cutoff_extra;
       if ((p.x[i] - p.x[j]).squaredNorm() < cut * cut)
         out.emplace_back(static_cast<std::int32_t>(i), static_cast<std::int32_t>(j));

@@ -11,6 +11,9 @@
 //    is the second member. The force phase writes one result per pair (no two threads write the
 //    same place) and the gather phase sums each particle's pairs in a fixed order, so forces are
 //    bit-identical whatever the number of threads.
+//  - The components of one clump (Particles::body) are never listed together: they never
+//    interact. A component is a particle with a position of its own (set from its body's motion,
+//    rotation included), so the displacement criterion below holds for it as for a sphere.
 //  - Rebuild when the largest displacement since the last build exceeds half the skin. A rebuild
 //    sorts the particles by cell (memory locality) and carries every contact's history over from
 //    the old list (found by the particles' indices before the sort), so springs survive rebuilds
@@ -76,8 +79,8 @@ void compute_clearances(NeighborList& list, const Particles& p);
 /// pair and its history (indices are renumbered as Particles::keep does).
 void compact_neighbor_list(NeighborList& list, const std::vector<char>& keep);
 
-/// The reference oracle: every pair (i < j) with |x_i - x_j| < r_i + r_j + cutoff_extra, by an
-/// O(N^2) loop. Used by tests.
+/// The reference oracle: every pair (i < j) with |x_i - x_j| < r_i + r_j + cutoff_extra, except
+/// the pairs of components of one clump, by an O(N^2) loop. Used by tests.
 std::vector<std::pair<std::int32_t, std::int32_t>> brute_force_pairs(const Particles& p,
                                                                      double cutoff_extra);
 

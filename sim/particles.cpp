@@ -46,7 +46,7 @@ void Particles::keep(const std::vector<char>& flags) {
 
 std::size_t Particles::add(const Vec3& position, double r, double density, std::int32_t mat,
                            std::int64_t pid) {
-  const double m = density * 4.0 / 3.0 * 3.14159265358979323846 * r * r * r;
+  const double m = sphere_mass(density, r);
   const std::size_t i = size();
   resize(i + 1);  // every field of the list grows; those not set below are value-initialised
   x[i] = position;
@@ -60,6 +60,8 @@ std::size_t Particles::add(const Vec3& position, double r, double density, std::
   material[i] = mat;
   id[i] = pid;
   wall_history[i] = WallHistory{};
+  body[i] = -1;
+  component[i] = -1;
   return i;
 }
 

@@ -22,8 +22,13 @@ inline constexpr int kMaxWalls = 6;
 /// The contact history of one particle with each wall.
 using WallHistory = std::array<ContactHistory, kMaxWalls>;
 
-// X(type, name, unit and meaning)
-#define REPOSETWIN_PARTICLE_FIELDS(X)                                   \
+// X(type, name, unit and meaning). The list is the core fields, then the clump fields (kept apart
+// because checkpoints written before clumps existed hold the core fields only).
+#define REPOSETWIN_PARTICLE_FIELDS(X) \
+  REPOSETWIN_PARTICLE_CORE_FIELDS(X)  \
+  REPOSETWIN_PARTICLE_CLUMP_FIELDS(X)
+
+#define REPOSETWIN_PARTICLE_CORE_FIELDS(X)                              \
   X(Vec3, x, "position [m]")                                            \
   X(Vec3, v, "velocity [m/s]")                                          \
   X(Vec3, w, "angular velocity [rad/s]")                                \
@@ -35,6 +40,14 @@ using WallHistory = std::array<ContactHistory, kMaxWalls>;
   X(std::int32_t, material, "material index into Model::materials")     \
   X(std::int64_t, id, "stable particle id, unchanged by reordering")         \
   X(WallHistory, wall_history, "tangential and rolling springs per wall")
+
+// A component of a clump has the body's mass in `mass` (the contact kernels' damping then uses
+// the body's mass, as LIGGGHTS multisphere does: the mass that actually moves) and 2/5 of the
+// body's mass times its own radius squared in `inertia` (read only by the EPSD rolling dashpot's
+// effective inertia, which for a one-sphere clump is then the sphere's).
+#define REPOSETWIN_PARTICLE_CLUMP_FIELDS(X)                                          \
+  X(std::int32_t, body, "index of the particle's clump in State::bodies; -1 = a sphere") \
+  X(std::int32_t, component, "the particle's place in its clump's template; -1 = a sphere")
 
 /// Per-particle arrays, all of the same length.
 struct Particles {
@@ -56,9 +69,15 @@ struct Particles {
   /// Keeps the particles whose flag is true, in order.
   void keep(const std::vector<char>& flags);
 
-  /// Appends one particle at rest; returns its index.
+  /// Appends one particle (a sphere, in no clump) at rest; returns its index.
   std::size_t add(const Vec3& position, double radius, double density, std::int32_t material,
                   std::int64_t id);
 };
+
+/// Mass of a sphere, density 4/3 pi r^3 [kg] (one expression, so that a one-sphere clump and a
+/// sphere of the same radius have the same bits).
+inline double sphere_mass(double density, double r) {
+  return density * 4.0 / 3.0 * 3.14159265358979323846 * r * r * r;
+}
 
 }  // namespace reposetwin::sim

@@ -69,6 +69,108 @@ std::size_t World::add_particle(const Vec3& x, double radius, int material) {
   return i;
 }
 
+std::size_t World::add_clump(int shape, const Vec3& x, const Quat& q, int material) {
+  const ClumpTemplate& t = model_.clumps.at(static_cast<std::size_t>(shape));
+  const double density = model_.materials.at(material).density;
+  Bodies& bodies = state_.bodies;
+  const std::size_t b = bodies.size();
+  bodies.resize(b + 1);
+  bodies.x[b] = x;
+  bodies.q[b] = q.normalized();
+  bodies.v[b].setZero();
+  bodies.w[b].setZero();
+  bodies.l[b].setZero();
+  bodies.force[b].setZero();
+  bodies.torque[b].setZero();
+  if (t.size() == 1) {  // the sphere's own expressions (Particles::add), for the sphere's bits
+    const double r = t.radii[0];
+    bodies.mass[b] = sphere_mass(density, r);
+    bodies.inertia[b] = Vec3::Constant(0.4 * bodies.mass[b] * r * r);
+  } else {
+    bodies.mass[b] = density * t.volume;
+    bodies.inertia[b] = density * t.inertia;
+  }
+  bodies.shape[b] = shape;
+  bodies.material[b] = material;
+  bodies.id[b] = state_.next_body_id++;
+  const Mat3 rot = bodies.q[b].toRotationMatrix();
+  Particles& p = state_.particles;
+  const double m = bodies.mass[b];
+  for (std::size_t c = 0; c < t.size(); ++c) {
+    const double r = t.radii[c];
+    const Vec3 xc = t.size() == 1 ? x : Vec3(x + rot * t.offsets[c]);
+    const std::size_t i = p.add(xc, r, density, material, state_.next_id++);
+    p.mass[i] = m;
+    p.inertia[i] = 0.4 * m * r * r;
+    p.body[i] = static_cast<std::int32_t>(b);
+    p.component[i] = static_cast<std::int32_t>(c);
+  }
+  state_.body_components.start.clear();  // indexed again when next needed
+  state_.forces_valid = false;
+  state_.wall_candidates_valid = false;
+  return b;
+}
+
+void World::set_body_velocity(std::size_t b, const Vec3& v, const Vec3& w) {
+  Bodies& bodies = state_.bodies;
+  bodies.v.at(b) = v;
+  if (bodies.spherical(b)) {
+    bodies.w[b] = w;
+    bodies.l[b] = bodies.inertia[b].x() * w;
+  } else {
+    const Mat3 r = bodies.q[b].toRotationMatrix();
+    bodies.l[b] = r * bodies.inertia[b].cwiseProduct(r.transpose() * w);
+    bodies.w[b] = body_angular_velocity(bodies.q[b], bodies.l[b], bodies.inertia[b]);
+  }
+  if (!state_.body_components.indexed_for(bodies.size()))
+    index_body_components(state_.particles, bodies.size(), state_.body_components);
+  move_components(b);
+}
+
+void World::place_components(std::size_t b, const Mat3& rot, double* moved2) {
+  const Bodies& bodies = state_.bodies;
+  Particles& p = state_.particles;
+  const BodyComponents& bc = state_.body_components;
+  const Vec3* const x_at_build = state_.neighbors.x_at_build.data();
+  const std::int32_t c0 = bc.start[b], c1 = bc.start[b + 1];
+  if (c1 - c0 == 1) {  // a one-sphere clump: the body's values themselves
+    const std::size_t i = static_cast<std::size_t>(bc.particle[c0]);
+    p.x[i] = bodies.x[b];
+    p.v[i] = bodies.v[b];
+    p.w[i] = bodies.w[b];
+    if (moved2) moved2[i] = (p.x[i] - x_at_build[i]).squaredNorm();
+    return;
+  }
+  const Vec3* const offsets =
+      model_.clumps[static_cast<std::size_t>(bodies.shape[b])].offsets.data();
+  for (std::int32_t k = c0; k < c1; ++k) {
+    const std::size_t i = static_cast<std::size_t>(bc.particle[k]);
+    const Vec3 r = rot * offsets[k - c0];
+    p.x[i] = bodies.x[b] + r;
+    p.v[i] = bodies.v[b] + bodies.w[b].cross(r);
+    p.w[i] = bodies.w[b];
+    if (moved2) moved2[i] = (p.x[i] - x_at_build[i]).squaredNorm();
+  }
+}
+
+void World::move_components(std::size_t b) {
+  const Bodies& bodies = state_.bodies;
+  Particles& p = state_.particles;
+  const BodyComponents& bc = state_.body_components;
+  const std::int32_t c0 = bc.start[b], c1 = bc.start[b + 1];
+  if (c1 - c0 == 1) {
+    const std::size_t i = static_cast<std::size_t>(bc.particle[c0]);
+    p.v[i] = bodies.v[b];
+    p.w[i] = bodies.w[b];
+    return;
+  }
+  for (std::int32_t k = c0; k < c1; ++k) {
+    const std::size_t i = static_cast<std::size_t>(bc.particle[k]);
+    p.v[i] = bodies.v[b] + bodies.w[b].cross(p.x[i] - bodies.x[b]);
+    p.w[i] = bodies.w[b];
+  }
+}
+
 void World::set_wall_velocity(int wall, const Vec3& velocity) {
   state_.walls.at(wall).velocity = velocity;
 }
@@ -88,10 +190,12 @@ void World::set_wall_enabled(int wall, bool enabled) {
 void World::step() {
   if (!state_.forces_valid) compute_forces();
   kick_drift();
+  kick_drift_bodies();
   move_walls();
   update_neighbors();
   pair_forces();
   gather_wall_forces(/*kick=*/true);
+  gather_bodies(/*kick=*/true);
   state_.time += model_.dt;
   ++state_.step;
   ++profile_.steps;
@@ -102,6 +206,7 @@ void World::compute_forces() {
   update_neighbors();
   pair_forces();
   gather_wall_forces(/*kick=*/false);
+  gather_bodies(/*kick=*/false);
 }
 
 void World::kick_drift() {
@@ -129,6 +234,122 @@ void World::kick_drift() {
     }
   }
   moved2_ = listed ? max2 : -1.0;
+}
+
+void World::order_bodies() {
+  Particles& p = state_.particles;
+  Bodies& bodies = state_.bodies;
+  const std::size_t nb = bodies.size();
+  // The bodies in the order of their first component in the (just sorted) particle arrays.
+  std::vector<std::int32_t> order;
+  order.reserve(nb);
+  std::vector<char> seen(nb, 0);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const std::int32_t b = p.body[i];
+    if (b >= 0 && !seen[static_cast<std::size_t>(b)]) {
+      seen[static_cast<std::size_t>(b)] = 1;
+      order.push_back(b);
+    }
+  }
+  bool identity = true;
+  for (std::size_t k = 0; k < nb && identity; ++k)
+    identity = order[k] == static_cast<std::int32_t>(k);
+  if (!identity) {
+    bodies.permute(order);
+    std::vector<std::int32_t> new_index(nb);
+    for (std::size_t k = 0; k < nb; ++k)
+      new_index[static_cast<std::size_t>(order[k])] = static_cast<std::int32_t>(k);
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (p.body[i] >= 0) p.body[i] = new_index[static_cast<std::size_t>(p.body[i])];
+  }
+  index_body_components(p, nb, state_.body_components);
+}
+
+void World::kick_drift_bodies() {
+  Bodies& bodies = state_.bodies;
+  const std::size_t nb = bodies.size();
+  if (nb == 0) return;
+  PhaseTimer t(profile_.bodies);
+  if (!state_.body_components.indexed_for(nb))
+    index_body_components(state_.particles, nb, state_.body_components);
+  const double dt = model_.dt, h = 0.5 * model_.dt;
+  const std::size_t par_min = model_.settings.parallel_min_particles;
+  // kick_drift measured the components' displacements from their motion as spheres: they are
+  // measured again from their places on the bodies (when kick_drift measured at all: else
+  // update_neighbors does), and the largest is taken again over every particle.
+  const bool measure = moved2_ >= 0.0;
+  double* const moved2 = measure ? state_.moved2.data() : nullptr;
+#pragma omp parallel for schedule(static) if (nb > par_min)
+  for (std::size_t b = 0; b < nb; ++b) {
+    bodies.v[b] += (h / bodies.mass[b]) * bodies.force[b];
+    bodies.x[b] += dt * bodies.v[b];
+    if (bodies.spherical(b)) {  // as a sphere (Bodies::spherical); the orientation turns at w
+      const double inertia = bodies.inertia[b].x();
+      bodies.w[b] += (h / inertia) * bodies.torque[b];
+      bodies.l[b] = inertia * bodies.w[b];
+      const double speed = bodies.w[b].norm();
+      if (speed > 0.0)
+        bodies.q[b] = (Quat(Eigen::AngleAxisd(speed * dt, bodies.w[b] / speed)) * bodies.q[b])
+                          .normalized();
+    } else {
+      bodies.l[b] += h * bodies.torque[b];
+      free_rotor_drift(bodies.q[b], bodies.l[b], bodies.inertia[b], dt);
+    }
+    const Mat3 rot = bodies.q[b].toRotationMatrix();
+    if (!bodies.spherical(b))
+      bodies.w[b] = rot * (rot.transpose() * bodies.l[b]).cwiseQuotient(bodies.inertia[b]);
+    place_components(b, rot, moved2);
+  }
+  if (!measure) return;
+  const std::size_t n = state_.particles.size();
+  double max2 = 0.0;
+  for (std::size_t i = 0; i < n; ++i) max2 = std::max(max2, moved2[i]);
+  moved2_ = max2;
+}
+
+void World::gather_bodies(bool kick) {
+  Bodies& bodies = state_.bodies;
+  const std::size_t nb = bodies.size();
+  if (nb == 0) return;
+  PhaseTimer t(profile_.bodies);
+  if (!state_.body_components.indexed_for(nb))
+    index_body_components(state_.particles, nb, state_.body_components);
+  const Particles& p = state_.particles;
+  const BodyComponents& bc = state_.body_components;
+  const Vec3 g = model_.settings.gravity;
+  const double h = 0.5 * model_.dt;
+  const std::size_t par_min = model_.settings.parallel_min_particles;
+  // Each component's force holds gravity with the body's mass (its `mass`, pair_forces): the
+  // body keeps it once, from its first component. Sums in template order, on any thread count.
+#pragma omp parallel for schedule(static) if (nb > par_min)
+  for (std::size_t b = 0; b < nb; ++b) {
+    const std::int32_t c0 = bc.start[b], c1 = bc.start[b + 1];
+    const std::size_t i0 = static_cast<std::size_t>(bc.particle[c0]);
+    Vec3 f = p.force[i0], tq = p.torque[i0];
+    if (c1 - c0 > 1) {  // (a one-sphere clump: the sphere's force and torque themselves)
+      const Vec3 weight = bodies.mass[b] * g;
+      tq += (p.x[i0] - bodies.x[b]).cross(f - weight);
+      for (std::int32_t k = c0 + 1; k < c1; ++k) {
+        const std::size_t i = static_cast<std::size_t>(bc.particle[k]);
+        const Vec3 contact = p.force[i] - weight;
+        f += contact;
+        tq += p.torque[i] + (p.x[i] - bodies.x[b]).cross(contact);
+      }
+    }
+    bodies.force[b] = f;
+    bodies.torque[b] = tq;
+    if (!kick) continue;
+    bodies.v[b] += (h / bodies.mass[b]) * f;
+    if (bodies.spherical(b)) {
+      const double inertia = bodies.inertia[b].x();
+      bodies.w[b] += (h / inertia) * tq;
+      bodies.l[b] = inertia * bodies.w[b];
+    } else {
+      bodies.l[b] += h * tq;
+      bodies.w[b] = body_angular_velocity(bodies.q[b], bodies.l[b], bodies.inertia[b]);
+    }
+    move_components(b);
+  }
 }
 
 void World::move_walls() {
@@ -161,6 +382,7 @@ void World::update_neighbors() {
     return;
   }
   build_neighbor_list(p, nl, /*sort_particles=*/true);
+  if (state_.bodies.size() > 0) order_bodies();  // the components have moved in the arrays
   state_.moved2.assign(n, 0.0);
   // What a pair that did not touch last step must have: no springs or reactions. A pair with
   // springs carried over from the old list is taken as touching (live): the force phase clears
@@ -465,8 +687,9 @@ Diagnostics World::diagnose() const {
       }
       continue;
     }
-    d.kinetic_energy += 0.5 * p.mass[i] * p.v[i].squaredNorm() +
-                        0.5 * p.inertia[i] * p.w[i].squaredNorm();
+    if (p.body[i] < 0)  // (a clump's energy is its body's, below)
+      d.kinetic_energy += 0.5 * p.mass[i] * p.v[i].squaredNorm() +
+                          0.5 * p.inertia[i] * p.w[i].squaredNorm();
     d.max_speed = std::max(d.max_speed, p.v[i].norm());
     if (p.x[i].norm() > limit && d.status == Status::kOk) {
       d.status = Status::kEscaped;
@@ -485,6 +708,10 @@ Diagnostics World::diagnose() const {
       }
     }
   }
+  const Bodies& bodies = state_.bodies;
+  for (std::size_t b = 0; b < bodies.size(); ++b)
+    d.kinetic_energy += 0.5 * bodies.mass[b] * bodies.v[b].squaredNorm() +
+                        0.5 * bodies.w[b].dot(bodies.l[b]);
   // The pairs' overlaps from the positions (the force phase keeps none: a step stores only what
   // the next one needs), by the kernel's touch test (|d|^2 < (r_i + r_j)^2).
   const NeighborList& nl = state_.neighbors;
@@ -519,7 +746,34 @@ std::size_t World::remove_particles(const std::vector<char>& remove) {
     removed += remove[i] ? 1 : 0;
   }
   if (removed == 0) return 0;
-  state_.particles.keep(keep);
+  Bodies& bodies = state_.bodies;
+  Particles& p = state_.particles;
+  if (bodies.size() > 0) {
+    // Whole clumps: a body with any component removed goes with all of them.
+    if (!state_.body_components.indexed_for(bodies.size()))
+      index_body_components(p, bodies.size(), state_.body_components);
+    const BodyComponents& bc = state_.body_components;
+    std::vector<char> keep_body(bodies.size(), 1);
+    for (std::size_t i = 0; i < keep.size(); ++i)
+      if (!keep[i] && p.body[i] >= 0) keep_body[static_cast<std::size_t>(p.body[i])] = 0;
+    std::vector<std::int32_t> new_index(bodies.size(), -1);
+    std::int32_t kept = 0;
+    for (std::size_t b = 0; b < bodies.size(); ++b) {
+      if (keep_body[b]) {
+        new_index[b] = kept++;
+        continue;
+      }
+      for (std::int32_t k = bc.start[b]; k < bc.start[b + 1]; ++k) {
+        removed += keep[static_cast<std::size_t>(bc.particle[k])] ? 1 : 0;
+        keep[static_cast<std::size_t>(bc.particle[k])] = 0;
+      }
+    }
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (p.body[i] >= 0) p.body[i] = new_index[static_cast<std::size_t>(p.body[i])];
+    bodies.keep(keep_body);
+  }
+  p.keep(keep);
+  if (bodies.size() > 0) index_body_components(p, bodies.size(), state_.body_components);
   compact_neighbor_list(state_.neighbors, keep);
   const std::size_t np = state_.neighbors.pairs();
   state_.reaction.assign(np, Reaction{});
@@ -545,6 +799,14 @@ std::uint64_t state_hash(const State& s) {
     mix(p.v[i].data(), 3 * sizeof(double));
     mix(p.w[i].data(), 3 * sizeof(double));
     mix(&p.id[i], sizeof(std::int64_t));
+  }
+  const Bodies& b = s.bodies;  // (nothing without clumps: the spheres' hashes stay as they were)
+  for (std::size_t k = 0; k < b.size(); ++k) {
+    mix(b.x[k].data(), 3 * sizeof(double));
+    mix(b.q[k].coeffs().data(), 4 * sizeof(double));
+    mix(b.v[k].data(), 3 * sizeof(double));
+    mix(b.l[k].data(), 3 * sizeof(double));
+    mix(&b.id[k], sizeof(std::int64_t));
   }
   return h;
 }

@@ -2,6 +2,10 @@
 //
 // Design note. step() reads as the table of contents of one velocity-Verlet step:
 //   1. kick_drift       v += dt/2 F/m, w += dt/2 T/I, x += dt v      (forces of the last step)
+//   1b. kick_drift_bodies  only with clumps (sim/bodies.hpp): the bodies' opening kick
+//                       v += dt/2 F/M, L += dt/2 T and drift (the rotation by the free-rotor
+//                       splitting, sim/clump.hpp); each component is placed at x + R(q) b with
+//                       v + w x r and w, and its displacement measured for the rebuild test
 //   2. move_walls       prescribed wall motion (the lift)
 //   3. update_neighbors rebuild the Verlet list if a particle moved more than skin/2
 //   4. pair_forces      Hertz-Mindlin + rolling kernel once per touching pair, 2 or 4 pairs at
@@ -17,6 +21,14 @@
 //                       (the particles near an enabled wall, listed at rebuild; the kernel in
 //                       lanes too, compute_wall_contacts), then takes the closing kick
 //                       v += dt/2 F/m, w += dt/2 T/I
+//   6. gather_bodies    only with clumps: each body sums its components' forces and torques
+//                       (r x F + T) in template order, gravity once, takes the closing kick
+//                       v += dt/2 F/M, L += dt/2 T, and sets its components' velocities
+//                       v + w x r and angular velocities w
+// Components are ordinary particles for phases 3-5 (pairs of one body are never listed, and a
+// rebuild reorders the bodies with their components), so phases 1 and 5 also move and kick them
+// as spheres; phases 1b and 6 overwrite that with the body's motion. Without clumps both do
+// nothing and the spheres' bits are those of an engine without clumps.
 // (diagnose(): energy, overlap, NaN and escape checks, called by the runner every few steps.)
 // Each phase is timed into Profile, which the benchmark prints. No phase writes memory another
 // thread writes, and no floating-point sum depends on the thread count, so a run is
@@ -27,6 +39,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/bodies.hpp"
 #include "sim/model.hpp"
 #include "sim/neighbor.hpp"
 #include "sim/pair_simd.hpp"
@@ -42,9 +55,10 @@ const char* status_name(Status s);
 /// Seconds spent in each phase of step() since the start (or the last reset).
 struct Profile {
   double kick_drift = 0, move_walls = 0, neighbors = 0, pair_forces = 0, gather_walls_kick = 0;
+  double bodies = 0;  // kick_drift_bodies and gather_bodies (clumps only)
   std::int64_t steps = 0;
   double total() const {
-    return kick_drift + move_walls + neighbors + pair_forces + gather_walls_kick;
+    return kick_drift + move_walls + neighbors + pair_forces + gather_walls_kick + bodies;
   }
 };
 
@@ -61,6 +75,11 @@ struct Diagnostics {
 /// Everything that changes while the run steps.
 struct State {
   Particles particles;
+  Bodies bodies;                    // clumps; their components are in `particles`
+  // (derived) each body's components' particle indices, in template order; rebuilt whenever
+  // the particles are reordered or removed
+  BodyComponents body_components;
+  std::int64_t next_body_id = 0;    // id given to the next inserted body
   NeighborList neighbors;
   std::vector<WallState> walls;     // one per Model::walls entry
   double time = 0.0;                // [s]
@@ -106,6 +125,16 @@ class World {
   /// Inserts a particle at rest; returns its index (valid until the next rebuild).
   std::size_t add_particle(const Vec3& x, double radius, int material);
 
+  /// Inserts a clump of template `shape` (Model::clumps) at rest with its centre of mass at x
+  /// and orientation q (body to world; normalised here), its components of `material`; returns
+  /// the body's index (valid until the next rebuild, which reorders the bodies with the
+  /// particles; Bodies::id is stable). Its components are particles with the body's index.
+  std::size_t add_clump(int shape, const Vec3& x, const Quat& q, int material);
+
+  /// Sets a body's velocity [m/s] and world-frame angular velocity [rad/s] (and so its angular
+  /// momentum and its components' velocities).
+  void set_body_velocity(std::size_t body, const Vec3& v, const Vec3& w);
+
   /// Sets a wall's velocity (for example the funnel lift) [m/s].
   void set_wall_velocity(int wall, const Vec3& velocity);
   void set_wall_enabled(int wall, bool enabled);
@@ -126,6 +155,7 @@ class World {
   Diagnostics diagnose() const;
 
   /// Removes particles for which `remove` is true (e.g. fallen off the plate); returns the count.
+  /// A clump goes whole: removing any of its components removes the body and all of them.
   std::size_t remove_particles(const std::vector<char>& remove);
 
  private:
@@ -136,7 +166,16 @@ class World {
   void build_wall_candidates();
   void pair_forces();
   void gather_wall_forces(bool kick);
-  void compute_forces();  // phases 3-5 without the kick (also used once before the first step)
+  void kick_drift_bodies();
+  void order_bodies();  // after the particles' sort: bodies by their first component's index
+  void gather_bodies(bool kick);
+  // Sets body b's components' positions x + rot b_c, velocities v + w x r and angular
+  // velocities w (rot: the body's rotation matrix) and, if moved2 is given, their squared
+  // displacements since the list's build; move_components sets the velocities only, from the
+  // components' positions.
+  void place_components(std::size_t b, const Mat3& rot, double* moved2);
+  void move_components(std::size_t b);
+  void compute_forces();  // phases 3-6 without the kick (also used once before the first step)
 
   Model model_;
   State state_;
@@ -152,7 +191,8 @@ class World {
 };
 
 /// A SHA-256-free, portable 64-bit FNV-1a hash of the particle state (positions, velocities,
-/// angular velocities, ids), for determinism tests.
+/// angular velocities, ids) and, if there are clumps, of the bodies' (positions, orientations,
+/// velocities, angular momenta, ids), for determinism tests.
 std::uint64_t state_hash(const State& s);
 
 }  // namespace reposetwin::sim

@@ -54,9 +54,11 @@ TEST(Checkpoint, ResumesBitIdentically) {
   for (int s = 0; s < 1500; ++s) b.step();
   EXPECT_EQ(state_hash(a.state()), state_hash(b.state()));
   EXPECT_EQ(a.state().step, b.state().step);
-  // A format-1 checkpoint (sessions 1-9: the same fields, then each pair's overlap ratio) is
-  // read too, its overlaps dropped.
-  {
+  // Checkpoints of spheres only in the older formats are read too: format 2 (the particles'
+  // core fields, no clump fields and no bodies) and format 1 (format 2, then each pair's overlap
+  // ratio, dropped on reading). Both are made here from a format-3 file by cutting out its clump
+  // section: the particles' clump fields, the empty body arrays and the next body id.
+  for (const char format : {'2', '1'}) {
     World c = small_pour();
     for (int s = 0; s < 1500; ++s) c.step();
     write_checkpoint(c, path);
@@ -65,23 +67,39 @@ TEST(Checkpoint, ResumesBitIdentically) {
       std::ifstream in(path, std::ios::binary);
       bytes.assign(std::istreambuf_iterator<char>(in), {});
     }
-    ASSERT_EQ(bytes.substr(0, 8), "RTWCKPT2");
-    bytes[7] = '1';
-    const std::uint64_t np = c.state().neighbors.pairs();
-    bytes.append(reinterpret_cast<const char*>(&np), sizeof np);
-    bytes.append(np * sizeof(double), '\0');
+    ASSERT_EQ(bytes.substr(0, 8), "RTWCKPT3");
+    const std::size_t n = c.state().particles.size();
+    std::size_t core = 0, clump = 0;
+#define CORE_BYTES(type, name, doc) core += sizeof(std::uint64_t) + n * sizeof(type);
+#define CLUMP_BYTES(type, name, doc) clump += sizeof(std::uint64_t) + n * sizeof(type);
+#define BODY_BYTES(type, name, doc) clump += sizeof(std::uint64_t);
+    REPOSETWIN_PARTICLE_CORE_FIELDS(CORE_BYTES)
+    REPOSETWIN_PARTICLE_CLUMP_FIELDS(CLUMP_BYTES)
+    REPOSETWIN_BODY_FIELDS(BODY_BYTES)
+#undef CORE_BYTES
+#undef CLUMP_BYTES
+#undef BODY_BYTES
+    clump += sizeof(std::int64_t);  // next_body_id
+    const std::size_t header = 8 + sizeof(double) + sizeof(std::uint64_t);
+    bytes.erase(header + core, clump);
+    bytes[7] = format;
+    if (format == '1') {
+      const std::uint64_t np = c.state().neighbors.pairs();
+      bytes.append(reinterpret_cast<const char*>(&np), sizeof np);
+      bytes.append(np * sizeof(double), '\0');
+    }
     {
       std::ofstream out(path, std::ios::binary | std::ios::trunc);
       out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     }
     World d = small_pour(0);
     read_checkpoint(d, path);
-    EXPECT_EQ(state_hash(d.state()), state_hash(c.state()));
+    EXPECT_EQ(state_hash(d.state()), state_hash(c.state())) << "format " << format;
     for (int s = 0; s < 500; ++s) {
       c.step();
       d.step();
     }
-    EXPECT_EQ(state_hash(d.state()), state_hash(c.state()));
+    EXPECT_EQ(state_hash(d.state()), state_hash(c.state())) << "format " << format;
   }
   // A corrupt file is refused with a message naming it.
   { std::FILE* f = std::fopen(path.c_str(), "wb"); std::fputs("garbage", f); std::fclose(f); }
