@@ -12,6 +12,7 @@ PACKAGES=(
   libtomlplusplus-dev      # scene and campaign files
   libcli11-dev             # command line
   nlohmann-json3-dev       # result files
+  libcsv-dev               # CSV reader (the paper's tables, measured data)
   libgtest-dev             # tests
   gnuplot-nox              # report plots
   libopenmpi-dev openmpi-bin  # optional campaign spreading under mpirun

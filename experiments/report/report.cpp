@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "experiments/calibration/calibration.hpp"
+#include "experiments/io/csv.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/input_error.hpp"
 #include "sim/contact.hpp"
@@ -317,41 +318,20 @@ std::string lab_photo_html(const ReportSettings& settings, const fs::path& out,
 }  // namespace
 
 std::vector<json> read_paper_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot read the paper's CSV file");
-  auto split = [](const std::string& line) {
-    std::vector<std::string> f;
-    std::string cur;
-    for (char c : line) {
-      if (c == ',') {
-        f.push_back(cur);
-        cur.clear();
-      } else if (c != '\r') {
-        cur += c;
-      }
-    }
-    f.push_back(cur);
-    return f;
-  };
-  std::vector<std::string> header;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw InputError(path + ": cannot read the paper's CSV file");
+  const CsvTable t = read_csv_file(path);
+  if (t.header.empty()) throw InputError(path + ": no header line");
   std::vector<json> rows;
-  int n = 0;
-  for (std::string line; std::getline(in, line);) {
-    ++n;
-    if (line.empty() || line[0] == '#') continue;
-    const auto f = split(line);
-    if (header.empty()) {
-      header = f;
-      continue;
-    }
-    if (f.size() != header.size())
-      throw InputError(path + ":" + std::to_string(n) + ": " + std::to_string(f.size()) +
-                       " fields, the header has " + std::to_string(header.size()));
-    json r = json::object();
-    for (std::size_t i = 0; i < f.size(); ++i) r[header[i]] = f[i];
-    rows.push_back(r);
+  for (const CsvRecord& r : t.rows) {
+    if (r.fields.size() != t.header.size())
+      throw InputError(path + ":" + std::to_string(r.line) + ": " +
+                       std::to_string(r.fields.size()) + " fields, the header has " +
+                       std::to_string(t.header.size()));
+    json row = json::object();
+    for (std::size_t i = 0; i < r.fields.size(); ++i) row[t.header[i]] = r.fields[i];
+    rows.push_back(row);
   }
-  if (header.empty()) throw InputError(path + ": no header line");
   return rows;
 }
 
@@ -376,9 +356,7 @@ json paper_comparison(const std::vector<std::string>& dirs, const std::string& p
     t3_file = (fs::path(paper_dir) / "table3_calibration.csv").string();
     t1 = by_sample(read_paper_csv(t1_file), t1_file);
     t3 = by_sample(read_paper_csv(t3_file), t3_file);
-    std::ifstream in(t3_file);
-    for (std::string line; std::getline(in, line);)
-      if (!line.empty() && line[0] == '#') t3_notes.push_back(line.substr(1));
+    t3_notes = read_csv_file(t3_file).comments;
   }
 
   json rows = json::array();
