@@ -35,6 +35,62 @@ const char* const kFigure =
     R"(<figure><img src='{{src}}'{{#width}} width='{{width}}'{{/width}}><figcaption>{{caption}}</figcaption></figure>
 )";
 
+// built, version; dir (a folder) or folders (how many).
+const char* const kBuilt =
+    R"(<p>Built {{built}} by {{version}} from {{#dir}}<code>{{dir}}</code>{{/dir}}{{^dir}}{{folders}} folder(s){{/dir}}.</p>
+)";
+
+// photos: figures (the lab photo, then the render beside it); render: whether there is one.
+const char* const kLabPhoto = R"(<h2>Lab photo beside the simulated render</h2>
+{{#photos}}{{> figure}}{{/photos}}{{^render}}<p>(no simulated render with a measurement overlay in this folder)</p>
+{{/render}})";
+
+// plot: PNG name or false; comparison: table.
+const char* const kComparison = R"(<h2>Beside the paper's Table 3</h2>
+{{#plot}}<img src='{{plot}}' alt='measured against simulated angle'>
+{{/plot}}{{#comparison}}{{> table}}{{/comparison}})";
+
+// conventions: [{keyword, torque, radius, twice}]; notes: {file, text} or false.
+const char* const kComparisonCaption =
+    R"(Our mu_r is that of the scene's rolling model; the paper's is EDEM's. )"
+    R"({{#conventions}}Ours (<code>{{keyword}}</code>): {{torque}}; lever arm {{radius}}. )"
+    R"({{#twice}}For equal spheres R* = R/2, half EDEM's lever arm R, so the same torque cap )"
+    R"(needs about twice EDEM's mu_r. {{/twice}}{{/conventions}})"
+    R"({{#notes}}Paper (from {{file}}):{{text}}. {{/notes}})"
+    R"({{^notes}}Paper: EDEM, lever arm R = contact-to-centre distance (paper data not found: )"
+    R"(give --paper-data). {{/notes}})"
+    R"(Angles: ours atan(2H/D) as measured (see each calibration's angle method), the paper's )"
+    R"(EDEM angle a protractor on a centre slice, the lab's atan(2H/D) from a photo. )"
+    R"(Predictions (shaded) run the other test at the calibrated mu_r; their mu_r interval )"
+    R"(effect is the angle range at the interval's ends. Simulations count every run used.)";
+
+// plotted: whether angles.png was made.
+const char* const kAngles = R"({{#plotted}}<h2>Angles per case</h2><img src='angles.png'>
+{{/plotted}}{{^plotted}}<p>(gnuplot not available: no plot)</p>
+{{/plotted}})";
+
+// cases: table; renders: figures.
+const char* const kCases = R"(<h2>Cases</h2>
+{{#cases}}{{> table}}{{/cases}}<h2>Renders with measurement overlays</h2>
+{{#renders}}{{> figure}}{{/renders}})";
+
+// plot: PNG name or false; json: calibration.json as text.
+const char* const kCalibration = R"(<h2>Calibration</h2>{{#plot}}<img src='{{plot}}'>{{/plot}}
+<pre>{{json}}</pre>
+)";
+
+// json: predictions.json as text.
+const char* const kPredictions = R"(<h2>Predictions at the calibrated mu_r</h2>
+<pre>{{json}}</pre>
+)";
+
+// folders: [{href, dir, title}].
+const char* const kFolders = R"(<h2>Folders</h2>
+<ul>
+{{#folders}}<li><a href='{{href}}'>{{dir}}</a> ({{title}})</li>
+{{/folders}}</ul>
+)";
+
 // data, code, finished.
 const char* const kLoopIntro = R"(<p>Data: {{data}}<br>Code {{code}}, finished {{finished}}</p>
 )";

@@ -15,6 +15,17 @@ extern const char* const kPage;
 extern const char* const kTable;
 extern const char* const kFigure;
 
+// Sections of a run, campaign, calibration or comparison report.
+extern const char* const kBuilt;
+extern const char* const kLabPhoto;
+extern const char* const kComparison;
+extern const char* const kComparisonCaption;
+extern const char* const kAngles;
+extern const char* const kCases;
+extern const char* const kCalibration;
+extern const char* const kPredictions;
+extern const char* const kFolders;
+
 // Sections of the loop's page.
 extern const char* const kLoopIntro;
 extern const char* const kLoopError;
