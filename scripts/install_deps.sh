@@ -12,6 +12,8 @@ PACKAGES=(
   libtomlplusplus-dev      # scene and campaign files
   libcli11-dev             # command line
   nlohmann-json3-dev       # result files
+  libkainjow-mustache-dev  # HTML templates of the reports (header-only)
+  libcsv-dev               # CSV reader (the paper's tables, measured data)
   libgtest-dev             # tests
   gnuplot-nox              # report plots
   libopenmpi-dev openmpi-bin  # optional campaign spreading under mpirun

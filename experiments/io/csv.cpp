@@ -1,0 +1,93 @@
+#include "experiments/io/csv.hpp"
+
+#include <csv.h>
+
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "experiments/io/input_error.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+
+// libcsv's callbacks collect into this.
+struct Collector {
+  CsvTable table;
+  std::vector<std::string> fields;
+  int record_line = 0;  // the line the record being read starts on
+};
+
+void on_field(void* text, std::size_t len, void* data) {
+  auto* c = static_cast<Collector*>(data);
+  c->fields.emplace_back(text ? static_cast<const char*>(text) : "", text ? len : 0);
+}
+
+void on_record(int /*terminator*/, void* data) {
+  auto* c = static_cast<Collector*>(data);
+  if (c->table.header.empty() && c->table.header_line == 0) {
+    c->table.header = std::move(c->fields);
+    c->table.header_line = c->record_line;
+  } else {
+    c->table.rows.push_back({c->record_line, std::move(c->fields)});
+  }
+  c->fields.clear();
+}
+
+// Fields are kept as written: no character counts as padding to trim.
+int no_space(unsigned char) { return 0; }
+
+struct ParserFree {
+  void operator()(csv_parser* p) const {
+    csv_free(p);
+    delete p;
+  }
+};
+
+}  // namespace
+
+CsvTable parse_csv(const std::string& text, const std::string& where) {
+  std::unique_ptr<csv_parser, ParserFree> p(new csv_parser);
+  if (csv_init(p.get(), CSV_STRICT | CSV_STRICT_FINI) != 0)
+    throw std::runtime_error(where + ": cannot start the CSV parser");
+  csv_set_space_func(p.get(), no_space);
+  Collector c;
+  // Comments are recognised line by line, so the parser is fed one line at a time; a line
+  // continues a quoted field when an odd number of quotes came before it ("" keeps the parity).
+  bool in_quotes = false;
+  std::istringstream in(text);
+  int line_no = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++line_no;
+    if (!in_quotes) {
+      const std::size_t first = line.find_first_not_of(" \t\r");
+      if (first != std::string::npos && line[first] == '#') {
+        std::string comment = line.substr(first + 1);
+        if (!comment.empty() && comment.back() == '\r') comment.pop_back();
+        c.table.comments.push_back(std::move(comment));
+        continue;
+      }
+      c.record_line = line_no;
+    }
+    for (char ch : line)
+      if (ch == '"') in_quotes = !in_quotes;
+    line += '\n';
+    if (csv_parse(p.get(), line.data(), line.size(), on_field, on_record, &c) != line.size())
+      throw InputError(where + ":" + std::to_string(line_no) + ": " +
+                       csv_strerror(csv_error(p.get())));
+  }
+  if (csv_fini(p.get(), on_field, on_record, &c) != 0)
+    throw InputError(where + ":" + std::to_string(c.record_line) + ": " +
+                     csv_strerror(csv_error(p.get())));
+  return c.table;
+}
+
+CsvTable read_csv_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot read the CSV file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_csv(text.str(), path);
+}
+
+}  // namespace reposetwin::experiments

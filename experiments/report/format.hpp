@@ -1,0 +1,31 @@
+// Numbers as the report pages print them: one set of formatting functions for every page (the
+// campaign, calibration and comparison report and the loop's page).
+//
+// Design note. Each function names a convention rather than a printf pattern, so a table states
+// what its numbers are: a measured quantity with a fixed number of decimals, a derived statistic
+// to three significant digits, or the paper's own values as printed (never padded with digits
+// the paper did not give). A value that is not a number (a JSON null: nothing measured) prints
+// as "-".
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace reposetwin::experiments::report {
+
+/// `v` with `digits` decimals ("%.*f"): angles and coefficients we measured.
+std::string fixed(double v, int digits = 2);
+
+/// fixed() of a JSON number, "-" otherwise.
+std::string fixed_or_dash(const nlohmann::json& v, int digits = 2);
+
+/// Three significant digits ("%.3g"), "-" for a non-number: the loop's statistics.
+std::string sig3(const nlohmann::json& v);
+
+/// The shortest form of the paper's numbers as printed (0.15, 3.35, 200), "-" for a non-number.
+std::string as_printed(const nlohmann::json& v);
+
+/// "mean ± sd" with fixed() decimals.
+std::string mean_sd(double mean, double sd, int digits = 2);
+
+}  // namespace reposetwin::experiments::report

@@ -1,0 +1,23 @@
+#include "experiments/report/gnuplot.hpp"
+
+#include <cstdlib>
+
+#include "experiments/io/provenance.hpp"
+
+namespace reposetwin::experiments::report {
+
+bool run_gnuplot(const std::filesystem::path& script_path, const std::string& script,
+                 const std::filesystem::path& png) {
+  write_file_atomic(script_path.string(), script);
+  std::error_code ec;
+  std::filesystem::remove(png, ec);  // a stale PNG must not pass for a new plot
+  const std::string cmd = "gnuplot '" + script_path.string() + "' > /dev/null 2>&1";
+  return std::system(cmd.c_str()) == 0 && std::filesystem::exists(png);
+}
+
+std::string png_terminal(const std::filesystem::path& png, int width, int height, bool enhanced) {
+  return "set terminal pngcairo size " + std::to_string(width) + "," + std::to_string(height) +
+         (enhanced ? "" : " noenhanced") + "\nset output '" + png.string() + "'\n";
+}
+
+}  // namespace reposetwin::experiments::report

@@ -1,0 +1,127 @@
+#include "experiments/report/templates.hpp"
+
+namespace reposetwin::experiments::report::templates {
+
+// title, heading; sections: rendered HTML, in order.
+const char* const kPage = R"(<!doctype html>
+<html><head><meta charset='utf-8'><title>{{title}}</title>
+<style>
+body{font-family:sans-serif;max-width:1200px;margin:auto}
+table{border-collapse:collapse;margin:6px 0}
+td,th{border:1px solid #aaa;padding:3px 6px;font-size:13px}
+th{background:#eee}
+table.num td{text-align:right}
+table.num td.l{text-align:left}
+tr.shaded{background:#eef}
+caption{caption-side:bottom;text-align:left;max-width:1000px}
+figure{display:inline-block;margin:4px}
+</style></head><body>
+<h1>{{heading}}</h1>
+{{#sections}}{{{.}}}
+{{/sections}}</body></html>
+)";
+
+// header: [text]; rows: [{shaded, cells: [{bold, code, text, small, note, links, left}]}];
+// caption_html: rendered caption or false; numeric: right-aligned cells.
+const char* const kTable = R"(<table{{#numeric}} class='num'{{/numeric}}>
+{{#caption_html}}<caption>{{{caption_html}}}</caption>
+{{/caption_html}}<tr>{{#header}}<th>{{.}}</th>{{/header}}</tr>
+{{#rows}}<tr{{#shaded}} class='shaded'{{/shaded}}>{{#cells}}<td{{#left}} class='l'{{/left}}>{{#bold}}<b>{{bold}}</b> {{/bold}}{{#code}}<code>{{code}}</code>{{/code}}{{#text}}{{text}}{{/text}}{{#small}} <small>{{small}}</small>{{/small}}{{#note}}<br><small>{{note}}</small>{{/note}}{{#links}}<a href='{{href}}'>{{label}}</a> {{/links}}</td>{{/cells}}</tr>
+{{/rows}}</table>
+)";
+
+// src, caption, width (or false).
+const char* const kFigure =
+    R"(<figure><img src='{{src}}'{{#width}} width='{{width}}'{{/width}}><figcaption>{{caption}}</figcaption></figure>
+)";
+
+// built, version; dir (a folder) or folders (how many).
+const char* const kBuilt =
+    R"(<p>Built {{built}} by {{version}} from {{#dir}}<code>{{dir}}</code>{{/dir}}{{^dir}}{{folders}} folder(s){{/dir}}.</p>
+)";
+
+// photos: figures (the lab photo, then the render beside it); render: whether there is one.
+const char* const kLabPhoto = R"(<h2>Lab photo beside the simulated render</h2>
+{{#photos}}{{> figure}}{{/photos}}{{^render}}<p>(no simulated render with a measurement overlay in this folder)</p>
+{{/render}})";
+
+// plot: PNG name or false; comparison: table.
+const char* const kComparison = R"(<h2>Beside the paper's Table 3</h2>
+{{#plot}}<img src='{{plot}}' alt='measured against simulated angle'>
+{{/plot}}{{#comparison}}{{> table}}{{/comparison}})";
+
+// conventions: [{keyword, torque, radius, twice}]; notes: {file, text} or false.
+const char* const kComparisonCaption =
+    R"(Our mu_r is that of the scene's rolling model; the paper's is EDEM's. )"
+    R"({{#conventions}}Ours (<code>{{keyword}}</code>): {{torque}}; lever arm {{radius}}. )"
+    R"({{#twice}}For equal spheres R* = R/2, half EDEM's lever arm R, so the same torque cap )"
+    R"(needs about twice EDEM's mu_r. {{/twice}}{{/conventions}})"
+    R"({{#notes}}Paper (from {{file}}):{{text}}. {{/notes}})"
+    R"({{^notes}}Paper: EDEM, lever arm R = contact-to-centre distance (paper data not found: )"
+    R"(give --paper-data). {{/notes}})"
+    R"(Angles: ours atan(2H/D) as measured (see each calibration's angle method), the paper's )"
+    R"(EDEM angle a protractor on a centre slice, the lab's atan(2H/D) from a photo. )"
+    R"(Predictions (shaded) run the other test at the calibrated mu_r; their mu_r interval )"
+    R"(effect is the angle range at the interval's ends. Simulations count every run used.)";
+
+// plotted: whether angles.png was made.
+const char* const kAngles = R"({{#plotted}}<h2>Angles per case</h2><img src='angles.png'>
+{{/plotted}}{{^plotted}}<p>(gnuplot not available: no plot)</p>
+{{/plotted}})";
+
+// cases: table; renders: figures.
+const char* const kCases = R"(<h2>Cases</h2>
+{{#cases}}{{> table}}{{/cases}}<h2>Renders with measurement overlays</h2>
+{{#renders}}{{> figure}}{{/renders}})";
+
+// plot: PNG name or false; json: calibration.json as text.
+const char* const kCalibration = R"(<h2>Calibration</h2>{{#plot}}<img src='{{plot}}'>{{/plot}}
+<pre>{{json}}</pre>
+)";
+
+// json: predictions.json as text.
+const char* const kPredictions = R"(<h2>Predictions at the calibrated mu_r</h2>
+<pre>{{json}}</pre>
+)";
+
+// folders: [{href, dir, title}].
+const char* const kFolders = R"(<h2>Folders</h2>
+<ul>
+{{#folders}}<li><a href='{{href}}'>{{dir}}</a> ({{title}})</li>
+{{/folders}}</ul>
+)";
+
+// data, code, finished.
+const char* const kLoopIntro = R"(<p>Data: {{data}}<br>Code {{code}}, finished {{finished}}</p>
+)";
+
+// errors: table; mu_r, mu_r_se, seed_sd.
+const char* const kLoopError = R"(<h2>Error before and after</h2>
+{{#errors}}{{> table}}{{/errors}}<p>Baseline mu_r = {{mu_r}} &plusmn; {{mu_r_se}}; seed spread of one pile {{seed_sd}} deg.</p>
+)";
+
+// effects: table or false; rule, min_t, margin.
+const char* const kLoopEffects = R"(<h2>Chosen effects</h2>
+{{#effects}}{{> table}}{{/effects}}{{^effects}}<p>None: no candidate beat the seed noise.</p>
+{{/effects}}<p>Rule: {{rule}} (min_t {{min_t}}, margin {{margin}} deg).</p>
+)";
+
+// iterations: [{n, mu_r, loo, candidates: table, stopped (or false)}].
+const char* const kLoopIterations =
+    R"({{#iterations}}<h3>Iteration {{n}} (mu_r {{mu_r}}; mu_r-only LOO {{loo}} deg)</h3>
+{{#candidates}}{{> table}}{{/candidates}}{{#stopped}}<p>Stopped: {{stopped}}.</p>
+{{/stopped}}{{/iterations}})";
+
+// jams: [{id, n}] or false; unavailable: [{name, why}] or false.
+const char* const kLoopNotes =
+    R"({{#jams}}<p>Baseline pours that formed no pile and were repeated with new seeds (the lab reports none):</p>
+<ul>{{#list}}<li>{{id}}: {{n}}</li>{{/list}}</ul>
+{{/jams}}{{#unavailable}}<p>Unavailable candidates:</p>
+<ul>{{#list}}<li>{{name}}: {{why}}</li>{{/list}}</ul>
+{{/unavailable}})";
+
+// plots: figures; residuals: table.
+const char* const kLoopResiduals = R"(<h2>Residuals</h2>
+{{#plots}}{{> figure}}{{/plots}}{{#residuals}}{{> table}}{{/residuals}})";
+
+}  // namespace reposetwin::experiments::report::templates

@@ -1,0 +1,88 @@
+// The loop's page from a loop.json written here: every section, table and test appears, values
+// are escaped, and each condition gets its residual plot.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "experiments/io/provenance.hpp"
+#include "experiments/loop/loop.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+json small_loop(bool with_effect) {
+  const json residual = {{"residual_deg", 0.5}, {"sigma_deg", 0.2}, {"predicted_deg", 35.25}};
+  json loop = {
+      {"provenance", {{"data", "lab<1>.csv"}, {"code_version", "v1"}, {"finished", "now"}}},
+      {"tests",
+       {{{"id", "t1"}, {"role", "calibrate"}, {"angle_deg", 35.75}, {"conditions", {{"W_mm", 40}}}},
+        {{"id", "t2"}, {"role", "validate"}, {"angle_deg", 36.5}, {"conditions", {{"W_mm", 60}}}}}},
+      {"baseline",
+       {{"residuals", {residual, residual}},
+        {"mu_r", 0.1234},
+        {"mu_r_se", 0.01},
+        {"seed_sd_deg", 0.4},
+        {"curves", {{{"id", "t1"}, {"clogged_pours", {1, 0, 1}}}}}}},
+      {"final",
+       {{"residuals", {residual, residual}},
+        {"effects", json::array()}}},
+      {"summary",
+       {{"rmse_calibrate_before_deg", 1.2345},
+        {"rmse_calibrate_after_deg", 0.5},
+        {"rmse_validate_before_deg", 1.5},
+        {"rmse_validate_after_deg", nullptr}}},
+      {"rule", {{"text", "|c| > 3 se"}, {"min_t", 3}, {"loo_margin_deg", 0.1}}},
+      {"iterations",
+       {{{"iteration", 1},
+         {"mu_r", 0.12},
+         {"null", {{"loo_rmse_mu_only_deg", 1.1}}},
+         {"candidates",
+          {{{"name", "plate_friction"},
+            {"coef", 0.9},
+            {"coef_se", 0.1},
+            {"t", 9.0},
+            {"loo_rmse_deg", 0.4},
+            {"loo_gain_deg", 0.7},
+            {"explained", 0.8},
+            {"accepted", true}}}},
+         {"stopped", "no candidate left"}}}},
+      {"unavailable_candidates", {{{"name", "humidity"}, {"why", "no column"}}}}};
+  if (with_effect)
+    loop["final"]["effects"] = {{{"name", "plate_friction"},
+                                 {"kind", "scene"},
+                                 {"value", 0.3},
+                                 {"value_se", 0.05},
+                                 {"units", "-"},
+                                 {"mu_r", 0.11}}};
+  return loop;
+}
+
+TEST(ReportLoop, PageShowsEverySectionAndTest) {
+  const fs::path out = fs::temp_directory_path() / "reposetwin_loop_report_test";
+  fs::remove_all(out);
+  write_loop_html(small_loop(true), out.string());
+  const std::string html = read_file((out / "index.html").string());
+  for (const char* s :
+       {"<title>ReposeTwin loop</title>", "<h1>Closing the loop</h1>", "Data: lab&lt;1&gt;.csv",
+        "Code v1, finished now", "<h2>Error before and after</h2>", "RMSE calibration tests [deg]",
+        "1.23", "Baseline mu_r = 0.123", "<h2>Chosen effects</h2>", "plate_friction", "0.3",
+        "Rule: |c| &gt; 3 se (min_t 3, margin 0.1 deg)", "<h3>Iteration 1 (mu_r 0.12; mu_r-only LOO 1.1 deg)</h3>",
+        "<td>yes</td>", "Stopped: no candidate left.", "<li>t1: 2</li>", "<li>humidity: no column</li>",
+        "<h2>Residuals</h2>", "<td class='l'>t2</td><td class='l'>validate</td><td>36.5</td>",
+        "35.2"})
+    EXPECT_NE(html.find(s), std::string::npos) << s;
+  EXPECT_EQ(html.find("None: no candidate"), std::string::npos);
+  EXPECT_TRUE(fs::exists(out / "plots" / "residual_W_mm.dat"));
+  if (fs::exists(out / "plots" / "residual_W_mm.png")) {  // gnuplot is optional
+    EXPECT_NE(html.find("src='plots/residual_W_mm.png'"), std::string::npos);
+  }
+
+  write_loop_html(small_loop(false), out.string());
+  EXPECT_NE(read_file((out / "index.html").string()).find("None: no candidate beat the seed noise."),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
