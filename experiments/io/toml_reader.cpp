@@ -123,4 +123,14 @@ void TableReader::finish() const {
   }
 }
 
+void TableReader::known_keys(const std::set<std::string>& allowed) const {
+  for (const auto& [key, node] : *table_) {
+    if (allowed.count(std::string(key.str()))) continue;
+    std::string list;
+    for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+    fail(std::string(key.str()),
+         "is an unknown key (value " + show_node(node) + "; allowed: " + list + ")");
+  }
+}
+
 }  // namespace reposetwin::experiments

@@ -40,6 +40,9 @@ class TableReader {
 
   /// Throws InputError for the first key that was never read.
   void finish() const;
+  /// Throws InputError for the first key not in `allowed`, listing the allowed ones. Called
+  /// before reading, it names a misspelt key rather than the missing key it stood for.
+  void known_keys(const std::set<std::string>& allowed) const;
 
   /// An error about `key` of this table.
   [[noreturn]] void fail(const std::string& key, const std::string& what) const;

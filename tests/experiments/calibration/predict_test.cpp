@@ -19,6 +19,7 @@
 #include <thread>
 
 #include "../../vision/synthetic.hpp"
+#include "experiments/calibration/calibrate_campaign.hpp"
 #include "experiments/campaign/campaign.hpp"
 #include "experiments/campaign/case_runner.hpp"
 #include "experiments/io/provenance.hpp"

@@ -1,0 +1,373 @@
+#include "experiments/calibration/calibrate_campaign.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <set>
+#include <stdexcept>
+
+#include "experiments/io/provenance.hpp"
+#include "sim/contact.hpp"
+
+namespace reposetwin::experiments {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr const char* kCalibrationFile = "calibration.json";
+constexpr const char* kPredictionsFile = "predictions.json";
+
+const CampaignCalibration& calibration_of(const Campaign& c) {
+  if (!c.calibration)
+    throw std::invalid_argument(c.file + ": [calibration] is missing (target_deg, mu_r_range)");
+  return *c.calibration;
+}
+
+std::vector<std::string> keys_of(const CampaignCalibration& cc) {
+  return cc.keys.empty() ? std::vector<std::string>{cc.key} : cc.keys;
+}
+
+// The rolling law behind the calibrated key: the scene's rolling_model beside the key (the
+// scene format's default "epsd" when the scene does not say), described by sim::kRollingModels.
+nlohmann::json rolling_model_of(const Campaign& c) {
+  const auto& cc = calibration_of(c);
+  const toml::table doc = build_case_scene(calibration_run(c, cc.settings.mu_r_lo, 1));
+  const auto dot = cc.key.rfind('.');
+  const std::string parent = dot == std::string::npos ? std::string() : cc.key.substr(0, dot);
+  std::string keyword = "epsd";
+  bool stated = false;
+  if (!parent.empty()) {
+    if (auto v = toml::at_path(doc, parent + ".rolling_model").value<std::string>()) {
+      keyword = *v;
+      stated = true;
+    }
+  }
+  nlohmann::json j = {{"keyword", keyword}, {"stated_in_scene", stated}};
+  if (const sim::RollingModelInfo* info = sim::find_rolling_model(keyword)) {
+    j["torque"] = std::string(info->torque);
+    j["radius"] = std::string(info->radius);
+    j["angular_velocity"] = std::string(info->angular_velocity);
+  }
+  return j;
+}
+
+std::vector<Observation> observations_of(const nlohmann::json& cal, const std::string& file) {
+  std::vector<Observation> obs;
+  if (!cal.contains("observations") || !cal["observations"].is_array())
+    throw std::runtime_error(file + ": field 'observations' is missing");
+  for (const auto& o : cal["observations"])
+    obs.push_back({o.at("mu_r").get<double>(), o.at("seed").get<std::uint64_t>(),
+                   o.at("angle_deg").get<double>()});
+  return obs;
+}
+
+// The first field in which a stored calibration.json answered another question than campaign `c`
+// asks now ({field, stored, now}), or none. The angle is compared only when one is given.
+struct FieldDifference {
+  std::string field;
+  nlohmann::json stored, now;
+};
+std::optional<FieldDifference> calibration_difference(const nlohmann::json& j, const Campaign& c,
+                                                      const std::string& angle_method) {
+  const CampaignCalibration& cc = calibration_of(c);
+  const nlohmann::json target =
+      j.contains("target") ? j["target"].value("angle_deg", nlohmann::json()) : nlohmann::json();
+  const nlohmann::json stored_angle = j.value("angle_method", nlohmann::json());
+  const std::vector<FieldDifference> fields = {
+      {"campaign_name", j.value("campaign_name", nlohmann::json()), c.name},
+      {"keys", j.value("keys", nlohmann::json()), keys_of(cc)},
+      {"target.angle_deg", target, cc.target.angle_deg},
+      {"mu_r_range", j.value("mu_r_range", nlohmann::json()),
+       nlohmann::json{cc.settings.mu_r_lo, cc.settings.mu_r_hi}},
+      {"angle_method", stored_angle,
+       angle_method.empty() ? stored_angle : nlohmann::json(angle_method)}};
+  for (const FieldDifference& f : fields)
+    if (f.stored != f.now) return f;
+  return std::nullopt;
+}
+
+// A finished calibration in OUT is a result: calibrating again with the same question rewrites it
+// with the same numbers (every run is reused), but a different question (target, range, keys or
+// angle) would silently replace it, so that needs --force.
+void refuse_to_replace_other_calibration(const Campaign& c, const std::string& out_dir,
+                                         const CalibrateOptions& options, bool force) {
+  const std::string file = (fs::path(out_dir) / kCalibrationFile).string();
+  if (force || !fs::exists(file)) return;
+  nlohmann::json old;
+  try {
+    old = nlohmann::json::parse(read_file(file));
+  } catch (const std::exception& e) {
+    throw std::runtime_error(file + ": a calibration file that cannot be read (" + e.what() +
+                             "); move it away or use --force");
+  }
+  if (const auto d = calibration_difference(old, c, options.angle_method))
+    throw std::runtime_error(file + ": a finished calibration with " + d->field + " = " +
+                             d->stored.dump() + " is here, and this one asks for " + d->now.dump() +
+                             "; give another --out, move the file away, or use --force");
+}
+
+// Adds the caller's extra fields and writes `j` to OUT/NAME on rank 0 (or without MPI).
+void write_result(nlohmann::json& j, const std::string& out_dir, const char* name,
+                  const RunnerSettings& runner, const CalibrateOptions& options) {
+  if (options.extra.is_object())
+    for (const auto& [k, v] : options.extra.items()) j[k] = v;
+  if (!runner.rank || runner.rank->rank == 0)
+    write_json_atomic((fs::path(out_dir) / name).string(), j);
+}
+
+// The calibrated mu_r and its 95% interval, from calibration.json.
+struct CalibratedMu {
+  double mu = 0.0, lo = 0.0, hi = 0.0;
+};
+CalibratedMu calibrated_mu_of(const nlohmann::json& cal, const std::string& cal_file) {
+  if (!cal.contains("mu_r") || !cal["mu_r"].is_number())
+    throw std::runtime_error(cal_file + ": status '" + cal.value("status", std::string("?")) +
+                             "': no calibrated mu_r to predict with (" +
+                             cal.value("message", std::string()) + ")");
+  return {cal["mu_r"].get<double>(), cal.at("mu_r_interval").at(0).get<double>(),
+          cal.at("mu_r_interval").at(1).get<double>()};
+}
+
+// The angle of every prediction run, by run id: one batch for every prediction, the calibrated
+// mu_r first, then the interval ends. NaN marks a run that made no pile.
+std::map<std::string, double> prediction_angles(const Campaign& c, const CalibratedMu& m,
+                                                const std::string& out_dir, const CaseFn& case_fn,
+                                                const AngleFn& angle_of,
+                                                const RunnerSettings& runner) {
+  std::vector<CaseSpec> runs;
+  std::set<std::string> ids;
+  auto add = [&](const PredictionCase& p, double mu) {
+    for (auto seed : p.seeds) {
+      CaseSpec s = prediction_run(c, p, mu, seed);
+      if (ids.insert(s.id()).second) runs.push_back(std::move(s));
+    }
+  };
+  for (const auto& p : c.predictions) add(p, m.mu);
+  for (const auto& p : c.predictions)
+    if (p.interval_ends)
+      for (double mu : {m.lo, m.hi}) add(p, mu);
+  std::map<std::string, double> angle;
+  if (runs.empty()) return angle;
+  const auto results = run_batch(c, runs, out_dir, case_fn, runner);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const double a = angle_of(results[i]);
+    if (!std::isnan(a) && (!std::isfinite(a) || a < 0.0 || a > 90.0))
+      throw std::runtime_error("prediction run " + runs[i].id() + " returned angle " +
+                               std::to_string(a) + " outside [0, 90] deg");
+    angle[runs[i].id()] = a;  // NaN: no pile (a clogged outlet), an outcome, not an angle
+  }
+  return angle;
+}
+
+// Prediction p's runs at one mu_r: the angle per seed (null for no pile) and their statistics.
+nlohmann::json prediction_at(const Campaign& c, const PredictionCase& p, double mu,
+                             const std::map<std::string, double>& angle) {
+  nlohmann::json angles = nlohmann::json::array(), dirs = nlohmann::json::array();
+  std::vector<double> v;
+  int no_pile = 0;
+  for (auto seed : p.seeds) {
+    const CaseSpec s = prediction_run(c, p, mu, seed);
+    const double a = angle.at(s.id());
+    if (std::isnan(a)) {
+      ++no_pile;
+      angles.push_back(nullptr);
+    } else {
+      v.push_back(a);
+      angles.push_back(a);
+    }
+    dirs.push_back(s.relative_dir());
+  }
+  const SampleStats st = sample_stats(v);
+  const auto or_null = [&](double x) { return st.n > 0 ? nlohmann::json(x) : nlohmann::json(); };
+  return nlohmann::json{{"mu_r", mu},
+                        {"angles_deg", angles},
+                        {"runs", dirs},
+                        {"n", st.n},
+                        {"no_pile", no_pile},
+                        {"mean_deg", or_null(st.mean)},
+                        {"seed_sd_deg", or_null(st.sd)},
+                        {"sem_deg", or_null(st.n > 0 ? st.sd / std::sqrt(st.n) : 0.0)}};
+}
+
+// How far the mu_r interval moves prediction p: run at both ends, or (interval_ends = false)
+// estimated from the calibration test's fitted curve.
+nlohmann::json interval_effect(const Campaign& c, const PredictionCase& p, const CalibratedMu& m,
+                               double mean, const MonotoneFit& fit,
+                               const std::map<std::string, double>& angle) {
+  if (p.interval_ends) {
+    const nlohmann::json a = prediction_at(c, p, m.lo, angle), b = prediction_at(c, p, m.hi, angle);
+    nlohmann::json effect = {
+        {"method", "runs"},
+        {"note", "the test run with the same seeds at both ends of the 95% mu_r interval"},
+        {"at_low", a},
+        {"at_high", b},
+        {"angle_range_deg", nullptr}};
+    if (a["mean_deg"].is_number() && b["mean_deg"].is_number()) {
+      const double x = a["mean_deg"].get<double>(), y = b["mean_deg"].get<double>();
+      effect["angle_range_deg"] = {std::min(x, y), std::max(x, y)};
+    }
+    return effect;
+  }
+  const double f0 = evaluate(fit, m.mu);
+  const double lo = fit.points.front().mu_r, hi = fit.points.back().mu_r;
+  const double dl = evaluate(fit, std::clamp(m.lo, lo, hi)) - f0;
+  const double dh = evaluate(fit, std::clamp(m.hi, lo, hi)) - f0;
+  return {{"method", "calibration_slope"},
+          {"note",
+           "not run: the prediction shifted by the calibration test's fitted angle change "
+           "over the 95% mu_r interval (assumes this test responds to mu_r as that one)"},
+          {"angle_range_deg", {mean + std::min(dl, dh), mean + std::max(dl, dh)}}};
+}
+
+// The predictions.json entry of prediction p.
+nlohmann::json prediction_entry(const Campaign& c, const PredictionCase& p, const CalibratedMu& m,
+                                const MonotoneFit& fit,
+                                const std::map<std::string, double>& angle) {
+  nlohmann::json j = prediction_at(c, p, m.mu, angle);
+  const double mean = j["mean_deg"].is_number() ? j["mean_deg"].get<double>() : NAN;
+  nlohmann::json seeds = nlohmann::json::array();
+  for (auto s : p.seeds) seeds.push_back(s);
+  j["name"] = p.name;
+  j["description"] = p.description;
+  j["scene"] = p.scene_path;
+  j["table1_sample"] = p.table1_sample ? nlohmann::json(*p.table1_sample) : nlohmann::json();
+  j["check"] = p.scene_path == c.scene_path && p.overrides == c.overrides;
+  j["measured_deg"] = p.measured.angle_deg;
+  j["measured_sd_deg"] = p.measured.sd_deg;
+  j["seeds"] = seeds;
+  const auto finite_or_null = [](double x) {
+    return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json();
+  };
+  j["error_deg"] = finite_or_null(mean - p.measured.angle_deg);
+  j["abs_error_deg"] = finite_or_null(std::abs(mean - p.measured.angle_deg));
+  j["mu_r_interval"] = {m.lo, m.hi};
+  j["interval_effect"] = interval_effect(c, p, m, mean, fit, angle);
+  return j;
+}
+
+// Predictions made earlier from the same calibration (another --only selection) stay in the
+// file; an entry of the same name is replaced by the new one.
+nlohmann::json merge_with_earlier(const fs::path& file, double mu,
+                                  const std::vector<std::string>& keys, nlohmann::json list) {
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) return list;
+  nlohmann::json old;
+  try {
+    old = nlohmann::json::parse(read_file(file.string()));
+  } catch (const std::exception&) {
+    return list;
+  }
+  if (old.value("mu_r", -1.0) != mu || old["keys"] != keys || !old["predictions"].is_array())
+    return list;
+  std::set<std::string> fresh;
+  for (const auto& p : list) fresh.insert(p.value("name", std::string()));
+  nlohmann::json merged = nlohmann::json::array();
+  for (const auto& p : old["predictions"])
+    if (!fresh.count(p.value("name", std::string()))) merged.push_back(p);
+  for (auto& p : list) merged.push_back(std::move(p));
+  return merged;
+}
+
+}  // namespace
+
+void keep_only_predictions(Campaign& c, const std::vector<std::string>& names) {
+  std::vector<PredictionCase> kept;
+  for (const std::string& name : names) {
+    auto it = std::find_if(c.predictions.begin(), c.predictions.end(),
+                           [&](const PredictionCase& p) { return p.name == name; });
+    if (it == c.predictions.end()) {
+      std::string list;
+      for (const auto& p : c.predictions) list += (list.empty() ? "" : ", ") + p.name;
+      throw std::invalid_argument(c.file + ": no [[predict]] named '" + name + "' (" +
+                                  (list.empty() ? std::string("there are none") : list) + ")");
+    }
+    kept.push_back(*it);
+  }
+  c.predictions = std::move(kept);
+}
+
+nlohmann::json run_calibration(const Campaign& c, const std::string& out_dir, const CaseFn& case_fn,
+                               const AngleFn& angle_of, const RunnerSettings& runner,
+                               const CalibrateOptions& options) {
+  const CampaignCalibration& cc = calibration_of(c);
+  if (!angle_of) throw std::invalid_argument("run_calibration: no angle function");
+  refuse_to_replace_other_calibration(c, out_dir, options, runner.force);
+  auto simulate = [&](const std::vector<std::pair<double, std::uint64_t>>& points) {
+    std::vector<CaseSpec> runs;
+    for (const auto& [mu, seed] : points) runs.push_back(calibration_run(c, mu, seed));
+    std::vector<double> angles;
+    for (const nlohmann::json& r : run_batch(c, runs, out_dir, case_fn, runner))
+      angles.push_back(angle_of(r));
+    return angles;
+  };
+  const CalibrationResult r = calibrate_batch(simulate, cc.target, cc.settings);
+  nlohmann::json j = to_json(r);
+  j["campaign"] = c.file;
+  j["campaign_name"] = c.name;
+  j["key"] = cc.key;
+  j["keys"] = keys_of(cc);
+  j["mu_r_range"] = {cc.settings.mu_r_lo, cc.settings.mu_r_hi};
+  j["tolerance_deg"] = cc.settings.tolerance_deg;
+  j["seeds_per_point"] = cc.settings.seeds_per_point;
+  j["table1_sample"] = cc.table1_sample ? nlohmann::json(*cc.table1_sample) : nlohmann::json();
+  j["scene"] = c.scene_path;
+  j["rolling_model"] = rolling_model_of(c);
+  j["angle_method"] = options.angle_method;
+  if (!cc.target_photos.is_null()) j["target_photos"] = cc.target_photos;
+  j["created_utc"] = utc_now();
+  fs::create_directories(fs::path(out_dir));
+  write_result(j, out_dir, kCalibrationFile, runner, options);
+  return j;
+}
+
+nlohmann::json read_calibration(const Campaign& c, const std::string& out_dir,
+                                const std::string& angle_method) {
+  calibration_of(c);
+  const std::string file = (fs::path(out_dir) / kCalibrationFile).string();
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec))
+    throw std::runtime_error(file + ": no finished calibration here (run `reposetwin calibrate " +
+                             c.file + "` first, or give its --out folder)");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(read_file(file));
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(file + ": not a calibration file (" + e.what() + ")");
+  }
+  if (const auto d = calibration_difference(j, c, angle_method))
+    throw std::runtime_error(file + ": field '" + d->field + "' = " + d->stored.dump() +
+                             " differs from the campaign file's " + d->now.dump() + " (" + c.file +
+                             "): this calibration was made from other inputs");
+  return j;
+}
+
+nlohmann::json run_predictions(const Campaign& c, const nlohmann::json& cal,
+                               const std::string& out_dir, const CaseFn& case_fn,
+                               const AngleFn& angle_of, const RunnerSettings& runner,
+                               const CalibrateOptions& options) {
+  const CampaignCalibration& cc = calibration_of(c);
+  if (!angle_of) throw std::invalid_argument("run_predictions: no angle function");
+  const std::string cal_file = (fs::path(out_dir) / kCalibrationFile).string();
+  const CalibratedMu m = calibrated_mu_of(cal, cal_file);
+  const MonotoneFit fit = fit_monotone(observations_of(cal, cal_file));
+  const std::map<std::string, double> angle =
+      prediction_angles(c, m, out_dir, case_fn, angle_of, runner);
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& p : c.predictions) list.push_back(prediction_entry(c, p, m, fit, angle));
+  const fs::path file = fs::path(out_dir) / kPredictionsFile;
+  nlohmann::json out = {{"campaign", c.file},
+                        {"campaign_name", c.name},
+                        {"calibration_file", kCalibrationFile},
+                        {"calibration_status", cal.value("status", std::string())},
+                        {"mu_r", m.mu},
+                        {"mu_r_interval", {m.lo, m.hi}},
+                        {"keys", keys_of(cc)},
+                        {"angle_method", options.angle_method},
+                        {"created_utc", utc_now()},
+                        {"predictions", merge_with_earlier(file, m.mu, keys_of(cc), list)}};
+  write_result(out, out_dir, kPredictionsFile, runner, options);
+  return out;
+}
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,65 @@
+// Calibrate, then predict: the drivers behind the calibrate and predict commands.
+//
+// Design. run_calibration() drives calibrate_batch() (calibration.hpp) through run_batch()
+// (campaign/campaign.hpp) and writes calibration.json; run_predictions() runs every [[predict]]
+// test at the calibrated mu_r (and, unless interval_ends = false, at both ends of its 95%
+// interval) through the same resumable pool, and writes predictions.json. A prediction's mu_r
+// comes from calibration.json, whose numbers round-trip exactly through JSON, so a resumed or
+// predict-only call names the same run folders and reuses every finished run. The interval's
+// effect on a prediction is measured by those end runs; with interval_ends = false it is
+// estimated by shifting the prediction by the calibration test's own fitted angle change over the
+// interval (stated as such in the file). A finished calibration.json is a result: calibrating
+// again with another question (target, range, keys or angle) into the same folder needs --force.
+#pragma once
+
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "experiments/campaign/campaign.hpp"
+
+namespace reposetwin::experiments {
+
+/// The angle a calibration or prediction uses from one run's result (the case function's JSON).
+/// For a prediction it may return NaN for a run that made no pile (a clogged outlet): such runs
+/// are listed and counted (no_pile), never averaged.
+using AngleFn = std::function<double(const nlohmann::json& case_result)>;
+
+/// What the calibrate command records beside the numbers.
+struct CalibrateOptions {
+  std::string angle_method;  // how the angle is measured, in words (stored in the JSON files)
+  nlohmann::json extra;      // more fields for calibration.json (e.g. code version)
+};
+
+/// Keeps only the [[predict]] tests named in `names`, in that order; std::invalid_argument naming
+/// the campaign file, the unknown name and the names there are otherwise.
+void keep_only_predictions(Campaign& c, const std::vector<std::string>& names);
+
+/// Calibrates the campaign's [calibration] through run_batch (resumable: finished runs are
+/// reused) and writes OUT/calibration.json atomically; returns its content. Besides to_json of the
+/// result it records the campaign (file, name), the keys, the mu_r range, table1_sample, the
+/// scene and the scene's rolling model (keyword and the exact law, from sim::kRollingModels).
+/// Throws std::invalid_argument if the campaign has no [calibration].
+nlohmann::json run_calibration(const Campaign& campaign, const std::string& out_dir,
+                               const CaseFn& case_fn, const AngleFn& angle_of,
+                               const RunnerSettings& runner = {},
+                               const CalibrateOptions& options = {});
+
+/// Reads OUT/calibration.json and checks that it is this campaign's finished calibration (same
+/// campaign name, keys, target and mu_r range, and the angle method when `angle_method` is given).
+/// Throws std::runtime_error naming the file and the field that differs or is missing.
+nlohmann::json read_calibration(const Campaign& campaign, const std::string& out_dir,
+                                const std::string& angle_method = "");
+
+/// Runs every [[predict]] test at the calibration's mu_r (and at its interval ends unless the
+/// entry says interval_ends = false) through run_batch, and writes OUT/predictions.json
+/// atomically; returns its content: per prediction the angles per seed, mean, seed sd, the
+/// measured angle, the error (mean - measured) and the mu_r interval's effect with its method.
+/// Throws std::runtime_error if the calibration has no calibrated mu_r (cannot reach).
+nlohmann::json run_predictions(const Campaign& campaign, const nlohmann::json& calibration,
+                               const std::string& out_dir, const CaseFn& case_fn,
+                               const AngleFn& angle_of, const RunnerSettings& runner = {},
+                               const CalibrateOptions& options = {});
+
+}  // namespace reposetwin::experiments

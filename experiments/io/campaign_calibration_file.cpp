@@ -1,0 +1,185 @@
+// The [calibration] table of a campaign file (see campaign_file.hpp for the format).
+#include <filesystem>
+#include <set>
+
+#include "experiments/io/campaign_file_detail.hpp"
+#include "experiments/io/overrides.hpp"
+#include "experiments/photos/lab_photos.hpp"
+
+namespace reposetwin::experiments::campaign_file {
+namespace fs = std::filesystem;
+namespace {
+
+// calibration.key: one dotted key, or a list of distinct keys that all take the calibrated value.
+void read_keys(TableReader& t, CampaignCalibration& cc) {
+  const std::string& file = t.file();
+  const std::string p = "calibration.";
+  if (const toml::node* k = t.raw().get("key"); k && k->is_array()) {
+    t.mark_used("key");
+    for (const auto& e : *k->as_array()) {
+      if (!e.is_string())
+        throw bad(file, p + "key", value_text(*k), "must be a string or a list of strings");
+      cc.keys.push_back(e.as_string()->get());
+    }
+    if (cc.keys.empty()) throw bad(file, p + "key", "[]", "needs at least one key");
+    if (std::set<std::string>(cc.keys.begin(), cc.keys.end()).size() != cc.keys.size())
+      throw bad(file, p + "key", value_text(*k), "a key is repeated");
+    cc.key = cc.keys.front();
+  } else {
+    cc.key = t.string("key", cc.key);
+    cc.keys = {cc.key};
+  }
+  for (const auto& k : cc.keys) split_dotted_key(k, file + ": key 'calibration.key'");
+}
+
+// The calibration target measured on the lab's side photos (calibration.target_photos, a path or
+// a list, relative to the campaign file) with vision/, as the renders are measured: the mean
+// atan(2H/D) when the simulated angle is an atan(2H/D) (image, particles), the mean flank angle
+// when it is a protractor-like angle (image_flank, slice), so both sides are read alike. The
+// target's sd is the measurement's uncertainty of the mean (spread over the photos and their own
+// errors); target_sd_deg, when given, replaces it. `record` receives the measurement.
+Target target_from_photos(TableReader& t, AngleMeasure angle, nlohmann::json* record) {
+  const std::string& file = t.file();
+  const std::string prefix = "calibration.";
+  t.mark_used("target_photos");
+  const toml::node* n = t.raw().get("target_photos");
+  std::vector<std::string> photos;
+  auto add = [&](const toml::node& e) {
+    if (!e.is_string() || e.as_string()->get().empty())
+      throw bad(file, prefix + "target_photos", value_text(*n),
+                "must be a path or a list of paths (the lab's side photos)");
+    fs::path path(e.as_string()->get());
+    if (path.is_relative()) path = fs::path(file).parent_path() / path;
+    photos.push_back(fs::absolute(path).lexically_normal().string());
+  };
+  if (const toml::array* a = n->as_array()) {
+    for (const auto& e : *a) add(e);
+  } else {
+    add(*n);
+  }
+  if (photos.empty()) throw bad(file, prefix + "target_photos", "[]", "needs at least one photo");
+  LabPhotoScale scale;
+  const std::string camera = t.string("target_photo_camera", "");
+  if (!camera.empty()) {
+    fs::path path(camera);
+    if (path.is_relative()) path = fs::path(file).parent_path() / path;
+    scale.camera_json = path.lexically_normal().string();
+  }
+  scale.mm_per_px = optional_number(t, "target_mm_per_px");
+  const std::string at = file + ": key '" + prefix;
+  const LabPhotoMeasurement m = measure_lab_photos(
+      photos, scale,
+      {at + "target_photos'", at + "target_photo_camera'", at + "target_mm_per_px'",
+       prefix + "target_photo_camera", prefix + "target_mm_per_px"});
+  const bool flank = angle == AngleMeasure::kImageFlank || angle == AngleMeasure::kSlice;
+  const vision::Spread& s = flank ? m.summary.flank_deg : m.summary.theta_deg;
+  *record = m.record;
+  (*record)["photos"] = photos;
+  (*record)["target_from"] = flank ? "flank_deg (mean flank angle over the photos)"
+                                   : "theta_deg (atan(2H/D), mean over the photos)";
+  return Target{s.mean, s.sigma_mean};
+}
+
+// The measured angle: target_deg typed in, or target_photos measured; target_sd_deg optional.
+void read_target(TableReader& t, CampaignCalibration& cc) {
+  const std::string& file = t.file();
+  const std::string p = "calibration.";
+  const auto target = optional_number(t, "target_deg");
+  const toml::node* photos = t.raw().get("target_photos");
+  if (target && photos)
+    throw bad(file, p + "target_photos", value_text(*photos),
+              "give either target_deg or target_photos, not both");
+  if (!target && !photos)
+    throw bad(file, p + "target_deg", "",
+              "missing (the measured angle in degrees, or target_photos: the lab's side "
+              "photos of the pile)");
+  for (const char* k : {"target_photo_camera", "target_mm_per_px"})
+    if (!photos && t.has(k))
+      throw bad(file, p + k, value_text(*t.raw().get(k)), "only with target_photos");
+  if (photos) {
+    cc.target = target_from_photos(t, cc.angle, &cc.target_photos);
+  } else {
+    cc.target.angle_deg = *target;
+  }
+  if (auto sd = optional_number(t, "target_sd_deg")) cc.target.sd_deg = *sd;
+  try {
+    validate_target(cc.target);
+  } catch (const std::invalid_argument& e) {
+    const std::string shown = photos ? "measured " + std::to_string(cc.target.angle_deg) + " deg"
+                                     : value_text(*t.raw().get("target_deg"));
+    throw bad(file, p + (photos ? "target_photos" : "target_deg"), shown, e.what());
+  }
+}
+
+// mu_r_range, seeds, tolerance, budget and bootstrap size, each within its bounds.
+void read_settings(TableReader& t, CalibrationSettings& s) {
+  const std::string& file = t.file();
+  const std::string p = "calibration.";
+  const std::string range_text = t.has("mu_r_range") ? value_text(*t.raw().get("mu_r_range")) : "";
+  if (!t.has("mu_r_range"))
+    throw bad(file, p + "mu_r_range", "", "must be a list of two numbers [lo, hi]");
+  const std::vector<double> range = t.numbers("mu_r_range");
+  if (range.size() != 2)
+    throw bad(file, p + "mu_r_range", range_text, "must be a list of two numbers [lo, hi]");
+  s.mu_r_lo = range[0];
+  s.mu_r_hi = range[1];
+  if (!(s.mu_r_lo >= 0.0 && s.mu_r_hi > s.mu_r_lo))
+    throw bad(file, p + "mu_r_range", range_text, "need 0 <= lo < hi");
+  if (auto v = optional_integer(t, "seeds_per_point")) {
+    if (*v < 1 || *v > 1000)
+      throw bad(file, p + "seeds_per_point", std::to_string(*v), "must be 1..1000");
+    s.seeds_per_point = static_cast<int>(*v);
+  }
+  if (auto v = optional_integer(t, "first_seed")) {
+    if (*v < 0) throw bad(file, p + "first_seed", std::to_string(*v), "must be >= 0");
+    s.first_seed = static_cast<std::uint64_t>(*v);
+  }
+  if (auto v = optional_number(t, "tolerance_deg")) {
+    if (!(*v > 0.0))
+      throw bad(file, p + "tolerance_deg", value_text(*t.raw().get("tolerance_deg")),
+                "must be > 0");
+    s.tolerance_deg = *v;
+  }
+  s.confirm_bracket = t.boolean("confirm", s.confirm_bracket);
+  const int min_sims = (s.confirm_bracket ? 4 : 2) * s.seeds_per_point;
+  if (auto v = optional_integer(t, "max_simulations")) {
+    if (*v < min_sims || *v > 1000000)
+      throw bad(file, p + "max_simulations", std::to_string(*v),
+                "must be at least " + std::to_string(min_sims) +
+                    " (seeds_per_point at both range ends" +
+                    (s.confirm_bracket ? " and at the two confirmed bracket points)" : ")"));
+    s.max_simulations = static_cast<int>(*v);
+  } else if (s.max_simulations < min_sims) {
+    throw bad(file, p + "seeds_per_point", std::to_string(s.seeds_per_point),
+              "needs max_simulations >= " + std::to_string(min_sims) + " (default " +
+                  std::to_string(s.max_simulations) + ")");
+  }
+  if (auto v = optional_integer(t, "bootstrap_replicates")) {
+    if (*v < 100 || *v > 1000000)
+      throw bad(file, p + "bootstrap_replicates", std::to_string(*v), "must be 100..1000000");
+    s.bootstrap.replicates = static_cast<int>(*v);
+  }
+}
+
+}  // namespace
+
+CampaignCalibration read_calibration_table(TableReader& t, const Campaign& c, SceneCache& scenes) {
+  t.known_keys({"key", "target_deg", "target_sd_deg", "target_photos", "target_photo_camera",
+                "target_mm_per_px", "mu_r_range", "seeds_per_point", "first_seed", "tolerance_deg",
+                "max_simulations", "bootstrap_replicates", "confirm", "table1_sample", "angle"});
+  CampaignCalibration cc;
+  read_keys(t, cc);
+  cc.table1_sample = read_table1_sample(t);
+  if (t.has("angle"))
+    cc.angle = parse_angle_measure(t.string("angle"), c.file + ": key 'calibration.angle'");
+  read_target(t, cc);
+  read_settings(t, cc.settings);
+  // The keys must apply to the base scene.
+  toml::table copy = scenes.get(c.scene_path);
+  for (const auto& k : cc.keys)
+    apply_override(copy, k, toml::value<double>(cc.settings.mu_r_lo),
+                   c.file + ", key 'calibration.key' (scene " + c.scene_path + ")");
+  return cc;
+}
+
+}  // namespace reposetwin::experiments::campaign_file
