@@ -35,11 +35,7 @@ json Loop::run() {
   rec.rule = s_.rule;
 
   const Surface& base = simulate_baseline();
-  noise_sd_ = pooled_seed_sd(base);
-  seed_se_ = noise_sd_ / std::sqrt(double(s_.seeds.size()));
-  const double se_pred2 = noise_sd_ * noise_sd_ / static_cast<double>(s_.seeds.size());
-  for (const LabTest& t : data_.tests)
-    sigma_.push_back(std::sqrt(noise_sd_ * noise_sd_ / t.repeats + se_pred2));
+  set_seed_noise(base);
   rec.baseline = calibrate_baseline(base);
 
   const std::size_t node = nearest_grid_point(rec.baseline.fit.mu);
@@ -51,20 +47,12 @@ json Loop::run() {
   for (int it = 0; it < s_.max_effects + 1; ++it)
     if (!iterate(it, state, rec.fingerprints, node, rec.iterations)) break;
 
-  rec.final_model.fit = state.fit;
-  rec.final_model.effects = state.chosen;
-  rec.final_model.residuals = residuals(state.model, state.fit.mu);
-  rec.final_model.rmse = rmse_by_role(rec.final_model.residuals);
+  rec.final_model = final_record(state);
   rec.provenance = provenance(base);
   rec.simulations = {
       cache_.simulations_started(), cache_.photos_started(),
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count()};
-
-  const json loop = to_json(rec);
-  fs::create_directories(out_);
-  if (s_.html) write_loop_html(loop, out_);
-  write_json_atomic((fs::path(out_) / "loop.json").string(), loop);
-  return loop;
+  return write(rec);
 }
 
 void Loop::say(const std::string& m) const {
@@ -168,6 +156,15 @@ double Loop::pooled_seed_sd(const Surface& base) const {
     }
   const double sd = std::sqrt(ss / std::max(1, dof));
   return sd > 0.0 ? sd : 1e-3;
+}
+
+// The seed noise every residual and prediction carries (loop.hpp's design note).
+void Loop::set_seed_noise(const Surface& base) {
+  noise_sd_ = pooled_seed_sd(base);
+  seed_se_ = noise_sd_ / std::sqrt(double(s_.seeds.size()));
+  const double se_pred2 = noise_sd_ * noise_sd_ / static_cast<double>(s_.seeds.size());
+  for (const LabTest& t : data_.tests)
+    sigma_.push_back(std::sqrt(noise_sd_ * noise_sd_ / t.repeats + se_pred2));
 }
 
 BaselineRecord Loop::calibrate_baseline(const Surface& base) const {
@@ -441,6 +438,15 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
   return true;
 }
 
+FinalRecord Loop::final_record(const LoopState& state) const {
+  FinalRecord f;
+  f.fit = state.fit;
+  f.effects = state.chosen;
+  f.residuals = residuals(state.model, state.fit.mu);
+  f.rmse = rmse_by_role(f.residuals);
+  return f;
+}
+
 LoopProvenance Loop::provenance(const Surface& base) const {
   LoopProvenance p;
   p.code_version = code_version();
@@ -461,6 +467,14 @@ LoopProvenance Loop::provenance(const Surface& base) const {
   for (const LabTest& t : data_.tests) scenes.insert(t.scene_path);
   p.scenes.assign(scenes.begin(), scenes.end());
   return p;
+}
+
+json Loop::write(const LoopRecord& rec) const {
+  const json loop = to_json(rec);
+  fs::create_directories(out_);
+  if (s_.html) write_loop_html(loop, out_);
+  write_json_atomic((fs::path(out_) / "loop.json").string(), loop);
+  return loop;
 }
 
 }  // namespace loop_detail

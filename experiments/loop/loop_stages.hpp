@@ -94,7 +94,7 @@ class Loop {
   // Stages (loop.cpp).
   void check_settings();
   const Surface& simulate_baseline();
-  double pooled_seed_sd(const Surface& base) const;
+  void set_seed_noise(const Surface& base);
   BaselineRecord calibrate_baseline(const Surface& base) const;
   std::size_t nearest_grid_point(double mu) const;
   std::vector<const CandidateEffect*> available_candidates(
@@ -105,13 +105,16 @@ class Loop {
                std::size_t node, std::vector<IterationRecord>& iterations);
   IterationRecord trace(int it, const LoopState& state,
                         const std::vector<FingerprintRecord>& fps) const;
+  FinalRecord final_record(const LoopState& state) const;
   LoopProvenance provenance(const Surface& base) const;
+  nlohmann::json write(const LoopRecord& rec) const;  // OUT/loop.json and OUT/index.html
 
   // Building blocks (loop.cpp).
   Surface simulate_surface(const std::vector<EffectSetting>& effects);
   FingerprintRecord fingerprint(const CandidateEffect& e, const Surface& base, std::size_t node,
                                 const std::vector<SimOutcome>& on, std::size_t first) const;
   std::string untraceable(const FingerprintRecord& f) const;
+  double pooled_seed_sd(const Surface& base) const;
 
   // The model's fit and residuals (loop_model.cpp).
   MuFit fit_mu(const Model& model, const Surface* extra, double t_max) const;
