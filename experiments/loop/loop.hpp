@@ -27,9 +27,10 @@
 //    twin(mu_r, p) = (1 - t) twin_before(mu_r) + t twin_p1(mu_r), t = (p - off) / (p1 - off),
 //    i.e. linear in p between two simulated surfaces; (mu_r, t) are fitted jointly (t in closed
 //    form for each mu_r of the scan, t limited to [0, 3] and to the effect's range). Residuals
-//    are recomputed from this simulated model, and the loop repeats until no candidate is
-//    accepted or max_effects are in. If the refit's simulations cannot be measured (a pile too
-//    flat to photograph), the simulated value steps back halfway towards off, twice at most.
+//    are recomputed from this simulated model, and the loop repeats while a candidate is
+//    accepted and fewer than max_effects are in. If the refit's simulations cannot be measured
+//    (a pile too flat to photograph), the simulated value steps back halfway towards off, twice
+//    at most.
 //    A threshold effect (a plate that slides only below some friction) breaks the linear
 //    estimate: when the simulated response at the fingerprint's grid point misses the traced
 //    strength by more than half, the value is refined by secant steps between the known responses
@@ -39,6 +40,11 @@
 //    error of a prediction, is not chosen (recorded under not_confirmed with the reason).
 //  * Caching and resuming: loop_sim.hpp. loop.json (atomic) is written last; an existing one is
 //    never overwritten without `force`.
+//  * Code. Loop::run (loop.cpp) reads as the list of these stages: check the settings, simulate
+//    the baseline surface, pool the seed noise, calibrate mu_r with its residuals, fingerprint
+//    the candidates, then iterate (trace and select, refit by simulation in loop_refit.cpp,
+//    confirm), and write loop.json. The stages pass the typed records of loop_records.hpp;
+//    loop.json is their to_json, made in one place (loop_stages.hpp holds the stages' model).
 #pragma once
 
 #include <cstdint>

@@ -230,6 +230,12 @@ int rank_candidates(std::vector<CandidateScore>& scores) {
   return -1;
 }
 
+double rmse(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double x : v) s += x * x;
+  return v.empty() ? 0.0 : std::sqrt(s / static_cast<double>(v.size()));
+}
+
 nlohmann::json to_json(const CandidateScore& s) {
   return {{"name", s.name},
           {"coef", s.coef},

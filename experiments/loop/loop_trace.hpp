@@ -117,6 +117,9 @@ CandidateScore score_candidate(const TraceProblem& problem, const std::string& n
 /// one in the sorted vector, or -1 if none is accepted.
 int rank_candidates(std::vector<CandidateScore>& scores);
 
+/// The root mean square of `v` (0 for an empty vector), summed in order [units of v].
+double rmse(const std::vector<double>& v);
+
 nlohmann::json to_json(const CandidateScore& s);
 nlohmann::json to_json(const NullScore& s);
 

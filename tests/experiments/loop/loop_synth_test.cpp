@@ -12,9 +12,10 @@
 //  * Conditions: mass (15, 35 g) x plate (steel, declared friction 0.5; wood, 0.25) x declared
 //    lift speed (0.03, 0.1 m/s), eight tests, one held out. Each hidden effect leaves its own
 //    pattern: a smooth plate changes steel more than wood; a faster lift changes the fast series
-//    more; cohesion steepens the heavier piles more and lifts every angle beyond mu_r's reach. (A camera 6 mm above the plate, declared level, was a test here until session 5; it
-//    passed only through vision's plate-line flaw. With vision reading H from the toe line, its
-//    true effect, about 0.5 deg, is below one pile's scatter and the loop names nothing.)
+//    more; cohesion steepens the heavier piles more and lifts every angle beyond mu_r's reach.
+//    (A camera 6 mm above the plate, declared level, is not a test: with vision reading H from
+//    the toe line, its true effect, about 0.5 deg, is below one pile's scatter and the loop
+//    names nothing.)
 //  * The lab is the twin with hidden mu_r 0.25 (between grid points), other seeds, a different
 //    camera (14 instead of 12 pile radii away, three views instead of two, image noise).
 //  * Size design (rolling resistance that varies with grain size has no fingerprint when every
@@ -181,7 +182,7 @@ TEST(LoopSynth, HiddenFastLiftIsFound) {
 // clogs one test at the grid's top and the cut is 30%; from 15 kJ/m^3 the lab's own 26 mm funnel
 // arches on the slow 15 g tests (17-28% of the grains lodged). The cut is chaotic, not only
 // dependent on the strength: the same 12 kJ/m^3 data re-simulated after a change of rounding
-// alone in the contact kernel (session 9) gave 50% (1.91 -> 0.97 deg; held out 3.86 -> 2.06),
+// alone in the contact kernel gave 50% (1.91 -> 0.97 deg; held out 3.86 -> 2.06),
 // because cohesion and mu_r both steepen the piles and the three seeds per point leave the
 // strength poorly determined (docs/loop.md). So this test holds cohesion to a 45% cut; naming
 // it and fitting it above zero are what it proves.
@@ -191,12 +192,12 @@ TEST(LoopSynth, HiddenCohesionIsFound) {
 
 // Rolling resistance grows with grain size, mu_r (d / d_ref)^3: fine piles flatter, coarse
 // steeper than one mu_r makes them (cohesion would do the opposite).
-// DISABLED (session 5, docs/loop.md): the design's residual is too weak against its noise floor
-// for the 70% cut to be more than a coin toss. Named both times, but cut 81% with vision before
-// the plate-line fix (after-RMSE 0.38 deg, below the floor of about 0.7) and 68% after it
-// (0.63 deg); the trial simulated at the true exponent fits no better (0.78 deg). And its
-// fingerprint at mu_r 0.5 does not stand out of its own seed noise (RMS 0.88 deg against 1.15
-// per test), so since the traceability filter checks that, nothing is named. Run it with
+// DISABLED (docs/loop.md): the design's residual is too weak against its noise floor for the 70%
+// cut to be more than a coin toss. With vision reading the plate line from the toe the cut is
+// 68% (after-RMSE 0.63 deg against a floor of about 0.7); the trial simulated at the true
+// exponent fits no better (0.78 deg). And its fingerprint at mu_r 0.5 does not stand out of
+// its own seed noise (RMS 0.88 deg against 1.15 per test), so the traceability filter, which
+// checks that, lets nothing be named. Run it with
 // --gtest_also_run_disabled_tests.
 TEST(LoopSynth, DISABLED_HiddenSizeDependentRollingIsFound) {
   expect_found(

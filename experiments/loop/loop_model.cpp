@@ -1,0 +1,113 @@
+// The loop's model of the twin: curves on the mu_r grid, their mixture, the joint fit of mu_r
+// (and of a refit's weight t) and the residuals it leaves (loop_stages.hpp, loop.hpp's note).
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "experiments/loop/loop_stages.hpp"
+
+namespace reposetwin::experiments::loop_detail {
+
+double Curve::lin(const std::vector<double>& y, double m) const {
+  m = clamp(m);
+  std::size_t k = 0;
+  while (k + 2 < mu.size() && m > mu[k + 1]) ++k;
+  const double s = (m - mu[k]) / (mu[k + 1] - mu[k]);
+  return y[k] + s * (y[k + 1] - y[k]);
+}
+
+double Model::angle(std::size_t i, double m) const {
+  double s = 0.0;
+  for (const auto& [w, surf] : terms) s += w * surf->curve[i].at(m);
+  return s;
+}
+
+double Model::h(std::size_t i, double m) const {
+  double s = 0.0;
+  for (const auto& [w, surf] : terms) s += w * surf->curve[i].lin(surf->curve[i].h, m);
+  return s;
+}
+
+double Model::d(std::size_t i, double m) const {
+  double s = 0.0;
+  for (const auto& [w, surf] : terms) s += w * surf->curve[i].lin(surf->curve[i].d, m);
+  return s;
+}
+
+MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max) const {
+  const double lo = s_.mu_grid.front(), hi = s_.mu_grid.back();
+  const int steps = 2000;
+  MuFit best;
+  double best_sse = 1e300;
+  for (int q = 0; q <= steps; ++q) {
+    const double m = lo + (hi - lo) * q / steps;
+    double swdy = 0.0, swdd = 0.0;
+    std::vector<double> y, dd, w;
+    for (std::size_t i : cal_) {
+      const double base = model.angle(i, m);
+      const double di = extra ? extra->curve[i].at(m) - base : 0.0;
+      y.push_back(data_.tests[i].angle_deg - base);
+      dd.push_back(di);
+      w.push_back(1.0 / (sigma_[i] * sigma_[i]));
+      swdy += w.back() * di * y.back();
+      swdd += w.back() * di * di;
+    }
+    const double t = (extra && swdd > 0.0) ? std::clamp(swdy / swdd, 0.0, t_max) : 0.0;
+    double sse = 0.0;
+    for (std::size_t k = 0; k < y.size(); ++k) sse += w[k] * std::pow(y[k] - t * dd[k], 2);
+    if (sse < best_sse) {
+      best_sse = sse;
+      best.mu = m;
+      best.t = t;
+    }
+  }
+  best.at_edge = best.mu <= lo + 1e-12 || best.mu >= hi - 1e-12;
+  // Standard errors from the Jacobian of the prediction in (mu, t).
+  const double h = (hi - lo) / 100.0;
+  Eigen::MatrixXd jac(cal_.size(), extra ? 2 : 1);
+  for (std::size_t k = 0; k < cal_.size(); ++k) {
+    const std::size_t i = cal_[k];
+    auto pred = [&](double m) {
+      const double base = model.angle(i, m);
+      return extra ? base + best.t * (extra->curve[i].at(m) - base) : base;
+    };
+    const double a = std::max(lo, best.mu - h), b = std::min(hi, best.mu + h);
+    jac(k, 0) = (pred(b) - pred(a)) / (b - a) / sigma_[i];
+    if (extra) jac(k, 1) = (extra->curve[i].at(best.mu) - model.angle(i, best.mu)) / sigma_[i];
+  }
+  const Eigen::MatrixXd info = jac.transpose() * jac;
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(info);
+  if (lu.isInvertible()) {
+    const Eigen::MatrixXd cov = lu.inverse();
+    best.mu_se = std::sqrt(std::max(0.0, cov(0, 0)));
+    if (extra) best.t_se = std::sqrt(std::max(0.0, cov(1, 1)));
+  } else {
+    best.mu_se = std::numeric_limits<double>::infinity();
+    best.t_se = std::numeric_limits<double>::infinity();
+  }
+  return best;
+}
+
+std::vector<ResidualRow> Loop::residuals(const Model& model, double m) const {
+  std::vector<ResidualRow> rows;
+  for (std::size_t i = 0; i < data_.tests.size(); ++i) {
+    const LabTest& t = data_.tests[i];
+    ResidualRow r;
+    r.id = t.id;
+    r.role = t.role;
+    r.measured_deg = t.angle_deg;
+    r.predicted_deg = model.angle(i, m);
+    r.residual_deg = t.angle_deg - r.predicted_deg;
+    r.sigma_deg = sigma_[i];
+    r.predicted_se_deg = seed_se_;
+    r.predicted_h_mm = model.h(i, m);
+    r.predicted_d_mm = model.d(i, m);
+    if (t.height_mm) r.residual_h_mm = *t.height_mm - r.predicted_h_mm;
+    if (t.diameter_mm) r.residual_d_mm = *t.diameter_mm - r.predicted_d_mm;
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+}  // namespace reposetwin::experiments::loop_detail

@@ -1,0 +1,213 @@
+#include "experiments/loop/loop_records.hpp"
+
+#include "experiments/loop/loop_effects.hpp"
+
+namespace reposetwin::experiments {
+using nlohmann::json;
+
+namespace {
+
+json optional_number(const std::optional<double>& v) { return v ? json(*v) : json(); }
+
+json to_json_array(const auto& records) {
+  json a = json::array();
+  for (const auto& r : records) a.push_back(to_json(r));
+  return a;
+}
+
+}  // namespace
+
+RoleRmse rmse_by_role(const std::vector<ResidualRow>& rows) {
+  std::vector<double> c, v;
+  for (const ResidualRow& r : rows) (r.role == "calibrate" ? c : v).push_back(r.residual_deg);
+  RoleRmse out;
+  out.calibrate_deg = rmse(c);
+  if (!v.empty()) out.validate_deg = rmse(v);
+  out.n_calibrate = c.size();
+  out.n_validate = v.size();
+  return out;
+}
+
+json to_json(const ResidualRow& r) {
+  json j = {{"id", r.id},
+            {"role", r.role},
+            {"measured_deg", r.measured_deg},
+            {"predicted_deg", r.predicted_deg},
+            {"residual_deg", r.residual_deg},
+            {"sigma_deg", r.sigma_deg},
+            {"predicted_se_deg", r.predicted_se_deg},
+            {"predicted_H_mm", r.predicted_h_mm},
+            {"predicted_D_mm", r.predicted_d_mm}};
+  if (r.residual_h_mm) j["residual_H_mm"] = *r.residual_h_mm;
+  if (r.residual_d_mm) j["residual_D_mm"] = *r.residual_d_mm;
+  return j;
+}
+
+json to_json(const RoleRmse& r) {
+  return {{"calibrate_deg", r.calibrate_deg},
+          {"n_calibrate", r.n_calibrate},
+          {"n_validate", r.n_validate},
+          {"validate_deg", optional_number(r.validate_deg)}};
+}
+
+json to_json(const BaselineCurve& c) {
+  return {{"id", c.id},
+          {"mu_r", c.mu},
+          {"angle_deg", c.angle_deg},
+          {"angle_seeds_deg", c.angle_seeds_deg},
+          {"pour_seeds", c.pour_seeds},
+          {"clogged_pours", c.clogged_pours}};
+}
+
+json to_json(const BaselineRecord& b) {
+  return {{"mu_r", b.fit.mu},
+          {"mu_r_se", b.fit.mu_se},
+          {"mu_r_at_grid_edge", b.fit.at_edge},
+          {"seed_sd_deg", b.seed_sd_deg},
+          {"seed_se_deg", b.seed_se_deg},
+          {"residuals", to_json_array(b.residuals)},
+          {"rmse", to_json(b.rmse)},
+          {"curves", to_json_array(b.curves)}};
+}
+
+json to_json(const FingerprintRecord& f) {
+  return {{"name", f.name},
+          {"probe", f.probe},
+          {"mu_r", f.mu_r},
+          {"angle_deg", f.angle_deg},
+          {"angle_se_deg", f.angle_se_deg},
+          {"H_mm", f.h_mm},
+          {"D_mm", f.d_mm}};
+}
+
+json to_json(const UnavailableCandidate& u) { return {{"name", u.name}, {"why", u.why}}; }
+
+json to_json(const RefitTrialRecord& t) {
+  return {{"simulated_at", t.simulated_at},
+          {"response_fraction", t.response_fraction},
+          {"t", t.t},
+          {"mu_r", t.mu_r},
+          {"rmse_calibrate_deg", t.rmse_calibrate_deg}};
+}
+
+namespace {
+
+// The fields ChosenEffect and NotConfirmed share.
+json refit_fields(const RefitSummary& r) {
+  return {{"name", r.name},
+          {"linear_estimate", r.linear_estimate},
+          {"simulated_at", r.simulated_at},
+          {"t", r.t},
+          {"mu_r", r.mu_r},
+          {"trials", to_json_array(r.trials)},
+          {"refit_notes", r.refit_notes}};
+}
+
+}  // namespace
+
+json to_json(const ChosenEffect& c) {
+  json j = refit_fields(c.refit);
+  j.update({{"kind", c.kind},
+            {"key", c.key},
+            {"units", c.units},
+            {"off", c.off},
+            {"probe", c.probe},
+            {"value", c.value},
+            {"value_se", c.value_se},
+            {"t_at_limit", c.t_at_limit},
+            {"mu_r_se", c.mu_r_se}});
+  return j;
+}
+
+json to_json(const NotConfirmed& n) {
+  json j = refit_fields(n.refit);
+  j.update({{"rmse_calibrate_deg", n.rmse_calibrate_deg}, {"reason", n.reason}});
+  return j;
+}
+
+json to_json(const RefitFailed& f) {
+  return {
+      {"name", f.name}, {"refit_failed", f.refit_failed}, {"linear_estimate", f.linear_estimate}};
+}
+
+json to_json(const IterationRecord& it) {
+  json j = {{"iteration", it.iteration},
+            {"mu_r", it.mu_r},
+            {"null", to_json(it.null)},
+            {"candidates", to_json_array(it.candidates)}};
+  if (it.chosen)
+    j["chosen"] = to_json(*it.chosen);
+  else if (it.refit_failed)
+    j["chosen"] = to_json(*it.refit_failed);
+  else
+    j["chosen"] = nullptr;
+  if (it.stopped) j["stopped"] = *it.stopped;
+  if (it.not_confirmed) j["not_confirmed"] = to_json(*it.not_confirmed);
+  return j;
+}
+
+json to_json(const FinalRecord& f) {
+  return {{"mu_r", f.fit.mu},
+          {"mu_r_se", f.fit.mu_se},
+          {"effects", to_json_array(f.effects)},
+          {"residuals", to_json_array(f.residuals)},
+          {"rmse", to_json(f.rmse)}};
+}
+
+json to_json(const LoopProvenance& p) {
+  json j = {{"code_version", p.code_version},
+            {"data", p.data},
+            {"seeds", p.seeds},
+            {"angle_measure", p.angle_measure},
+            {"angle_method", p.angle_method},
+            {"lab_angle_source", p.lab_angle_source},
+            {"mu_grid", p.mu_grid},
+            {"mu_key", p.mu_key},
+            {"image", p.image},
+            {"max_pours", p.max_pours},
+            {"cache", p.cache},
+            {"finished", p.finished},
+            {"scenes", p.scenes}};
+  if (p.run) j["run"] = *p.run;
+  return j;
+}
+
+json to_json(const SimulationCounts& s) {
+  return {{"pile_runs_started", s.pile_runs_started},
+          {"photos_started", s.photos_started},
+          {"wall_s", s.wall_s}};
+}
+
+json to_json(const LoopRecord& loop) {
+  const double before = loop.baseline.rmse.calibrate_deg;
+  const double after = loop.final_model.rmse.calibrate_deg;
+  json names = json::array();
+  for (const ChosenEffect& c : loop.final_model.effects) names.push_back(c.refit.name);
+  const json summary = {
+      {"chosen", loop.final_model.effects.empty() ? json() : json(names.back())},
+      {"effects", names},
+      {"rmse_calibrate_before_deg", before},
+      {"rmse_calibrate_after_deg", after},
+      {"rmse_validate_before_deg", optional_number(loop.baseline.rmse.validate_deg)},
+      {"rmse_validate_after_deg", optional_number(loop.final_model.rmse.validate_deg)},
+      {"reduction", before > 0.0 ? 1.0 - after / before : 0.0}};
+  const json rule = {{"min_t", loop.rule.min_t},
+                     {"loo_margin_deg", loop.rule.loo_margin_factor * loop.baseline.seed_se_deg},
+                     {"text",
+                      "accept the best-ranked candidate with |c|/se > min_t and a leave-one-"
+                      "test-out RMSE below the mu_r-only LOO RMSE by more than the seed "
+                      "standard error of a predicted angle"}};
+  return {{"tests", to_json_array(loop.tests)},
+          {"candidate_registry", to_json_array(candidate_effects())},
+          {"unavailable_candidates", to_json_array(loop.unavailable)},
+          {"rule", rule},
+          {"baseline", to_json(loop.baseline)},
+          {"fingerprints", to_json_array(loop.fingerprints)},
+          {"iterations", to_json_array(loop.iterations)},
+          {"final", to_json(loop.final_model)},
+          {"summary", summary},
+          {"simulations", to_json(loop.simulations)},
+          {"provenance", to_json(loop.provenance)}};
+}
+
+}  // namespace reposetwin::experiments

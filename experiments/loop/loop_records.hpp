@@ -1,0 +1,208 @@
+// The records of one loop run: what each stage of Loop::run returns, and their JSON.
+//
+// Design note. The stages of the loop (loop.cpp) hand each other these plain structs; JSON is
+// made only at the file edge, by one to_json per record, and loop.json is the to_json of a
+// LoopRecord. The JSON field names are those of loop.json (docs/loop.md), which tests and the
+// report (report/loop_report.cpp) read. An iteration's `chosen` field is null when nothing was
+// chosen, the refit failure when every refit simulation failed, or the chosen effect.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "experiments/loop/loop_data.hpp"
+#include "experiments/loop/loop_trace.hpp"
+
+namespace reposetwin::experiments {
+
+/// A joint fit of mu_r (and of the refit's mixing weight t) to the calibration tests.
+struct MuFit {
+  double mu = 0.0;       // calibrated mu_r [-]
+  double mu_se = 0.0;    // its standard error [-]
+  double t = 0.0;        // weight of the extra simulated surface (0 without one) [-]
+  double t_se = 0.0;     // its standard error [-]
+  bool at_edge = false;  // mu sits on an end of the mu_r grid
+};
+
+/// One test's residual under a model at a mu_r.
+struct ResidualRow {
+  std::string id;
+  std::string role;                     // "calibrate" or "validate"
+  double measured_deg = 0.0;            // lab angle as compared [deg]
+  double predicted_deg = 0.0;           // twin angle [deg]
+  double residual_deg = 0.0;            // measured - predicted [deg]
+  double sigma_deg = 0.0;               // 1-sigma noise of the residual [deg]
+  double predicted_se_deg = 0.0;        // seed standard error of the prediction [deg]
+  double predicted_h_mm = 0.0;          // [mm]
+  double predicted_d_mm = 0.0;          // [mm]
+  std::optional<double> residual_h_mm;  // when the lab measured H [mm]
+  std::optional<double> residual_d_mm;  // when the lab measured D [mm]
+};
+
+/// RMS residuals by role.
+struct RoleRmse {
+  double calibrate_deg = 0.0;          // [deg]
+  std::optional<double> validate_deg;  // none without validation tests [deg]
+  std::size_t n_calibrate = 0;
+  std::size_t n_validate = 0;
+};
+
+/// RMS residual of each role over `rows`.
+RoleRmse rmse_by_role(const std::vector<ResidualRow>& rows);
+
+/// One test's baseline response on the mu_r grid, with the seeds of the pours that made its
+/// piles and the pours that jammed (repeated; a lab pours its tests without jamming).
+struct BaselineCurve {
+  std::string id;
+  std::vector<double> mu;                              // grid [-]
+  std::vector<double> angle_deg;                       // seed means per grid point [deg]
+  std::vector<std::vector<double>> angle_seeds_deg;    // [grid][seed] [deg]
+  std::vector<std::vector<std::uint64_t>> pour_seeds;  // [grid][seed]
+  std::vector<int> clogged_pours;                      // per grid point
+};
+
+/// The calibrated base model (mu_r only) and its residuals.
+struct BaselineRecord {
+  MuFit fit;
+  double seed_sd_deg = 0.0;  // pooled seed spread of one pile's angle [deg]
+  double seed_se_deg = 0.0;  // seed standard error of a predicted angle [deg]
+  std::vector<ResidualRow> residuals;
+  RoleRmse rmse;
+  std::vector<BaselineCurve> curves;
+};
+
+/// A candidate's simulated change of every test's angle, H and D at its probe value.
+struct FingerprintRecord {
+  std::string name;
+  double probe = 0.0;                // effect value simulated
+  double mu_r = 0.0;                 // grid point simulated at [-]
+  std::vector<double> angle_deg;     // per test: mean change of angle [deg]
+  std::vector<double> angle_se_deg;  // per test: its standard error over the seeds [deg]
+  std::vector<double> h_mm;          // per test: mean change of H [mm]
+  std::vector<double> d_mm;          // per test: mean change of D [mm]
+};
+
+/// A candidate left out of the tracing, with the reason.
+struct UnavailableCandidate {
+  std::string name;
+  std::string why;
+};
+
+/// One simulated refit value and the joint fit it gave.
+struct RefitTrialRecord {
+  double simulated_at = 0.0;        // effect value simulated on the grid
+  double response_fraction = 0.0;   // response at the fingerprint's grid point / fingerprint
+  double t = 0.0;                   // joint fit's weight [-]
+  double mu_r = 0.0;                // joint fit's mu_r [-]
+  double rmse_calibrate_deg = 0.0;  // calibration RMSE of the refitted model [deg]
+};
+
+/// What the simulated refit of an accepted candidate gave: the trial kept and all trials.
+struct RefitSummary {
+  std::string name;
+  double linear_estimate = 0.0;  // the tracing's value, clamped to the range
+  double simulated_at = 0.0;     // the trial kept (lowest calibration RMSE)
+  double t = 0.0;                // its joint fit's weight [-]
+  double mu_r = 0.0;             // its joint fit's mu_r [-]
+  std::vector<RefitTrialRecord> trials;
+  std::string refit_notes;  // failed simulations and the steps back
+};
+
+/// An effect the simulated refit took into the model.
+struct ChosenEffect {
+  RefitSummary refit;
+  std::string kind, key, units;
+  double off = 0.0, probe = 0.0;
+  double value = 0.0, value_se = 0.0;  // off + t (simulated_at - off), in `units`
+  bool t_at_limit = false;
+  double mu_r_se = 0.0;
+};
+
+/// An accepted candidate whose simulated refit did not confirm it.
+struct NotConfirmed {
+  RefitSummary refit;
+  double rmse_calibrate_deg = 0.0;  // of the refitted model [deg]
+  std::string reason;
+};
+
+/// An accepted candidate none of whose refit simulations could be measured.
+struct RefitFailed {
+  std::string name;
+  std::string refit_failed;  // the failures
+  double linear_estimate = 0.0;
+};
+
+/// One iteration: the tracing of the residual and what became of the best candidate.
+struct IterationRecord {
+  int iteration = 0;
+  double mu_r = 0.0;  // mu_r the residual was taken at [-]
+  NullScore null;
+  std::vector<CandidateScore> candidates;  // ranked
+  std::optional<std::string> stopped;      // an accepted candidate the effect limit stopped
+  std::optional<ChosenEffect> chosen;
+  std::optional<NotConfirmed> not_confirmed;
+  std::optional<RefitFailed> refit_failed;
+};
+
+/// The model at the end of the loop.
+struct FinalRecord {
+  MuFit fit;
+  std::vector<ChosenEffect> effects;
+  std::vector<ResidualRow> residuals;
+  RoleRmse rmse;
+};
+
+/// What the loop ran on and with.
+struct LoopProvenance {
+  std::string code_version, data, angle_measure, angle_method, lab_angle_source;
+  std::vector<std::uint64_t> seeds;
+  std::vector<double> mu_grid;
+  std::string mu_key, image, cache, finished;
+  int max_pours = 0;
+  std::optional<nlohmann::json> run;  // the first baseline pile run's provenance
+  std::vector<std::string> scenes;    // sorted, unique
+};
+
+/// The simulations this run started.
+struct SimulationCounts {
+  int pile_runs_started = 0;
+  int photos_started = 0;
+  double wall_s = 0.0;
+};
+
+/// The whole of loop.json.
+struct LoopRecord {
+  std::vector<LabTest> tests;
+  std::vector<UnavailableCandidate> unavailable;
+  AcceptanceRule rule;
+  BaselineRecord baseline;
+  std::vector<FingerprintRecord> fingerprints;
+  std::vector<IterationRecord> iterations;
+  FinalRecord final_model;
+  SimulationCounts simulations;
+  LoopProvenance provenance;
+};
+
+nlohmann::json to_json(const ResidualRow& r);
+nlohmann::json to_json(const RoleRmse& r);
+nlohmann::json to_json(const BaselineCurve& c);
+nlohmann::json to_json(const BaselineRecord& b);
+nlohmann::json to_json(const FingerprintRecord& f);
+nlohmann::json to_json(const UnavailableCandidate& u);
+nlohmann::json to_json(const RefitTrialRecord& t);
+nlohmann::json to_json(const ChosenEffect& c);
+nlohmann::json to_json(const NotConfirmed& n);
+nlohmann::json to_json(const RefitFailed& f);
+nlohmann::json to_json(const IterationRecord& it);
+nlohmann::json to_json(const FinalRecord& f);
+nlohmann::json to_json(const LoopProvenance& p);
+nlohmann::json to_json(const SimulationCounts& s);
+/// loop.json: the records, the candidate registry, the rule and a summary.
+nlohmann::json to_json(const LoopRecord& loop);
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,142 @@
+// The stages of the loop and the simulated model they share; internal to loop.cpp (Loop::run,
+// which calls the stages in order, and the stages up to the tracing), loop_model.cpp (the
+// model, its mu_r fit and residuals) and loop_refit.cpp (the refit by simulation). The method
+// is loop.hpp's design note.
+//
+// Design note. A Surface is the twin at one setting of the effects: every test's simulated
+// response on the mu_r grid. The current model is a weighted mixture of surfaces (the baseline,
+// then one more per effect refitted), held by pointer into the surfaces the Loop owns, so a
+// model is cheap to copy while trials are compared. Each stage is a member of Loop that takes
+// and returns the records of loop_records.hpp (or a surface); none builds JSON.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <memory>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "experiments/calibration/calibration.hpp"
+#include "experiments/loop/loop.hpp"
+#include "experiments/loop/loop_records.hpp"
+
+namespace reposetwin::experiments::loop_detail {
+
+/// One test's simulated response on the mu_r grid (one model setting).
+struct Curve {
+  std::vector<double> mu;                        // grid [-]
+  MonotoneFit fit;                               // angle against mu_r
+  std::vector<double> h, d, angle;               // seed means per grid point [mm, mm, deg]
+  std::vector<std::vector<double>> angle_seeds;  // per grid point, per seed [deg]
+  std::vector<std::vector<double>> h_seeds, d_seeds;
+  std::vector<int> clogged;  // per grid point: pours that formed no pile
+
+  double clamp(double m) const { return std::clamp(m, mu.front(), mu.back()); }
+  /// The fitted angle at mu_r m (clamped to the grid) [deg].
+  double at(double m) const { return evaluate(fit, clamp(m)); }
+  /// y interpolated linearly on the grid at m (clamped).
+  double lin(const std::vector<double>& y, double m) const;
+};
+
+/// The twin for every test at one setting of the effects: curves on the mu_r grid.
+struct Surface {
+  std::vector<EffectSetting> effects;
+  std::vector<Curve> curve;                               // per test
+  std::vector<std::vector<std::vector<SimOutcome>>> raw;  // [test][grid][seed]
+};
+
+/// The current model: a mixture of simulated surfaces (loop.hpp's design note).
+struct Model {
+  std::vector<std::pair<double, const Surface*>> terms;  // weight, surface
+  double angle(std::size_t test, double mu) const;       // [deg]
+  double h(std::size_t test, double mu) const;           // [mm]
+  double d(std::size_t test, double mu) const;           // [mm]
+};
+
+/// What the iterations change: the model, its fit and the effects in it.
+struct LoopState {
+  Model model;
+  MuFit fit;
+  std::vector<EffectSetting> effects;
+  std::set<std::string> used;        // names of the effects in the model
+  std::vector<ChosenEffect> chosen;  // in the order they were added
+};
+
+/// One refit trial: the effect simulated at p on the whole grid and (mu_r, t) fitted jointly.
+struct Trial {
+  double p = 0.0;         // simulated value
+  double fraction = 0.0;  // its response at the node, in units of the probe's fingerprint
+  const Surface* surf = nullptr;
+  MuFit joint;
+  double rmse = 0.0;  // calibration RMSE of the refitted model [deg]
+  Model model;        // the model with this trial mixed in
+};
+
+/// The refit of one accepted candidate: its trials and the failures on the way.
+struct Refit {
+  std::vector<Trial> trials;
+  std::string notes;
+};
+
+/// The loop over one dataset; run() names the stages in order.
+class Loop {
+ public:
+  Loop(const LabData& data, const std::string& out, const LoopSettings& s);
+  nlohmann::json run();
+
+ private:
+  void say(const std::string& m) const;
+  // The cache's runs, a pour that formed no pile repeated with a new seed (s_.max_pours).
+  std::vector<SimOutcome> pour(const std::vector<SimRequest>& req);
+
+  // Stages (loop.cpp).
+  void check_settings();
+  const Surface& simulate_baseline();
+  void set_seed_noise(const Surface& base);
+  BaselineRecord calibrate_baseline(const Surface& base) const;
+  std::size_t nearest_grid_point(double mu) const;
+  std::vector<const CandidateEffect*> available_candidates(
+      std::vector<UnavailableCandidate>& unavailable);
+  std::vector<FingerprintRecord> fingerprint_candidates(
+      const Surface& base, std::size_t node, std::vector<UnavailableCandidate>& unavailable);
+  bool iterate(int it, LoopState& state, const std::vector<FingerprintRecord>& fps,
+               std::size_t node, std::vector<IterationRecord>& iterations);
+  IterationRecord trace(int it, const LoopState& state,
+                        const std::vector<FingerprintRecord>& fps) const;
+  FinalRecord final_record(const LoopState& state) const;
+  LoopProvenance provenance(const Surface& base) const;
+  nlohmann::json write(const LoopRecord& rec) const;  // OUT/loop.json and OUT/index.html
+
+  // Building blocks (loop.cpp).
+  Surface simulate_surface(const std::vector<EffectSetting>& effects);
+  FingerprintRecord fingerprint(const CandidateEffect& e, const Surface& base, std::size_t node,
+                                const std::vector<SimOutcome>& on, std::size_t first) const;
+  std::string untraceable(const FingerprintRecord& f) const;
+  double pooled_seed_sd(const Surface& base) const;
+
+  // The model's fit and residuals (loop_model.cpp).
+  MuFit fit_mu(const Model& model, const Surface* extra, double t_max) const;
+  std::vector<ResidualRow> residuals(const Model& model, double mu) const;
+
+  // Refit by simulation (loop_refit.cpp).
+  Refit refit_by_simulation(const CandidateEffect& e, double off, double p1, double coef,
+                            const FingerprintRecord& fp, double mu_node, const LoopState& state);
+  bool run_trial(const CandidateEffect& e, double off, double p, const FingerprintRecord& fp,
+                 double mu_node, const LoopState& state, Refit& refit);
+  std::string unconfirmed_reason(const Trial& best, const LoopState& state) const;
+  double calibration_rmse(const Model& model, double mu) const;
+
+  const LabData& data_;
+  std::string out_;
+  const LoopSettings s_;
+  SimCache cache_;
+  std::vector<std::size_t> cal_, val_;  // test indices by role
+  double noise_sd_ = 0.0;               // pooled seed spread of one pile's angle [deg]
+  double seed_se_ = 0.0;                // seed standard error of a predicted angle [deg]
+  std::vector<double> sigma_;           // per test: 1-sigma noise of its residual [deg]
+  std::vector<std::unique_ptr<Surface>> surfaces_;
+};
+
+}  // namespace reposetwin::experiments::loop_detail

@@ -1,0 +1,96 @@
+// The loop's records and their loop.json fields: the RMSE by role, an iteration's `chosen`
+// field in each of its three forms, and the summary made from the baseline and final records.
+#include "experiments/loop/loop_records.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace reposetwin::experiments {
+namespace {
+
+ResidualRow row(const std::string& role, double residual) {
+  ResidualRow r;
+  r.id = role + std::to_string(residual);
+  r.role = role;
+  r.residual_deg = residual;
+  return r;
+}
+
+TEST(LoopRecords, RmseByRoleSplitsCalibrationAndValidation) {
+  const RoleRmse r =
+      rmse_by_role({row("calibrate", 3.0), row("calibrate", -4.0), row("validate", 2.0)});
+  EXPECT_DOUBLE_EQ(r.calibrate_deg, std::sqrt(12.5));
+  ASSERT_TRUE(r.validate_deg.has_value());
+  EXPECT_DOUBLE_EQ(*r.validate_deg, 2.0);
+  const nlohmann::json j = to_json(r);
+  EXPECT_EQ(j["n_calibrate"], 2);
+  EXPECT_EQ(j["n_validate"], 1);
+  // Without validation tests the field is null, not 0.
+  EXPECT_TRUE(to_json(rmse_by_role({row("calibrate", 1.0)}))["validate_deg"].is_null());
+}
+
+TEST(LoopRecords, ResidualRowWritesLabHAndDOnlyWhenMeasured) {
+  ResidualRow r = row("calibrate", 1.0);
+  EXPECT_FALSE(to_json(r).contains("residual_H_mm"));
+  r.residual_h_mm = 0.5;
+  r.residual_d_mm = -2.0;
+  const nlohmann::json j = to_json(r);
+  EXPECT_EQ(j["residual_H_mm"], 0.5);
+  EXPECT_EQ(j["residual_D_mm"], -2.0);
+}
+
+TEST(LoopRecords, IterationChosenIsNullARefitFailureOrTheEffect) {
+  IterationRecord it;
+  it.iteration = 1;
+  it.stopped = "max_effects (1) reached";
+  nlohmann::json j = to_json(it);
+  EXPECT_TRUE(j["chosen"].is_null());
+  EXPECT_EQ(j["stopped"], "max_effects (1) reached");
+  EXPECT_FALSE(j.contains("not_confirmed"));
+
+  it = {};
+  it.refit_failed = RefitFailed{"plate_friction", "at 0.1: no pile; ", 0.1};
+  j = to_json(it);
+  EXPECT_EQ(j["chosen"]["refit_failed"], "at 0.1: no pile; ");
+  EXPECT_EQ(j["chosen"]["linear_estimate"], 0.1);
+
+  it = {};
+  it.not_confirmed = NotConfirmed{{"lift_speed", 2.0, 2.0, 0.0, 0.2, {}, ""}, 1.0, "t = 0"};
+  j = to_json(it);
+  EXPECT_TRUE(j["chosen"].is_null());
+  EXPECT_EQ(j["not_confirmed"]["reason"], "t = 0");
+
+  it = {};
+  ChosenEffect c;
+  c.refit.name = "plate_friction";
+  c.refit.trials = {{0.2, 0.6, 0.9, 0.25, 0.8}};
+  it.chosen = c;
+  j = to_json(it);
+  EXPECT_EQ(j["chosen"]["name"], "plate_friction");
+  EXPECT_EQ(j["chosen"]["trials"][0]["response_fraction"], 0.6);
+}
+
+TEST(LoopRecords, SummaryComparesTheBaselineAndFinalModels) {
+  LoopRecord loop;
+  loop.baseline.rmse.calibrate_deg = 4.0;
+  loop.baseline.seed_se_deg = 0.5;
+  loop.rule.loo_margin_factor = 2.0;
+  loop.final_model.rmse.calibrate_deg = 1.0;
+  loop.final_model.rmse.validate_deg = 1.5;
+  ChosenEffect c;
+  c.refit.name = "plate_friction";
+  loop.final_model.effects = {c};
+  const nlohmann::json j = to_json(loop);
+  EXPECT_EQ(j["summary"]["chosen"], "plate_friction");
+  EXPECT_EQ(j["summary"]["effects"], nlohmann::json::array({"plate_friction"}));
+  EXPECT_DOUBLE_EQ(j["summary"]["reduction"].get<double>(), 0.75);
+  EXPECT_TRUE(j["summary"]["rmse_validate_before_deg"].is_null());
+  EXPECT_EQ(j["summary"]["rmse_validate_after_deg"], 1.5);
+  EXPECT_DOUBLE_EQ(j["rule"]["loo_margin_deg"].get<double>(), 1.0);
+  EXPECT_FALSE(j["candidate_registry"].empty());
+  EXPECT_FALSE(j["provenance"].contains("run"));
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
