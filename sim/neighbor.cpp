@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <type_traits>
 
@@ -20,21 +21,33 @@ struct Grid {
   double h = 1.0;
   int nx = 1, ny = 1, nz = 1;
   int cell_of(const Vec3& x, int* ix, int* iy, int* iz) const {
-    *ix = std::clamp(static_cast<int>((x.x() - origin.x()) / h), 0, nx - 1);
-    *iy = std::clamp(static_cast<int>((x.y() - origin.y()) / h), 0, ny - 1);
-    *iz = std::clamp(static_cast<int>((x.z() - origin.z()) / h), 0, nz - 1);
+    *ix = index((x.x() - origin.x()) / h, nx);
+    *iy = index((x.y() - origin.y()) / h, ny);
+    *iz = index((x.z() - origin.z()) / h, nz);
     return (*iz * ny + *iy) * nx + *ix;
+  }
+  // A coordinate in cells, clamped to [0, n - 1]; a NaN (a broken state, which the runner's
+  // diagnose reports) goes to cell 0 instead of an undefined conversion.
+  static int index(double q, int n) {
+    if (!(q >= 0.0)) return 0;
+    return q >= n - 1 ? n - 1 : static_cast<int>(q);
   }
 };
 
 Grid make_grid(const Particles& p, double skin) {
-  Vec3 lo = p.x[0], hi = p.x[0];
+  // The box of the finite positions only: a non-finite one (the state is broken, and the
+  // runner stops on it at its next check) must not make the box, and the cell search below,
+  // unbounded.
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   double r_min = p.radius[0];
-  for (std::size_t i = 1; i < p.size(); ++i) {
-    lo = lo.cwiseMin(p.x[i]);
-    hi = hi.cwiseMax(p.x[i]);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.x[i].allFinite()) {
+      lo = lo.cwiseMin(p.x[i]);
+      hi = hi.cwiseMax(p.x[i]);
+    }
     r_min = std::min(r_min, p.radius[i]);
   }
+  if (!(lo.allFinite() && hi.allFinite())) lo = hi = Vec3::Zero();
   Grid g;
   g.origin = lo;
   g.h = 2.0 * r_min + skin;

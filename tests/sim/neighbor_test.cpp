@@ -1,12 +1,14 @@
 // The neighbor list against the brute-force O(N^2) oracle, on random polydisperse packings
 // (d_max / d_min = 8), and the forces it produces against a direct pair loop.
+#include "sim/neighbor.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <map>
 #include <set>
 
-#include "sim/neighbor.hpp"
 #include "sim/random.hpp"
 #include "sim/world.hpp"
 #include "sim_test_util.hpp"
@@ -60,6 +62,28 @@ TEST_P(NeighborOracle, PairsEqualBruteForce) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Sorted, NeighborOracle, ::testing::Values(false, true));
+
+// A broken state (a position NaN, infinite, or blown to 1e300 m by a runaway force) must not
+// hang the build: it finishes, and the pairs among the finite particles are still all listed.
+TEST(NeighborList, ANonFiniteOrFarPositionDoesNotHangTheBuild) {
+  for (double bad :
+       {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), 1e300}) {
+    Particles p = random_packing(500, 0.25e-3, 2e-3, 0.01, 4);
+    NeighborList nl;
+    nl.skin = 0.2e-3;
+    build_neighbor_list(p, nl, /*sort_particles=*/false);
+    const auto finite_pairs = id_pairs_of_list(p, nl);
+    ASSERT_GT(finite_pairs.size(), 100u);
+    const std::int64_t lost = p.id[17];
+    p.x[17] = Vec3(bad, 0.005, 0.005);
+    NeighborList broken;
+    broken.skin = nl.skin;
+    build_neighbor_list(p, broken, /*sort_particles=*/false);
+    const auto got = id_pairs_of_list(p, broken);
+    for (const auto& pair : finite_pairs)
+      if (pair.first != lost && pair.second != lost) EXPECT_TRUE(got.count(pair)) << bad;
+  }
+}
 
 // Springs survive a rebuild that reorders the particles: each pair keeps its springs, keyed by
 // the stable ids of its particles (the oracle), negated when the pair is listed the other way
