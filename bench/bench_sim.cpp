@@ -42,6 +42,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -64,7 +65,6 @@ using reposetwin::sim::WallKind;
 using reposetwin::sim::WallSpec;
 using reposetwin::sim::World;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDensity = 2760.0;              // [kg/m^3]
 constexpr double kRealYoungs = 46.8e9;           // the rock's E [Pa]
 constexpr double kSoftYoungs = 46.8e6;           // softened E used by the run [Pa]
@@ -141,14 +141,14 @@ Model make_model(const Options& o, double gravity_factor) {
 /// Places `n` spheres without overlap in a cone of kHeapAngleDeg on the plate z = 0, each
 /// resting (within kGap) on the spheres below it (design note).
 void build_heap(World& world, int n, std::uint64_t seed) {
-  const double tan_slope = std::tan(kHeapAngleDeg * kPi / 180.0);
+  const double tan_slope = std::tan(kHeapAngleDeg * std::numbers::pi / 180.0);
   const double mean_volume =  // E[pi d^3 / 6] for d uniform in [d_min, d_max] [m^3]
-      kPi / 6.0 * (std::pow(kDiameterMax, 4) - std::pow(kDiameterMin, 4)) /
+      std::numbers::pi / 6.0 * (std::pow(kDiameterMax, 4) - std::pow(kDiameterMin, 4)) /
       (4.0 * (kDiameterMax - kDiameterMin));
   reposetwin::sim::Rng rng(seed);
   // A cone that holds about 10% more spheres than asked for at the expected solid fraction.
-  double radius =
-      std::cbrt(3.0 * 1.1 * n * mean_volume / kExpectedSolidFraction / (kPi * tan_slope));
+  double radius = std::cbrt(3.0 * 1.1 * n * mean_volume / kExpectedSolidFraction /
+                            (std::numbers::pi * tan_slope));
   for (int attempt = 0; attempt < 20; ++attempt, radius *= 1.05) {
     const double height = radius * tan_slope;
     const int nxy = static_cast<int>(std::ceil(radius / kLattice)) + 1;

@@ -4,14 +4,13 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 
 namespace reposetwin::camera {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 [[noreturn]] void fail(const std::string& where, const std::string& field, const std::string& what) {
   throw std::invalid_argument(where + ": " + field + " " + what);
@@ -174,7 +173,7 @@ Camera side_view(double distance_m, double field_width_m, double height_m, doubl
   cam.intrinsics.height_px = height_px;
   cam.intrinsics.sensor_width_mm = 36.0;
   cam.intrinsics.focal_length_mm = distance_m / field_width_m * cam.intrinsics.sensor_width_mm;
-  const double a = azimuth_deg * kPi / 180.0;
+  const double a = azimuth_deg * std::numbers::pi / 180.0;
   cam.extrinsics.position = Eigen::Vector3d(distance_m * std::sin(a), -distance_m * std::cos(a),
                                             height_m);
   cam.extrinsics.look_at = Eigen::Vector3d(0.0, 0.0, height_m);

@@ -2,11 +2,11 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <numbers>
 
 namespace reposetwin::render {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr Rgb kBlack{20, 20, 20};
 constexpr Rgb kWhite{245, 245, 245};
 
@@ -47,8 +47,8 @@ void add_box(TriangleMesh& mesh, const Eigen::Vector3d& center, const Eigen::Vec
 void add_shell(TriangleMesh& mesh, const Shell& shell, int segments) {
   const double slope = (shell.r_bottom_m - shell.r_top_m) / (shell.z_top_m - shell.z_bottom_m);
   for (int i = 0; i < segments; ++i) {
-    const double a0 = 2.0 * kPi * i / segments;
-    const double a1 = 2.0 * kPi * (i + 1) / segments;
+    const double a0 = 2.0 * std::numbers::pi * i / segments;
+    const double a1 = 2.0 * std::numbers::pi * (i + 1) / segments;
     const Eigen::Vector3d d0(std::cos(a0), std::sin(a0), 0.0);
     const Eigen::Vector3d d1(std::cos(a1), std::sin(a1), 0.0);
     const Eigen::Vector3d n0 = (d0 + Eigen::Vector3d(0, 0, slope)).normalized();

@@ -3,13 +3,12 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
 namespace reposetwin::sim {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 [[noreturn]] void bad_shape(const std::string& name, const std::string& what) {
   throw std::invalid_argument("clump template '" + name + "': " + what);
@@ -49,7 +48,7 @@ MassProperties clump_mass_properties(const std::vector<Vec3>& centres,
   Mat3 second = Mat3::Zero();
   for (std::size_t i = 0; i < n; ++i) {
     const double r = radii[i];
-    const double v = 4.0 / 3.0 * kPi * r * r * r;
+    const double v = 4.0 / 3.0 * std::numbers::pi * r * r * r;
     vol += v;
     first += v * c[i];
     second += v * (c[i] * c[i].transpose() + (r * r / 5.0) * Mat3::Identity());
@@ -195,7 +194,7 @@ ClumpTemplate make_clump_template(const ClumpShape& shape, const MassPropertySet
   if (n == 1) {
     // A sphere: the closed form, and the engine then treats it exactly as a sphere (World).
     const double r = shape.radii[0];
-    t.volume = 4.0 / 3.0 * kPi * r * r * r;
+    t.volume = 4.0 / 3.0 * std::numbers::pi * r * r * r;
     t.inertia = Vec3::Constant(0.4 * t.volume * r * r);
     t.offsets = {Vec3::Zero()};
     t.centre = shape.offsets[0];

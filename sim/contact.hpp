@@ -29,6 +29,7 @@
 #include <Eigen/Geometry>  // cross products
 #include <cmath>
 #include <cstddef>
+#include <numbers>
 #include <string_view>
 
 namespace reposetwin::sim {
@@ -108,10 +109,9 @@ struct ContactConstants {
 /// beta = ln e / sqrt(ln^2 e + pi^2). With the Hertz spring and the damping below, the
 /// rebound/approach speed ratio of a head-on collision equals e exactly.
 inline double damping_beta(double restitution) {
-  constexpr double kPi = 3.14159265358979323846;
   if (restitution >= 1.0) return 0.0;
   const double l = std::log(restitution);
-  return l / std::sqrt(l * l + kPi * kPi);
+  return l / std::sqrt(l * l + std::numbers::pi * std::numbers::pi);
 }
 
 /// Fills the derived fields of `c` (hertz_factor, normal_damping, tangential_damping) from
@@ -292,8 +292,7 @@ inline Vec3 rolling_epsd(const ContactConstants& c, const ContactStiffness& k, d
 /// small delta (twice the Hertz area), so a LIGGGHTS value k corresponds to k_c = 2 k here.
 /// Returns the magnitude F_c >= 0 [N].
 inline double sjkr_cohesion(double k_c, double r_eff, double delta) {
-  constexpr double kPi = 3.14159265358979323846;
-  return kPi * k_c * r_eff * delta;
+  return std::numbers::pi * k_c * r_eff * delta;
 }
 
 /// Size factor of the rolling coefficient, (d_c / d_ref)^alpha [-]: with alpha < 0 small

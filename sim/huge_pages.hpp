@@ -4,7 +4,7 @@
 // addresses that follow the neighbor list, not memory order. With 4 KiB pages a 50,000-sphere
 // heap touches about ten thousand pages per step, more than the second-level TLB holds, so many
 // reads first walk the page table. With 2 MiB pages the same arrays take a few dozen TLB entries
-// (bench/README.md, session 8: 5-8% of the step on the standard heap, the results unchanged).
+// (bench/README.md: 5-8% of the step on the standard heap, the results unchanged).
 // Linux gives huge pages to a region only on request (madvise) under Debian's default setting
 // (/sys/kernel/mm/transparent_hugepage/enabled = madvise): HugePageAllocator allocates arrays of
 // at least kHugeArrayMinBytes aligned to 2 MiB and asks for huge pages before the first write;

@@ -1,15 +1,14 @@
 #include "sim/model.hpp"
 
-#include "sim/particles.hpp"
-
 #include <cmath>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
+#include "sim/particles.hpp"
+
 namespace reposetwin::sim {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 [[noreturn]] void bad(const std::string& field, double value, const std::string& rule) {
   std::ostringstream os;
@@ -21,7 +20,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 double rayleigh_time(double radius, double density, double youngs_modulus, double poisson) {
   const double g = youngs_modulus / (2.0 * (1.0 + poisson));
-  return kPi * radius * std::sqrt(density / g) / (0.1631 * poisson + 0.8766);
+  return std::numbers::pi * radius * std::sqrt(density / g) / (0.1631 * poisson + 0.8766);
 }
 
 double hertz_contact_time(double m_eff, double r_eff, double e_eff, double speed) {

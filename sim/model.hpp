@@ -2,7 +2,7 @@
 //
 // Design note (after MuJoCo's mjModel/mjData split): the Model is built once from a scene and
 // never changes while the run steps; everything that changes every step lives in State
-// (sim/state.hpp). Materials are indexed by small integers; the pair table holds the contact
+// (sim/world.hpp). Materials are indexed by small integers; the pair table holds the contact
 // parameters of every pair of materials, walls included (a wall has a material like a particle),
 // so "rock on steel funnel" and "rock on rubber plate" are separate, declared inputs.
 #pragma once

@@ -13,7 +13,7 @@
 // three-term sums included ((a0 + a1) + a2), so a lane gives the bits of the scalar kernel
 // exactly; tests/sim/pair_simd_test.cpp checks this contact by contact, and the pinned
 // determinism hash checks it for whole runs. A 4-wide AVX copy of the same code (chosen at run
-// time) was as fast as SSE2 on the standard heap and was removed (bench/README.md, session 4).
+// time) was as fast as SSE2 on the standard heap (bench/README.md).
 //
 // Scope of the lanes: material pairs with EPSD rolling and neither cohesion nor size-dependent
 // rolling (lanes_eligible), which is the standard heap's and the paper's physics; a contact of
@@ -48,9 +48,8 @@ inline ContactInput pair_input(const Particles& p, const ContactConstants& c, st
   const double cut = ri + rj, msum = mi + mj, rmin = std::min(ri, rj);
   const double dist = std::sqrt(d.squaredNorm());
   // One division for the normal d / |d|, R* = r_i r_j / (r_i + r_j) and m* = m_i m_j / (m_i +
-  // m_j): inv = 1 / (|d| (r_i + r_j) (m_i + m_j) r_min). (r_min served the overlap ratio
-  // delta / r_min the kernel stored until session 10; it stays in the product because taking it
-  // out would change the rounding of the other three.)
+  // m_j): inv = 1 / (|d| (r_i + r_j) (m_i + m_j) r_min). r_min is in the product only for the
+  // rounding: taking it out would change the rounding of the other three, and every pinned hash.
   const double a = dist * cut, b = msum * rmin;
   const double inv = 1.0 / (a * b);
   ContactInput in;

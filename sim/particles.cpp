@@ -9,7 +9,7 @@ void Particles::permute(const std::vector<std::size_t>& order) {
   // In place, one cycle of the permutation at a time. A rebuild's order is nearly the identity
   // (the particles were sorted at the last rebuild and have moved little since), so most
   // particles stay where they are, and nothing is allocated: fresh arrays on huge pages would
-  // each cost page faults (bench/README.md, session 9).
+  // each cost page faults (bench/README.md).
   std::vector<char> placed(order.size(), 0);
   for (std::size_t s = 0; s < order.size(); ++s) {
     if (placed[s] || order[s] == s) continue;

@@ -1,8 +1,9 @@
 // Particles as a struct of arrays whose field list is written once.
 //
 // REPOSETWIN_PARTICLE_FIELDS names every per-particle array with its type and unit. Resizing,
-// reordering (the spatial sort), checkpoints and VTK output iterate this list, so a new field
-// cannot be forgotten by any of them (after MuJoCo's mjxmacro.h).
+// reordering (the spatial sort), removal and checkpoints iterate this list, so a new field cannot
+// be forgotten by any of them (after MuJoCo's mjxmacro.h). VTK output writes, by name, the fields
+// a viewer needs.
 #pragma once
 
 #include <Eigen/Core>

@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
@@ -12,7 +13,6 @@
 namespace reposetwin::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 [[noreturn]] void fail(const std::string& message) {
@@ -174,15 +174,15 @@ SectorReach sector_reach(std::span<const Vec3> x, std::span<const double> r,
     const Eigen::Vector2d d = x[i].head<2>() - centre;
     const double rho = d.norm();
     double phi = std::atan2(d.y(), d.x());
-    if (phi < 0.0) phi += 2.0 * kPi;
-    const int k = std::min(sectors - 1, static_cast<int>(phi / (2.0 * kPi) * sectors));
+    if (phi < 0.0) phi += 2.0 * std::numbers::pi;
+    const int k = std::min(sectors - 1, static_cast<int>(phi / (2.0 * std::numbers::pi) * sectors));
     const double reach = rho + r[i];
     if (std::isnan(s.reach[k]) || reach > s.reach[k]) {
       s.reach[k] = reach;
-      const Eigen::Vector2d u = rho > 0.0
-                                    ? Eigen::Vector2d(d / rho)
-                                    : Eigen::Vector2d(std::cos((k + 0.5) * 2.0 * kPi / sectors),
-                                                      std::sin((k + 0.5) * 2.0 * kPi / sectors));
+      const Eigen::Vector2d u =
+          rho > 0.0 ? Eigen::Vector2d(d / rho)
+                    : Eigen::Vector2d(std::cos((k + 0.5) * 2.0 * std::numbers::pi / sectors),
+                                      std::sin((k + 0.5) * 2.0 * std::numbers::pi / sectors));
       s.outer[k] = centre + reach * u;
     }
   }
@@ -426,7 +426,7 @@ PileGeometry measure_pile(std::span<const Vec3> positions, std::span<const doubl
   // 4. Protractor slices.
   std::vector<double> slice_angles, flank_angles, equal_area;
   for (int k = 0; k < settings.slice_azimuths; ++k) {
-    const double azimuth = kPi * k / settings.slice_azimuths;
+    const double azimuth = std::numbers::pi * k / settings.slice_azimuths;
     PileSlice slice = measure_slice(x, r, pile, g, azimuth, settings);
     if (slice.valid) slice_angles.push_back(slice.angle);
     if (slice.positive.valid) flank_angles.push_back(slice.positive.angle);

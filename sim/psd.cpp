@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
 namespace reposetwin::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // A lab sheet writes 100 for the top sieve; allow for a decimal copied with rounding noise.
 constexpr double kFullPassingTolerance = 1e-6;  // [%]
 // Relative slack when comparing d_max or d_min to the table's end sizes (unit conversions).
@@ -40,7 +40,9 @@ std::string bracket(std::size_t i) {
   throw std::invalid_argument("PSD: " + message);
 }
 
-double sphere_mass(double d, double density) { return density * kPi / 6.0 * d * d * d; }
+double sphere_mass(double d, double density) {
+  return density * std::numbers::pi / 6.0 * d * d * d;
+}
 
 // One diameter from the normal N((a+b)/2, (sd_fraction (b-a))^2) clipped to [a, b] by rejection.
 double draw_clipped_normal(double a, double b, double sd_fraction, Rng& rng) {
@@ -191,8 +193,8 @@ double expected_particle_count(const PsdSpec& spec, double target_mass, double d
   double count = 0.0;
   for (const auto& in : r.intervals) {
     if (in.mass_fraction <= 0.0) continue;
-    const double mean_mass =
-        density * kPi / 6.0 * clipped_normal_mean_cube(in.lower, in.upper, r.interval_sd_fraction);
+    const double mean_mass = density * std::numbers::pi / 6.0 *
+                             clipped_normal_mean_cube(in.lower, in.upper, r.interval_sd_fraction);
     count += in.mass_fraction * simulated / mean_mass;
   }
   return count;

@@ -524,7 +524,7 @@ void World::pair_forces() {
     Vec3 block_force[kBlock], block_torque[kBlock];
     // Each thread takes one contiguous range of blocks, of about equal work (first_block): the
     // particles kick_drift has just moved on the same core (its static halves) are still in that
-    // core's cache. Dealing blocks out dynamically was 13% slower on two threads (session 9).
+    // core's cache; dealing blocks out dynamically loses that (13% slower on two threads).
     const int nt = omp_get_num_threads(), t = omp_get_thread_num();
     const std::size_t b_end = first_block(block_cost_, t + 1, nt);
     for (std::size_t b = first_block(block_cost_, t, nt); b < b_end; ++b) {

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <iomanip>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -11,8 +12,7 @@
 namespace reposetwin::vision {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kRadToDeg = 180.0 / kPi;
+constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 
 std::string str(double v) {
   std::ostringstream os;
@@ -336,7 +336,7 @@ TopMeasurement measure_top(const cv::Mat& image, const ScaleSpec& scale,
   const cv::RotatedRect el = cv::fitEllipse(f);
   m.mm_per_px = camera::mm_per_px_at(cam, scale.axis_foot);
   m.diameter_circle_m = 2.0 * r / 1000.0;
-  m.diameter_area_m = 2.0 * std::sqrt(area / kPi) / 1000.0;
+  m.diameter_area_m = 2.0 * std::sqrt(area / std::numbers::pi) / 1000.0;
   m.sigma_diameter_circle_m = p.sigma_diameter_circle_px * m.mm_per_px / 1000.0;
   m.circle_residual_m = rms / 1000.0;
   m.ellipticity =

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <sstream>
@@ -11,8 +12,7 @@
 namespace reposetwin::vision {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kRadToDeg = 180.0 / kPi;
+constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 // Standard deviation of a uniform error over one pixel [px].
 const double kQuantisationPx = 1.0 / std::sqrt(12.0);
 // A plate edge pixel has the backdrop this many rows above it [px].

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -10,8 +11,6 @@
 
 namespace reposetwin::vision {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 std::string str(double v) {
   std::ostringstream os;
@@ -156,7 +155,7 @@ TopProfile measure_on_levels(const cv::Mat& gray, const cv::Point2d& seed, const
   outline.reserve(s.rays);
   const double rmax = std::hypot(roi.width, roi.height);
   for (int i = 0; i < s.rays; ++i) {
-    const double a = 2.0 * kPi * i / s.rays;
+    const double a = 2.0 * std::numbers::pi * i / s.rays;
     const cv::Point2d d(std::cos(a), std::sin(a));
     // First pixel outside the blob along the ray.
     double rho0 = -1.0;
@@ -211,7 +210,7 @@ TopProfile measure_on_levels(const cv::Mat& gray, const cv::Point2d& seed, const
     area += a.x * b.y - b.x * a.y;
   }
   out.area_px = 0.5 * std::abs(area);
-  out.diameter_area_px = 2.0 * std::sqrt(out.area_px / kPi);
+  out.diameter_area_px = 2.0 * std::sqrt(out.area_px / std::numbers::pi);
   std::vector<cv::Point2f> f(outline.begin(), outline.end());
   const cv::RotatedRect el = cv::fitEllipse(f);
   out.ellipse_major_px = std::max(el.size.width, el.size.height);

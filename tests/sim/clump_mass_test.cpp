@@ -9,14 +9,13 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <vector>
 
 #include "sim/clump.hpp"
 
 namespace reposetwin::sim {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 /// Integrals of an axisymmetric solid about the x axis (coordinates along the axis s, across
 /// y): A0 = int dV, A1 = int s dV, A2 = int s^2 dV, B = int y^2 dV (= int z^2 dV).
@@ -64,10 +63,11 @@ AxialMoments collinear_union(const std::vector<double>& c, const std::vector<dou
       return sum;
     };
     const double p[3] = {p0, p1, p2};
-    m.a0 += kPi * integral(p, 3, 0);
-    m.a1 += kPi * integral(p, 3, 1);
-    m.a2 += kPi * integral(p, 3, 2);
-    m.b += kPi / 4.0 * integral(q, 5, 0);  // a disc of radius rho: int y^2 dA = pi rho^4 / 4
+    m.a0 += std::numbers::pi * integral(p, 3, 0);
+    m.a1 += std::numbers::pi * integral(p, 3, 1);
+    m.a2 += std::numbers::pi * integral(p, 3, 2);
+    m.b += std::numbers::pi / 4.0 *
+           integral(q, 5, 0);  // a disc of radius rho: int y^2 dA = pi rho^4 / 4
   }
   return m;
 }
@@ -145,7 +145,7 @@ TEST(ClumpMass, CollinearSpheresMatchTheClosedFormAndConverge) {
     }
     // Not the sum of the spheres: the overlaps are counted once.
     double sum = 0.0;
-    for (double r : cs.r) sum += 4.0 / 3.0 * kPi * r * r * r;
+    for (double r : cs.r) sum += 4.0 / 3.0 * std::numbers::pi * r * r * r;
     EXPECT_LT(want.vol, sum * (1.0 - 1e-3)) << cs.name;
   }
 }
@@ -154,11 +154,12 @@ TEST(ClumpMass, TwoSpheresMatchTheLensVolume) {
   // Union = both spheres less the lens, V_lens = pi (R + r - d)^2 (d^2 + 2 d r - 3 r^2 + 2 d R +
   // 6 r R - 3 R^2) / (12 d) (the sphere-sphere intersection).
   const double big = 1e-3, small = 0.6e-3, d = 1.1e-3;
-  const double lens = kPi * std::pow(big + small - d, 2) *
-                      (d * d + 2 * d * small - 3 * small * small + 2 * d * big +
-                       6 * small * big - 3 * big * big) /
-                      (12 * d);
-  const double want = 4.0 / 3.0 * kPi * (big * big * big + small * small * small) - lens;
+  const double lens =
+      std::numbers::pi * std::pow(big + small - d, 2) *
+      (d * d + 2 * d * small - 3 * small * small + 2 * d * big + 6 * small * big - 3 * big * big) /
+      (12 * d);
+  const double want =
+      4.0 / 3.0 * std::numbers::pi * (big * big * big + small * small * small) - lens;
   const MassProperties mp =
       clump_mass_properties({Vec3(0, 0, 0), 1e-3 * Vec3(0.3, -0.9, std::sqrt(0.31))},
                             {big, small});  // |offset| = 1.1 mm
@@ -243,7 +244,7 @@ TEST(ClumpMass, TemplateIsInItsPrincipalFrame) {
   const ClumpTemplate one = make_clump_template({"one", {Vec3(1e-3, 2e-3, 3e-3)}, {1e-3}});
   EXPECT_EQ(one.offsets[0], Vec3::Zero());
   EXPECT_EQ(one.inertia[0], one.inertia[2]);
-  EXPECT_DOUBLE_EQ(one.volume, 4.0 / 3.0 * kPi * 1e-9);
+  EXPECT_DOUBLE_EQ(one.volume, 4.0 / 3.0 * std::numbers::pi * 1e-9);
 }
 
 TEST(ClumpMass, BadShapesAreRefusedWithAClearMessage) {

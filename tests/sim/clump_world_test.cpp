@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <set>
 
 #include "sim/checkpoint.hpp"
@@ -18,8 +19,6 @@
 
 namespace reposetwin::sim {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 /// A tetrahedral clump of four spheres of radius r, centres at distance a from its centre.
 ClumpShape tetrahedron(double r, double a) {
@@ -201,7 +200,7 @@ TEST(ClumpWorld, FlatClumpDroppedOnThePlateComesToRestWithoutDrift) {
   m.finalize(r, r);
   World w(m);
   const Quat flat = m.clumps[t].axes.conjugate();  // body axes back to the square's frame
-  const Quat tilt(Eigen::AngleAxisd(3.0 * kPi / 180.0, Vec3(1, 0.4, 0).normalized()));
+  const Quat tilt(Eigen::AngleAxisd(3.0 * std::numbers::pi / 180.0, Vec3(1, 0.4, 0).normalized()));
   w.add_clump(t, Vec3(1e-3, 2e-3, r + 1.5e-3), tilt * flat, 0);
   w.set_body_velocity(0, Vec3(0.002, 0, 0), Vec3(0, 0, 1.0));
   const Vec3 x0 = w.state().bodies.x[0];
@@ -419,7 +418,7 @@ TEST(ClumpIncline, DumbbellStaysSlidesOrTipsAsFrictionAndGeometryPredict) {
   // Along its axis the dumbbell slides once tan(theta) > mu_s, at a = g (sin theta - mu_s cos
   // theta), and tips over its lower sphere once the vertical through its centre of mass leaves
   // the lower contact, tan(theta) > a / r (centre of mass r above the plate, a uphill of it).
-  const double r = 1e-3, pi = kPi;
+  const double r = 1e-3, pi = std::numbers::pi;
   // Long (a/r = 0.9, tipping at 42 deg) and mu_s = 0.466 (sliding at 25 deg).
   for (double deg : {22.0, 28.0}) {
     const double theta = deg * pi / 180.0;

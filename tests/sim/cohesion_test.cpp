@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <functional>
+#include <numbers>
 
 #include "sim/world.hpp"
 #include "sim_test_util.hpp"
@@ -20,7 +21,6 @@ namespace {
 using testing::make_model;
 using testing::plate;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kR = 1e-3;    // sphere radius [m]
 constexpr double kE = 46.8e6;  // softened Young's modulus [Pa]
 constexpr double kNu = 0.19;
@@ -28,7 +28,7 @@ constexpr double kRho = 2760.0;
 constexpr double kG = 9.81;
 constexpr double kKc = 2e5;  // cohesion energy density [Pa]: cohesion ~ weight at rest
 
-double sphere_mass(double r) { return kRho * 4.0 / 3.0 * kPi * r * r * r; }
+double sphere_mass(double r) { return kRho * 4.0 / 3.0 * std::numbers::pi * r * r * r; }
 // E* of two bodies of the same material (rock on rock, or rock on the test's "steel").
 double e_star() { return kE / (2.0 * (1.0 - kNu * kNu)); }
 
@@ -37,7 +37,7 @@ struct Law {
   double a;  // Hertz: 4/3 E* sqrt(R*) [N/m^1.5]
   double b;  // cohesion: pi k_c R* [N/m]
   explicit Law(double r_eff, double k_c = kKc)
-      : a(4.0 / 3.0 * e_star() * std::sqrt(r_eff)), b(kPi * k_c * r_eff) {}
+      : a(4.0 / 3.0 * e_star() * std::sqrt(r_eff)), b(std::numbers::pi * k_c * r_eff) {}
   double force(double d) const { return a * std::pow(d, 1.5) - b * d; }
   double energy(double d) const { return 0.4 * a * std::pow(d, 2.5) - 0.5 * b * d * d; }
   double delta_eq() const { return (b / a) * (b / a); }

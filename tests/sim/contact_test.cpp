@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "sim/world.hpp"
 #include "sim_test_util.hpp"
@@ -15,13 +16,12 @@ using testing::frictionless;
 using testing::make_model;
 using testing::plate;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kR = 1e-3;      // sphere radius [m]
 constexpr double kE = 46.8e6;    // softened Young's modulus [Pa]
 constexpr double kNu = 0.19;
 constexpr double kRho = 2760.0;
 
-double sphere_mass(double r) { return kRho * 4.0 / 3.0 * kPi * r * r * r; }
+double sphere_mass(double r) { return kRho * 4.0 / 3.0 * std::numbers::pi * r * r * r; }
 
 struct Impact {
   double duration;  // [s]

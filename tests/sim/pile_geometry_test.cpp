@@ -4,18 +4,17 @@
 
 #include <gtest/gtest.h>
 
-#include "../support/cone_pile.hpp"
-
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
+#include "../support/cone_pile.hpp"
 #include "sim/random.hpp"
 
 namespace reposetwin::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
+constexpr double kDeg = std::numbers::pi / 180.0;
 
 using test_support::Spheres;
 using test_support::add_ring;

@@ -5,16 +5,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
 namespace reposetwin::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDensity = 2760.0;  // [kg/m^3]
 
-double mass_of(double d) { return kDensity * kPi / 6.0 * d * d * d; }
+double mass_of(double d) { return kDensity * std::numbers::pi / 6.0 * d * d * d; }
 
 // Sizes 0.5, 1, 2, 4 mm passing 10, 30, 60, 100 %.
 SieveTable hand_table() { return {{0.5e-3, 1e-3, 2e-3, 4e-3}, {10.0, 30.0, 60.0, 100.0}}; }

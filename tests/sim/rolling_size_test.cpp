@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "sim/world.hpp"
 #include "sim_test_util.hpp"
@@ -17,7 +18,6 @@ namespace {
 using testing::make_model;
 using testing::plate;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kE = 46.8e6;  // softened Young's modulus [Pa]
 constexpr double kNu = 0.19;
 constexpr double kRho = 2760.0;
@@ -27,7 +27,7 @@ double e_star() { return kE / (2.0 * (1.0 - kNu * kNu)); }
 double hertz(double r_eff, double delta) {
   return 4.0 / 3.0 * e_star() * std::sqrt(r_eff) * std::pow(delta, 1.5);
 }
-double sphere_mass(double r) { return kRho * 4.0 / 3.0 * kPi * r * r * r; }
+double sphere_mass(double r) { return kRho * 4.0 / 3.0 * std::numbers::pi * r * r * r; }
 
 /// Rolling resistance with size scaling; no sliding friction, no damping (the torque is then the
 /// rolling torque alone and the normal force the plain Hertz force).

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <numbers>
 
 #include "tests/vision/synthetic.hpp"
 #include "vision/image.hpp"
@@ -15,7 +16,7 @@
 namespace reposetwin::vision {
 namespace {
 
-double theta_of(double h, double d) { return std::atan(2.0 * h / d) * 180.0 / synthetic::kPi; }
+double theta_of(double h, double d) { return std::atan(2.0 * h / d) * 180.0 / std::numbers::pi; }
 
 std::string temp_path(const std::string& name) {
   return (std::filesystem::temp_directory_path() / ("reposetwin_vision_" + name)).string();

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "tests/vision/synthetic.hpp"
 
@@ -13,7 +14,7 @@ namespace {
 using synthetic::SideScene;
 
 double true_theta_deg(double h, double d) {
-  return std::atan(2.0 * h / d) * 180.0 / synthetic::kPi;
+  return std::atan(2.0 * h / d) * 180.0 / std::numbers::pi;
 }
 
 TEST(SideView, CleanConeGivesThetaAndSize) {
@@ -59,8 +60,8 @@ TEST(SideView, RoundedApexLeavesTheFlanksAndLowersH) {
   const double h_top = 70.0 - 40.0 * (1.0 / std::cos(phi) - 1.0);
   EXPECT_NEAR(p.height_px * s.mm_per_px, h_top, 0.3);
   EXPECT_NEAR(p.theta_deg, true_theta_deg(h_top, 200.0), 0.3);
-  EXPECT_NEAR(p.left.angle_deg, phi * 180.0 / synthetic::kPi, 0.5);
-  EXPECT_NEAR(p.right.angle_deg, phi * 180.0 / synthetic::kPi, 0.5);
+  EXPECT_NEAR(p.left.angle_deg, phi * 180.0 / std::numbers::pi, 0.5);
+  EXPECT_NEAR(p.right.angle_deg, phi * 180.0 / std::numbers::pi, 0.5);
   // With a 20-100% band the rounding enters the fit: the Huber fit keeps the angle but the
   // reported residual shows the curvature.
   SideSettings wide;
@@ -91,7 +92,7 @@ TEST(SideView, BottomLayerParticleDoesNotTiltTheToe) {
     SideScene s;
     s.mm_per_px = 0.5;
     s.diameter_mm = 80.0;
-    s.height_mm = 40.0 * std::tan(phi_deg * synthetic::kPi / 180.0);
+    s.height_mm = 40.0 * std::tan(phi_deg * std::numbers::pi / 180.0);
     s.base_particle_mm = 2.0;
     s.bar_offset_mm = -120.0;
     const SideProfile p = measure_side_pixels(synthetic::draw_side(s));

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cmath>
+#include <numbers>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <optional>
@@ -19,8 +20,6 @@
 #include "camera/camera.hpp"
 
 namespace reposetwin::vision::synthetic {
-
-constexpr double kPi = 3.14159265358979323846;
 
 /// Photographic degradations shared by the scene kinds.
 struct Degradation {
@@ -216,7 +215,7 @@ inline cv::Mat draw_side(const SideScene& s) {
   if (!s.camera) {
     const double au = s.axis_u < 0 ? 0.5 * (s.width - 1) : s.axis_u;
     const double k = 1.0 / s.mm_per_px;
-    const double t = s.tilt_deg * kPi / 180.0;
+    const double t = s.tilt_deg * std::numbers::pi / 180.0;
     // Scene (x right [mm], z up [mm]) to pixels, rotated by the tilt about the axis foot.
     auto px = [&](double x, double z) {
       const double du = x * k, dv = -z * k;
@@ -241,7 +240,7 @@ inline cv::Mat draw_side(const SideScene& s) {
       const double zc = s.height_mm - rho / std::cos(phi);
       std::vector<cv::Point2d> poly{px(-rb, -below), px(rb, -below)};
       for (int i = 0; i <= 180; ++i) {
-        const double a = 0.5 * kPi - phi + 2.0 * phi * i / 180.0;  // right to left
+        const double a = 0.5 * std::numbers::pi - phi + 2.0 * phi * i / 180.0;  // right to left
         poly.push_back(px(rho * std::cos(a), zc + rho * std::sin(a)));
       }
       pile.push_back(poly);
@@ -251,8 +250,8 @@ inline cv::Mat draw_side(const SideScene& s) {
       for (double side : {-1.0, 1.0}) {
         std::vector<cv::Point2d> disk;
         for (int k = 0; k < 64; ++k)
-          disk.push_back(px(side * (r - rp) + rp * std::cos(2.0 * kPi * k / 64),
-                            rp + rp * std::sin(2.0 * kPi * k / 64)));
+          disk.push_back(px(side * (r - rp) + rp * std::cos(2.0 * std::numbers::pi * k / 64),
+                            rp + rp * std::sin(2.0 * std::numbers::pi * k / 64)));
         pile.push_back(disk);
       }
     }
@@ -262,8 +261,8 @@ inline cv::Mat draw_side(const SideScene& s) {
         const double xc = side * (r + rs * (0.3 + 2.0 * i));  // a touching chain
         std::vector<cv::Point2d> disk;
         for (int k = 0; k < 64; ++k)
-          disk.push_back(
-              px(xc + rs * std::cos(2.0 * kPi * k / 64), rs + rs * std::sin(2.0 * kPi * k / 64)));
+          disk.push_back(px(xc + rs * std::cos(2.0 * std::numbers::pi * k / 64),
+                            rs + rs * std::sin(2.0 * std::numbers::pi * k / 64)));
         pile.push_back(disk);
       }
     }
@@ -273,8 +272,8 @@ inline cv::Mat draw_side(const SideScene& s) {
         for (double side : {-1.0, 1.0}) {
           std::vector<cv::Point2d> disk;
           for (int k = 0; k < 64; ++k)
-            disk.push_back(px(side * xc + rs * std::cos(2.0 * kPi * k / 64),
-                              rs + rs * std::sin(2.0 * kPi * k / 64)));
+            disk.push_back(px(side * xc + rs * std::cos(2.0 * std::numbers::pi * k / 64),
+                              rs + rs * std::sin(2.0 * std::numbers::pi * k / 64)));
           pile.push_back(disk);
         }
     }
@@ -299,7 +298,7 @@ inline cv::Mat draw_side(const SideScene& s) {
     const double below = 2.0 * camera::mm_per_px_at(cam, Eigen::Vector3d(0, 0, 0)) / 1000.0;
     std::vector<Eigen::Vector3d> cone{Eigen::Vector3d(0, 0, h)};
     for (int i = 0; i < 1440; ++i) {
-      const double a = 2.0 * kPi * i / 1440;
+      const double a = 2.0 * std::numbers::pi * i / 1440;
       cone.emplace_back(r * std::cos(a), r * std::sin(a), 0.0);
       const double rb = r * (1.0 + below / h);
       cone.emplace_back(rb * std::cos(a), rb * std::sin(a), -below);
@@ -342,7 +341,7 @@ inline cv::Mat draw_top(const TopScene& s) {
                b = 0.5 * (s.minor_diameter_mm > 0 ? s.minor_diameter_mm : s.diameter_mm);
   std::vector<Eigen::Vector3d> world;
   for (int i = 0; i < 1440; ++i) {
-    const double t = 2.0 * kPi * i / 1440;
+    const double t = 2.0 * std::numbers::pi * i / 1440;
     if (s.camera) {
       world.emplace_back(a / 1000.0 * std::cos(t), b / 1000.0 * std::sin(t), 0.0);
     } else {
