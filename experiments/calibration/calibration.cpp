@@ -7,18 +7,15 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "experiments/io/format.hpp"
+
 namespace reposetwin::experiments {
 namespace {
 
 constexpr double kLowQuantile = 0.025;   // lower end of the reported 95% interval
 constexpr double kHighQuantile = 0.975;  // upper end of the reported 95% interval
 
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
-}
+std::string num(double v) { return significant(v, 10); }
 
 // A random stream that gives the same numbers on every platform: mt19937_64 is fully specified,
 // and the normal draw is our own Box-Muller (std::normal_distribution is not portable).

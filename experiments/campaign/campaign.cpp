@@ -1,7 +1,5 @@
 #include "experiments/campaign/campaign.hpp"
 
-#include <fcntl.h>
-#include <sys/file.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -228,29 +226,6 @@ std::vector<RunStatus> scan(const Campaign& c, const fs::path& out_dir) {
   return st;
 }
 
-// An exclusive lock on the output folder for local runs (see the design note).
-class FolderLock {
- public:
-  explicit FolderLock(const fs::path& out_dir) {
-    const std::string p = (out_dir / ".campaign.lock").string();
-    fd_ = ::open(p.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (fd_ < 0) throw std::runtime_error(p + ": cannot open the campaign lock file");
-    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
-      ::close(fd_);
-      throw std::runtime_error(out_dir.string() +
-                               ": another campaign process is running in this folder");
-    }
-  }
-  ~FolderLock() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  FolderLock(const FolderLock&) = delete;
-  FolderLock& operator=(const FolderLock&) = delete;
-
- private:
-  int fd_ = -1;
-};
-
 // The absolute output folder, created; refuses runs whose indices are not their positions and a
 // folder that holds another campaign.
 fs::path prepare_out_dir(const Campaign& campaign, const std::string& out_dir_str) {
@@ -339,7 +314,7 @@ CampaignSummary run_impl(const Campaign& campaign, const std::string& out_dir_st
   const RankInfo rank = settings.rank.value_or(RankInfo{});
   const bool writes_manifest = !mpi || rank.rank == 0;
   std::optional<FolderLock> lock;
-  if (!mpi) lock.emplace(out_dir);
+  if (!mpi) lock.emplace(out_dir.string(), ".campaign.lock", "another campaign process");
   const std::string tag =
       "[campaign " + campaign.name +
       (mpi ? " rank " + std::to_string(rank.rank) + "/" + std::to_string(rank.size)

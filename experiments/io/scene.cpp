@@ -6,6 +6,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "experiments/io/format.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/toml_reader.hpp"
 
@@ -17,11 +18,7 @@ constexpr double kMinGrains = 10.0;    // grains of the largest size in a sample
 constexpr double kMaxLiftSpeed = 1.0;  // [m/s]
 constexpr double kMaxGravity = 100.0;  // [m/s^2]
 
-std::string num(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
+std::string num(double v) { return significant(v); }
 
 sim::Material read_material(TableReader t, const std::string& name) {
   sim::Material m;

@@ -7,10 +7,11 @@
 #include <sstream>
 
 #include "experiments/campaign/campaign.hpp"
-#include "experiments/photos/lab_photos.hpp"
-#include "experiments/loop/loop_effects.hpp"
-#include "experiments/io/scene_overrides.hpp"
+#include "experiments/io/format.hpp"
 #include "experiments/io/input_error.hpp"
+#include "experiments/io/scene_overrides.hpp"
+#include "experiments/loop/loop_effects.hpp"
+#include "experiments/photos/lab_photos.hpp"
 
 namespace reposetwin::experiments {
 namespace fs = std::filesystem;
@@ -61,16 +62,7 @@ bool looks_like_toml_value(const std::string& v) {
   }
 }
 
-std::string toml_number(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  std::string t = s.str();
-  if (t.find_first_of(".eE") == std::string::npos && t.find("inf") == std::string::npos &&
-      t.find("nan") == std::string::npos)
-    t += ".0";
-  return t;
-}
+std::string toml_number(double v) { return toml_float(v, 17); }
 
 }  // namespace
 

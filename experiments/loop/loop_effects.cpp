@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "experiments/io/format.hpp"
 #include "experiments/io/overrides.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/scene_overrides.hpp"
@@ -16,13 +17,7 @@ using nlohmann::json;
 
 namespace {
 
-std::string num(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.12g", v);
-  std::string s = b;
-  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
-  return s;
-}
+std::string num(double v) { return toml_float(v, 12); }
 
 std::vector<std::string> sets_of(const LabTest& t) {
   std::vector<std::string> s;

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "experiments/campaign/campaign.hpp"
+#include "experiments/io/format.hpp"
 #include "experiments/io/overrides.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/scene.hpp"
@@ -27,11 +28,7 @@ using nlohmann::json;
 
 namespace {
 
-std::string num(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.9g", v);
-  return b;
-}
+std::string num(double v) { return significant(v, 9); }
 
 // A pile run: what its case function needs.
 struct SimJob {

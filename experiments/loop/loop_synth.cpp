@@ -7,9 +7,10 @@
 #include <set>
 #include <sstream>
 
-#include "experiments/loop/loop_effects.hpp"
+#include "experiments/io/format.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/toml_reader.hpp"
+#include "experiments/loop/loop_effects.hpp"
 
 namespace reposetwin::experiments {
 namespace fs = std::filesystem;
@@ -17,11 +18,7 @@ using nlohmann::json;
 
 namespace {
 
-std::string num(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.10g", v);
-  return b;
-}
+std::string num(double v) { return significant(v, 10); }
 
 }  // namespace
 

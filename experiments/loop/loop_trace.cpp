@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "experiments/io/format.hpp"
+
 namespace reposetwin::experiments {
 namespace {
 
@@ -23,12 +25,7 @@ void check_sizes(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const Eigen
                                   "] = " + std::to_string(sigma[i]) + " must be positive");
 }
 
-std::string fmt(double v, int digits = 3) {
-  std::ostringstream s;
-  s.precision(digits);
-  s << v;
-  return s.str();
-}
+std::string fmt(double v, int digits = 3) { return significant(v, digits); }
 
 Eigen::MatrixXd columns(const Eigen::VectorXd& a, const Eigen::VectorXd* b) {
   Eigen::MatrixXd x(a.size(), b ? 2 : 1);

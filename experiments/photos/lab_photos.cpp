@@ -5,6 +5,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
+#include "experiments/io/format.hpp"
 #include "experiments/io/input_error.hpp"
 
 namespace reposetwin::experiments {
@@ -25,12 +26,7 @@ class SingleOpenCvThread {
   int old_;
 };
 
-std::string number_text(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
+std::string number_text(double v) { return significant(v, 17); }
 
 }  // namespace
 

@@ -14,19 +14,6 @@ using nlohmann::json;
 
 namespace {
 
-PhotoSettings photo_settings(const ImageSettings& s) {
-  PhotoSettings p;
-  p.width_px = s.width_px;
-  p.height_px = s.height_px;
-  p.side_views = s.side_views;
-  p.top_view = s.top_view;
-  p.distance_radii = s.distance_radii;
-  p.camera_height_m = s.camera_height_m;
-  p.k1 = s.k1;
-  p.tint_seed = s.tint_seed;
-  return p;
-}
-
 // measurement.json: every view, the side summary, the top footprint, settings and provenance.
 json measurement_json(const PilePhotos& photos, const ImageSettings& settings,
                       const json& provenance) {
@@ -38,8 +25,9 @@ json measurement_json(const PilePhotos& photos, const ImageSettings& settings,
     views.push_back(j);
   }
   const vision::SideSummary& summary = *photos.summary;
-  json out = {{"method", "vision on renders: theta = atan(2H/D) per side view, perspective "
-                         "corrected with the render's camera; mean and spread over azimuths"},
+  json out = {{"method",
+               "vision on renders: theta = atan(2H/D) per side view, perspective "
+               "corrected with the render's camera; mean and spread over azimuths"},
               {"side_views", views},
               {"side_summary", vision::to_json(summary)},
               {"theta_deg", summary.theta_deg.mean},
@@ -69,9 +57,7 @@ json measurement_json(const PilePhotos& photos, const ImageSettings& settings,
 json render_and_measure(const PileSpheres& pile, const std::string& out_dir,
                         const ImageSettings& settings, const json& provenance,
                         std::optional<Eigen::Vector2d> centre) {
-  if (settings.side_views < 1) throw InputError("images: side_views must be at least 1");
-  const PilePhotos photos =
-      photograph_pile(pile, photo_settings(settings), out_dir, provenance, centre);
+  const PilePhotos photos = photograph_pile(pile, settings, out_dir, provenance, centre);
   const json out = measurement_json(photos, settings, provenance);
   write_json_atomic((fs::path(out_dir) / "measurement.json").string(), out);
   return out;
@@ -109,8 +95,8 @@ json render_and_measure_run(const PileRun& run, const std::string& run_dir,
   if (run.pile.status == sim::PileStatus::kNoPile)
     throw InputError(run_dir + ": the run formed no pile (" + run.stop.detail +
                      "); nothing to photograph");
-  return photograph_run(run, run.final_spheres, run_dir, "final.vtp",
-                        fs::path(run_dir) / "images", settings);
+  return photograph_run(run, run.final_spheres, run_dir, "final.vtp", fs::path(run_dir) / "images",
+                        settings);
 }
 
 json render_and_measure_run(const std::string& run_dir, const ImageSettings& settings,

@@ -18,16 +18,9 @@
 
 namespace reposetwin::experiments {
 
-struct ImageSettings {
-  int width_px = 1920;            // [px]
-  int height_px = 1080;           // [px]
-  int side_views = 4;             // side views spread over 180 degrees of azimuth [-]
-  bool top_view = true;           // also the top view (footprint) [-]
-  double camera_height_m = 0.0;   // side camera height above the plate (0 = level) [m]
-  double distance_radii = 12.0;   // camera distance in pile radii (at least 10) [-]
-  double k1 = 0.0;                // lens radial distortion of the side camera [-]
-  std::uint64_t tint_seed = 1;    // particle tint seed
-};
+/// The campaign's photographs: photographs.hpp's settings with their defaults (the true camera
+/// is the declared one, every file written, every side view must be measured).
+using ImageSettings = PhotoSettings;
 
 /// Photographs the pile (photographs.hpp, with the settings above: every side view must be
 /// measured) into `out_dir` (side_az000.png/.json/.measured.png, ..., top.png,

@@ -14,6 +14,7 @@
 #include "experiments/calibration/calibration.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
+#include "experiments/pile/pile_record.hpp"
 #include "experiments/report/format.hpp"
 #include "experiments/report/gnuplot.hpp"
 #include "experiments/report/html.hpp"
@@ -80,7 +81,7 @@ void add_result(FolderResults& f, const std::string& case_name, const json& over
   c.provenance = r.at("provenance");
   // A run stopped by a physics failure (overlap, NaN, escape) has no valid pile: it is listed
   // with its stop reason but its angles never enter a mean.
-  if (reason.rfind("physics", 0) == 0) return;
+  if (stop_from_json(r.at("stop")).is_physics()) return;
   const json& pile = r.at("pile");
   c.particle_deg.push_back(pile.value("theta_hd_deg", 0.0));
   c.slice_deg.push_back(pile.value("slice_angle_mean_deg", 0.0));

@@ -1,0 +1,26 @@
+// Numbers as text in messages, case names, cache keys and TOML values: one formatter, so the
+// same number reads the same everywhere and a change of format is made once. (Report pages have
+// their own conventions, report/format.hpp, built on the same printf rules.)
+#pragma once
+
+#include <cstdio>
+#include <string>
+
+namespace reposetwin::experiments {
+
+/// `v` to `digits` significant digits, as printf's "%.*g" (and an ostream of that precision).
+inline std::string significant(double v, int digits = 6) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*g", digits, v);
+  return b;
+}
+
+/// A float in TOML syntax: significant(v, digits) with ".0" added where it would read as an
+/// integer (inf and nan are TOML floats as they are).
+inline std::string toml_float(double v, int digits = 17) {
+  std::string t = significant(v, digits);
+  if (t.find_first_of(".eEn") == std::string::npos) t += ".0";
+  return t;
+}
+
+}  // namespace reposetwin::experiments
