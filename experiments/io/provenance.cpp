@@ -86,7 +86,7 @@ FolderLock::FolderLock(const std::string& dir, const std::string& name, const st
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     ::close(fd_);
     fd_ = -1;
-    throw InputError(dir + ": " + what + " is already running in this folder (" + p +
+    throw FolderBusy(dir + ": " + what + " is already running in this folder (" + p +
                      " is locked); wait for it or use another folder");
   }
 }

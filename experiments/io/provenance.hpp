@@ -8,6 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "experiments/io/input_error.hpp"
+
 namespace reposetwin::experiments {
 
 /// The code version: project version plus `git describe` when the build ran.
@@ -25,12 +27,19 @@ void write_file_atomic(const std::string& path, const std::string& text);
 /// Writes JSON (indented) atomically.
 void write_json_atomic(const std::string& path, const nlohmann::json& j);
 
+/// Another process holds a folder's lock (a bad input for this one, which a caller that can
+/// wait for the other, such as a shared cache, catches by type).
+class FolderBusy : public InputError {
+ public:
+  using InputError::InputError;
+};
+
 /// An exclusive lock on a folder, held while the object lives and released by the kernel when
 /// the process ends, even by SIGKILL: two processes never write one run or campaign folder.
 class FolderLock {
  public:
-  /// Locks DIR/NAME (created with DIR). Throws InputError naming the folder and `what` ("a
-  /// pile run") when another process holds it.
+  /// Locks DIR/NAME (created with DIR). Throws FolderBusy naming the folder and `what`
+  /// ("another pile run") when another process holds it.
   FolderLock(const std::string& dir, const std::string& name, const std::string& what);
   ~FolderLock();
   FolderLock(const FolderLock&) = delete;

@@ -70,10 +70,8 @@ std::vector<json> batch_with_retry(const std::string& dir, const std::vector<Cas
   for (int attempt = 0;; ++attempt) {
     try {
       return run_batch(cache_campaign(dir), runs, dir, fn, rs);
-    } catch (const std::runtime_error& e) {
-      if (std::string(e.what()).find("another campaign process") == std::string::npos ||
-          attempt > 3600)
-        throw;
+    } catch (const FolderBusy&) {
+      if (attempt > 3600) throw;
       std::this_thread::sleep_for(std::chrono::milliseconds(500));
     }
   }
