@@ -39,35 +39,18 @@ Quat random_rotation(Rng& rng) {
 World clump_pour(int n, int parallel_min, double gravity_z = -20.0 * 9.81) {
   Model m = testing::make_model(PairParams{}, 46.8e6, Vec3(0, 0, gravity_z));
   m.walls.push_back(testing::plate());
-  WallSpec funnel;
-  funnel.name = "funnel";
-  funnel.kind = WallKind::kShell;
-  funnel.material = 1;
-  funnel.z_top = 0.03;
-  funnel.r_bottom = 0.005;
-  funnel.r_top = 0.015;
-  m.walls.push_back(funnel);
+  m.walls.push_back(testing::pour_funnel());
   m.settings.parallel_min_particles = parallel_min;
   m.add_clump_template(tetrahedron(0.45e-3, 0.4e-3));
   m.finalize(0.45e-3, 1e-3);
   World w(m);
   Rng rng(7);
-  int placed = 0;
-  for (int layer = 0; placed < n; ++layer) {
-    const double z = 0.0015 + 0.0021 * layer;
-    const double r_in = 0.005 + (0.015 - 0.005) * z / 0.03 - 0.0011;
-    for (int ix = -8; ix <= 8 && placed < n; ++ix)
-      for (int iy = -8; iy <= 8 && placed < n; ++iy) {
-        const Vec3 x(0.0021 * ix + 0.0002 * (layer % 2), 0.0021 * iy, z);
-        if (std::hypot(x.x(), x.y()) > r_in) continue;
-        if (placed % 2 == 0) {
-          w.add_clump(0, x, random_rotation(rng), 0);
-        } else {
-          w.add_particle(x, rng.uniform(0.5e-3, 1e-3), 0);
-        }
-        ++placed;
-      }
-  }
+  testing::for_each_funnel_site(n, [&](const Vec3& x, int k) {
+    if (k % 2 == 0)
+      w.add_clump(0, x, random_rotation(rng), 0);
+    else
+      w.add_particle(x, rng.uniform(0.5e-3, 1e-3), 0);
+  });
   return w;
 }
 

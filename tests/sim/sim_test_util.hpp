@@ -48,13 +48,8 @@ inline PairParams frictionless(double e) {
   return p;
 }
 
-/// A small pour: polydisperse spheres (d 1-2 mm) on a lattice inside a conical funnel (wall 1,
-/// 10-30 mm across, 30 mm high) standing on a plate (wall 0), released under gravity_z, every
-/// contact with `pair` (default: the paper's e 0.79, mu_s 0.466, EPSD mu_r 0.15).
-inline World funnel_pour(int n = 400, int parallel_min = 2000, double gravity_z = -9.81,
-                         const PairParams& pair = PairParams{}) {
-  Model m = make_model(pair, 46.8e6, Vec3(0, 0, gravity_z));
-  m.walls.push_back(plate());
+/// The funnel of the pours: a shell 30 mm tall, 10 mm across at its bottom, 30 mm at its top.
+inline WallSpec pour_funnel() {
   WallSpec funnel;
   funnel.name = "funnel";
   funnel.kind = WallKind::kShell;
@@ -63,12 +58,13 @@ inline World funnel_pour(int n = 400, int parallel_min = 2000, double gravity_z 
   funnel.z_top = 0.03;
   funnel.r_bottom = 0.005;
   funnel.r_top = 0.015;
-  m.walls.push_back(funnel);
-  m.settings.parallel_min_particles = parallel_min;
-  m.finalize(0.5e-3, 1e-3);
-  World w(m);
-  // Spheres on a lattice of 2.1 mm inside the funnel, layer after layer, no initial overlap.
-  Rng rng(42);
+  return funnel;
+}
+
+/// Calls place(x, k) for the first n sites (k = 0 .. n-1) of a 2.1 mm lattice inside
+/// pour_funnel(), layer after layer: grains up to 2 mm across start without overlap.
+template <class Place>
+void for_each_funnel_site(int n, Place&& place) {
   int placed = 0;
   for (int layer = 0; placed < n; ++layer) {
     const double z = 0.0015 + 0.0021 * layer;
@@ -77,10 +73,25 @@ inline World funnel_pour(int n = 400, int parallel_min = 2000, double gravity_z 
       for (int iy = -8; iy <= 8 && placed < n; ++iy) {
         const Vec3 x(0.0021 * ix + 0.0002 * (layer % 2), 0.0021 * iy, z);
         if (std::hypot(x.x(), x.y()) > r_in) continue;
-        w.add_particle(x, rng.uniform(0.5e-3, 1e-3), 0);
-        ++placed;
+        place(x, placed++);
       }
   }
+}
+
+/// A small pour: polydisperse spheres (d 1-2 mm) on a lattice inside a conical funnel (wall 1,
+/// 10-30 mm across, 30 mm high) standing on a plate (wall 0), released under gravity_z, every
+/// contact with `pair` (default: the paper's e 0.79, mu_s 0.466, EPSD mu_r 0.15).
+inline World funnel_pour(int n = 400, int parallel_min = 2000, double gravity_z = -9.81,
+                         const PairParams& pair = PairParams{}) {
+  Model m = make_model(pair, 46.8e6, Vec3(0, 0, gravity_z));
+  m.walls.push_back(plate());
+  m.walls.push_back(pour_funnel());
+  m.settings.parallel_min_particles = parallel_min;
+  m.finalize(0.5e-3, 1e-3);
+  World w(m);
+  Rng rng(42);
+  for_each_funnel_site(
+      n, [&](const Vec3& x, int) { w.add_particle(x, rng.uniform(0.5e-3, 1e-3), 0); });
   return w;
 }
 
