@@ -222,8 +222,11 @@ void World::kick_drift() {
   const Vec3* const x_at_build = listed ? state_.neighbors.x_at_build.data() : nullptr;
   if (listed) state_.moved2.resize(n);
   double* const moved2 = state_.moved2.data();
-  double max2 = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : max2) if (n > par_min)
+  // The sum of the displacements is there for its finiteness alone: std::max drops a NaN, a sum
+  // keeps it, so a broken state is seen in the step that makes it, for one add per particle.
+  double max2 = 0.0, sum2 = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : max2) reduction(+ : sum2) \
+    if (n > par_min)
   for (std::size_t i = 0; i < n; ++i) {
     p.v[i] += (h / p.mass[i]) * p.force[i];
     p.w[i] += (h / p.inertia[i]) * p.torque[i];
@@ -231,9 +234,11 @@ void World::kick_drift() {
     if (listed) {
       moved2[i] = (p.x[i] - x_at_build[i]).squaredNorm();
       max2 = std::max(max2, moved2[i]);
+      sum2 += moved2[i];
     }
   }
   moved2_ = listed ? max2 : -1.0;
+  if (!std::isfinite(sum2)) nonfinite_ = true;
 }
 
 void World::order_bodies() {

@@ -154,6 +154,11 @@ class World {
   /// Computes energy, overlap, speed and checks for NaN or escaped particles.
   Diagnostics diagnose() const;
 
+  /// True once a step has moved a particle to a non-finite position (or by a non-finite
+  /// distance). Checked every step at the cost of one add per particle, so a runner that calls
+  /// diagnose() only every few steps can call it at once; diagnose() names the particle.
+  bool nonfinite_seen() const { return nonfinite_; }
+
   /// Removes particles for which `remove` is true (e.g. fallen off the plate); returns the count.
   /// A clump goes whole: removing any of its components removes the body and all of them.
   std::size_t remove_particles(const std::vector<char>& remove);
@@ -184,6 +189,7 @@ class World {
   // Largest squared displacement since the list was built, measured by kick_drift for the
   // update_neighbors that follows it; -1 if unknown (then update_neighbors measures) [m^2].
   double moved2_ = -1.0;
+  bool nonfinite_ = false;  // see nonfinite_seen()
   // pair_forces' work estimate for the threads' ranges: each block's contacts computed by the
   // kernel last step, and the cost before each block (scratch; results never depend on them).
   std::vector<std::int32_t> block_queued_;

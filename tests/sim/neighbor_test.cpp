@@ -80,8 +80,11 @@ TEST(NeighborList, ANonFiniteOrFarPositionDoesNotHangTheBuild) {
     broken.skin = nl.skin;
     build_neighbor_list(p, broken, /*sort_particles=*/false);
     const auto got = id_pairs_of_list(p, broken);
-    for (const auto& pair : finite_pairs)
-      if (pair.first != lost && pair.second != lost) EXPECT_TRUE(got.count(pair)) << bad;
+    for (const auto& pair : finite_pairs) {
+      if (pair.first != lost && pair.second != lost) {
+        EXPECT_TRUE(got.count(pair)) << bad;
+      }
+    }
   }
 }
 

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <string>
 
 #include "sim/checkpoint.hpp"
@@ -191,6 +192,24 @@ TEST(Diagnostics, ReportsNanAndEscape) {
   const Diagnostics d = w.diagnose();
   EXPECT_EQ(d.status, Status::kEscaped);
   EXPECT_NE(d.detail.find("farther"), std::string::npos);
+}
+
+// A state broken between two diagnose() calls is seen in the step that breaks it: the runner
+// then stops at once instead of stepping on for up to a check interval.
+TEST(Diagnostics, ANonFiniteStepIsSeenInThatStep) {
+  World w = small_pour(50);
+  for (int s = 0; s < 200; ++s) w.step();
+  EXPECT_FALSE(w.nonfinite_seen()) << "a healthy pour is never flagged";
+  w.state().particles.v[7] = Vec3(0, 0, std::numeric_limits<double>::infinity());
+  w.step();
+  EXPECT_TRUE(w.nonfinite_seen());
+  EXPECT_EQ(w.diagnose().status, Status::kNan);
+
+  World nan_world = small_pour(50);
+  for (int s = 0; s < 5; ++s) nan_world.step();
+  nan_world.state().particles.force[2] = Vec3(std::nan(""), 0, 0);  // a NaN force from a kernel
+  nan_world.step();
+  EXPECT_TRUE(nan_world.nonfinite_seen());
 }
 
 TEST(World, RemovingParticlesKeepsTheRestConsistent) {
