@@ -1,3 +1,4 @@
+#include <iostream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -36,6 +37,10 @@ void add_run_command(CLI::App& app) {
       return;
     }
     std::cout << experiments::to_json(run->pile).dump(2) << "\n";
+    if (run->stop.is_physics()) {
+      std::cerr << "run stopped (" << experiments::stop_reason_text(run->stop)
+                << "): " << run->stop.detail << "\n" << run->stop.likely_cause << "\n";
+    }
     set_exit_code(run->stop.is_physics() ? 3 : 0);
   });
 }

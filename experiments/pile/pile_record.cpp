@@ -68,6 +68,7 @@ RunStop stop_from_json(const json& j) {
   RunStop s;
   const std::string reason = j.at("reason").get<std::string>();
   s.detail = j.value("detail", std::string());
+  s.likely_cause = j.value("likely_cause", std::string());
   for (StopReason r : {StopReason::kSettled, StopReason::kSettleTimeLimit, StopReason::kTimeLimit,
                        StopReason::kClogged}) {
     s.reason = r;
@@ -82,7 +83,9 @@ RunStop stop_from_json(const json& j) {
 }
 
 json to_json(const RunStop& stop) {
-  return {{"reason", stop_reason_text(stop)}, {"detail", stop.detail}};
+  json j = {{"reason", stop_reason_text(stop)}, {"detail", stop.detail}};
+  if (!stop.likely_cause.empty()) j["likely_cause"] = stop.likely_cause;
+  return j;
 }
 
 // ---- pile ----------------------------------------------------------------------------------

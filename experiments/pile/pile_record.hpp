@@ -38,6 +38,8 @@ struct RunStop {
   StopReason reason = StopReason::kSettled;
   sim::Status physics = sim::Status::kOk;  // the engine's status when reason is kPhysics
   std::string detail;                      // a sentence: which particle, how many lodged, ...
+  std::string likely_cause;                // a physics stop: the scene keys that most likely
+                                           // caused it (physics_stop_hint); else ""
   bool is_physics() const { return reason == StopReason::kPhysics; }
 };
 

@@ -15,6 +15,7 @@
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/vtk_output.hpp"
+#include "experiments/pile/stop_hint.hpp"
 #include "sim/checkpoint.hpp"
 #include "sim/psd.hpp"
 #include "sim/random.hpp"
@@ -383,7 +384,8 @@ class PileRunner {
   }
 
   // Steps the engine; the controller looks every few milliseconds of simulated time, not every
-  // step. Returns false when a wall-time or step limit stopped the run (checkpointed).
+  // step, and at once when the engine has seen a non-finite state (so a broken run stops in the
+  // step that broke it). Returns false when a wall-time or step limit stopped the run (checkpointed).
   bool advance_until_done() {
     const std::int64_t check_every =
         std::max<std::int64_t>(1, std::llround(0.002 / world_->model().dt));
@@ -396,7 +398,7 @@ class PileRunner {
         ctl_.next_frame = state().time + scene_.output.frame_interval;
         write_frame();
       }
-      if ((state().step - step0_) % check_every != 0) continue;
+      if ((state().step - step0_) % check_every != 0 && !world_->nonfinite_seen()) continue;
       if (!check_phase()) break;  // a physics stop
       const double wall = wall_now();
       report_progress(wall);
@@ -422,7 +424,7 @@ class PileRunner {
     const sim::Diagnostics d = world_->diagnose();
     ctl_.max_overlap_seen = std::max(ctl_.max_overlap_seen, d.max_overlap_ratio);
     if (d.status != sim::Status::kOk) {
-      ctl_.stop = {StopReason::kPhysics, d.status, d.detail};
+      ctl_.stop = {StopReason::kPhysics, d.status, d.detail, physics_stop_hint(d.status, scene_)};
       ctl_.phase = Phase::kDone;
       return false;
     }

@@ -21,20 +21,21 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 TEST(PileRecord, EveryStopReasonRoundTripsAndAnUnknownOneIsRefused) {
-  std::vector<RunStop> stops = {{StopReason::kSettled, sim::Status::kOk, "calm"},
-                                {StopReason::kSettleTimeLimit, sim::Status::kOk, ""},
-                                {StopReason::kTimeLimit, sim::Status::kOk, "phase lift"},
-                                {StopReason::kClogged, sim::Status::kOk, "no pile: 3 lodged"}};
+  std::vector<RunStop> stops = {{StopReason::kSettled, sim::Status::kOk, "calm", ""},
+                                {StopReason::kSettleTimeLimit, sim::Status::kOk, "", ""},
+                                {StopReason::kTimeLimit, sim::Status::kOk, "phase lift", ""},
+                                {StopReason::kClogged, sim::Status::kOk, "no pile: 3 lodged", ""}};
   for (sim::Status s : {sim::Status::kNan, sim::Status::kOverlap, sim::Status::kEscaped})
-    stops.push_back({StopReason::kPhysics, s, "particle 7"});
+    stops.push_back({StopReason::kPhysics, s, "particle 7", "numerics.rayleigh_fraction = 0.2"});
   for (const RunStop& s : stops) {
     const RunStop back = stop_from_json(to_json(s));
     EXPECT_EQ(back.reason, s.reason) << stop_reason_text(s);
     EXPECT_EQ(back.physics, s.physics) << stop_reason_text(s);
     EXPECT_EQ(back.detail, s.detail);
+    EXPECT_EQ(back.likely_cause, s.likely_cause);
     EXPECT_EQ(back.is_physics(), s.reason == StopReason::kPhysics);
   }
-  EXPECT_EQ(stop_reason_text({StopReason::kPhysics, sim::Status::kNan, ""}), "physics: nan");
+  EXPECT_EQ(stop_reason_text({StopReason::kPhysics, sim::Status::kNan, "", ""}), "physics: nan");
   EXPECT_THROW(stop_from_json({{"reason", "physics: gremlins"}}), std::invalid_argument);
   EXPECT_THROW(stop_from_json({{"reason", "done"}}), std::invalid_argument);
 }
@@ -52,7 +53,7 @@ PileRun sample_run() {
   r.provenance.threads = 2;
   r.provenance.created_utc = "2026-12-01T00:00:00Z";
   r.provenance.extra = {{"campaign_case", "m200/seed_1"}};
-  r.stop = {StopReason::kSettled, sim::Status::kOk, "kinetic energy below"};
+  r.stop = {StopReason::kSettled, sim::Status::kOk, "kinetic energy below", ""};
   r.pile.status = sim::PileStatus::kOk;
   r.pile.height_m = 0.0123;
   r.pile.base_diameter_m = 0.0456;
@@ -104,7 +105,7 @@ TEST(PileRecord, APileRunRoundTripsThroughItsJson) {
   EXPECT_FALSE(back.procedure.events[1].particles.has_value());
 
   PileRun clogged = sample_run();
-  clogged.stop = {StopReason::kClogged, sim::Status::kOk, "no pile: 9 particles lodged"};
+  clogged.stop = {StopReason::kClogged, sim::Status::kOk, "no pile: 9 particles lodged", ""};
   clogged.pile = clogged_pile(9, clogged.stop.detail);
   const PileRun c = pile_run_from_json(to_json(clogged));
   EXPECT_TRUE(c.pile.clogged);

@@ -15,6 +15,7 @@
 #include "experiments/io/scene.hpp"
 #include "experiments/io/scene_overrides.hpp"
 #include "experiments/pile/pile_run.hpp"
+#include "experiments/pile/stop_hint.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -132,6 +133,28 @@ TEST(PileRunSafety, APhysicsStopIsWrittenWithNoPileMeasured) {
   EXPECT_EQ(file.at("pile").at("status"), "not measured");
   EXPECT_NE(file.at("pile").at("detail").get<std::string>().find("physics"), std::string::npos);
   EXPECT_TRUE(pile_run_from_json(file).pile.not_measured);
+  // The stop names the scene key that most likely caused it, with the value the scene set.
+  const std::string cause = file.at("stop").at("likely_cause").get<std::string>();
+  EXPECT_NE(cause.find("numerics.softened_youngs_modulus_pa = 100"), std::string::npos) << cause;
+  EXPECT_EQ(pile_run_from_json(file).stop.likely_cause, cause);
+}
+
+// Every physics status maps to the keys that govern it, in the scene's own names and values.
+TEST(PhysicsStopHint, NamesTheKeysThatGovernEachStatus) {
+  SceneConfig scene = parse_scene_text(std::string(test_support::kTinyScene), "tiny.toml");
+  EXPECT_EQ(physics_stop_hint(sim::Status::kOk, scene), "");
+  EXPECT_NE(physics_stop_hint(sim::Status::kNan, scene).find("numerics.rayleigh_fraction = 0.3"),
+            std::string::npos)
+      << physics_stop_hint(sim::Status::kNan, scene);
+  scene.settings.time_step = 1e-5;
+  EXPECT_NE(physics_stop_hint(sim::Status::kNan, scene).find("numerics.time_step_s = 1e-05"),
+            std::string::npos);
+  const std::string overlap = physics_stop_hint(sim::Status::kOverlap, scene);
+  EXPECT_NE(overlap.find("numerics.max_overlap_ratio"), std::string::npos) << overlap;
+  EXPECT_NE(overlap.find("numerics.softened_youngs_modulus_pa = 5e+06"), std::string::npos)
+      << overlap;
+  EXPECT_NE(physics_stop_hint(sim::Status::kEscaped, scene).find("numerics.escape_distance_m"),
+            std::string::npos);
 }
 
 }  // namespace
