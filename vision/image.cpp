@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -33,12 +36,88 @@ void monomials(double x, double y, int degree, float* out) {
 
 int monomial_count(int degree) { return (degree + 1) * (degree + 2) / 2; }
 
+// Big-endian and little-endian unsigned integers from a byte buffer.
+std::uint32_t be(const unsigned char* b, int n) {
+  std::uint32_t v = 0;
+  for (int k = 0; k < n; ++k) v = (v << 8) | b[k];
+  return v;
+}
+std::uint32_t le(const unsigned char* b, int n) {
+  std::uint32_t v = 0;
+  for (int k = n - 1; k >= 0; --k) v = (v << 8) | b[k];
+  return v;
+}
+
+// A JPEG's frame size: the first start-of-frame marker (SOF0..SOF15 but DHT C4, JPG C8 and DAC
+// CC), each segment skipped by its stated length.
+std::optional<cv::Size> jpeg_size(std::ifstream& in) {
+  unsigned char b[9];
+  in.seekg(2);
+  while (in.read(reinterpret_cast<char*>(b), 4)) {
+    if (b[0] != 0xFF) return std::nullopt;
+    const int marker = b[1];
+    const std::uint32_t length = be(b + 2, 2);
+    if (length < 2) return std::nullopt;
+    const bool sof = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 &&
+                     marker != 0xCC;
+    if (sof) {
+      if (!in.read(reinterpret_cast<char*>(b), 5)) return std::nullopt;
+      return cv::Size(static_cast<int>(be(b + 3, 2)), static_cast<int>(be(b + 1, 2)));
+    }
+    in.seekg(static_cast<std::streamoff>(length) - 2, std::ios::cur);
+  }
+  return std::nullopt;
+}
+
+// Clamps a header field to int for cv::Size (a forged header may state up to 2^32 - 1).
+int side(std::uint32_t v) {
+  return static_cast<int>(std::min<std::uint32_t>(v, std::numeric_limits<int>::max()));
+}
+
 }  // namespace
 
-cv::Mat load_image(const std::string& path) {
+std::optional<cv::Size> image_header_size(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::invalid_argument(path + ": cannot open the image file");
+  unsigned char h[26] = {};
+  in.read(reinterpret_cast<char*>(h), sizeof h);
+  const std::streamsize got = in.gcount();
+  in.clear();
+  static constexpr unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  if (got >= 24 && std::equal(kPng, kPng + 8, h) && std::equal(h + 12, h + 16, "IHDR"))
+    return cv::Size(side(be(h + 16, 4)), side(be(h + 20, 4)));
+  if (got >= 26 && h[0] == 'B' && h[1] == 'M') {  // BITMAPINFOHEADER: signed, height may be < 0
+    const auto w = static_cast<std::int32_t>(le(h + 18, 4));
+    const auto hh = static_cast<std::int32_t>(le(h + 22, 4));
+    return cv::Size(side(static_cast<std::uint32_t>(std::abs(static_cast<std::int64_t>(w)))),
+                    side(static_cast<std::uint32_t>(std::abs(static_cast<std::int64_t>(hh)))));
+  }
+  if (got >= 3 && h[0] == 0xFF && h[1] == 0xD8 && h[2] == 0xFF) return jpeg_size(in);
+  return std::nullopt;
+}
+
+namespace {
+
+void check_size(const std::string& path, cv::Size size, const ImageLimits& limits) {
+  const double pixels = static_cast<double>(size.width) * static_cast<double>(size.height);
+  if (pixels > limits.max_pixels)
+    throw std::invalid_argument(path + ": image is " + std::to_string(size.width) + " x " +
+                                std::to_string(size.height) + " pixels, above the limit of " +
+                                str(limits.max_pixels) + " pixels (vision's image limit)");
+  if (std::min(size.width, size.height) < limits.min_side_px)
+    throw std::invalid_argument(path + ": image is " + std::to_string(size.width) + " x " +
+                                std::to_string(size.height) + " pixels; both sides must be at "
+                                "least " + std::to_string(limits.min_side_px) + " pixels");
+}
+
+}  // namespace
+
+cv::Mat load_image(const std::string& path, const ImageLimits& limits) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
     throw std::invalid_argument(path + ": image file does not exist or is not a regular file");
+  if (const std::optional<cv::Size> header = image_header_size(path))
+    check_size(path, *header, limits);
   cv::Mat img;
   try {
     img = cv::imread(path, cv::IMREAD_COLOR);
@@ -47,6 +126,7 @@ cv::Mat load_image(const std::string& path) {
   }
   if (img.empty())
     throw std::invalid_argument(path + ": not an image OpenCV can decode (or the image is empty)");
+  check_size(path, img.size(), limits);  // formats whose header we do not read
   return img;
 }
 

@@ -12,13 +12,31 @@
 #pragma once
 
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 
 namespace reposetwin::vision {
 
+/// Limits on an image before it is decoded: a photo far beyond any lab camera's would take
+/// seconds and gigabytes to decode before vision could say anything about it, and a sliver a few
+/// pixels high holds no pile to measure.
+struct ImageLimits {
+  double max_pixels = 250e6;  // width x height; a 100-megapixel camera's frame is 1e8 [px]
+  int min_side_px = 16;       // the shorter side [px]
+};
+
+/// Width and height read from a PNG, JPEG or BMP file's header without decoding it (OpenCV 4.6,
+/// Debian 12's, has no call that reads a size without decoding, and its own pixel limit is read
+/// from the environment once at start-up); std::nullopt
+/// for another format or a header too short to read. Throws std::invalid_argument naming `path`
+/// when the file cannot be opened.
+std::optional<cv::Size> image_header_size(const std::string& path);
+
 /// Reads an image file as 8-bit BGR. Throws std::invalid_argument naming `path` when the file is
-/// missing, is not an image OpenCV can decode, or is empty.
-cv::Mat load_image(const std::string& path);
+/// missing, is not an image OpenCV can decode, or is empty, and naming the limit when its size
+/// (read from the header before decoding where the format allows, else after) is outside
+/// `limits`.
+cv::Mat load_image(const std::string& path, const ImageLimits& limits = {});
 
 /// Grey levels of an 8-bit or 16-bit image with 1, 3 or 4 channels, as CV_32F scaled to
 /// [0, 255]. Throws std::invalid_argument naming `where` for an empty or unsupported image.

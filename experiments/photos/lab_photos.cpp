@@ -7,6 +7,7 @@
 
 #include "experiments/io/format.hpp"
 #include "experiments/io/input_error.hpp"
+#include "vision/image.hpp"
 
 namespace reposetwin::experiments {
 namespace fs = std::filesystem;
@@ -53,8 +54,13 @@ LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
   std::vector<vision::SideMeasurement> views;
   json unmeasured = json::array();
   for (const std::string& p : photos) {
-    const cv::Mat image = cv::imread(p, cv::IMREAD_COLOR);
-    if (image.empty()) throw InputError(fields.photo + ": \"" + p + "\" cannot be read as an image");
+    cv::Mat image;
+    try {
+      image = vision::load_image(p);  // refuses an oversized image before decoding it
+    } catch (const std::invalid_argument& e) {
+      throw InputError(fields.photo + ": \"" + p + "\" cannot be read as an image (" + e.what() +
+                       ")");
+    }
     vision::ScaleSpec this_scale = common;
     const fs::path sidecar = fs::path(p).replace_extension(".json");
     const bool own_sidecar = !declared_scale && fs::exists(sidecar);

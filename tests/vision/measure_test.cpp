@@ -9,6 +9,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <opencv2/imgcodecs.hpp>
+#include <optional>
 
 #include "tests/vision/synthetic.hpp"
 #include "vision/image.hpp"
@@ -240,6 +242,60 @@ TEST(LoadImage, RejectsFilesThatAreNotImages) {
   }
   std::filesystem::remove(path);
   EXPECT_THROW(load_image(temp_path("does_not_exist.png")), std::invalid_argument);
+}
+
+// The header reader against OpenCV's own decoder, on each format it reads.
+TEST(LoadImage, HeaderSizeAgreesWithTheDecoder) {
+  cv::Mat img(37, 53, CV_8UC3, cv::Scalar(10, 200, 90));
+  for (const char* ext : {".png", ".jpg", ".bmp"}) {
+    const std::string path = temp_path(std::string("header_size") + ext);
+    ASSERT_TRUE(cv::imwrite(path, img)) << ext;
+    const std::optional<cv::Size> size = image_header_size(path);
+    ASSERT_TRUE(size.has_value()) << ext;
+    EXPECT_EQ(*size, cv::imread(path).size()) << ext;
+    std::filesystem::remove(path);
+  }
+  const std::string tiff = temp_path("header_size.tiff");
+  ASSERT_TRUE(cv::imwrite(tiff, img));
+  EXPECT_FALSE(image_header_size(tiff).has_value()) << "TIFF is checked after decoding";
+  EXPECT_EQ(load_image(tiff).size(), img.size());
+  std::filesystem::remove(tiff);
+}
+
+// A PNG whose header states 20000 x 20000 pixels is refused from its header, before any decoding
+// (the rest of the file is not even a valid PNG), naming the file and the limit.
+TEST(LoadImage, RefusesAnOversizedImageBeforeDecodingIt) {
+  const std::string path = temp_path("huge.png");
+  {
+    std::ofstream out(path, std::ios::binary);
+    const unsigned char header[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n', 0, 0, 0, 13,
+                                    'I', 'H', 'D', 'R', 0, 0, 0x4E, 0x20, 0, 0, 0x4E, 0x20,
+                                    8, 2, 0, 0, 0};
+    out.write(reinterpret_cast<const char*>(header), sizeof header);
+  }
+  try {
+    load_image(path);
+    FAIL() << "expected an exception";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path), std::string::npos) << what;
+    EXPECT_NE(what.find("20000 x 20000"), std::string::npos) << what;
+    EXPECT_NE(what.find("limit"), std::string::npos) << what;
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(LoadImage, RefusesASliverNamingTheFile) {
+  const std::string path = temp_path("sliver.png");
+  ASSERT_TRUE(cv::imwrite(path, cv::Mat(1, 2000, CV_8UC3, cv::Scalar::all(128))));
+  try {
+    load_image(path);
+    FAIL() << "expected an exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("2000 x 1"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
 }
 
 TEST(MeasureSide, EmptyAndBlackImagesAreRejected) {
