@@ -1,5 +1,6 @@
 #include <iostream>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -28,9 +29,19 @@ void add_render_command(CLI::App& app) {
   cmd->add_option("--frame", args->frames,
                   "Also photograph these snapshots of the series (e.g. frames/frame_00004.vtp)");
   cmd->callback([args]() {
+    // Each view is measured on its own: one view vision cannot read is reported, and the others
+    // still give the angle.
+    args->images.views_must_measure = false;
     for (const std::string& f : args->frames)
       experiments::render_and_measure_run(args->run_dir, args->images, f);
     const nlohmann::json m = experiments::render_and_measure_run(args->run_dir, args->images);
+    for (const nlohmann::json& v : m["side_views"])
+      if (v.contains("error"))
+        std::cerr << "warning: " << args->run_dir << "/images/" << v["image"].get<std::string>()
+                  << " not measured: " << v["error"].get<std::string>() << "\n";
+    if (m["theta_deg"].is_null())
+      throw std::runtime_error(args->run_dir + "/images: no side view could be measured (" +
+                               "the photos and measurement.json are written)");
     std::cout << nlohmann::json{{"theta_deg", m["theta_deg"]},
                                 {"theta_sd_deg", m["theta_sd_deg"]},
                                 {"height_m", m["height_m"]},

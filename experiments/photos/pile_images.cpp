@@ -15,26 +15,28 @@ using nlohmann::json;
 namespace {
 
 // measurement.json: every view, the side summary, the top footprint, settings and provenance.
+// A view vision could not measure is listed with its error; the summary is over the others
+// (null when none measured).
 json measurement_json(const PilePhotos& photos, const ImageSettings& settings,
                       const json& provenance) {
   json views = json::array();
   for (const SideView& v : photos.sides) {
-    json j = vision::to_json(*v.measured);
+    json j = v.measured ? vision::to_json(*v.measured) : json{{"error", v.error}};
     j["image"] = v.stem + ".png";
     j["azimuth_deg"] = v.azimuth_deg;
     views.push_back(j);
   }
-  const vision::SideSummary& summary = *photos.summary;
+  const std::optional<vision::SideSummary>& summary = photos.summary;
   json out = {{"method",
                "vision on renders: theta = atan(2H/D) per side view, perspective "
                "corrected with the render's camera; mean and spread over azimuths"},
               {"side_views", views},
-              {"side_summary", vision::to_json(summary)},
-              {"theta_deg", summary.theta_deg.mean},
-              {"theta_sd_deg", summary.theta_deg.stddev},
-              {"height_m", summary.height_m.mean},
-              {"diameter_m", summary.diameter_m.mean},
-              {"flank_deg", summary.flank_deg.mean},
+              {"side_summary", summary ? vision::to_json(*summary) : json()},
+              {"theta_deg", summary ? json(summary->theta_deg.mean) : json()},
+              {"theta_sd_deg", summary ? json(summary->theta_deg.stddev) : json()},
+              {"height_m", summary ? json(summary->height_m.mean) : json()},
+              {"diameter_m", summary ? json(summary->diameter_m.mean) : json()},
+              {"flank_deg", summary ? json(summary->flank_deg.mean) : json()},
               {"pile_centre_shift_m", {photos.centre_shift.x(), photos.centre_shift.y()}},
               {"settings",
                {{"width_px", settings.width_px},

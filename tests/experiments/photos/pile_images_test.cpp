@@ -70,6 +70,50 @@ TEST(RenderedConeViews, EveryAzimuthReadsTheConesHeightAndWidth) {
   }
 }
 
+// A side view vision cannot measure is listed with its error, not fatal, when the caller asks
+// so (the `render` command): measurement.json keeps every view, and the summary is over the
+// measured ones (null when none). Photos drowned in sensor noise have no pile edge to find.
+TEST(RenderedConeViews, AViewVisionCannotMeasureIsListedWithItsError) {
+  test_support::Spheres layer;
+  for (int i = -6; i <= 6; ++i) {
+    for (int j = -6; j <= 6; ++j) {
+      if (i * i + j * j > 36) continue;
+      layer.x.emplace_back(0.004 * i, 0.004 * j, 0.002);
+      layer.r.push_back(0.002);
+    }
+  }
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_unmeasurable_views";
+  fs::remove_all(dir);
+  ImageSettings settings;
+  settings.width_px = 640;
+  settings.height_px = 360;
+  settings.side_views = 2;
+  settings.top_view = false;
+  settings.views_must_measure = false;
+  settings.noise_sd = 400.0;
+  const nlohmann::json m =
+      render_and_measure(layer.x, layer.r, std::vector<int>(layer.r.size(), 0), dir.string(),
+                         settings);
+  ASSERT_EQ(m["side_views"].size(), 2u);
+  int failed = 0;
+  for (const nlohmann::json& v : m["side_views"]) {
+    EXPECT_TRUE(v.contains("image")) << v.dump();
+    if (v.contains("error")) {
+      ++failed;
+      EXPECT_FALSE(v["error"].get<std::string>().empty());
+    }
+  }
+  ASSERT_GT(failed, 0) << "the monolayer was measured as a pile: " << m["theta_deg"];
+  if (failed == 2) {
+    EXPECT_TRUE(m["theta_deg"].is_null());
+  }
+  EXPECT_TRUE(fs::exists(dir / "measurement.json"));
+  EXPECT_TRUE(fs::exists(dir / "side_az000.png")) << "the photo is kept even when unmeasured";
+  settings.views_must_measure = true;
+  EXPECT_ANY_THROW(render_and_measure(layer.x, layer.r, std::vector<int>(layer.r.size(), 0),
+                                      dir.string(), settings));
+}
+
 }  // namespace
 }  // namespace reposetwin::experiments
 
