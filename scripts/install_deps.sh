@@ -18,6 +18,10 @@ PACKAGES=(
   gnuplot-nox              # report plots
   libopenmpi-dev openmpi-bin  # optional campaign spreading under mpirun
 )
+# scripts/fuzz.sh only: clang with libFuzzer and the sanitizers' runtime.
+if [ "${1:-}" = "--fuzz" ]; then
+  PACKAGES+=(clang libclang-rt-dev)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
