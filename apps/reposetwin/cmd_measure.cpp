@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
+#include "apps/reposetwin/validators.hpp"
 #include "experiments/io/provenance.hpp"
 #include "vision/image.hpp"
 #include "vision/measure.hpp"
@@ -188,7 +189,7 @@ void add_measure_command(CLI::App& app) {
   auto* mm = cmd->add_option("--mm-per-px", opts->mm_per_px,
                              "Scale at the pile axis [mm/px] for the side views; assumes an "
                              "orthographic view")
-                 ->check(CLI::PositiveNumber);
+                 ->check(positive_number());
   auto* cam = cmd->add_option("--camera", opts->cameras,
                               "Render sidecar JSON with the camera (perspective corrected); "
                               "repeat for each side image in order")
@@ -198,7 +199,7 @@ void add_measure_command(CLI::App& app) {
   mm->excludes(cam)->excludes(marker);
   cam->excludes(marker);
   cmd->add_option("--top-mm-per-px", opts->top_mm_per_px, "Scale on the plate in the top view")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   cmd->add_option("--top-camera", opts->top_camera, "Sidecar JSON of the top view")
       ->check(CLI::ExistingFile);
   cmd->add_option("--overlay", opts->overlay,

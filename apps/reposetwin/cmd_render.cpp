@@ -1,3 +1,4 @@
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <stdexcept>
@@ -5,6 +6,7 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
+#include "experiments/io/input_error.hpp"
 #include "experiments/photos/pile_images.hpp"
 
 namespace reposetwin::cli {
@@ -14,6 +16,7 @@ void add_render_command(CLI::App& app) {
     std::string run_dir;
     experiments::ImageSettings images;
     std::vector<std::string> frames;
+    bool force = false;
   };
   auto args = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
@@ -28,7 +31,20 @@ void add_render_command(CLI::App& app) {
   cmd->add_flag("!--no-top", args->images.top_view, "Skip the top view");
   cmd->add_option("--frame", args->frames,
                   "Also photograph these snapshots of the series (e.g. frames/frame_00004.vtp)");
+  cmd->add_flag("--force", args->force, "Replace the run's earlier photographs");
   cmd->callback([args]() {
+    // Photographs are results: an earlier set (run's own, or an earlier render) stays unless
+    // asked, checked before anything is rendered.
+    namespace fs = std::filesystem;
+    std::vector<fs::path> outputs = {fs::path(args->run_dir) / "images" / "measurement.json"};
+    for (const std::string& f : args->frames)
+      outputs.push_back(fs::path(args->run_dir) / "images" / fs::path(f).stem() /
+                        "measurement.json");
+    for (const fs::path& p : outputs)
+      if (fs::exists(p) && !args->force)
+        throw experiments::InputError(p.string() +
+                                      ": photographs are already there; pass --force to replace "
+                                      "them");
     // Each view is measured on its own: one view vision cannot read is reported, and the others
     // still give the angle.
     args->images.views_must_measure = false;

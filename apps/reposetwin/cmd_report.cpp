@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "apps/reposetwin/commands.hpp"
+#include "experiments/io/input_error.hpp"
 #include "experiments/report/report.hpp"
 
 namespace reposetwin::cli {
@@ -13,6 +14,7 @@ void add_report_command(CLI::App& app) {
     std::vector<std::string> dirs;
     std::string out;
     experiments::ReportSettings settings;
+    bool force = false;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
@@ -32,9 +34,19 @@ void add_report_command(CLI::App& app) {
   cmd->add_option("--paper-data", a->settings.paper_dir,
                   "Folder of the paper's CSVs (default: data/paper found upwards from the "
                   "calibration's campaign file, then from the working folder)");
+  cmd->add_flag("--force", a->force, "Rebuild a report that is already there");
   cmd->callback([a]() {
     namespace fs = std::filesystem;
     std::string out = a->out;
+    // A report is a result: an earlier one stays unless asked (checked before anything is read).
+    // Over several folders, each folder's own report is rebuilt too.
+    std::vector<fs::path> pages;
+    for (const auto& d : a->dirs) pages.push_back(fs::path(d) / "report" / "index.html");
+    if (!out.empty()) pages.push_back(fs::path(out) / "report" / "index.html");
+    for (const fs::path& p : pages)
+      if (fs::exists(p) && !a->force)
+        throw experiments::InputError(p.string() +
+                                      ": a report is already there; pass --force to rebuild it");
     if (a->dirs.size() == 1 && out.empty()) {
       const nlohmann::json s = experiments::build_report(a->dirs[0], a->settings);
       std::cout << s.dump(2) << "\n" << a->dirs[0] << "/report/index.html\n";
@@ -50,6 +62,9 @@ void add_report_command(CLI::App& app) {
           common = common.parent_path();
       }
       out = common.string();
+      if (fs::exists(fs::path(out) / "report" / "index.html") && !a->force)
+        throw experiments::InputError(out + "/report/index.html: a report is already there; pass "
+                                      "--force to rebuild it");
     }
     const nlohmann::json s = experiments::build_report(a->dirs, out, a->settings);
     std::cout << s.dump(2) << "\n" << out << "/report/index.html\n";

@@ -1,24 +1,92 @@
+// `reposetwin run`: the plan, the pile test, its photographs and the summary page, then one line.
+#include <unistd.h>
+
+#include <chrono>
 #include <iostream>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
-#include "experiments/pile/pile_run.hpp"
+#include "apps/reposetwin/validators.hpp"
+#include "experiments/io/input_error.hpp"
+#include "experiments/io/provenance.hpp"
 #include "experiments/io/scene_overrides.hpp"
+#include "experiments/photos/pile_images.hpp"
+#include "experiments/pile/pile_run.hpp"
+#include "experiments/pile/run_plan.hpp"
+#include "experiments/report/run_summary.hpp"
 
 namespace reposetwin::cli {
+namespace {
+
+struct RunArgs {
+  std::string scene;
+  std::vector<std::string> sets;
+  experiments::RunOptions run;
+  experiments::PlanSettings plan;
+  bool quiet = false;
+  bool json = false;
+  bool no_images = false;
+  bool yes = false;
+};
+
+// The threads the run will use: the command line's, the scene's, or every core.
+int run_threads(const RunArgs& a, const experiments::SceneConfig& scene) {
+  if (a.run.threads > 0) return a.run.threads;
+  if (scene.settings.threads > 0) return scene.settings.threads;
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+// Prints the plan; a plan above the limits goes ahead only with --yes or a person's "y".
+// Returns false when it must not start.
+bool accept_plan(const RunArgs& a, const experiments::SceneConfig& scene) {
+  if (a.run.resume) return true;  // planned when it started
+  const experiments::RunPlan plan = experiments::plan_run(scene, run_threads(a, scene), a.plan);
+  if (!a.quiet) std::cerr << experiments::plan_text(plan, a.plan);
+  const std::string refusal = experiments::plan_refusal(plan, a.plan);
+  if (refusal.empty() || a.yes) return true;
+  if (isatty(STDIN_FILENO) && isatty(STDERR_FILENO)) {
+    if (a.quiet) std::cerr << experiments::plan_text(plan, a.plan);
+    std::cerr << refusal << "\nRun it anyway? [y/N] ";
+    std::string answer;
+    std::getline(std::cin, answer);
+    if (answer == "y" || answer == "Y" || answer == "yes") return true;
+  }
+  std::cerr << "reposetwin: refused: " << refusal << "\n";
+  return false;
+}
+
+// The run's photographs from its final state in memory, measured; nullopt (and why) when there
+// are none.
+std::optional<nlohmann::json> photographs(const RunArgs& a, const experiments::PileRun& run,
+                                          std::string& why) {
+  if (a.no_images) {
+    why = "--no-images";
+    return std::nullopt;
+  }
+  if (!run.pile_ok()) {
+    why = "the run formed no measurable pile";
+    return std::nullopt;
+  }
+  try {
+    return experiments::render_and_measure_run(run, a.run.out_dir, experiments::ImageSettings{});
+  } catch (const std::exception& e) {
+    why = std::string("the photographs could not be measured: ") + e.what();
+    std::cerr << "reposetwin: warning: " << why << "\n";
+    return std::nullopt;
+  }
+}
+
+}  // namespace
 
 void add_run_command(CLI::App& app) {
-  struct Args {
-    std::string scene;
-    std::vector<std::string> sets;
-    experiments::RunOptions run;
-    bool quiet = false;
-  };
-  auto args = std::make_shared<Args>();
-  auto* cmd = app.add_subcommand(
-      "run", "Run a pile test scene (the embedded quick scene when no SCENE is given)");
+  auto args = std::make_shared<RunArgs>();
+  auto* cmd =
+      app.add_subcommand("run",
+                         "Run a pile test scene (the embedded quick scene when no SCENE is given), "
+                         "photograph the pile and write RUN_DIR/summary.html");
   cmd->add_option("scene", args->scene, "Scene file (TOML); default: the embedded quick scene");
   cmd->add_option("--out,-o", args->run.out_dir, "Run folder for results, snapshots, checkpoint")
       ->capture_default_str();
@@ -27,16 +95,41 @@ void add_run_command(CLI::App& app) {
       ->check(CLI::Range(0, 4096));
   cmd->add_flag("--force", args->run.force, "Overwrite a finished result in the run folder");
   cmd->add_flag("--resume", args->run.resume, "Continue from the run folder's checkpoint");
-  cmd->add_flag("--quiet,-q", args->quiet, "No progress lines");
+  cmd->add_flag("--quiet,-q", args->quiet, "No plan or progress lines");
+  cmd->add_flag("--json", args->json, "Also print result.json on stdout (before the last line)");
+  cmd->add_flag("--no-images", args->no_images,
+                "No photographs: faster; the headline falls back to the particle atan(2H/D)");
+  cmd->add_flag("--yes,-y", args->yes,
+                "Start even when the plan is above the limits (--max-particles, --max-hours)");
+  cmd->add_option("--max-particles", args->plan.max_particles,
+                  "Plan limit: more particles need --yes")
+      ->capture_default_str()
+      ->check(positive_number());
+  auto* hours = cmd->add_option_function<double>(
+      "--max-hours", [args](double h) { args->plan.max_wall_s = 3600.0 * h; },
+      "Plan limit: a longer estimated wall time needs --yes [h] (default 1)");
+  hours->check(positive_number());
   cmd->callback([args]() {
+    const auto t0 = std::chrono::steady_clock::now();
     const experiments::SceneConfig scene = experiments::load_scene(args->scene, args->sets);
+    if (!accept_plan(*args, scene)) {
+      set_exit_code(6);
+      return;
+    }
     args->run.progress = !args->quiet;
     const std::optional<experiments::PileRun> run = experiments::run_pile_test(scene, args->run);
     if (!run) {  // a stop limit (none is set from the command line; kept for completeness)
       std::cout << "stopped before the end; continue with --resume\n";
       return;
     }
-    std::cout << experiments::to_json(run->pile).dump(2) << "\n";
+    experiments::RunSummaryInputs in;
+    in.run_dir = args->run.out_dir;
+    in.overrides = args->sets;
+    in.images = photographs(*args, *run, in.images_note);
+    in.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const experiments::RunSummary summary = experiments::finish_run(*run, scene, in);
+    if (args->json) std::cout << experiments::read_file(args->run.out_dir + "/result.json") << "\n";
+    std::cout << experiments::headline_line(*run, summary, in.wall_s) << std::endl;
     if (run->stop.is_physics()) {
       std::cerr << "run stopped (" << experiments::stop_reason_text(run->stop)
                 << "): " << run->stop.detail << "\n" << run->stop.likely_cause << "\n";

@@ -17,5 +17,6 @@ void add_report_command(CLI::App& app);
 void add_timestep_command(CLI::App& app);
 void add_measure_command(CLI::App& app);
 void add_loop_command(CLI::App& app);  // loop and loop-synth
+void add_keys_command(CLI::App& app);
 
 }  // namespace reposetwin::cli

@@ -1,11 +1,51 @@
 // reposetwin: the one command-line entry point. Thin: each subcommand lives in its own
 // apps/reposetwin/cmd_*.cpp and is registered in the table below.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <exception>
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include "apps/reposetwin/commands.hpp"
 #include "experiments/io/provenance.hpp"
+
+namespace {
+
+// Levenshtein distance: how far a typed word is from a command's name.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// CLI11 (2.1) reads an unknown first word as a missing subcommand; a user who typed "runn"
+// wants to hear which command was meant. Returns the message, or "" when `word` is a command.
+std::string unknown_command(CLI::App& app, const std::string& word) {
+  std::string best, names;
+  std::size_t best_d = std::string::npos;
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    const std::string& name = sub->get_name();
+    if (name == word) return "";
+    names += (names.empty() ? "" : ", ") + name;
+    const std::size_t d = edit_distance(word, name);
+    if (d < best_d) best_d = d, best = name;
+  }
+  std::string msg = "reposetwin: '" + word + "' is not a command";
+  if (best_d <= std::max<std::size_t>(2, word.size() / 3)) msg += "; did you mean '" + best + "'?";
+  return msg + "\ncommands: " + names + " (reposetwin --help)";
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"ReposeTwin: a DEM digital twin of the angle-of-repose pile test"};
@@ -20,6 +60,13 @@ int main(int argc, char** argv) {
   reposetwin::cli::add_timestep_command(app);
   reposetwin::cli::add_measure_command(app);
   reposetwin::cli::add_loop_command(app);
+  reposetwin::cli::add_keys_command(app);
+  if (argc > 1 && argv[1][0] != '-') {
+    if (const std::string msg = unknown_command(app, argv[1]); !msg.empty()) {
+      std::cerr << msg << "\n";
+      return static_cast<int>(CLI::ExitCodes::ExtrasError);
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

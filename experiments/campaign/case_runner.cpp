@@ -5,6 +5,7 @@
 
 #include "experiments/io/json_fields.hpp"
 #include "experiments/io/scene.hpp"
+#include "experiments/pile/headline.hpp"
 #include "experiments/pile/pile_run.hpp"
 
 namespace reposetwin::experiments {
@@ -22,6 +23,16 @@ json to_json(const CaseResult& r) {
     out["image"] = {{"theta_deg", r.image->theta_deg}, {"theta_sd_deg", r.image->theta_sd_deg},
                     {"height_m", r.image->height_m},   {"diameter_m", r.image->diameter_m},
                     {"flank_deg", r.image->flank_deg}, {"images", r.image->images}};
+  // The one headline angle, named as in a run's result.json (pile/headline.hpp).
+  if (!r.pile.clogged && !r.pile.not_measured && r.pile.status != sim::PileStatus::kNoPile) {
+    Headline h = headline_from_particles(r.pile);
+    if (r.image)
+      h = {r.image->theta_deg, r.image->theta_sd_deg, r.image->height_m, r.image->diameter_m, 0,
+           true, kHeadlineFromImages};
+    json fields = to_json(h);
+    fields.erase("headline_views");  // a case keeps only the views' mean and spread
+    out.update(fields);
+  }
   return out;
 }
 

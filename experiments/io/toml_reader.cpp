@@ -3,6 +3,11 @@
 #include <sstream>
 
 namespace reposetwin::experiments {
+namespace {
+thread_local std::set<std::string>* g_recorded_keys = nullptr;
+}  // namespace
+
+void record_keys(std::set<std::string>* keys) { g_recorded_keys = keys; }
 
 std::string show_node(const toml::node& node) {
   std::ostringstream os;
@@ -42,6 +47,7 @@ bool TableReader::has(const std::string& key) const { return table_->contains(ke
 
 const toml::node* TableReader::get(const std::string& key) {
   used_.insert(key);
+  if (g_recorded_keys) g_recorded_keys->insert(where(key));
   return table_->get(key);
 }
 

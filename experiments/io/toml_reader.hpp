@@ -57,6 +57,11 @@ class TableReader {
   std::set<std::string> used_;
 };
 
+/// From now on, every key a TableReader on this thread looks up (dotted, as where() gives it)
+/// is also added to `keys`, until called with nullptr: how the scene-key reference's test
+/// (io/scene_keys.hpp) learns every key the parser reads.
+void record_keys(std::set<std::string>* keys);
+
 /// Parses TOML text; a syntax error becomes an InputError "file:line:column: description".
 toml::table parse_toml(const std::string& text, const std::string& file);
 

@@ -15,6 +15,8 @@ table.num td.l{text-align:left}
 tr.shaded{background:#eef}
 caption{caption-side:bottom;text-align:left;max-width:1000px}
 figure{display:inline-block;margin:4px}
+.headline .angle{font-size:44px;font-weight:bold;margin:8px 0}
+.note{color:#a40}
 </style></head><body>
 <h1>{{heading}}</h1>
 {{#sections}}{{{.}}}
@@ -90,6 +92,26 @@ const char* const kFolders = R"(<h2>Folders</h2>
 {{#folders}}<li><a href='{{href}}'>{{dir}}</a> ({{title}})</li>
 {{/folders}}</ul>
 )";
+
+// angle, sd (or false), measure, H_mm, D_mm, particles, views, note (or false), stop (or false).
+const char* const kRunHeadline = R"(<div class='headline'>
+<p class='angle'>{{angle}}{{#sd}} &plusmn; {{sd}}{{/sd}}&deg;</p>
+<p><b>Angle of repose</b> <code>headline_angle_deg</code> = {{measure}}{{#views}} (mean of {{views}}, &plusmn; their spread){{/views}}.
+H = {{H_mm}} mm, D = {{D_mm}} mm, {{particles}} particles.</p>
+{{#note}}<p class='note'>{{note}}</p>
+{{/note}}{{#stop}}<p class='note'>Run stopped: {{stop}}.</p>
+{{/stop}}</div>
+)";
+
+// photos: figures (side overlays, then the top overlay); none: why there are no photos, or false.
+const char* const kRunPhotos = R"(<h2>The twin's photographs, measured</h2>
+{{#photos}}{{> figure}}{{/photos}}{{#none}}<p>{{none}}</p>
+{{/none}})";
+
+// heading; intro (or false); rows: table.
+const char* const kRunTable = R"(<h2>{{heading}}</h2>
+{{#intro}}<p>{{intro}}</p>
+{{/intro}}{{#rows}}{{> table}}{{/rows}})";
 
 // data, code, finished.
 const char* const kLoopIntro = R"(<p>Data: {{data}}<br>Code {{code}}, finished {{finished}}</p>

@@ -26,6 +26,11 @@ extern const char* const kCalibration;
 extern const char* const kPredictions;
 extern const char* const kFolders;
 
+// Sections of a run's one-page summary (run_summary.hpp).
+extern const char* const kRunHeadline;
+extern const char* const kRunPhotos;
+extern const char* const kRunTable;
+
 // Sections of the loop's page.
 extern const char* const kLoopIntro;
 extern const char* const kLoopError;

@@ -1,0 +1,36 @@
+// The reference of every scene key: type, default, unit and meaning (`reposetwin keys`,
+// docs/scene.md).
+//
+// Design note. The reference is one table next to the parser, and its defaults are read from
+// the same default-constructed settings structs the parser starts from, so a changed default
+// cannot leave the reference behind. That it is complete is a test, not a promise:
+// tests/experiments/io/scene_keys_test.cpp records every key the parser looks up while it reads
+// scenes that use every table (TableReader's key recorder) and every key the PSD reader allows,
+// and fails for one the reference lacks. Keys under a table of user-chosen names are written
+// with a placeholder: materials.<name>.density_kg_m3, contacts.<a>-<b>.friction.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace reposetwin::experiments {
+
+struct SceneKey {
+  std::string key;           // dotted, with <name> / <a>-<b> placeholders
+  std::string type;          // "string", "number", "integer", "array of numbers", "table"
+  std::string default_text;  // "required", "-" (optional, no default) or the default value
+  std::string unit;          // SI unit, or "-"
+  std::string meaning;       // one line
+};
+
+/// Every scene key, in the order of a scene file.
+const std::vector<SceneKey>& scene_keys();
+
+/// The reference key of a dotted key as written in a scene ("materials.rock.poisson_ratio" ->
+/// "materials.<name>.poisson_ratio"); the key itself when no placeholder applies.
+std::string scene_key_pattern(const std::string& dotted);
+
+/// The reference as a Markdown page (docs/scene.md is this text).
+std::string scene_keys_markdown();
+
+}  // namespace reposetwin::experiments

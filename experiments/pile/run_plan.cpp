@@ -1,0 +1,116 @@
+#include "experiments/pile/run_plan.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+#include "experiments/io/input_error.hpp"
+#include "sim/psd.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+
+// Solid fraction of the loose fill lattice, as the scene's container check assumes.
+constexpr double kLooseSolidFraction = 0.6;
+// Settling inside the container before the lift, and after it (both measured on the shipped
+// funnel scenes: 0.17-0.33 s and 0.15-0.65 s).
+constexpr double kFillSettleS = 0.3;
+constexpr double kFinalSettleS = 0.5;
+// The lift empties the container before it has risen the whole fill height: material flows out
+// of the outlet as it rises (measured: 0.75 of h / v on the funnel scenes).
+constexpr double kLiftFraction = 0.75;
+
+// Height [m] of a loose bulk volume [m^3] in the container (frustum or cylinder), by bisection.
+double fill_height(const ContainerConfig& c, double volume) {
+  const double r0 = 0.5 * c.bottom_diameter;
+  const double slope = (0.5 * c.top_diameter - r0) / c.height;
+  auto v = [&](double h) {
+    const double r = r0 + slope * h;
+    return std::numbers::pi / 3.0 * h * (r0 * r0 + r0 * r + r * r);
+  };
+  double lo = 0.0, hi = c.height;
+  if (v(hi) <= volume) return hi;
+  for (int i = 0; i < 60; ++i) (v(0.5 * (lo + hi)) < volume ? lo : hi) = 0.5 * (lo + hi);
+  return 0.5 * (lo + hi);
+}
+
+std::string fmt(const char* pattern, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, pattern, v);
+  return buf;
+}
+
+}  // namespace
+
+std::string duration_text(double seconds) {
+  const auto s = static_cast<long long>(std::llround(std::max(0.0, seconds)));
+  char buf[48];
+  if (s >= 86400)
+    std::snprintf(buf, sizeof buf, "%lldd%lldh", s / 86400, (s % 86400) / 3600);
+  else if (s >= 3600)
+    std::snprintf(buf, sizeof buf, "%lldh%lldm", s / 3600, (s % 3600) / 60);
+  else if (s >= 60)
+    std::snprintf(buf, sizeof buf, "%lldm%llds", s / 60, s % 60);
+  else
+    std::snprintf(buf, sizeof buf, "%llds", s);
+  return buf;
+}
+
+RunPlan plan_run(const SceneConfig& scene, int threads, const PlanSettings& settings) {
+  RunPlan p;
+  const sim::ResolvedPsd psd = sim::resolve_psd(scene.psd.spec);
+  const double density =
+      scene.materials[material_index(scene, scene.sample_material, "sample.material")].density;
+  p.particles = std::llround(sim::expected_particle_count(scene.psd.spec, scene.mass, density));
+  p.fines_fraction = psd.fines_fraction;
+  p.d_min_mm = 1e3 * psd.d_min;
+  p.d_max_mm = 1e3 * psd.d_max;
+  p.time_step_s = build_model(scene, 0.5 * psd.d_min, 0.5 * psd.d_max).dt;
+  const double bulk = scene.mass * psd.simulated_mass_factor / (density * kLooseSolidFraction);
+  p.fill_height_m = fill_height(scene.container, bulk);
+  p.simulated_time_s = std::min(
+      scene.procedure.max_time,
+      kFillSettleS + kFinalSettleS + kLiftFraction * p.fill_height_m / scene.procedure.lift_speed);
+  p.steps = std::llround(std::ceil(p.simulated_time_s / p.time_step_s));
+  p.threads = std::max(1, threads);
+  p.particle_steps_per_s = settings.particle_steps_per_s_per_thread * p.threads;
+  p.wall_s =
+      static_cast<double>(p.steps) * static_cast<double>(p.particles) / p.particle_steps_per_s;
+  return p;
+}
+
+std::string plan_text(const RunPlan& p, const PlanSettings& s) {
+  std::string t = "plan: " + std::to_string(p.particles) + " particles (d " +
+                  fmt("%.3g", p.d_min_mm) + "-" + fmt("%.3g", p.d_max_mm) + " mm); " +
+                  fmt("%.1f", 100.0 * p.fines_fraction) +
+                  "% of the mass is finer than d_min and not simulated\n";
+  t += "plan: dt " + fmt("%.3g", p.time_step_s) + " s, about " + fmt("%.2g", p.simulated_time_s) +
+       " s simulated (fill height " + fmt("%.0f", 1e3 * p.fill_height_m) + " mm), " +
+       std::to_string(p.steps) + " steps\n";
+  t += "plan: estimated wall time " + duration_text(p.wall_s) + " at " +
+       fmt("%.2g", p.particle_steps_per_s) + " particle-steps/s (" +
+       fmt("%.2g", s.particle_steps_per_s_per_thread) + " per thread, measured on whole pile " +
+       "runs, x " + std::to_string(p.threads) + " thread(s))\n";
+  return t;
+}
+
+std::string plan_refusal(const RunPlan& p, const PlanSettings& s) {
+  std::string why;
+  if (p.particles > s.max_particles)
+    why = std::to_string(p.particles) + " particles is above the limit of " +
+          std::to_string(s.max_particles);
+  if (p.wall_s > s.max_wall_s)
+    why += (why.empty() ? "" : " and ") + std::string("the estimated ") + duration_text(p.wall_s) +
+           " is above the limit of " + duration_text(s.max_wall_s);
+  if (why.empty()) return "";
+  const double bigger = 2.0 * p.d_min_mm;
+  const std::string example =
+      bigger < 0.9 * p.d_max_mm ? ", e.g. --set sample.d_min_mm=" + fmt("%.3g", bigger) : "";
+  return "this run is too large to start unasked: " + why +
+         ". Raise the cut-off sample.d_min_mm (now " + fmt("%.3g", p.d_min_mm) +
+         " mm; the count grows about as d_min^-3)" + example +
+         ", or lower sample.mass_kg; or pass --yes to run it anyway";
+}
+
+}  // namespace reposetwin::experiments

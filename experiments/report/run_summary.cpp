@@ -1,0 +1,257 @@
+#include "experiments/report/run_summary.hpp"
+
+#include <filesystem>
+#include <map>
+
+#include "experiments/io/format.hpp"
+#include "experiments/io/provenance.hpp"
+#include "experiments/pile/run_plan.hpp"
+#include "experiments/report/format.hpp"
+#include "experiments/report/html.hpp"
+#include "experiments/report/templates.hpp"
+
+namespace reposetwin::experiments {
+namespace fs = std::filesystem;
+using nlohmann::json;
+using namespace report;
+
+namespace {
+
+std::string mm(double m, int digits = 1) { return fixed(1e3 * m, digits); }
+
+std::string number_at(const json& j, const char* key, int digits = 2, double scale = 1.0) {
+  return j.contains(key) && j[key].is_number() ? fixed(scale * j[key].get<double>(), digits)
+                                               : std::string("-");
+}
+
+// The value of every measure of measure_definitions(), by its name, as the page prints it.
+std::map<std::string, std::string> measure_values(const PileRun& run,
+                                                  const std::optional<Headline>& h,
+                                                  const std::optional<json>& images) {
+  std::map<std::string, std::string> v;
+  if (h) v["headline_angle_deg"] = mean_sd(h->angle_deg, h->angle_sd_deg) + " deg";
+  if (images) {
+    v["theta_deg"] = number_at(*images, "theta_deg") + " deg";
+    v["flank_deg"] = number_at(*images, "flank_deg") + " deg";
+    v["height_m, diameter_m"] = number_at(*images, "height_m", 1, 1e3) + " mm, " +
+                                number_at(*images, "diameter_m", 1, 1e3) + " mm";
+    if (images->contains("top"))
+      v["top.D_circle_m"] = number_at((*images)["top"], "D_circle_m", 1, 1e3) + " mm";
+  }
+  const PileMeasure& p = run.pile;
+  if (!p.clogged && !p.not_measured) {
+    v["pile.theta_hd_deg"] = fixed(p.theta_hd_deg) + " deg";
+    v["pile.height_m, pile.base_diameter_m"] =
+        mm(p.height_m) + " mm, " + mm(p.base_diameter_m) + " mm";
+    v["pile.slice_angle_mean_deg"] = mean_sd(p.slice_angle_mean_deg, p.slice_angle_sd_deg) +
+                                     " deg (" + std::to_string(p.valid_slices) + " slices)";
+    v["pile.equal_area_angle_deg"] = fixed(p.equal_area_angle_deg) + " deg";
+    v["pile.centre_of_mass_angle_deg"] = fixed(p.centre_of_mass_angle_deg) + " deg";
+  }
+  return v;
+}
+
+std::string measures_section(const PileRun& run, const std::optional<Headline>& h,
+                             const std::optional<json>& images) {
+  const auto values = measure_values(run, h, images);
+  Table t;
+  t.header = {"measure (field)", "value", "file", "definition"};
+  for (const MeasureDefinition& d : measure_definitions()) {
+    const auto it = values.find(d.name);
+    Cell name;
+    name.code = d.name;
+    Cell def(d.definition);
+    def.left = true;
+    t.rows.push_back({{name, it == values.end() ? Cell("-") : Cell(it->second), Cell(d.where), def},
+                      std::string(d.name) == "headline_angle_deg"});
+  }
+  mustache::data d;
+  d.set("heading", std::string("Every measure, by name"));
+  d.set("intro", std::string("Compare a lab's angle with headline_angle_deg only: the lab reads "
+                             "atan(2H/D) from a side photo. The others differ on the same heap "
+                             "by their definition, not by error (docs/measures.md)."));
+  d.set("rows", to_data(t));
+  return render(templates::kRunTable, d);
+}
+
+std::string photos_section(const RunSummaryInputs& in) {
+  std::vector<Figure> figs;
+  if (in.images) {
+    for (const json& v : in.images->value("side_views", json::array())) {
+      const std::string stem = fs::path(v.value("image", std::string())).stem().string();
+      figs.push_back(
+          {"images/" + stem + ".measured.png",
+           "side, azimuth " + fixed(v.value("azimuth_deg", 0.0), 0) +
+               " deg: atan(2H/D) = " + number_at(v, "theta_deg") + " deg, flank " +
+               fixed(0.5 * (v.value("flank_left_deg", 0.0) + v.value("flank_right_deg", 0.0))) +
+               " deg",
+           560});
+    }
+    if (in.images->contains("top") && (*in.images)["top"].contains("D_circle_m"))
+      figs.push_back(
+          {"images/top.measured.png",
+           "top: footprint circle " + number_at((*in.images)["top"], "D_circle_m", 1, 1e3) + " mm",
+           560});
+  }
+  mustache::data d;
+  d.set("photos", to_data(figs));
+  d.set("none", text_or_false(in.images ? std::string() : "No photographs: " + in.images_note));
+  return render(templates::kRunPhotos, d);
+}
+
+TableRow row(const std::string& key, const std::string& value) {
+  Cell k(key), v(value);
+  k.left = v.left = true;
+  return {{k, v}};
+}
+
+// A row of links to files of the run folder (relative, so a copied folder keeps them).
+TableRow files_row(const std::vector<std::string>& files) {
+  Cell k("files"), v;
+  k.left = v.left = true;
+  for (const std::string& f : files) v.links.push_back({f, f});
+  return {{k, v}};
+}
+
+std::string table_section(const std::string& heading, std::vector<TableRow> rows) {
+  Table t;
+  t.header = {"what", "value"};
+  t.rows = std::move(rows);
+  mustache::data d;
+  d.set("heading", heading);
+  d.set("intro", false);
+  d.set("rows", to_data(t));
+  return render(templates::kRunTable, d);
+}
+
+std::string inputs_section(const PileRun& run, const SceneConfig& scene,
+                           const RunSummaryInputs& in) {
+  std::string sets;
+  for (const std::string& s : in.overrides) sets += (sets.empty() ? "" : "  ") + s;
+  const PsdRecord& psd = run.psd;
+  const auto sample_pair = scene.contacts.find({scene.sample_material, scene.sample_material});
+  std::string rolling = "-";
+  if (sample_pair != scene.contacts.end()) {
+    rolling = fixed(sample_pair->second.rolling_friction, 3);
+    for (const auto& m : sim::kRollingModels)
+      if (m.model == sample_pair->second.rolling_model)
+        rolling += " (" + std::string(m.keyword) + ")";
+  }
+  return table_section(
+      "Inputs",
+      {row("scene", scene.name + " (" + scene.file + ")"), row("description", scene.description),
+       row("overrides (--set)", sets.empty() ? "none" : sets),
+       row("sample", fixed(scene.mass * 1e3, 1) + " g of " + scene.sample_material + ", seed " +
+                         std::to_string(scene.seed)),
+       row("sieve table", psd.name + " (" + psd.source + ")"),
+       row("simulated sizes", fixed(psd.d_min_drawn_mm, 2) + "-" + fixed(psd.d_max_drawn_mm, 2) +
+                                  " mm; " + fixed(100 * psd.fines_fraction_not_simulated, 1) +
+                                  "% of the mass finer than d_min = " + fixed(psd.d_min_mm, 2) +
+                                  " mm not simulated"),
+       row("container", scene.container.kind + ", outlet " +
+                            mm(scene.container.bottom_diameter, 0) + " mm, top " +
+                            mm(scene.container.top_diameter, 0) + " mm, height " +
+                            mm(scene.container.height, 0) + " mm, lifted at " +
+                            fixed(scene.procedure.lift_speed, 3) + " m/s"),
+       row("rolling friction (sample on sample)", rolling), files_row({"scene.resolved.toml"})});
+}
+
+std::string provenance_section(const PileRun& run, const RunSummaryInputs& in) {
+  const RunProvenance& p = run.provenance;
+  std::vector<TableRow> rows = {
+      row("code version", p.code_version),
+      row("created (UTC)", p.created_utc),
+      row("stop",
+          stop_reason_text(run.stop) + (run.stop.detail.empty() ? "" : ": " + run.stop.detail)),
+      row("particles", std::to_string(run.particles.final) + " in the pile's world (" +
+                           std::to_string(run.particles.initial) + " filled)"),
+      row("time step", significant(p.time_step_s) + " s (Rayleigh time " +
+                           significant(p.rayleigh_time_s) + " s)"),
+      row("Young's modulus", p.softened_youngs_modulus_pa
+                                 ? significant(*p.softened_youngs_modulus_pa) +
+                                       " Pa (softened; real " +
+                                       significant(p.youngs_modulus_real_pa) + " Pa)"
+                                 : significant(p.youngs_modulus_real_pa) + " Pa"),
+      row("steps, simulation wall time", std::to_string(run.performance.steps) + " steps, " +
+                                             duration_text(run.performance.wall_s) + " with " +
+                                             std::to_string(p.threads) + " thread(s)"),
+      row("command wall time (photographs included)", duration_text(in.wall_s))};
+  if (in.images) rows.push_back(row("renderer", in.images->value("gl", std::string("-"))));
+  std::vector<std::string> files = {"result.json", "series.pvd", "final.vtp"};
+  if (in.images) files.push_back("images/measurement.json");
+  rows.push_back(files_row(files));
+  return table_section("Provenance", std::move(rows));
+}
+
+std::string headline_section(const PileRun& run, const std::optional<Headline>& h,
+                             const RunSummaryInputs& in) {
+  mustache::data d;
+  d.set("angle", h ? fixed(h->angle_deg) : std::string("no pile"));
+  d.set("sd", h && h->from_images ? mustache::data(fixed(h->angle_sd_deg)) : mustache::data(false));
+  d.set("measure", h ? h->measure : std::string("-"));
+  d.set("views", h && h->views > 0 ? mustache::data(std::to_string(h->views) + " side views")
+                                   : mustache::data(false));
+  d.set("H_mm", h ? mm(h->height_m) : std::string("-"));
+  d.set("D_mm", h ? mm(h->diameter_m) : std::string("-"));
+  d.set("particles", std::to_string(run.particles.final));
+  d.set("note", text_or_false(h && !h->from_images ? "No photographs (" + in.images_note +
+                                                         "): the headline is the particle "
+                                                         "atan(2H/D), not the lab's measure."
+                                                   : std::string()));
+  d.set("stop", text_or_false(run.stop.reason == StopReason::kSettled
+                                  ? std::string()
+                                  : stop_reason_text(run.stop) + " " + run.stop.detail));
+  return render(templates::kRunHeadline, d);
+}
+
+}  // namespace
+
+std::string run_summary_html(const PileRun& run, const SceneConfig& scene,
+                             const RunSummaryInputs& in, const std::optional<Headline>& h) {
+  const Page page{
+      "ReposeTwin run: " + scene.name,
+      "ReposeTwin run: " + scene.name,
+      {headline_section(run, h, in), photos_section(in), measures_section(run, h, in.images),
+       inputs_section(run, scene, in), provenance_section(run, in)}};
+  return render_page(page);
+}
+
+RunSummary finish_run(const PileRun& run, const SceneConfig& scene, const RunSummaryInputs& in) {
+  RunSummary s;
+  const bool pile =
+      !run.pile.clogged && !run.pile.not_measured && run.pile.status != sim::PileStatus::kNoPile;
+  if (pile)
+    s.headline = in.images ? headline_from_images(*in.images) : headline_from_particles(run.pile);
+  const fs::path dir(in.run_dir);
+  const fs::path result = dir / "result.json";
+  json r = json::parse(read_file(result.string()));
+  if (s.headline) r.update(to_json(*s.headline));
+  if (in.images)
+    r["image"] = {
+        {"theta_deg", (*in.images)["theta_deg"]}, {"theta_sd_deg", (*in.images)["theta_sd_deg"]},
+        {"height_m", (*in.images)["height_m"]},   {"diameter_m", (*in.images)["diameter_m"]},
+        {"flank_deg", (*in.images)["flank_deg"]}, {"images", "images"}};
+  write_json_atomic(result.string(), r);
+  s.page = (dir / "summary.html").string();
+  write_file_atomic(s.page, run_summary_html(run, scene, in, s.headline));
+  return s;
+}
+
+std::string headline_line(const PileRun& run, const RunSummary& s, double wall_s) {
+  std::string line;
+  if (s.headline) {
+    const Headline& h = *s.headline;
+    line = "angle of repose " + fixed(h.angle_deg) +
+           (h.from_images ? " \u00b1 " + fixed(h.angle_sd_deg) : std::string()) + " deg (" +
+           (h.from_images ? "image atan(2H/D), " + std::to_string(h.views) + " side views"
+                          : "particle atan(2H/D): no photographs") +
+           "); H " + mm(h.height_m) + " mm, D " + mm(h.diameter_m) + " mm";
+  } else {
+    line = "no pile (" + stop_reason_text(run.stop) + (run.stop.detail.empty() ? "" : ": ") +
+           run.stop.detail + ")";
+  }
+  return line + "; " + std::to_string(run.particles.final) + " particles; wall " +
+         duration_text(wall_s) + "; report " + s.page;
+}
+
+}  // namespace reposetwin::experiments

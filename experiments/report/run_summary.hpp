@@ -1,0 +1,49 @@
+// The one-page summary a run ends with: the twin's photographs, its headline angle, every other
+// measure by name, the inputs and the provenance, and the one line a person reads.
+//
+// Design note. `reposetwin run` is the main job, so it ends where a user wants to be: the pile
+// photographed like the lab's (photos/pile_images.hpp, from the run's final state in memory)
+// and its angle read from the photos as the lab reads its own (pile/headline.hpp). The page is
+// written beside the run's files (RUN_DIR/summary.html) and links only relatively (images/...,
+// result.json), so a copied run folder still opens. It uses the report's page skeleton, table
+// and figure templates (templates.hpp); C++ only fills typed page data. finish_run() also adds
+// the headline fields to result.json (atomically, keeping every field it had).
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "experiments/io/scene.hpp"
+#include "experiments/pile/headline.hpp"
+#include "experiments/pile/pile_record.hpp"
+
+namespace reposetwin::experiments {
+
+/// What the summary shows besides the run record.
+struct RunSummaryInputs {
+  std::string run_dir;
+  std::vector<std::string> overrides;    // the --set arguments as given
+  std::optional<nlohmann::json> images;  // images/measurement.json; absent: no photographs
+  std::string images_note;               // why there are none (--no-images, vision failed)
+  double wall_s = 0.0;                   // the command's wall time, photographs included [s]
+};
+
+/// What finish_run() made.
+struct RunSummary {
+  std::optional<Headline> headline;  // absent when the run formed no pile
+  std::string page;                  // RUN_DIR/summary.html
+};
+
+/// Adds the headline to RUN_DIR/result.json and writes RUN_DIR/summary.html.
+RunSummary finish_run(const PileRun& run, const SceneConfig& scene, const RunSummaryInputs& in);
+
+/// The summary page's HTML (finish_run writes it).
+std::string run_summary_html(const PileRun& run, const SceneConfig& scene,
+                             const RunSummaryInputs& in, const std::optional<Headline>& h);
+
+/// The run's last line on stdout: headline angle, H, D, particle count, wall time, the page.
+std::string headline_line(const PileRun& run, const RunSummary& s, double wall_s);
+
+}  // namespace reposetwin::experiments

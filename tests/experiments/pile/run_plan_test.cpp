@@ -1,0 +1,81 @@
+// The plan printed before a run: its counts against an independent draw and closed forms, and
+// the refusal above the limits naming the key that shrinks the run.
+#include "experiments/pile/run_plan.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "experiments/io/scene_overrides.hpp"
+#include "sim/psd.hpp"
+#include "sim/random.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+
+TEST(RunPlan, ParticleCountMatchesTheSamplersDraw) {
+  const SceneConfig s = load_scene("", {});
+  const RunPlan p = plan_run(s, 1);
+  sim::Rng rng(s.seed);
+  const double density = s.materials[material_index(s, s.sample_material, "")].density;
+  const sim::PsdSample drawn = sim::sample_psd(s.psd.spec, s.mass, density, rng);
+  EXPECT_NEAR(static_cast<double>(p.particles), static_cast<double>(drawn.summary.count),
+              0.05 * static_cast<double>(drawn.summary.count));
+  EXPECT_NEAR(p.fines_fraction, drawn.summary.fines_fraction, 1e-12);
+  EXPECT_NEAR(p.d_min_mm, 2.5, 1e-9);
+}
+
+const std::string kSource = REPOSETWIN_SOURCE_DIR;
+
+TEST(RunPlan, FillHeightInACylinderIsVolumeOverArea) {
+  const SceneConfig s = load_scene(kSource + "/data/scenes/paper/fig18_column_dmax70.toml");
+  ASSERT_EQ(s.container.kind, "cylinder");
+  const RunPlan p = plan_run(s, 2);
+  const double density = s.materials[material_index(s, s.sample_material, "")].density;
+  const double bulk = s.mass / (density * 0.6);
+  const double r = 0.5 * s.container.bottom_diameter;
+  EXPECT_NEAR(p.fill_height_m, bulk / (std::numbers::pi * r * r), 1e-9);
+  EXPECT_NEAR(p.simulated_time_s,
+              std::min(s.procedure.max_time, 0.8 + 0.75 * p.fill_height_m / s.procedure.lift_speed),
+              1e-9);
+  EXPECT_EQ(p.steps, static_cast<std::int64_t>(std::ceil(p.simulated_time_s / p.time_step_s)));
+  EXPECT_NEAR(p.wall_s, static_cast<double>(p.steps * p.particles) / (2 * 1.3e6), 1e-6);
+}
+
+TEST(RunPlan, SmallerCutOffMeansMoreParticlesAndASmallerStep) {
+  const std::string scene = kSource + "/data/scenes/paper/table1_s1_dmax2p0_200g.toml";
+  const RunPlan coarse = plan_run(load_scene(scene), 1);
+  const RunPlan fine = plan_run(load_scene(scene, {"sample.d_min_mm=0.5"}), 1);
+  EXPECT_GT(fine.particles, 3 * coarse.particles);
+  EXPECT_LT(fine.time_step_s, coarse.time_step_s);
+  EXPECT_LT(fine.fines_fraction, coarse.fines_fraction);
+  EXPECT_GT(fine.wall_s, 4 * coarse.wall_s);
+}
+
+TEST(RunPlan, AboveTheLimitsItIsRefusedNamingTheCutOffKey) {
+  const RunPlan p = plan_run(load_scene("", {}), 1);
+  EXPECT_EQ(plan_refusal(p), "");
+  PlanSettings few;
+  few.max_particles = 100;
+  const std::string why = plan_refusal(p, few);
+  EXPECT_NE(why.find("above the limit of 100"), std::string::npos) << why;
+  EXPECT_NE(why.find("sample.d_min_mm"), std::string::npos) << why;
+  EXPECT_NE(why.find("--yes"), std::string::npos) << why;
+  PlanSettings slow;
+  slow.particle_steps_per_s_per_thread = 10.0;  // days
+  const std::string late = plan_refusal(plan_run(load_scene("", {}), 1, slow), slow);
+  EXPECT_NE(late.find("above the limit of 1h0m"), std::string::npos) << late;
+  EXPECT_NE(plan_text(p).find("particle-steps/s"), std::string::npos);
+}
+
+TEST(RunPlan, DurationsReadAsAPersonWritesThem) {
+  EXPECT_EQ(duration_text(45.2), "45s");
+  EXPECT_EQ(duration_text(725), "12m5s");
+  EXPECT_EQ(duration_text(3 * 3600 + 20 * 60), "3h20m");
+  EXPECT_EQ(duration_text(4 * 86400 + 6 * 3600), "4d6h");
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
