@@ -1,6 +1,7 @@
 // The pile test with clumps: a tiny pour of four-sphere rods fills, lifts, settles and forms a
 // pile measured from the component spheres; its result names the shape and counts bodies and
-// components; the snapshot carries body ids; a run cut off and resumed ends bit-identically;
+// components; the snapshot carries body ids; a run cut off and resumed ends bit-identically, as
+// does a run on two threads;
 // a resume against other templates is refused; and a scene of one-sphere clumps gives the sphere
 // engine's pile exactly.
 #include <gtest/gtest.h>
@@ -80,8 +81,9 @@ SceneConfig scene_from(const std::string& text, const fs::path& dir) {
 }
 
 PileRun run(const SceneConfig& scene, const fs::path& out, std::int64_t stop_after = 0,
-            bool resume = false) {
+            bool resume = false, int threads = 1) {
   RunOptions opt;
+  opt.threads = threads;
   opt.out_dir = out.string();
   opt.progress = false;
   opt.stop_after_steps = stop_after;
@@ -131,6 +133,16 @@ TEST(PileClumps, ATinyPourOfRodsFormsAPileAndResumesBitIdentically) {
   EXPECT_EQ(a.performance.steps, b.performance.steps);
   EXPECT_EQ(a.final_spheres.x, b.final_spheres.x);
   EXPECT_EQ(a.final_spheres.body, b.final_spheres.body);
+}
+
+// The same rod pour on two threads ends in the same bits as on one.
+TEST(PileClumps, TwoThreadsGiveTheSameRodPile) {
+  const fs::path dir = temp_dir("threads");
+  const SceneConfig scene = scene_from(scene_text(kRod), dir);
+  const PileRun a = run(scene, dir / "one", 0, false, 1), b = run(scene, dir / "two", 0, false, 2);
+  EXPECT_EQ(a.performance.steps, b.performance.steps);
+  EXPECT_EQ(a.pile.theta_hd_deg, b.pile.theta_hd_deg);
+  EXPECT_EQ(a.final_spheres.x, b.final_spheres.x);
 }
 
 // The controller keeps the templates' fingerprint: a checkpoint whose clumps another build of
