@@ -219,6 +219,23 @@ ClumpTemplate make_clump_template(const ClumpShape& shape, const MassPropertySet
   return t;
 }
 
+ClumpTemplate scale_clump_template(const ClumpTemplate& t, double factor) {
+  if (!(factor > 0.0) || !std::isfinite(factor)) {
+    std::ostringstream os;
+    os << "clump " << t.name << ": scale factor " << factor << " must be positive and finite";
+    throw std::invalid_argument(os.str());
+  }
+  ClumpTemplate s = t;
+  for (Vec3& o : s.offsets) o *= factor;
+  for (double& r : s.radii) r *= factor;
+  const double f2 = factor * factor;
+  s.volume = t.volume * (f2 * factor);
+  s.inertia = t.inertia * (f2 * f2 * factor);
+  s.reach = t.reach * factor;
+  s.centre = t.centre * factor;
+  return s;
+}
+
 namespace {
 
 /// cos x and sin x. For |x| <= 0.05 (a body turning less than 0.1 rad in a step: nearly always)

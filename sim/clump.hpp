@@ -94,6 +94,12 @@ struct ClumpTemplate {
 ClumpTemplate make_clump_template(const ClumpShape& shape,
                                   const MassPropertySettings& settings = {});
 
+/// The template scaled by `factor` (> 0, finite): offsets, radii, reach and centre times
+/// factor, volume times factor^3, inertia per unit density times factor^5, axes unchanged. The
+/// mass properties scale exactly, so a shape's overlaps are integrated once, at one size, and
+/// every grain of it is a scaled copy. Throws std::invalid_argument for a bad factor.
+ClumpTemplate scale_clump_template(const ClumpTemplate& t, double factor);
+
 /// Rotates the orientation q (body to world) of a torque-free rigid body with principal moments
 /// `inertia` [kg m^2] and world-frame angular momentum l [kg m^2/s] over time tau [s] by the
 /// symmetric splitting 1, 2, 3, 2, 1 (design note); q stays a unit quaternion.

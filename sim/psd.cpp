@@ -201,14 +201,39 @@ double expected_particle_count(const PsdSpec& spec, double target_mass, double d
 }
 
 PsdSample sample_psd(const PsdSpec& spec, double target_mass, double density, Rng& rng) {
+  PsdShape sphere;
+  sphere.volume_per_cube = std::numbers::pi / 6.0;
+  sphere.sphere = true;
+  PsdSample out = sample_psd_shapes(spec, target_mass, density, {sphere}, rng);
+  out.shape.clear();
+  return out;
+}
+
+PsdSample sample_psd_shapes(const PsdSpec& spec, double target_mass, double density,
+                            const std::vector<PsdShape>& shapes, Rng& rng) {
   if (!(target_mass > 0.0) || !std::isfinite(target_mass)) {
     fail("target mass = " + format_number(target_mass) + " kg must be positive");
   }
   if (!(density > 0.0) || !std::isfinite(density)) {
     fail("density = " + format_number(density) + " kg/m^3 must be positive");
   }
+  if (shapes.empty()) fail("no grain shapes");
+  double fraction_sum = 0.0, mean_volume = 0.0;
+  for (std::size_t s = 0; s < shapes.size(); ++s) {
+    const PsdShape& sh = shapes[s];
+    if (!(sh.volume_per_cube > 0.0) || !std::isfinite(sh.volume_per_cube))
+      fail("shape " + std::to_string(s) + " volume per cube = " +
+           format_number(sh.volume_per_cube) + " must be positive");
+    if (!(sh.mass_fraction >= 0.0) || !std::isfinite(sh.mass_fraction))
+      fail("shape " + std::to_string(s) + " mass fraction = " + format_number(sh.mass_fraction) +
+           " must not be negative");
+    fraction_sum += sh.mass_fraction;
+    mean_volume += sh.mass_fraction / sh.volume_per_cube;
+  }
+  if (std::abs(fraction_sum - 1.0) > 1e-9)
+    fail("shape mass fractions sum to " + format_number(fraction_sum) + ", not 1");
   const ResolvedPsd r = resolve_psd(spec);
-  const std::size_t k_count = r.intervals.size();
+  const std::size_t k_count = r.intervals.size(), s_count = shapes.size();
 
   PsdSample out;
   PsdSummary& sum = out.summary;
@@ -222,13 +247,18 @@ PsdSample sample_psd(const PsdSpec& spec, double target_mass, double density, Rn
   sum.d_min_drawn = std::numeric_limits<double>::infinity();
   sum.d_max_drawn = 0.0;
 
-  std::vector<double> target(k_count), drawn(k_count, 0.0);
+  // Cells (interval k, shape s) at k * s_count + s.
+  std::vector<double> target(k_count * s_count), drawn(k_count * s_count, 0.0);
+  std::vector<double> drawn_k(k_count, 0.0);
   std::vector<std::size_t> count(k_count, 0);
-  for (std::size_t k = 0; k < k_count; ++k) {
-    target[k] = r.intervals[k].mass_fraction * sum.simulated_target_mass;
-  }
-  // Refuse requests that would exhaust memory rather than fail deep inside a vector.
-  const double expected = expected_particle_count(spec, target_mass, density);
+  for (std::size_t k = 0; k < k_count; ++k)
+    for (std::size_t s = 0; s < s_count; ++s)
+      target[k * s_count + s] =
+          r.intervals[k].mass_fraction * shapes[s].mass_fraction * sum.simulated_target_mass;
+  // Refuse requests that would exhaust memory rather than fail deep inside a vector (the sphere
+  // count scaled by the mean volume of a grain against a sphere's).
+  const double expected = expected_particle_count(spec, target_mass, density) *
+                          (std::numbers::pi / 6.0) * mean_volume;
   constexpr double kMaxParticles = 2e8;
   if (expected > kMaxParticles) {
     fail("target mass = " + format_number(target_mass) + " kg would need about " +
@@ -236,27 +266,33 @@ PsdSample sample_psd(const PsdSpec& spec, double target_mass, double density, Rn
          "); raise d_min");
   }
   out.diameter.reserve(static_cast<std::size_t>(expected * 1.01) + 16);
+  out.shape.reserve(out.diameter.capacity());
 
   double total = 0.0;
   while (total < sum.simulated_target_mass) {
-    // The interval furthest below its target mass; ties go to the smaller size. Intervals with
-    // no mass in the table are never drawn from.
-    std::size_t best = k_count;
+    // The cell furthest below its target mass; ties go to the smaller size, then to the
+    // earlier shape. Cells with no mass in the table are never drawn from.
+    std::size_t best = k_count * s_count;
     double best_deficit = -std::numeric_limits<double>::infinity();
-    for (std::size_t k = 0; k < k_count; ++k) {
-      if (r.intervals[k].mass_fraction <= 0.0) continue;
-      const double deficit = target[k] - drawn[k];
+    for (std::size_t c = 0; c < k_count * s_count; ++c) {
+      if (r.intervals[c / s_count].mass_fraction <= 0.0 || shapes[c % s_count].mass_fraction <= 0)
+        continue;
+      const double deficit = target[c] - drawn[c];
       if (deficit > best_deficit) {
         best_deficit = deficit;
-        best = k;
+        best = c;
       }
     }
-    const PsdInterval& in = r.intervals[best];
+    const std::size_t k = best / s_count, s = best % s_count;
+    const PsdInterval& in = r.intervals[k];
     const double d = draw_clipped_normal(in.lower, in.upper, r.interval_sd_fraction, rng);
-    const double m = sphere_mass(d, density);
+    const double m = shapes[s].sphere ? sphere_mass(d, density)
+                                      : density * shapes[s].volume_per_cube * d * d * d;
     out.diameter.push_back(d);
+    out.shape.push_back(static_cast<std::int32_t>(s));
     drawn[best] += m;
-    count[best] += 1;
+    drawn_k[k] += m;
+    count[k] += 1;
     total += m;
     sum.d_min_drawn = std::min(sum.d_min_drawn, d);
     sum.d_max_drawn = std::max(sum.d_max_drawn, d);
@@ -266,7 +302,7 @@ PsdSample sample_psd(const PsdSpec& spec, double target_mass, double density, Rn
   sum.count = out.diameter.size();
   for (std::size_t k = 0; k < k_count; ++k) {
     sum.intervals.push_back({r.intervals[k].lower, r.intervals[k].upper,
-                             r.intervals[k].mass_fraction, drawn[k] / total, count[k]});
+                             r.intervals[k].mass_fraction, drawn_k[k] / total, count[k]});
   }
   return out;
 }

@@ -17,9 +17,17 @@
 //   reaches the target. Each interval then ends within one particle of its target, and the total
 //   exceeds the target by less than the last particle's mass. The draw order interleaves sizes, so
 //   a filling routine that inserts particles in this order does not segregate them by size.
+// - Shaped grains (sample_psd_shapes): a grain's diameter is its sieve size, and its mass is its
+//   shape's volume per cube of sieve size times d^3 times the density (the caller states how a
+//   shape's sieve size is defined and computes that volume from the shape's true union). The
+//   same greedy rule then runs over (interval, shape) cells, each with the target interval
+//   fraction * shape fraction * mass, so every sieve class keeps its mass, every shape its mass
+//   fraction, and every shape within every class both. One spherical shape of fraction 1 draws
+//   exactly what sample_psd draws (sample_psd is that call).
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -117,8 +125,17 @@ struct PsdSummary {
 
 /// Particle diameters in draw order, with their summary.
 struct PsdSample {
-  std::vector<double> diameter;  // (n) [m]
+  std::vector<double> diameter;    // (n) [m]; for shaped grains, the sieve size
+  std::vector<std::int32_t> shape; // (n) index into sample_psd_shapes' shapes; empty from
+                                   // sample_psd
   PsdSummary summary;
+};
+
+/// A grain shape for sample_psd_shapes.
+struct PsdShape {
+  double volume_per_cube = 0.0;  // volume of a grain of sieve size d, divided by d^3 [-]
+  double mass_fraction = 1.0;    // its share of the sample's mass [-]
+  bool sphere = false;           // a sphere: its mass is computed as sample_psd's (same bits)
 };
 
 /// Draws particle diameters whose total mass matches target_mass [kg] (times the fines factor
@@ -126,6 +143,13 @@ struct PsdSample {
 /// depends only on the spec, the masses and the generator's state. Throws std::invalid_argument
 /// for a bad spec or a non-positive mass or density.
 PsdSample sample_psd(const PsdSpec& spec, double target_mass, double density, Rng& rng);
+
+/// Draws grains of several shapes (design note): sieve sizes and shape indices whose masses
+/// match target_mass within one grain. Throws std::invalid_argument for a bad spec, mass,
+/// density, an empty shape list, a non-positive volume, or fractions that are negative or do not
+/// sum to 1 within 1e-9.
+PsdSample sample_psd_shapes(const PsdSpec& spec, double target_mass, double density,
+                            const std::vector<PsdShape>& shapes, Rng& rng);
 
 /// Expected number of particles sample_psd draws for this spec, mass [kg] and density [kg/m^3]:
 /// the simulated mass of each interval divided by the mean sphere mass of its clipped normal

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <numbers>
 #include <sstream>
 
@@ -177,6 +178,7 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
       if (!(d > 0 && std::isfinite(d))) t.fail(key, "= " + num(d) + " must be a positive size");
       (std::string(key) == "d_min_mm" ? s.psd.spec.d_min : s.psd.spec.d_max) = 1e-3 * d;
     }
+    s.shapes = read_grain_shapes(t);
     t.finish();
     sim::ResolvedPsd resolved;
     try {
@@ -233,6 +235,7 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
                        " mm does not pass the outlet container.bottom_diameter_m = " +
                        num(c.bottom_diameter) + " m");
     }
+    check_shapes_pass_outlet(s.shapes, psd.d_max, c.bottom_diameter, file);
     const double density = s.materials[material_index(s, s.sample_material, "sample")].density;
     const double bulk = s.mass / (density * 0.6);  // loose bulk volume (solid fraction 0.6)
     if (bulk > container_volume(c)) {
@@ -349,7 +352,8 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
   root.finish();
   {  // Validate the numerics now (time step against the stability limit, pair parameters).
     const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
-    build_model(s, 0.5 * psd.d_min, 0.5 * psd.d_max);
+    const auto [r_min, r_max] = grain_radius_range(s, psd.d_min, psd.d_max);
+    build_model(s, r_min, r_max);
   }
   s.resolved_toml = resolved_text(doc, s, dir);
   return s;
@@ -369,6 +373,19 @@ int material_index(const SceneConfig& scene, const std::string& name, const std:
     if (scene.materials[i].name == name) return static_cast<int>(i);
   throw InputError(scene.file + ": " + key + " = \"" + name +
                    "\" is not a material in [materials]");
+}
+
+std::pair<double, double> grain_radius_range(const SceneConfig& scene, double d_min,
+                                             double d_max) {
+  if (scene.shapes.empty()) return {0.5 * d_min, 0.5 * d_max};
+  double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+  for (const GrainShape& g : scene.shapes) {
+    for (double r : g.unit.radii) {
+      lo = std::min(lo, r);
+      hi = std::max(hi, r);
+    }
+  }
+  return {lo * d_min, hi * d_max};
 }
 
 sim::Model build_model(const SceneConfig& scene, double r_min, double r_max) {

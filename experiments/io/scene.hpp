@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "experiments/io/grain_shape.hpp"
 #include "experiments/io/psd_file.hpp"
 #include "sim/model.hpp"
 #include "sim/pile_geometry.hpp"
@@ -55,6 +56,7 @@ struct SceneConfig {
   double mass = 0.02;                // sample mass [kg]
   std::string sample_material = "rock";
   PsdFile psd;
+  std::vector<GrainShape> shapes;    // grain shapes (io/grain_shape.hpp); empty: spheres
   std::vector<sim::Material> materials;                 // in file order
   std::map<std::pair<std::string, std::string>, sim::PairParams> contacts;
   ContainerConfig container;
@@ -79,6 +81,10 @@ const std::string& embedded_quick_scene();
 
 /// Index of a material by name; throws InputError naming the key if absent.
 int material_index(const SceneConfig& scene, const std::string& name, const std::string& key);
+
+/// The smallest and largest sphere radius [m] of grains with sieve sizes in [d_min, d_max] [m]:
+/// d / 2 for spheres, the components' radii scaled by d for shapes.
+std::pair<double, double> grain_radius_range(const SceneConfig& scene, double d_min, double d_max);
 
 /// The engine model of a scene for particle radii in [r_min, r_max] (walls: plate, container).
 /// Wall 0 is the plate, wall 1 the container.

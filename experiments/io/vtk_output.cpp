@@ -23,7 +23,43 @@
 
 namespace reposetwin::experiments {
 
-void write_vtp(const std::string& path, const sim::Particles& p) {
+namespace {
+
+// The clump arrays of the design note, added to `poly`.
+void add_body_arrays(vtkPolyData* poly, const sim::Particles& p, const sim::Bodies& bodies) {
+  const vtkIdType n = static_cast<vtkIdType>(p.size());
+  vtkNew<vtkTypeInt64Array> body_id;
+  vtkNew<vtkIntArray> component;
+  vtkNew<vtkDoubleArray> orientation;
+  body_id->SetName("body_id");
+  component->SetName("component");
+  orientation->SetName("orientation");
+  orientation->SetNumberOfComponents(4);
+  body_id->SetNumberOfTuples(n);
+  component->SetNumberOfTuples(n);
+  orientation->SetNumberOfTuples(n);
+  for (vtkIdType i = 0; i < n; ++i) {
+    const std::int32_t b = p.body[static_cast<std::size_t>(i)];
+    double q[4] = {1.0, 0.0, 0.0, 0.0};
+    if (b >= 0) {
+      const sim::Quat& o = bodies.q[static_cast<std::size_t>(b)];
+      q[0] = o.w();
+      q[1] = o.x();
+      q[2] = o.y();
+      q[3] = o.z();
+    }
+    body_id->SetValue(i, b >= 0 ? bodies.id[static_cast<std::size_t>(b)] : -1);
+    component->SetValue(i, p.component[static_cast<std::size_t>(i)]);
+    orientation->SetTuple(i, q);
+  }
+  poly->GetPointData()->AddArray(body_id);
+  poly->GetPointData()->AddArray(component);
+  poly->GetPointData()->AddArray(orientation);
+}
+
+}  // namespace
+
+void write_vtp(const std::string& path, const sim::Particles& p, const sim::Bodies* bodies) {
   const vtkIdType n = static_cast<vtkIdType>(p.size());
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
@@ -61,6 +97,7 @@ void write_vtp(const std::string& path, const sim::Particles& p) {
   poly->GetPointData()->AddArray(omega);
   poly->GetPointData()->AddArray(material);
   poly->GetPointData()->AddArray(id);
+  if (bodies && bodies->size() > 0) add_body_arrays(poly, p, *bodies);
   std::filesystem::create_directories(std::filesystem::path(path).parent_path());
   const std::string tmp = path + ".tmp.vtp";
   vtkNew<vtkXMLPolyDataWriter> writer;
@@ -81,6 +118,8 @@ SnapshotParticles read_vtp(const std::string& path) {
   if (!poly || !poly->GetPoints()) throw std::runtime_error(path + ": not a particle snapshot");
   auto* radius = vtkDoubleArray::SafeDownCast(poly->GetPointData()->GetArray("radius"));
   auto* material = vtkIntArray::SafeDownCast(poly->GetPointData()->GetArray("material"));
+  // (The reader may give the 64-bit ids as any integer array type; ids are exact in a double.)
+  vtkDataArray* body = poly->GetPointData()->GetArray("body_id");
   if (!radius) throw std::runtime_error(path + ": snapshot has no \"radius\" point data");
   SnapshotParticles s;
   const vtkIdType n = poly->GetNumberOfPoints();
@@ -90,6 +129,7 @@ SnapshotParticles read_vtp(const std::string& path) {
     s.x.emplace_back(x[0], x[1], x[2]);
     s.radius.push_back(radius->GetValue(i));
     s.material.push_back(material ? material->GetValue(i) : 0);
+    if (body) s.body.push_back(static_cast<std::int64_t>(body->GetComponent(i, 0)));
   }
   return s;
 }

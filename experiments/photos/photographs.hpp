@@ -72,7 +72,8 @@ struct PilePhotos {
 /// The render scene of a pile: the spheres moved so that `centre` (the footprint centre) is on
 /// the camera axis, on a plate wider than the footprint (1.3 x its radius), as a lab sets up its
 /// photograph. Without `centre`, the footprint centre is measured (sim/pile_geometry defaults).
-/// `shift`, when given, receives the centre that was moved to the axis [m].
+/// `shift`, when given, receives the centre that was moved to the axis [m]. A clump pile's
+/// spheres are its components (PileSpheres), so every component is drawn as the sphere it is.
 render::Scene centred_pile_scene(const PileSpheres& pile,
                                  std::optional<Eigen::Vector2d> centre = std::nullopt,
                                  Eigen::Vector2d* shift = nullptr);

@@ -115,7 +115,7 @@ json render_and_measure_run(const std::string& run_dir, const ImageSettings& set
                      "); nothing to photograph");
   const SnapshotParticles p = read_vtp(snapshot.string());
   const fs::path out = frame.empty() ? dir / "images" : dir / "images" / snapshot.stem();
-  return photograph_run(run, PileSpheres{p.x, p.radius, p.material}, run_dir,
+  return photograph_run(run, PileSpheres{p.x, p.radius, p.material, p.body}, run_dir,
                         snapshot.filename().string(), out, settings);
 }
 

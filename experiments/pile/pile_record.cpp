@@ -395,9 +395,74 @@ RunPerformance run_performance_from_json(const json& j) {
           json_number(j, "max_overlap_ratio_seen")};
 }
 
+namespace {
+json pile_run_json(const PileRun& r);  // the fields of every pile run's result
+}  // namespace
+
+// ---- grain shapes -------------------------------------------------------------------------
+
+json to_json(const ShapeRecord& s) {
+  json shapes = json::array();
+  for (const GrainShapeRecord& g : s.shapes)
+    shapes.push_back({{"name", g.name},
+                      {"kind", g.kind},
+                      {"target_mass_fraction", g.target_mass_fraction},
+                      {"drawn_mass_fraction", g.drawn_mass_fraction},
+                      {"count", g.count},
+                      {"components", g.components},
+                      {"elongation", g.elongation},
+                      {"flatness", g.flatness},
+                      {"roundness", g.roundness},
+                      {"measured_elongation", g.measured_elongation},
+                      {"measured_flatness", g.measured_flatness},
+                      {"volume_per_cube", g.volume_per_cube},
+                      {"outlet_diameter", g.outlet_diameter}});
+  return {{"grains", "clumps"},
+          {"sieve_convention", s.sieve_convention},
+          {"shapes", shapes},
+          {"bodies_initial", s.bodies_initial},
+          {"bodies_final", s.bodies_final},
+          {"components_initial", s.components_initial},
+          {"components_final", s.components_final}};
+}
+
+ShapeRecord shape_record_from_json(const json& j) {
+  ShapeRecord s;
+  s.sieve_convention = j.value("sieve_convention", std::string());
+  for (const json& g : j.at("shapes")) {
+    GrainShapeRecord r;
+    r.name = g.at("name");
+    r.kind = g.at("kind");
+    r.target_mass_fraction = json_number(g, "target_mass_fraction");
+    r.drawn_mass_fraction = json_number(g, "drawn_mass_fraction");
+    r.count = g.value("count", std::int64_t{0});
+    r.components = g.value("components", 0);
+    r.elongation = json_number(g, "elongation", 1.0);
+    r.flatness = json_number(g, "flatness", 1.0);
+    r.roundness = json_number(g, "roundness", 1.0);
+    r.measured_elongation = json_number(g, "measured_elongation", 1.0);
+    r.measured_flatness = json_number(g, "measured_flatness", 1.0);
+    r.volume_per_cube = json_number(g, "volume_per_cube");
+    r.outlet_diameter = json_number(g, "outlet_diameter");
+    s.shapes.push_back(r);
+  }
+  s.bodies_initial = j.value("bodies_initial", std::int64_t{0});
+  s.bodies_final = j.value("bodies_final", std::int64_t{0});
+  s.components_initial = j.value("components_initial", std::int64_t{0});
+  s.components_final = j.value("components_final", std::int64_t{0});
+  return s;
+}
+
 // ---- the run -------------------------------------------------------------------------------
 
 json to_json(const PileRun& r) {
+  json j = pile_run_json(r);
+  if (r.shape) j["shape"] = to_json(*r.shape);
+  return j;
+}
+
+namespace {
+json pile_run_json(const PileRun& r) {
   const ProcedureRecord& pr = r.procedure;
   return {{"provenance", to_json(r.provenance)},
           {"stop", to_json(r.stop)},
@@ -425,6 +490,7 @@ json to_json(const PileRun& r) {
             {"checkpoint", "checkpoint.bin"},
             {"scene", "scene.resolved.toml"}}}};
 }
+}  // namespace
 
 PileRun pile_run_from_json(const json& j) {
   try {
@@ -434,6 +500,7 @@ PileRun pile_run_from_json(const json& j) {
     r.pile = pile_measure_from_json(j.at("pile"));
     if (j.contains("psd")) r.psd = psd_record_from_json(j.at("psd"));
     r.particles = particle_counts_from_json(j.at("particles"));
+    if (j.contains("shape")) r.shape = shape_record_from_json(j.at("shape"));
     const json& pr = j.at("procedure");
     const json c = pr.value("container", json::object());
     ProcedureRecord& p = r.procedure;

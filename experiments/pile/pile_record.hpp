@@ -182,11 +182,37 @@ struct RunProvenance {
 nlohmann::json to_json(const RunProvenance& p);
 RunProvenance run_provenance_from_json(const nlohmann::json& j);
 
-/// The spheres of a pile: centres [m], radii [m] and material ids, in one order.
+/// One grain shape of a clump sample as drawn (io/grain_shape.hpp).
+struct GrainShapeRecord {
+  std::string name, kind;              // kind: "template" or "generated"
+  double target_mass_fraction = 0.0;   // as declared [-]
+  double drawn_mass_fraction = 0.0;    // of the drawn sample [-]
+  std::int64_t count = 0;              // grains drawn
+  int components = 0;                  // spheres per grain
+  double elongation = 1.0, flatness = 1.0, roundness = 1.0;  // nominal (generated) [-]
+  double measured_elongation = 1.0, measured_flatness = 1.0; // L/I, I/S of the body built [-]
+  double volume_per_cube = 0.0;        // volume / sieve size^3 of the union of its spheres [-]
+  double outlet_diameter = 0.0;        // smallest round outlet it passes lengthwise, in sieve
+                                       // sizes [-]
+};
+
+/// The grains of a clump sample; absent from the result of a sphere sample.
+struct ShapeRecord {
+  std::string sieve_convention;        // how a clump's sieve size is defined
+  std::vector<GrainShapeRecord> shapes;
+  std::int64_t bodies_initial = 0, bodies_final = 0;          // clumps as filled, in the pile
+  std::int64_t components_initial = 0, components_final = 0;  // their spheres
+};
+nlohmann::json to_json(const ShapeRecord& s);
+ShapeRecord shape_record_from_json(const nlohmann::json& j);
+
+/// The spheres of a pile: centres [m], radii [m] and material ids, in one order; for clumps,
+/// the component spheres with their body's id (empty for a sphere sample).
 struct PileSpheres {
   std::vector<Eigen::Vector3d> x;
   std::vector<double> radius;
   std::vector<int> material;
+  std::vector<std::int64_t> body{};  // body id of each sphere; empty when none is a clump's
 };
 
 /// One finished pile run (result.json).
@@ -195,7 +221,8 @@ struct PileRun {
   RunStop stop;
   PileMeasure pile;
   PsdRecord psd;
-  ParticleCounts particles;
+  ParticleCounts particles;  // grains: spheres, or clumps (bodies) for a clump sample
+  std::optional<ShapeRecord> shape;  // a clump sample's shapes and counts; none for spheres
   ProcedureRecord procedure;
   RunPerformance performance;
   /// The final state's spheres, in memory only (the file holds them in final.vtp): empty for a

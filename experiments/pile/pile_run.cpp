@@ -15,6 +15,7 @@
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/vtk_output.hpp"
+#include "experiments/pile/pile_sample.hpp"
 #include "experiments/pile/stop_hint.hpp"
 #include "sim/checkpoint.hpp"
 #include "sim/psd.hpp"
@@ -69,6 +70,7 @@ struct Controller {
   std::int64_t retained = 0;        // particles left in the container and lifted away with it
   double retained_mass = 0.0;       // their mass [kg]
   std::string scene_hash;           // FNV-1a of the resolved scene the run was started from
+  std::string templates_hash;       // FNV-1a of the clump templates ("" for spheres)
   std::string code_version;         // the engine that wrote this state
   std::int64_t step = -1;           // the engine step of the checkpoint written with it
   RunStop stop;                     // why the run ended (when phase is kDone)
@@ -93,6 +95,7 @@ struct Controller {
             {"stop_reason", phase == Phase::kDone ? stop_reason_text(stop) : ""},
             {"stop_detail", stop.detail},
             {"scene_fnv1a", scene_hash},
+            {"templates_fnv1a", templates_hash},
             {"code_version", code_version},
             {"step", step},
             {"retained", retained},
@@ -120,6 +123,7 @@ struct Controller {
     // Controller files written before these stamps have none, and are not checked.
     c.scene_hash = j.value("scene_fnv1a", std::string());
     c.code_version = j.value("code_version", std::string());
+    c.templates_hash = j.value("templates_fnv1a", std::string());
     c.step = j.value("step", std::int64_t{-1});
     // Controller files from before the retained-material rule have none retained.
     c.retained = j.value("retained", std::int64_t{0});
@@ -130,65 +134,17 @@ struct Controller {
   }
 };
 
-/// Radius of the container's inside at height z above its lower rim [m].
-double container_radius(const ContainerConfig& c, double z_rel) {
-  const double t = std::clamp(z_rel / c.height, 0.0, 1.0);
-  return 0.5 * (c.bottom_diameter + t * (c.top_diameter - c.bottom_diameter));
-}
-
-/// Places the sample on a loose square lattice inside the container, bottom up; above the
-/// container's top the lattice continues in a column of the top's radius (it falls in).
-void fill_container(sim::World& world, const SceneConfig& scene,
-                    const std::vector<double>& diameters, int material) {
-  double d_max = 0.0;
-  for (double d : diameters) d_max = std::max(d_max, d);
-  const double s = d_max * (1.0 + scene.procedure.lattice_gap);
-  const ContainerConfig& c = scene.container;
-  // Clearance from a slanted wall, measured horizontally: (s/2) / cos(wall slant).
-  const double slope = 0.5 * (c.top_diameter - c.bottom_diameter) / c.height;
-  const double clearance = 0.5 * s * std::sqrt(1.0 + slope * slope);
-  std::size_t next = 0;
-  for (int level = 0; next < diameters.size(); ++level) {
-    const double z_rel = 0.5 * s + level * s;
-    const double r_avail = container_radius(c, z_rel) - clearance;
-    if (level > 100000) throw std::logic_error("fill_container: runaway lattice");
-    if (r_avail <= 0.0) continue;
-    const int k = static_cast<int>(std::floor(r_avail / s));
-    const double shift = (level % 2) ? 0.5 * s : 0.0;  // staggered layers
-    for (int ix = -k - 1; ix <= k && next < diameters.size(); ++ix) {
-      for (int iy = -k - 1; iy <= k && next < diameters.size(); ++iy) {
-        const double x = ix * s + shift, y = iy * s + shift;
-        if (std::hypot(x, y) > r_avail) continue;
-        world.add_particle(sim::Vec3(x, y, c.gap + z_rel), 0.5 * diameters[next++], material);
-      }
-    }
-  }
-}
-
-// Which particles are inside the container (none when it is removed).
-std::vector<char> inside_mask(const sim::World& world, const ContainerConfig& c) {
-  const sim::State& st = world.state();
-  std::vector<char> in(st.particles.size(), 0);
-  if (!st.walls[kContainer].enabled) return in;
-  const double z0 = c.gap + st.walls[kContainer].offset.z();
-  for (std::size_t i = 0; i < in.size(); ++i) {
-    const sim::Vec3& x = st.particles.x[i];
-    const double z_rel = x.z() - z0;
-    if (z_rel < 0.0 || z_rel > c.height) continue;
-    in[i] = std::hypot(x.x(), x.y()) < container_radius(c, z_rel);
-  }
-  return in;
-}
-
-std::int64_t count_inside(const sim::World& world, const ContainerConfig& c) {
-  const std::vector<char> in = inside_mask(world, c);
-  return std::count(in.begin(), in.end(), 1);
-}
-
-PileSpheres spheres_of(const sim::Particles& p) {
-  return {{p.x.begin(), p.x.end()},
-          {p.radius.begin(), p.radius.end()},
-          {p.material.begin(), p.material.end()}};
+PileSpheres spheres_of(const sim::State& st) {
+  const sim::Particles& p = st.particles;
+  PileSpheres s{{p.x.begin(), p.x.end()},
+                {p.radius.begin(), p.radius.end()},
+                {p.material.begin(), p.material.end()},
+                {}};
+  if (st.bodies.size() == 0) return s;
+  s.body.resize(p.size(), -1);
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.body[i] >= 0) s.body[i] = st.bodies.id[static_cast<std::size_t>(p.body[i])];
+  return s;
 }
 
 std::string eta_text(double seconds) {
@@ -214,7 +170,7 @@ class PileRunner {
   std::optional<PileRun> run() {
     prepare_folder();
     const bool resuming = load_controller_or_sample();
-    build_world();
+    build_world(resuming);
     if (resuming) {
       resume_from_checkpoint();
     } else {
@@ -280,22 +236,17 @@ class PileRunner {
                           ": cannot resume from it: " + e.what());
       }
       check_same_scene_and_engine();
+      // Clumps: the templates are the model's, rebuilt from the same draw (checked in
+      // build_world against the controller's fingerprint).
+      if (!scene_.shapes.empty()) sample_ = draw_pile_sample(scene_, material_);
       return true;
     }
     ctl_.scene_hash = fnv1a_hex(scene_.resolved_toml);
-    sim::Rng rng(scene_.seed);
-    sim::PsdSample sample;
-    try {
-      sample =
-          sim::sample_psd(scene_.psd.spec, scene_.mass, scene_.materials[material_].density, rng);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(scene_.file + ": sample: " + e.what());
-    }
-    diameters_ = sample.diameter;
+    sample_ = draw_pile_sample(scene_, material_);
     const PsdFile& f = scene_.psd;
-    ctl_.psd = psd_record(sample.summary, f.source, f.name, f.provenance, f.assumption);
-    ctl_.r_min = 0.5 * sample.summary.d_min_drawn;
-    ctl_.r_max = 0.5 * sample.summary.d_max_drawn;
+    ctl_.psd = psd_record(sample_.summary, f.source, f.name, f.provenance, f.assumption);
+    ctl_.r_min = sample_.r_min;
+    ctl_.r_max = sample_.r_max;
     return false;
   }
 
@@ -315,12 +266,20 @@ class PileRunner {
                         "; run it again from the start with --force instead of --resume");
   }
 
-  void build_world() {
+  void build_world(bool resuming) {
     settings_ = scene_.settings;
     if (opt_.threads > 0) settings_.threads = opt_.threads;
     SceneConfig sc = scene_;
     sc.settings = settings_;
-    world_ = std::make_unique<sim::World>(build_model(sc, ctl_.r_min, ctl_.r_max));
+    sim::Model model = build_model(sc, ctl_.r_min, ctl_.r_max);
+    add_grain_templates(model, scene_, sample_);
+    const std::string templates = template_fingerprint(model);
+    if (resuming && ctl_.templates_hash != templates)
+      throw ResumeError(out_.string() + ": the checkpoint's clump templates (fingerprint \"" +
+                        ctl_.templates_hash + "\") are not those this scene builds (\"" +
+                        templates + "\"); run it again with --force instead of --resume");
+    ctl_.templates_hash = templates;
+    world_ = std::make_unique<sim::World>(std::move(model));
     series_ = std::make_unique<PvdSeries>(path("series.pvd").string());
   }
 
@@ -342,7 +301,7 @@ class PileRunner {
   }
 
   void fill_and_check() {
-    fill_container(*world_, scene_, diameters_, material_);
+    fill_container(*world_, scene_, sample_, material_);
     world_->refresh_forces();
     const sim::Diagnostics d0 = world_->diagnose();
     if (d0.max_overlap_ratio > settings_.initial_overlap_tolerance) {
@@ -351,12 +310,14 @@ class PileRunner {
                        "numerics.initial_overlap_tolerance = " +
                        std::to_string(settings_.initial_overlap_tolerance));
     }
+    // Per grain: a clump's components carry its mass, so the bodies' masses are averaged.
     double m_mean = 0.0;
-    for (double m : state().particles.mass) m_mean += m;
-    m_mean /= std::max<std::size_t>(1, state().particles.size());
+    const bool clumps = state().bodies.size() > 0;
+    for (double m : clumps ? state().bodies.mass : state().particles.mass) m_mean += m;
+    m_mean /= static_cast<double>(std::max<std::int64_t>(1, grain_count(state())));
     const double v = scene_.procedure.settle_speed;
     ctl_.ke_threshold = 0.5 * m_mean * v * v;
-    const auto n = static_cast<std::int64_t>(state().particles.size());
+    const std::int64_t n = grain_count(state());
     ctl_.events.push_back(run_event(0.0, "filled", n));
   }
 
@@ -380,7 +341,7 @@ class PileRunner {
 
   // The sample as filled (a resumed run may already have lifted some away with the container).
   std::int64_t initial_count() const {
-    return static_cast<std::int64_t>(state().particles.size()) + ctl_.retained;
+    return grain_count(state()) + ctl_.retained;
   }
 
   // Steps the engine; the controller looks every few milliseconds of simulated time, not every
@@ -428,7 +389,8 @@ class PileRunner {
       ctl_.phase = Phase::kDone;
       return false;
     }
-    const double ke = d.kinetic_energy / std::max<std::size_t>(1, state().particles.size());
+    const double ke =
+        d.kinetic_energy / static_cast<double>(std::max<std::int64_t>(1, grain_count(state())));
     ke_last_ = ke;
     const double in_phase = state().time - ctl_.phase_start;
     switch (ctl_.phase) {
@@ -454,10 +416,12 @@ class PileRunner {
   // funnel by hand, so soft particles do not hit the bottom at free-fall speed.
   void cap_fill_speeds() {
     const double cap = scene_.procedure.fill_max_speed;
-    for (sim::Vec3& v : world_->state().particles.v) {
+    auto limit = [cap](sim::Vec3& v) {
       const double s = v.norm();
       if (s > cap) v *= cap / s;
-    }
+    };
+    for (sim::Vec3& v : world_->state().particles.v) limit(v);
+    for (sim::Vec3& v : world_->state().bodies.v) limit(v);  // a clump moves as its body
   }
 
   void check_fill(double ke, double in_phase) {
@@ -500,15 +464,20 @@ class PileRunner {
       ctl_.inside_last = inside;
       ctl_.inside_changed = t;
     } else if (flow_stopped) {
-      end(StopReason::kClogged, "no pile: " + std::to_string(inside) + " particles lodged");
+      end(StopReason::kClogged, "no pile: " + std::to_string(inside) +
+                                    (scene_.shapes.empty() ? " particles lodged" : " clumps lodged"));
     }
   }
 
+  // Whole grains: a clump's mass once (its first component carries the body's mass).
   void lift_away_retained() {
     const std::vector<char> in = inside_mask(*world_, scene_.container);
+    const sim::Particles& p = state().particles;
     for (std::size_t i = 0; i < in.size(); ++i)
-      if (in[i]) ctl_.retained_mass += state().particles.mass[i];
-    ctl_.retained += static_cast<std::int64_t>(world_->remove_particles(in));
+      if (in[i] && p.component[i] <= 0) ctl_.retained_mass += p.mass[i];
+    const std::int64_t before = grain_count(state());
+    world_->remove_particles(in);
+    ctl_.retained += before - grain_count(state());
   }
 
   void check_settle(double ke, double in_phase) {
@@ -558,7 +527,7 @@ class PileRunner {
   void write_frame() {
     char name[64];
     std::snprintf(name, sizeof name, "frames/frame_%05d.vtp", ctl_.frames++);
-    write_vtp((out_ / name).string(), state().particles);
+    write_vtp((out_ / name).string(), state().particles, &state().bodies);
     series_->add(state().time, name);
   }
 
@@ -573,15 +542,15 @@ class PileRunner {
       r.pile = clogged_pile(ctl_.inside_last, ctl_.stop.detail);
     else
       r.pile = pile_measure(sim::measure_pile(st.particles.x, st.particles.radius, scene_.pile));
-    write_vtp(path("final.vtp").string(), st.particles);
+    write_vtp(path("final.vtp").string(), st.particles, &st.bodies);
     write_frame();  // the series always ends with the final state
     save_checkpoint();
     const double wall_total = ctl_.wall_seconds + wall_now();
     r.provenance = provenance_;
     r.stop = ctl_.stop;
     r.psd = ctl_.psd;
-    r.particles = {n0_, static_cast<std::int64_t>(st.particles.size()), ctl_.retained,
-                   ctl_.retained_mass};
+    r.particles = {n0_, grain_count(st), ctl_.retained, ctl_.retained_mass};
+    if (!scene_.shapes.empty()) r.shape = shape_record(scene_, sample_, st);
     const ProcedureConfig& pc = scene_.procedure;
     const ContainerConfig& c = scene_.container;
     r.procedure = {pc.lift_speed,     ctl_.lift_start,          ctl_.lift_end,     st.time,
@@ -589,10 +558,12 @@ class PileRunner {
                    c.bottom_diameter, c.top_diameter,           c.height,          ctl_.events};
     r.performance = {
         st.step, wall_total,
-        static_cast<double>(st.step) * static_cast<double>(n0_) / std::max(wall_total, 1e-9),
+        static_cast<double>(st.step) *
+            static_cast<double>(r.shape ? r.shape->components_initial : n0_) /
+            std::max(wall_total, 1e-9),
         st.neighbors.builds, ctl_.max_overlap_seen};
     write_json_atomic(path("result.json").string(), to_json(r));
-    r.final_spheres = spheres_of(st.particles);
+    r.final_spheres = spheres_of(st);
     if (opt_.progress)
       std::fprintf(stderr, "%s: %s (%s) after %.3f s simulated, %.1f s wall; wrote %s\n",
                    scene_.name.c_str(), stop_reason_text(r.stop).c_str(), r.stop.detail.c_str(),
@@ -606,7 +577,7 @@ class PileRunner {
   const std::chrono::steady_clock::time_point wall0_;
   int material_ = 0;
   Controller ctl_;
-  std::vector<double> diameters_;  // the sample as drawn (a fresh run only) [m]
+  PileSample sample_;  // the sample as drawn (a fresh run; a resumed one of clumps)
   sim::Settings settings_;
   std::unique_ptr<sim::World> world_;
   std::unique_ptr<PvdSeries> series_;

@@ -38,4 +38,13 @@ softened_youngs_modulus_pa = 5e6
 rayleigh_fraction = 0.3
 )";
 
+/// Appended to kTinyScene: every grain a rod of four spheres, L/I = 1.5 (about 50 rods).
+inline constexpr const char* kTinyRods = R"(
+[sample.shape]
+name = "rod"
+kind = "generated"
+elongation = 1.5
+spheres = 4
+)";
+
 }  // namespace reposetwin::test_support
