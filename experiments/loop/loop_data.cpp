@@ -53,15 +53,6 @@ double parse_number(const std::string& text, const Where& w, const std::string& 
   return v;
 }
 
-bool looks_like_toml_value(const std::string& v) {
-  try {
-    (void)toml::parse("v = " + v);
-    return true;
-  } catch (const toml::parse_error&) {
-    return false;
-  }
-}
-
 std::string toml_number(double v) { return toml_float(v, 17); }
 
 }  // namespace
@@ -197,7 +188,7 @@ LabData read_lab_csv(const std::string& path) {
       const std::string v = get(h);
       if (v.empty()) continue;
       const std::string key = h.substr(4);
-      const std::string value = looks_like_toml_value(v) ? v : "\"" + v + "\"";
+      const std::string value = is_toml_value(v) ? v : "\"" + v + "\"";
       test.overrides.emplace_back(key, value);
       test.override_columns.push_back(h);
       try {
