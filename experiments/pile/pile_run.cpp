@@ -15,6 +15,7 @@
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/vtk_output.hpp"
+#include "experiments/pile/container.hpp"
 #include "sim/checkpoint.hpp"
 #include "sim/psd.hpp"
 #include "sim/random.hpp"
@@ -25,8 +26,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-constexpr int kPlate = 0, kContainer = 1;
 
 enum class Phase { kFill, kLift, kSettle, kDone };
 
@@ -128,61 +127,6 @@ struct Controller {
     return c;
   }
 };
-
-/// Radius of the container's inside at height z above its lower rim [m].
-double container_radius(const ContainerConfig& c, double z_rel) {
-  const double t = std::clamp(z_rel / c.height, 0.0, 1.0);
-  return 0.5 * (c.bottom_diameter + t * (c.top_diameter - c.bottom_diameter));
-}
-
-/// Places the sample on a loose square lattice inside the container, bottom up; above the
-/// container's top the lattice continues in a column of the top's radius (it falls in).
-void fill_container(sim::World& world, const SceneConfig& scene,
-                    const std::vector<double>& diameters, int material) {
-  double d_max = 0.0;
-  for (double d : diameters) d_max = std::max(d_max, d);
-  const double s = d_max * (1.0 + scene.procedure.lattice_gap);
-  const ContainerConfig& c = scene.container;
-  // Clearance from a slanted wall, measured horizontally: (s/2) / cos(wall slant).
-  const double slope = 0.5 * (c.top_diameter - c.bottom_diameter) / c.height;
-  const double clearance = 0.5 * s * std::sqrt(1.0 + slope * slope);
-  std::size_t next = 0;
-  for (int level = 0; next < diameters.size(); ++level) {
-    const double z_rel = 0.5 * s + level * s;
-    const double r_avail = container_radius(c, z_rel) - clearance;
-    if (level > 100000) throw std::logic_error("fill_container: runaway lattice");
-    if (r_avail <= 0.0) continue;
-    const int k = static_cast<int>(std::floor(r_avail / s));
-    const double shift = (level % 2) ? 0.5 * s : 0.0;  // staggered layers
-    for (int ix = -k - 1; ix <= k && next < diameters.size(); ++ix) {
-      for (int iy = -k - 1; iy <= k && next < diameters.size(); ++iy) {
-        const double x = ix * s + shift, y = iy * s + shift;
-        if (std::hypot(x, y) > r_avail) continue;
-        world.add_particle(sim::Vec3(x, y, c.gap + z_rel), 0.5 * diameters[next++], material);
-      }
-    }
-  }
-}
-
-// Which particles are inside the container (none when it is removed).
-std::vector<char> inside_mask(const sim::World& world, const ContainerConfig& c) {
-  const sim::State& st = world.state();
-  std::vector<char> in(st.particles.size(), 0);
-  if (!st.walls[kContainer].enabled) return in;
-  const double z0 = c.gap + st.walls[kContainer].offset.z();
-  for (std::size_t i = 0; i < in.size(); ++i) {
-    const sim::Vec3& x = st.particles.x[i];
-    const double z_rel = x.z() - z0;
-    if (z_rel < 0.0 || z_rel > c.height) continue;
-    in[i] = std::hypot(x.x(), x.y()) < container_radius(c, z_rel);
-  }
-  return in;
-}
-
-std::int64_t count_inside(const sim::World& world, const ContainerConfig& c) {
-  const std::vector<char> in = inside_mask(world, c);
-  return std::count(in.begin(), in.end(), 1);
-}
 
 PileSpheres spheres_of(const sim::Particles& p) {
   return {{p.x.begin(), p.x.end()},
@@ -462,7 +406,7 @@ class PileRunner {
     const double limit = scene_.procedure.fill_settle_max;
     if (!((ke < ctl_.ke_threshold && in_phase > 0.05) || in_phase > limit)) return;
     if (in_phase > limit) event("fill settling reached its time limit");
-    world_->set_wall_velocity(kContainer, sim::Vec3(0, 0, scene_.procedure.lift_speed));
+    world_->set_wall_velocity(kContainerWall, sim::Vec3(0, 0, scene_.procedure.lift_speed));
     ctl_.phase = Phase::kLift;
     ctl_.phase_start = ctl_.lift_start = state().time;
     ctl_.inside_last = count_inside(*world_, scene_.container);
@@ -479,7 +423,7 @@ class PileRunner {
     const std::int64_t inside = count_inside(*world_, scene_.container);
     const bool flow_stopped = inside != 0 && inside == ctl_.inside_last &&
                               t - ctl_.inside_changed > pc.clog_window &&
-                              state().walls[kContainer].offset.z() > 4.0 * ctl_.r_max;
+                              state().walls[kContainerWall].offset.z() > 4.0 * ctl_.r_max;
     const bool little_left =
         static_cast<double>(inside) <= pc.max_retained_fraction * static_cast<double>(n0_);
     if (inside == 0 || (flow_stopped && little_left)) {
@@ -489,8 +433,8 @@ class PileRunner {
         what = "flow stopped; " + std::to_string(ctl_.retained) +
                " particles stayed in the container and were lifted away with it";
       }
-      world_->set_wall_velocity(kContainer, sim::Vec3::Zero());
-      world_->set_wall_enabled(kContainer, false);
+      world_->set_wall_velocity(kContainerWall, sim::Vec3::Zero());
+      world_->set_wall_enabled(kContainerWall, false);
       ctl_.phase = Phase::kSettle;
       ctl_.phase_start = ctl_.lift_end = t;
       event(what);
@@ -532,7 +476,7 @@ class PileRunner {
     if (ctl_.phase == Phase::kLift) {
       double top = 0;
       for (const sim::Vec3& x : st.particles.x) top = std::max(top, x.z());
-      remaining += std::max(0.0, top - scene_.container.gap - st.walls[kContainer].offset.z()) /
+      remaining += std::max(0.0, top - scene_.container.gap - st.walls[kContainerWall].offset.z()) /
                    pc.lift_speed;
     }
     const double sim_rate = (st.time - (step0_ * dt)) / std::max(wall, 1e-9);
