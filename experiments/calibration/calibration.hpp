@@ -39,8 +39,9 @@
 //  * The loop (loop/loop_model.cpp, Loop::fit_mu) fits mu_r differently on purpose: jointly to
 //    many tests on a fixed grid, by weighted least squares with a candidate effect's weight; this
 //    file matches one test's angle. Its comment there says why the two are not one fit.
-// Random numbers: std::mt19937_64 (fully specified) and our own normal and chi-square draws, so a
-// bootstrap seed gives the same interval on every platform.
+// Random numbers: sim::Rng (sim/random.hpp: std::mt19937_64, which is fully specified, with our
+// own uniform and normal draws) and a chi-square as a sum of its squared normals, so a bootstrap
+// seed gives the same interval on every platform.
 #pragma once
 
 #include <cstdint>
