@@ -32,13 +32,13 @@ std::vector<std::string> keys_of(const CampaignCalibration& cc) {
 // scene format's default "epsd" when the scene does not say), described by sim::kRollingModels.
 nlohmann::json rolling_model_of(const Campaign& c) {
   const auto& cc = calibration_of(c);
-  const toml::table doc = build_case_scene(calibration_run(c, cc.settings.mu_r_lo, 1));
+  const SceneDoc doc = build_case_scene(calibration_run(c, cc.settings.mu_r_lo, 1));
   const auto dot = cc.key.rfind('.');
   const std::string parent = dot == std::string::npos ? std::string() : cc.key.substr(0, dot);
   std::string keyword = "epsd";
   bool stated = false;
   if (!parent.empty()) {
-    if (auto v = toml::at_path(doc, parent + ".rolling_model").value<std::string>()) {
+    if (auto v = doc.string(parent + ".rolling_model")) {
       keyword = *v;
       stated = true;
     }

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "experiments/io/format.hpp"
+#include "sim/random.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -17,38 +18,18 @@ constexpr double kHighQuantile = 0.975;  // upper end of the reported 95% interv
 
 std::string num(double v) { return significant(v, 10); }
 
-// A random stream that gives the same numbers on every platform: mt19937_64 is fully specified,
-// and the normal draw is our own Box-Muller (std::normal_distribution is not portable).
-class Rng {
- public:
-  explicit Rng(std::uint64_t seed) : gen_(seed) {}
-  double uniform() { return (static_cast<double>(gen_() >> 11) + 0.5) * 0x1.0p-53; }  // (0, 1)
-  double normal() {
-    if (has_spare_) {
-      has_spare_ = false;
-      return spare_;
-    }
-    const double r = std::sqrt(-2.0 * std::log(uniform()));
-    const double phi = 2.0 * std::numbers::pi * uniform();
-    spare_ = r * std::sin(phi);
-    has_spare_ = true;
-    return r * std::cos(phi);
-  }
-  // Chi-square with an integer number of degrees of freedom, as a sum of squared normals.
-  double chi_square(int dof) {
-    double s = 0.0;
-    for (int i = 0; i < dof; ++i) {
-      const double z = normal();
-      s += z * z;
-    }
-    return s;
-  }
+// The bootstrap's random stream is the project's one (sim/random.hpp: portable, 53-bit uniforms
+// in [0, 1), Box-Muller normals); the chi-square draw is a sum of squared normals.
+using Rng = sim::Rng;
 
- private:
-  std::mt19937_64 gen_;
-  double spare_ = 0.0;
-  bool has_spare_ = false;
-};
+double chi_square(Rng& rng, int dof) {
+  double s = 0.0;
+  for (int i = 0; i < dof; ++i) {
+    const double z = rng.normal();
+    s += z * z;
+  }
+  return s;
+}
 
 // Weighted pool-adjacent-violators: the non-decreasing sequence closest to y in weighted least
 // squares (Barlow et al. 1972).
@@ -136,7 +117,7 @@ std::vector<double> replicate_fit(const MonotoneFit& fit, Rng& rng) {
   double var = 0.0;
   if (fit.noise_dof > 0)
     var = fit.noise_dof * fit.noise_sd_deg * fit.noise_sd_deg /
-          std::max(rng.chi_square(fit.noise_dof), 1e-12);
+          std::max(chi_square(rng, fit.noise_dof), 1e-12);
   std::vector<double> y, w;
   for (const auto& p : fit.points) {
     y.push_back(p.mean_deg + std::sqrt(var / p.n) * rng.normal());

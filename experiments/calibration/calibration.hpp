@@ -36,8 +36,12 @@
 //    0.3 / 0.5 / 1.0 deg, 100 trials each, default settings): the 95% interval holds the truth in
 //    96 / 95 / 91% of the calibrations with the confirmation, 86 / 88 / 87% without it; a fixed
 //    grid through calibrate_observations gives 95% (400 trials).
-// Random numbers: std::mt19937_64 (fully specified) and our own normal and chi-square draws, so a
-// bootstrap seed gives the same interval on every platform.
+//  * The loop (loop/loop_model.cpp, Loop::fit_mu) fits mu_r differently on purpose: jointly to
+//    many tests on a fixed grid, by weighted least squares with a candidate effect's weight; this
+//    file matches one test's angle. Its comment there says why the two are not one fit.
+// Random numbers: sim::Rng (sim/random.hpp: std::mt19937_64, which is fully specified, with our
+// own uniform and normal draws) and a chi-square as a sum of its squared normals, so a bootstrap
+// seed gives the same interval on every platform.
 #pragma once
 
 #include <cstdint>

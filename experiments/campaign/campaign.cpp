@@ -14,7 +14,6 @@
 #include "experiments/io/hash.hpp"
 #include "experiments/io/overrides.hpp"
 #include "experiments/io/provenance.hpp"
-#include "experiments/io/toml_reader.hpp"
 
 namespace reposetwin::experiments {
 namespace fs = std::filesystem;
@@ -25,26 +24,6 @@ constexpr const char* kErrorFile = "error.json";
 constexpr const char* kStartedFile = "started.json";
 constexpr const char* kManifestFile = "campaign.json";
 constexpr const char* kBatchFile = "batch.json";
-
-nlohmann::json toml_to_json(const toml::node& n) {
-  if (const auto* t = n.as_table()) {
-    nlohmann::json j = nlohmann::json::object();
-    for (const auto& [k, v] : *t) j[std::string(k.str())] = toml_to_json(v);
-    return j;
-  }
-  if (const auto* a = n.as_array()) {
-    nlohmann::json j = nlohmann::json::array();
-    for (const auto& v : *a) j.push_back(toml_to_json(v));
-    return j;
-  }
-  if (n.is_integer()) return n.as_integer()->get();
-  if (n.is_floating_point()) return n.as_floating_point()->get();
-  if (n.is_boolean()) return n.as_boolean()->get();
-  if (n.is_string()) return n.as_string()->get();
-  return toml_value_text(n);  // dates and times
-}
-
-toml::table parse_scene_file(const std::string& path) { return parse_toml(read_file(path), path); }
 
 std::string hostname() {
   char buf[256] = {};
@@ -386,7 +365,7 @@ std::string mu_r_run_name(const Campaign& campaign, const std::string& prefix, d
 // A run of `scene_path` with `overrides`, checked now rather than when it runs: the name is safe
 // as a folder name and every override applies to the scene (`origin` names the run in messages).
 CaseSpec checked_run(const Campaign& campaign, const std::string& name, std::uint64_t seed,
-                     const std::string& scene_path, toml::table overrides,
+                     const std::string& scene_path, std::vector<Override> overrides,
                      const std::string& origin) {
   if (!is_safe_name(name))
     throw std::invalid_argument(campaign.file + ": run name \"" + name +
@@ -397,18 +376,15 @@ CaseSpec checked_run(const Campaign& campaign, const std::string& name, std::uin
   s.scene_path = scene_path;
   s.scene_hash = fnv1a_hex(read_file(scene_path));
   s.overrides = std::move(overrides);
-  toml::table check = parse_scene_file(scene_path);
-  apply_overrides(check, s.overrides, origin);
+  (void)SceneDoc(scene_path, s.overrides, origin);
   return s;
 }
 
 }  // namespace
 
-toml::table build_case_scene(const CaseSpec& spec) {
-  toml::table doc = parse_scene_file(spec.scene_path);
-  apply_overrides(doc, spec.overrides,
+SceneDoc build_case_scene(const CaseSpec& spec) {
+  return SceneDoc(spec.scene_path, spec.overrides,
                   "case " + spec.case_name + " (scene " + spec.scene_path + ")");
-  return doc;
 }
 
 nlohmann::json to_json(const CaseSpec& spec) {
@@ -416,7 +392,7 @@ nlohmann::json to_json(const CaseSpec& spec) {
           {"seed", spec.seed},
           {"scene", spec.scene_path},
           {"scene_fnv1a", spec.scene_hash},
-          {"overrides", toml_to_json(spec.overrides)}};
+          {"overrides", overrides_to_json(spec.overrides)}};
 }
 
 nlohmann::json campaign_manifest(const Campaign& campaign, const std::string& out_dir) {
@@ -433,9 +409,9 @@ std::optional<nlohmann::json> read_run_result(const std::string& out_dir, const 
 }
 
 CaseSpec make_run(const Campaign& campaign, const std::string& case_name,
-                  const toml::table& overrides, std::uint64_t seed) {
-  toml::table all = campaign.overrides;
-  for (const auto& [k, v] : overrides) v.visit([&](const auto& x) { all.insert_or_assign(k, x); });
+                  const std::vector<Override>& overrides, std::uint64_t seed) {
+  std::vector<Override> all = campaign.overrides;
+  for (const Override& o : overrides) set_override(all, o);
   return checked_run(campaign, case_name, seed, campaign.scene_path, std::move(all),
                      campaign.file + ", run " + case_name);
 }
@@ -443,9 +419,9 @@ CaseSpec make_run(const Campaign& campaign, const std::string& case_name,
 CaseSpec calibration_run(const Campaign& campaign, double mu_r, std::uint64_t seed) {
   if (!campaign.calibration)
     throw std::invalid_argument(campaign.file + ": no [calibration] table");
-  toml::table ov;
-  ov.insert_or_assign(campaign.calibration->key, mu_r);
-  for (const auto& k : campaign.calibration->keys) ov.insert_or_assign(k, mu_r);
+  std::vector<Override> ov;
+  set_override(ov, number_override(campaign.calibration->key, mu_r));
+  for (const auto& k : campaign.calibration->keys) set_override(ov, number_override(k, mu_r));
   return make_run(campaign, mu_r_run_name(campaign, "calib", mu_r), ov, seed);
 }
 
@@ -457,8 +433,8 @@ CaseSpec prediction_run(const Campaign& campaign, const PredictionCase& p, doubl
     throw std::invalid_argument(campaign.file + ", prediction " + p.name +
                                 ": mu_r = " + std::to_string(mu_r) + " must be finite and >= 0");
   const std::string name = mu_r_run_name(campaign, "predict_" + p.name, mu_r);
-  toml::table overrides = p.overrides;
-  for (const auto& k : campaign.calibration->keys) overrides.insert_or_assign(k, mu_r);
+  std::vector<Override> overrides = p.overrides;
+  for (const auto& k : campaign.calibration->keys) set_override(overrides, number_override(k, mu_r));
   return checked_run(campaign, name, seed, p.scene_path, std::move(overrides),
                      campaign.file + ", prediction run " + name);
 }

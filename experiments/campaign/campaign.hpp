@@ -23,8 +23,6 @@
 //    same campaign file unchanged.
 #pragma once
 
-#include <toml++/toml.h>
-
 #include <cstdint>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -34,12 +32,13 @@
 
 #include "experiments/campaign/pool.hpp"
 #include "experiments/io/campaign_file.hpp"
+#include "experiments/io/scene_overrides.hpp"
 
 namespace reposetwin::experiments {
 
-/// The run's scene: the scene file parsed as TOML with the run's overrides applied. The caller's
-/// scene parser reads it (the seed is given separately in CaseSpec).
-toml::table build_case_scene(const CaseSpec& spec);
+/// The run's scene: the scene file with the run's overrides applied (the seed is given separately
+/// in CaseSpec: SceneDoc::set_seed). Throws InputError naming the case, the key and the value.
+SceneDoc build_case_scene(const CaseSpec& spec);
 
 /// The inputs of a run as JSON (stored in its result.json and checked when resuming).
 nlohmann::json to_json(const CaseSpec& spec);
@@ -81,7 +80,7 @@ CampaignSummary run_campaign(const Campaign& campaign, const std::string& out_di
 /// with the campaign's common overrides plus `overrides`. Throws std::invalid_argument naming the
 /// campaign file and the run if the name is unsafe or an override does not apply.
 CaseSpec make_run(const Campaign& campaign, const std::string& case_name,
-                  const toml::table& overrides, std::uint64_t seed);
+                  const std::vector<Override>& overrides, std::uint64_t seed);
 
 /// The run of the campaign's [calibration] at one mu_r and seed: named "calib_<leaf>_<mu_r>",
 /// with the calibration key set to mu_r. Throws if the campaign has no [calibration].

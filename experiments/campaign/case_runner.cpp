@@ -82,10 +82,9 @@ CaseImages case_images_of(const json& m) {
 
 CaseFn pile_case_fn(const CaseRunSettings& settings) {
   return [settings](const CaseSpec& spec, const std::string& case_dir) -> json {
-    toml::table doc = build_case_scene(spec);
-    if (toml::table* s = doc["scene"].as_table())
-      s->insert_or_assign("seed", static_cast<std::int64_t>(spec.seed));
-    const SceneConfig scene = parse_scene_table(doc, spec.scene_path);
+    SceneDoc doc = build_case_scene(spec);
+    doc.set_seed(spec.seed);
+    const SceneConfig scene = doc.config();
     RunOptions opt;
     opt.out_dir = (std::filesystem::path(case_dir) / "run").string();
     opt.progress = false;

@@ -4,6 +4,7 @@
 
 #include "experiments/io/campaign_file_detail.hpp"
 #include "experiments/io/overrides.hpp"
+#include "experiments/io/toml_edit.hpp"
 #include "experiments/photos/lab_photos.hpp"
 
 namespace reposetwin::experiments::campaign_file {

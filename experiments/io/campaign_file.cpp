@@ -10,6 +10,7 @@
 #include "experiments/io/campaign_file_detail.hpp"
 #include "experiments/io/hash.hpp"
 #include "experiments/io/overrides.hpp"
+#include "experiments/io/toml_edit.hpp"
 #include "experiments/io/provenance.hpp"
 
 namespace reposetwin::experiments {
@@ -93,23 +94,27 @@ void flatten(const toml::table& t, const std::string& prefix, toml::table& out) 
   }
 }
 
-toml::table read_overrides(TableReader& t) {
-  toml::table out;
+std::vector<Override> read_overrides(TableReader& t) {
+  toml::table flat;
   t.mark_used("overrides");
   const toml::node* n = t.raw().get("overrides");
-  if (n == nullptr) return out;
+  if (n == nullptr) return {};
   const std::string key = t.where("overrides");
   if (!n->is_table())
     throw bad(
         t.file(), key, value_text(*n),
         "must be a table of dotted keys, e.g. { \"contacts.rock-rock.rolling_friction\" = 0.1 }");
-  flatten(*n->as_table(), "", out);
-  for (const auto& [k, v] : out) split_dotted_key(k.str(), t.file() + ": key '" + key + "'");
+  flatten(*n->as_table(), "", flat);
+  std::vector<Override> out;
+  for (const auto& [k, v] : flat) {
+    split_dotted_key(k.str(), t.file() + ": key '" + key + "'");
+    set_override(out, override_of(std::string(k.str()), v));
+  }
   return out;
 }
 
-void merge_overrides(toml::table& into, const toml::table& from) {
-  for (const auto& [k, v] : from) v.visit([&](const auto& x) { into.insert_or_assign(k, x); });
+void merge_overrides(std::vector<Override>& into, const std::vector<Override>& from) {
+  for (const Override& o : from) set_override(into, o);
 }
 
 std::vector<std::uint64_t> read_seeds(TableReader& t, const std::string& key) {
@@ -170,7 +175,7 @@ using namespace campaign_file;
 struct CaseDef {
   std::string name, scene;
   std::string name_key;  // the key that named it, for the message about a repeated name
-  toml::table overrides;
+  std::vector<Override> overrides;
 };
 
 // Text of a sweep value for a case name: shortest round-trip form for floats.
@@ -234,7 +239,7 @@ std::vector<CaseDef> read_sweep(TableReader& t, const Campaign& c) {
                 "gives case name \"" + d.name + "\", which is not filesystem-safe");
     d.scene = c.scene_path;
     d.overrides = c.overrides;
-    v.visit([&](const auto& x) { d.overrides.insert_or_assign(key, x); });
+    set_override(d.overrides, override_of(key, v));
     cases.push_back(std::move(d));
   }
   return cases;
@@ -325,9 +330,9 @@ PredictionCase read_prediction(TableReader& t, const Campaign& c, SceneCache& sc
   pc.overrides = c.overrides;
   merge_overrides(pc.overrides, read_overrides(t));
   toml::table check = scenes.get(pc.scene_path);
-  toml::table with_mu = pc.overrides;
+  std::vector<Override> with_mu = pc.overrides;
   for (const auto& k : c.calibration->keys)
-    with_mu.insert_or_assign(k, c.calibration->settings.mu_r_lo);
+    set_override(with_mu, number_override(k, c.calibration->settings.mu_r_lo));
   apply_overrides(check, with_mu,
                   file + ", prediction " + pc.name + " (scene " + pc.scene_path + ")");
   pc.scene_hash = fnv1a_hex(read_file(pc.scene_path));

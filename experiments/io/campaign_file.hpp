@@ -66,8 +66,6 @@
 // and rock-plate rolling friction); the first names the calibration runs.
 #pragma once
 
-#include <toml++/toml.h>
-
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -76,6 +74,7 @@
 #include <vector>
 
 #include "experiments/calibration/calibration.hpp"
+#include "experiments/io/overrides.hpp"
 
 namespace reposetwin::experiments {
 
@@ -86,7 +85,7 @@ struct CaseSpec {
   std::uint64_t seed = 0;  // run seed
   std::string scene_path;  // absolute path of the scene file
   std::string scene_hash;  // FNV-1a 64 of the scene file's text (hex), to detect edited inputs
-  toml::table overrides;   // dotted key -> value, applied to the scene before parsing
+  std::vector<Override> overrides;  // sorted by key, applied to the scene before parsing
   /// The run's folder relative to the campaign output folder ("cases/<case>/seed_<n>").
   std::string relative_dir() const;
   /// A short id for messages ("<case>/seed_<n>").
@@ -130,7 +129,7 @@ struct PredictionCase {
   std::string description;           // free text (optional)
   std::string scene_path;            // absolute path of the test's scene
   std::string scene_hash;            // FNV-1a 64 of the scene file's text (hex)
-  toml::table overrides;             // the campaign's common overrides, then the entry's own
+  std::vector<Override> overrides;   // the campaign's common overrides, then the entry's own
   Target measured;                   // the test's measured angle and its 1-sigma uncertainty
   std::vector<std::uint64_t> seeds;  // run seeds
   bool interval_ends = true;         // also run the seeds at both ends of the mu_r interval
@@ -145,7 +144,7 @@ struct Campaign {
   std::string file;         // absolute path of the campaign file
   std::string scene_path;   // absolute path of the base scene
   std::vector<std::uint64_t> seeds;
-  toml::table overrides;       // the file's top-level overrides, common to every run
+  std::vector<Override> overrides;  // the file's top-level overrides, common to every run
   std::vector<CaseSpec> runs;  // cases x seeds, in file order then seed order
   std::optional<CampaignCalibration> calibration;
   std::vector<PredictionCase> predictions;  // [[predict]] entries (only with [calibration])

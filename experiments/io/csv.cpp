@@ -59,9 +59,12 @@ CsvTable parse_csv(const std::string& text, const std::string& where) {
   int line_no = 0;
   for (std::string line; std::getline(in, line);) {
     ++line_no;
+    // A UTF-8 byte-order mark (spreadsheet exports write one) is not part of the first field.
+    if (line_no == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
     if (!in_quotes) {
       const std::size_t first = line.find_first_not_of(" \t\r");
-      if (first != std::string::npos && line[first] == '#') {
+      if (first == std::string::npos) continue;  // a blank line, spaces only included
+      if (line[first] == '#') {
         std::string comment = line.substr(first + 1);
         if (!comment.empty() && comment.back() == '\r') comment.pop_back();
         c.table.comments.push_back(std::move(comment));

@@ -6,7 +6,8 @@
 // mode: a stray quote or an unterminated quoted field is an error, not silently read). What this
 // wrapper adds is only what our files need beyond RFC 4180: lines whose first non-blank character
 // is '#' (outside a quoted field) are comments, kept in order so a table's notes can be quoted;
-// blank lines are skipped; the first record is the header; every record keeps the line it
+// blank lines (spaces only included) are skipped; a UTF-8 byte-order mark at the start (which
+// spreadsheet exports write) is dropped; the first record is the header; every record keeps the line it
 // starts on for error messages. Fields are kept as written (no trimming): what a column means,
 // and how many fields a row must have, is the caller's business.
 #pragma once

@@ -8,6 +8,11 @@
 
 namespace reposetwin::experiments {
 
+/// A JSON number as a double: NaN for null.
+inline double json_number(const nlohmann::json& v) {
+  return v.is_null() ? std::numeric_limits<double>::quiet_NaN() : v.get<double>();
+}
+
 /// j[key] as a double: NaN for null, `fallback` when the key is absent.
 inline double json_number(const nlohmann::json& j, const char* key, double fallback = 0.0) {
   const auto it = j.find(key);

@@ -1,10 +1,12 @@
 #include "experiments/io/overrides.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <sstream>
 #include <stdexcept>
 
 #include "experiments/io/input_error.hpp"
+#include "experiments/io/toml_edit.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -151,6 +153,64 @@ void apply_overrides(toml::table& doc, const std::vector<Override>& overrides,
       throw InputError(e.what());
     }
   }
+}
+
+Override number_override(std::string key, double v) {
+  return {std::move(key), toml_value_text(toml::value<double>(v))};
+}
+
+Override string_override(std::string key, std::string_view text) {
+  return {std::move(key), toml_value_text(toml::value<std::string>(std::string(text)))};
+}
+
+Override override_of(std::string key, const toml::node& value) {
+  return {std::move(key), toml_value_text(value)};
+}
+
+bool is_toml_value(std::string_view text) {
+  try {
+    (void)toml::parse("v = " + std::string(text));
+    return true;
+  } catch (const toml::parse_error&) {
+    return false;
+  }
+}
+
+void set_override(std::vector<Override>& list, Override o) {
+  auto it = std::lower_bound(list.begin(), list.end(), o.key,
+                             [](const Override& a, const std::string& k) { return a.key < k; });
+  if (it != list.end() && it->key == o.key) {
+    it->value = std::move(o.value);
+  } else {
+    list.insert(it, std::move(o));
+  }
+}
+
+nlohmann::json toml_to_json(const toml::node& n) {
+  if (const auto* t = n.as_table()) {
+    nlohmann::json j = nlohmann::json::object();
+    for (const auto& [k, v] : *t) j[std::string(k.str())] = toml_to_json(v);
+    return j;
+  }
+  if (const auto* a = n.as_array()) {
+    nlohmann::json j = nlohmann::json::array();
+    for (const auto& v : *a) j.push_back(toml_to_json(v));
+    return j;
+  }
+  if (n.is_integer()) return n.as_integer()->get();
+  if (n.is_floating_point()) return n.as_floating_point()->get();
+  if (n.is_boolean()) return n.as_boolean()->get();
+  if (n.is_string()) return n.as_string()->get();
+  return toml_value_text(n);  // dates and times
+}
+
+nlohmann::json overrides_to_json(const std::vector<Override>& list) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const Override& o : list) {
+    const toml::table v = toml::parse("v = " + o.value);
+    j[o.key] = toml_to_json(*v.get("v"));
+  }
+  return j;
 }
 
 }  // namespace reposetwin::experiments

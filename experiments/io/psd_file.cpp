@@ -6,6 +6,8 @@
 #include <string_view>
 #include <vector>
 
+#include "experiments/io/toml_tables.hpp"
+
 namespace reposetwin::experiments {
 namespace {
 

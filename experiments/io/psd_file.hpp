@@ -20,8 +20,6 @@
 //   interval_sd_fraction = 0.1667 # optional: sd of the clipped normal / interval width
 #pragma once
 
-#include <toml++/toml.h>
-
 #include <string>
 
 #include "sim/psd.hpp"
@@ -41,11 +39,5 @@ struct PsdFile {
 /// (and line) for a missing file or a TOML syntax error, and std::invalid_argument naming the
 /// file, the field and the value for bad content.
 PsdFile read_psd_file(const std::string& path);
-
-/// Parses a [psd] table, for instance one embedded in a scene file; `source` names that file in
-/// messages and `where` the table's path in it (e.g. "psd"). Throws std::invalid_argument naming
-/// the source, the field and the value for bad content.
-PsdFile parse_psd_table(const toml::table& table, const std::string& source,
-                        const std::string& where = "psd");
 
 }  // namespace reposetwin::experiments

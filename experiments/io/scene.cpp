@@ -10,6 +10,7 @@
 #include "experiments/io/format.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/toml_reader.hpp"
+#include "experiments/io/toml_tables.hpp"
 
 namespace reposetwin::experiments {
 namespace {

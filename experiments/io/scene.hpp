@@ -73,8 +73,7 @@ struct SceneConfig {
 SceneConfig parse_scene_text(const std::string& text, const std::string& file);
 /// Reads and parses a scene file.
 SceneConfig parse_scene_file(const std::string& path);
-/// Parses an already loaded (and possibly overridden) TOML document.
-SceneConfig parse_scene_table(const toml::table& doc, const std::string& file);
+/// (A scene with overrides applied: io/scene_doc.hpp.)
 
 /// The built-in quick scene (data/scenes/quick.toml, compiled in).
 const std::string& embedded_quick_scene();

@@ -7,8 +7,10 @@
 #include <sstream>
 
 #include "experiments/campaign/campaign.hpp"
+#include "experiments/io/csv.hpp"
 #include "experiments/io/format.hpp"
 #include "experiments/io/input_error.hpp"
+#include "experiments/io/provenance.hpp"
 #include "experiments/io/scene_overrides.hpp"
 #include "experiments/loop/loop_effects.hpp"
 #include "experiments/photos/lab_photos.hpp"
@@ -53,15 +55,6 @@ double parse_number(const std::string& text, const Where& w, const std::string& 
   return v;
 }
 
-bool looks_like_toml_value(const std::string& v) {
-  try {
-    (void)toml::parse("v = " + v);
-    return true;
-  } catch (const toml::parse_error&) {
-    return false;
-  }
-}
-
 std::string toml_number(double v) { return toml_float(v, 17); }
 
 }  // namespace
@@ -79,204 +72,209 @@ const std::vector<ConditionColumn>& condition_columns() {
   return k;
 }
 
-std::vector<std::string> split_csv_line(const std::string& line, const std::string& where) {
-  std::vector<std::string> out;
-  std::string cur;
-  bool quoted = false;
-  for (std::size_t i = 0; i < line.size(); ++i) {
-    const char c = line[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
-        cur += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        cur += c;
-      }
-    } else if (c == '"') {
-      quoted = true;
-    } else if (c == ',') {
-      out.push_back(cur);
-      cur.clear();
-    } else if (c != '\r') {
-      cur += c;
-    }
+namespace {
+
+// The measured-data CSV's columns: the header as written (trimmed) and each name's position.
+struct Columns {
+  std::vector<std::string> header;
+  std::map<std::string, int> index;
+  bool has(const std::string& c) const { return index.count(c) > 0; }
+};
+
+// One data row: its fields by column name (trimmed; empty when the column is absent).
+struct Row {
+  const Columns& cols;
+  const std::vector<std::string>& fields;
+  std::string get(const std::string& c) const {
+    const auto it = cols.index.find(c);
+    return it == cols.index.end() ? std::string()
+                                  : trim(fields[static_cast<std::size_t>(it->second)]);
   }
-  if (quoted) throw InputError(where + ": unterminated quote");
-  out.push_back(cur);
-  return out;
+};
+
+// Phase 1: the header names only known columns, each once, and the required ones.
+Columns read_header(const CsvTable& csv, const std::string& file) {
+  const std::string at = file + " line " + std::to_string(csv.header_line);
+  std::set<std::string> known = {"id",        "role",          "scene",           "H_mm",
+                                 "D_mm",      "angle_deg",     "photo",           "photo_camera",
+                                 "mm_per_px", "camera_height_m", "repeats",       "note"};
+  for (const auto& c : condition_columns()) known.insert(c.column);
+  Columns cols;
+  for (std::size_t i = 0; i < csv.header.size(); ++i) {
+    const std::string h = trim(csv.header[i]);
+    if (cols.has(h)) throw InputError(at + ": column " + h + " appears twice");
+    if (!known.count(h) && h.rfind("set:", 0) != 0)
+      throw InputError(at + ": unknown column \"" + h +
+                       "\" (see docs/loop.md; any scene key goes in a set:KEY column)");
+    cols.header.push_back(h);
+    cols.index[h] = static_cast<int>(i);
+  }
+  for (const char* req : {"id", "role", "scene"})
+    if (!cols.has(req))
+      throw InputError(file + ": the required column \"" + std::string(req) + "\" is missing");
+  if (!cols.has("angle_deg") && !(cols.has("H_mm") && cols.has("D_mm")) && !cols.has("photo"))
+    throw InputError(file +
+                     ": a measured value is required: column angle_deg, or H_mm and D_mm, "
+                     "or photo");
+  return cols;
 }
 
+// Phase 2: the test's id (safe, unique), role and base scene.
+void read_identity(LabTest& test, const Row& row, Where& w, const fs::path& dir,
+                   std::set<std::string>& ids) {
+  test.id = row.get("id");
+  if (!is_safe_name(test.id))
+    throw InputError(w.at("id") + ": \"" + test.id +
+                     "\" is not a safe name ([A-Za-z0-9][A-Za-z0-9._-]*)");
+  if (!ids.insert(test.id).second)
+    throw InputError(w.at("id") + ": test id \"" + test.id + "\" appears twice");
+  w.id = test.id;
+  test.role = row.get("role");
+  if (test.role != "calibrate" && test.role != "validate")
+    throw InputError(w.at("role") + ": \"" + test.role + "\" must be \"calibrate\" or \"validate\"");
+  const std::string scene = row.get("scene");
+  if (scene.empty()) throw InputError(w.at("scene") + ": empty (a base scene file is required)");
+  test.scene_path = (dir / scene).lexically_normal().string();
+  if (!fs::exists(test.scene_path))
+    throw InputError(w.at("scene") + ": \"" + test.scene_path + "\" does not exist");
+}
+
+// Phase 3: conditions and set:KEY columns become overrides of the scene, which must build (the
+// message names the column whose override breaks it).
+void read_overrides(LabTest& test, const Row& row, const Where& w) {
+  for (const ConditionColumn& c : condition_columns()) {
+    const std::string v = row.get(c.column);
+    if (v.empty()) continue;
+    if (c.factor == 0.0) {
+      test.overrides.emplace_back(c.key, "\"" + v + "\"");
+    } else {
+      const double x = parse_number(v, w, c.column);
+      if (!(x > 0.0)) throw InputError(w.at(c.column) + ": " + v + " must be positive");
+      test.conditions[c.column] = x;
+      test.overrides.emplace_back(c.key, toml_number(c.factor * x));
+    }
+    test.override_columns.push_back(c.column);
+  }
+  for (const std::string& h : row.cols.header) {
+    if (h.rfind("set:", 0) != 0) continue;
+    const std::string v = row.get(h);
+    if (v.empty()) continue;
+    test.overrides.emplace_back(h.substr(4), is_toml_value(v) ? v : "\"" + v + "\"");
+    test.override_columns.push_back(h);
+    try {
+      test.conditions[h] = std::stod(v);
+    } catch (const std::exception&) {
+    }
+  }
+  std::vector<std::string> sets;
+  for (const auto& [k, v] : test.overrides) sets.push_back(k + "=" + v);
+  try {
+    (void)load_scene(test.scene_path, sets);
+  } catch (const std::exception& e) {
+    std::string culprit;
+    for (std::size_t k = 1; k <= sets.size() && culprit.empty(); ++k) {
+      try {
+        (void)load_scene(test.scene_path, {sets.begin(), sets.begin() + k});
+      } catch (const std::exception&) {
+        culprit = test.override_columns[k - 1] + " (" + sets[k - 1] + ")";
+      }
+    }
+    throw InputError(w.at(culprit.empty() ? "scene" : culprit) +
+                     ": the engine cannot build this test: " + e.what());
+  }
+}
+
+// Phase 4a: the declared camera height, the repeats and the measured H, D and angle.
+bool read_measured(LabTest& test, const Row& row, const Where& w) {
+  if (!row.get("camera_height_m").empty()) {
+    test.camera_height_m = parse_number(row.get("camera_height_m"), w, "camera_height_m");
+    if (*test.camera_height_m < 0.0)
+      throw InputError(w.at("camera_height_m") + ": must not be negative");
+  }
+  if (!row.get("repeats").empty()) {
+    const double n = parse_number(row.get("repeats"), w, "repeats");
+    if (!(n >= 1.0) || n != std::floor(n) || n > 1000)
+      throw InputError(w.at("repeats") + ": " + row.get("repeats") +
+                       " must be a whole number >= 1");
+    test.repeats = static_cast<int>(n);
+  }
+  if (!row.get("H_mm").empty()) test.height_mm = parse_number(row.get("H_mm"), w, "H_mm");
+  if (!row.get("D_mm").empty()) test.diameter_mm = parse_number(row.get("D_mm"), w, "D_mm");
+  for (const char* c : {"H_mm", "D_mm"}) {
+    const auto& v = std::string(c) == "H_mm" ? test.height_mm : test.diameter_mm;
+    if (v && !(*v > 0.0)) throw InputError(w.at(c) + ": " + row.get(c) + " must be positive");
+  }
+  if (!row.get("angle_deg").empty()) {
+    test.angle_deg = parse_number(row.get("angle_deg"), w, "angle_deg");
+    return true;
+  }
+  if (test.height_mm && test.diameter_mm) {
+    test.angle_deg = std::atan(2.0 * *test.height_mm / *test.diameter_mm) * 180.0 / M_PI;
+    return true;
+  }
+  return false;
+}
+
+// Phase 4b: the photos, measured by vision; their measurement replaces the typed-in values.
+void read_photos(LabTest& test, const Row& row, const Where& w, const fs::path& dir,
+                 bool have_angle) {
+  std::stringstream ss(row.get("photo"));
+  std::string p;
+  while (std::getline(ss, p, ';'))
+    if (!trim(p).empty()) test.photos.push_back((dir / trim(p)).lexically_normal().string());
+  std::string cam = row.get("photo_camera");
+  if (!cam.empty()) cam = (dir / cam).lexically_normal().string();
+  std::optional<double> mmpx;
+  if (!row.get("mm_per_px").empty()) mmpx = parse_number(row.get("mm_per_px"), w, "mm_per_px");
+  json declared = {{"angle_deg", have_angle ? json(test.angle_deg) : json()}};
+  const LabPhotoMeasurement m = measure_lab_photos(
+      test.photos, {cam, mmpx},
+      {w.at("photo"), w.at("photo_camera"), w.at("mm_per_px"), "photo_camera", "mm_per_px"});
+  test.angle_deg = m.summary.theta_deg.mean;
+  test.height_mm = 1e3 * m.summary.height_m.mean;
+  test.diameter_mm = 1e3 * m.summary.diameter_m.mean;
+  test.photo_measurement = m.record;
+  test.photo_measurement["declared_in_csv"] = declared;
+}
+
+// One data row as a test: the phases above, then the angle's range.
+LabTest read_row(const CsvRecord& rec, const Columns& cols, const std::string& file,
+                 const fs::path& dir, std::set<std::string>& ids) {
+  Where w{file, rec.line, ""};
+  if (rec.fields.size() != cols.header.size())
+    throw InputError(w.at("") + ": " + std::to_string(rec.fields.size()) + " fields for " +
+                     std::to_string(cols.header.size()) + " columns");
+  const Row row{cols, rec.fields};
+  LabTest test;
+  test.line = rec.line;
+  read_identity(test, row, w, dir, ids);
+  read_overrides(test, row, w);
+  bool have_angle = read_measured(test, row, w);
+  if (!row.get("photo").empty()) {
+    read_photos(test, row, w, dir, have_angle);
+    have_angle = true;
+  }
+  if (!have_angle)
+    throw InputError(w.at("angle_deg") +
+                     ": no measured value (angle_deg, H_mm and D_mm, or photo)");
+  if (!(test.angle_deg > 0.0 && test.angle_deg < 90.0))
+    throw InputError(w.at(test.photos.empty() ? "angle_deg" : "photo") + ": angle " +
+                     toml_number(test.angle_deg) + " deg is outside (0, 90)");
+  return test;
+}
+
+}  // namespace
+
 LabData read_lab_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the measured-data CSV");
+  if (!std::ifstream(path)) throw InputError(path + ": cannot open the measured-data CSV");
   LabData data;
   data.file = fs::absolute(path).lexically_normal().string();
   const fs::path dir = fs::path(data.file).parent_path();
-  std::vector<std::string> header;
-  std::string line;
-  int line_no = 0;
+  const CsvTable csv = parse_csv(read_file(path), data.file);
+  if (csv.header.empty()) throw InputError(data.file + ": no header line");
+  const Columns cols = read_header(csv, data.file);
   std::set<std::string> ids;
-  std::map<std::string, int> col;
-  auto has = [&](const std::string& c) { return col.count(c) > 0; };
-  while (std::getline(in, line)) {
-    ++line_no;
-    const std::string t = trim(line);
-    if (t.empty() || t[0] == '#') continue;
-    if (header.empty()) {
-      header = split_csv_line(t, data.file + " line " + std::to_string(line_no));
-      std::set<std::string> known = {"id",     "role",         "scene",     "H_mm",
-                                     "D_mm",   "angle_deg",    "photo",     "photo_camera",
-                                     "mm_per_px", "camera_height_m", "repeats", "note"};
-      for (const auto& c : condition_columns()) known.insert(c.column);
-      for (std::size_t i = 0; i < header.size(); ++i) {
-        header[i] = trim(header[i]);
-        const std::string& h = header[i];
-        if (col.count(h))
-          throw InputError(data.file + " line " + std::to_string(line_no) + ": column " + h +
-                           " appears twice");
-        if (!known.count(h) && h.rfind("set:", 0) != 0)
-          throw InputError(data.file + " line " + std::to_string(line_no) + ": unknown column \"" +
-                           h + "\" (see docs/loop.md; any scene key goes in a set:KEY column)");
-        col[h] = static_cast<int>(i);
-      }
-      for (const char* req : {"id", "role", "scene"})
-        if (!has(req))
-          throw InputError(data.file + ": the required column \"" + std::string(req) +
-                           "\" is missing");
-      if (!has("angle_deg") && !(has("H_mm") && has("D_mm")) && !has("photo"))
-        throw InputError(data.file +
-                         ": a measured value is required: column angle_deg, or H_mm and D_mm, "
-                         "or photo");
-      continue;
-    }
-    Where w{data.file, line_no, ""};
-    const std::vector<std::string> f = split_csv_line(line, w.at(""));
-    if (f.size() != header.size())
-      throw InputError(w.at("") + ": " + std::to_string(f.size()) + " fields for " +
-                       std::to_string(header.size()) + " columns");
-    auto get = [&](const std::string& c) -> std::string {
-      return has(c) ? trim(f[static_cast<std::size_t>(col[c])]) : std::string();
-    };
-    LabTest test;
-    test.line = line_no;
-    test.id = get("id");
-    if (!is_safe_name(test.id))
-      throw InputError(w.at("id") + ": \"" + test.id +
-                       "\" is not a safe name ([A-Za-z0-9][A-Za-z0-9._-]*)");
-    if (!ids.insert(test.id).second)
-      throw InputError(w.at("id") + ": test id \"" + test.id + "\" appears twice");
-    w.id = test.id;
-    test.role = get("role");
-    if (test.role != "calibrate" && test.role != "validate")
-      throw InputError(w.at("role") + ": \"" + test.role +
-                       "\" must be \"calibrate\" or \"validate\"");
-    const std::string scene = get("scene");
-    if (scene.empty()) throw InputError(w.at("scene") + ": empty (a base scene file is required)");
-    test.scene_path = (dir / scene).lexically_normal().string();
-    if (!fs::exists(test.scene_path))
-      throw InputError(w.at("scene") + ": \"" + test.scene_path + "\" does not exist");
-    // Conditions -> overrides.
-    for (const ConditionColumn& c : condition_columns()) {
-      const std::string v = get(c.column);
-      if (v.empty()) continue;
-      if (c.factor == 0.0) {
-        test.overrides.emplace_back(c.key, "\"" + v + "\"");
-      } else {
-        const double x = parse_number(v, w, c.column);
-        if (!(x > 0.0))
-          throw InputError(w.at(c.column) + ": " + v + " must be positive");
-        test.conditions[c.column] = x;
-        test.overrides.emplace_back(c.key, toml_number(c.factor * x));
-      }
-      test.override_columns.push_back(c.column);
-    }
-    for (const std::string& h : header) {
-      if (h.rfind("set:", 0) != 0) continue;
-      const std::string v = get(h);
-      if (v.empty()) continue;
-      const std::string key = h.substr(4);
-      const std::string value = looks_like_toml_value(v) ? v : "\"" + v + "\"";
-      test.overrides.emplace_back(key, value);
-      test.override_columns.push_back(h);
-      try {
-        test.conditions[h] = std::stod(v);
-      } catch (const std::exception&) {
-      }
-    }
-    // Build the scene now, naming the column whose override breaks it.
-    std::vector<std::string> sets;
-    for (const auto& [k, v] : test.overrides) sets.push_back(k + "=" + v);
-    try {
-      (void)load_scene(test.scene_path, sets);
-    } catch (const std::exception& e) {
-      std::string culprit;
-      for (std::size_t k = 1; k <= sets.size() && culprit.empty(); ++k) {
-        try {
-          (void)load_scene(test.scene_path, {sets.begin(), sets.begin() + k});
-        } catch (const std::exception&) {
-          culprit = test.override_columns[k - 1] + " (" + sets[k - 1] + ")";
-        }
-      }
-      throw InputError(w.at(culprit.empty() ? "scene" : culprit) +
-                       ": the engine cannot build this test: " + e.what());
-    }
-    // Measured values.
-    if (!get("camera_height_m").empty()) {
-      test.camera_height_m = parse_number(get("camera_height_m"), w, "camera_height_m");
-      if (*test.camera_height_m < 0.0)
-        throw InputError(w.at("camera_height_m") + ": must not be negative");
-    }
-    if (!get("repeats").empty()) {
-      const double n = parse_number(get("repeats"), w, "repeats");
-      if (!(n >= 1.0) || n != std::floor(n) || n > 1000)
-        throw InputError(w.at("repeats") + ": " + get("repeats") + " must be a whole number >= 1");
-      test.repeats = static_cast<int>(n);
-    }
-    if (!get("H_mm").empty()) test.height_mm = parse_number(get("H_mm"), w, "H_mm");
-    if (!get("D_mm").empty()) test.diameter_mm = parse_number(get("D_mm"), w, "D_mm");
-    for (const char* c : {"H_mm", "D_mm"}) {
-      const auto& v = std::string(c) == "H_mm" ? test.height_mm : test.diameter_mm;
-      if (v && !(*v > 0.0)) throw InputError(w.at(c) + ": " + get(c) + " must be positive");
-    }
-    bool have_angle = false;
-    if (!get("angle_deg").empty()) {
-      test.angle_deg = parse_number(get("angle_deg"), w, "angle_deg");
-      have_angle = true;
-    } else if (test.height_mm && test.diameter_mm) {
-      test.angle_deg = std::atan(2.0 * *test.height_mm / *test.diameter_mm) * 180.0 / M_PI;
-      have_angle = true;
-    }
-    if (!get("photo").empty()) {
-      std::stringstream ss(get("photo"));
-      std::string p;
-      while (std::getline(ss, p, ';'))
-        if (!trim(p).empty()) test.photos.push_back((dir / trim(p)).lexically_normal().string());
-      std::string cam = get("photo_camera");
-      if (!cam.empty()) cam = (dir / cam).lexically_normal().string();
-      std::optional<double> mmpx;
-      if (!get("mm_per_px").empty()) mmpx = parse_number(get("mm_per_px"), w, "mm_per_px");
-      json declared = {{"angle_deg", have_angle ? json(test.angle_deg) : json()}};
-      const LabPhotoMeasurement m =
-          measure_lab_photos(test.photos, {cam, mmpx},
-                             {w.at("photo"), w.at("photo_camera"), w.at("mm_per_px"),
-                              "photo_camera", "mm_per_px"});
-      test.angle_deg = m.summary.theta_deg.mean;
-      test.height_mm = 1e3 * m.summary.height_m.mean;
-      test.diameter_mm = 1e3 * m.summary.diameter_m.mean;
-      test.photo_measurement = m.record;
-      test.photo_measurement["declared_in_csv"] = declared;
-      have_angle = true;
-    }
-    if (!have_angle)
-      throw InputError(w.at("angle_deg") + ": no measured value (angle_deg, H_mm and D_mm, or photo)");
-    if (!(test.angle_deg > 0.0 && test.angle_deg < 90.0))
-      throw InputError(w.at(test.photos.empty() ? "angle_deg" : "photo") + ": angle " +
-                       toml_number(test.angle_deg) + " deg is outside (0, 90)");
-    data.tests.push_back(std::move(test));
-  }
-  if (header.empty()) throw InputError(data.file + ": no header line");
+  for (const CsvRecord& rec : csv.rows) data.tests.push_back(read_row(rec, cols, data.file, dir, ids));
   if (data.tests.empty()) throw InputError(data.file + ": no test rows");
   const double d_ref = reference_grain_diameter(data.tests);
   for (LabTest& t : data.tests) t.reference_diameter_m = d_ref;

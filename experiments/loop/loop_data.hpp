@@ -54,10 +54,6 @@ struct LabData {
 /// unreadable photos or photos without a usable scale.
 LabData read_lab_csv(const std::string& path);
 
-/// Splits one CSV line into fields (RFC 4180 quotes: "a,b" and "" inside quotes). Throws
-/// std::invalid_argument naming `where` for an unterminated quote.
-std::vector<std::string> split_csv_line(const std::string& line, const std::string& where);
-
 /// The named condition columns and the scene key each one drives (with its unit conversion).
 struct ConditionColumn {
   const char* column;  // CSV header

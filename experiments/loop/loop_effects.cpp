@@ -9,7 +9,6 @@
 #include "experiments/io/overrides.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/scene_overrides.hpp"
-#include "experiments/io/toml_reader.hpp"
 #include "sim/psd.hpp"
 
 namespace reposetwin::experiments {
@@ -25,13 +24,15 @@ std::vector<std::string> sets_of(const LabTest& t) {
   return s;
 }
 
-toml::table resolved_doc(const LabTest& t) {
-  toml::table doc = parse_toml(read_file(t.scene_path), t.scene_path);
-  for (const auto& [k, v] : t.overrides) {
-    toml::table value = toml::parse("v = " + v);
-    apply_override(doc, k, *value.get("v"), t.scene_path);
-  }
-  return doc;
+std::vector<Override> overrides_of(const LabTest& t) {
+  std::vector<Override> o;
+  for (const auto& [k, v] : t.overrides) o.push_back({k, v});
+  return o;
+}
+
+// The test's scene with its overrides applied, for values read by key path.
+SceneDoc resolved_doc(const LabTest& t) {
+  return SceneDoc(t.scene_path, overrides_of(t), t.scene_path);
 }
 
 // "contacts.{sample}-{plate}.friction" -> "contacts.rock-plate.friction" (or plate-rock, whichever
@@ -50,8 +51,8 @@ std::string resolve_key(const LabTest& t, const std::string& key) {
     const std::string pair = k.substr(9, dot - 9);
     const auto dash = pair.find('-');
     const std::string swapped = pair.substr(dash + 1) + "-" + pair.substr(0, dash);
-    const toml::table doc = resolved_doc(t);
-    if (!doc["contacts"][pair] && doc["contacts"][swapped])
+    const SceneDoc doc = resolved_doc(t);
+    if (!doc.has("contacts." + pair) && doc.has("contacts." + swapped))
       k = "contacts." + swapped + k.substr(dot);
   }
   return k;
@@ -147,9 +148,7 @@ double scene_value(const LabTest& t, const std::string& key_pattern) {
     const SceneConfig s = load_scene(t.scene_path, sets_of(t));
     return key == "sample.d_min_mm" ? 1e3 * s.psd.spec.d_min : s.procedure.lift_speed;
   }
-  const toml::table doc = resolved_doc(t);
-  const toml::node_view<const toml::node> n = doc.at_path(key);
-  if (auto v = n.value<double>()) return *v;
+  if (auto v = resolved_doc(t).number(key)) return *v;
   throw InputError(t.scene_path + " (test " + t.id + "): scene key " + key +
                    " has no numeric value");
 }

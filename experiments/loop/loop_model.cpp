@@ -35,6 +35,13 @@ double Model::d(std::size_t i, double m) const {
   return s;
 }
 
+// The loop's joint fit, not calibration::calibrate_batch's: calibrate matches ONE test's angle
+// by inverting a monotone (isotonic) fit it samples adaptively, with a bootstrap interval; the
+// loop fits one mu_r to MANY tests at once on a fixed grid (weighted least squares over the
+// calibration tests, sigma_i from seeds and the lab), jointly with the weight t of a candidate's
+// simulated surface, with standard errors from the Jacobian. With one test, no surface and a
+// monotone curve both give the crossing of the interpolated curve, but neither generalises to the
+// other's problem, so they stay two estimators.
 MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max) const {
   const double lo = s_.mu_grid.front(), hi = s_.mu_grid.back();
   const int steps = 2000;

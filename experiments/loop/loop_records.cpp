@@ -1,5 +1,6 @@
 #include "experiments/loop/loop_records.hpp"
 
+#include "experiments/io/json_fields.hpp"
 #include "experiments/loop/loop_effects.hpp"
 
 namespace reposetwin::experiments {
@@ -208,6 +209,191 @@ json to_json(const LoopRecord& loop) {
           {"summary", summary},
           {"simulations", to_json(loop.simulations)},
           {"provenance", to_json(loop.provenance)}};
+}
+
+namespace {
+
+double num(const json& j, const char* key) { return json_number(j.at(key)); }
+
+std::optional<double> optional_of(const json& j, const char* key) {
+  const auto it = j.find(key);
+  if (it == j.end() || it->is_null()) return std::nullopt;
+  return it->get<double>();
+}
+
+template <typename T, typename F>
+std::vector<T> array_from_json(const json& a, F from) {
+  std::vector<T> out;
+  for (const json& e : a) out.push_back(from(e));
+  return out;
+}
+
+// The fields ChosenEffect and NotConfirmed share.
+RefitSummary refit_from_json(const json& j) {
+  RefitSummary r;
+  r.name = j.at("name").get<std::string>();
+  r.linear_estimate = num(j, "linear_estimate");
+  r.simulated_at = num(j, "simulated_at");
+  r.t = num(j, "t");
+  r.mu_r = num(j, "mu_r");
+  r.trials = array_from_json<RefitTrialRecord>(j.at("trials"), refit_trial_record_from_json);
+  r.refit_notes = j.at("refit_notes").get<std::string>();
+  return r;
+}
+
+}  // namespace
+
+ResidualRow residual_row_from_json(const json& j) {
+  ResidualRow r;
+  r.id = j.at("id").get<std::string>();
+  r.role = j.at("role").get<std::string>();
+  r.measured_deg = num(j, "measured_deg");
+  r.predicted_deg = num(j, "predicted_deg");
+  r.residual_deg = num(j, "residual_deg");
+  r.sigma_deg = num(j, "sigma_deg");
+  r.predicted_se_deg = num(j, "predicted_se_deg");
+  r.predicted_h_mm = num(j, "predicted_H_mm");
+  r.predicted_d_mm = num(j, "predicted_D_mm");
+  r.residual_h_mm = optional_of(j, "residual_H_mm");
+  r.residual_d_mm = optional_of(j, "residual_D_mm");
+  return r;
+}
+
+RoleRmse role_rmse_from_json(const json& j) {
+  RoleRmse r;
+  r.calibrate_deg = num(j, "calibrate_deg");
+  r.validate_deg = optional_of(j, "validate_deg");
+  r.n_calibrate = j.at("n_calibrate").get<std::size_t>();
+  r.n_validate = j.at("n_validate").get<std::size_t>();
+  return r;
+}
+
+BaselineCurve baseline_curve_from_json(const json& j) {
+  BaselineCurve c;
+  c.id = j.at("id").get<std::string>();
+  c.mu = j.at("mu_r").get<std::vector<double>>();
+  for (const json& v : j.at("angle_deg")) c.angle_deg.push_back(json_number(v));
+  for (const json& row : j.at("angle_seeds_deg")) {
+    c.angle_seeds_deg.emplace_back();
+    for (const json& v : row) c.angle_seeds_deg.back().push_back(json_number(v));
+  }
+  c.pour_seeds = j.at("pour_seeds").get<std::vector<std::vector<std::uint64_t>>>();
+  c.clogged_pours = j.at("clogged_pours").get<std::vector<int>>();
+  return c;
+}
+
+BaselineRecord baseline_record_from_json(const json& j) {
+  BaselineRecord b;
+  b.fit.mu = num(j, "mu_r");
+  b.fit.mu_se = num(j, "mu_r_se");
+  b.fit.at_edge = j.at("mu_r_at_grid_edge").get<bool>();
+  b.seed_sd_deg = num(j, "seed_sd_deg");
+  b.seed_se_deg = num(j, "seed_se_deg");
+  b.residuals = array_from_json<ResidualRow>(j.at("residuals"), residual_row_from_json);
+  b.rmse = role_rmse_from_json(j.at("rmse"));
+  b.curves = array_from_json<BaselineCurve>(j.at("curves"), baseline_curve_from_json);
+  return b;
+}
+
+FingerprintRecord fingerprint_record_from_json(const json& j) {
+  FingerprintRecord f;
+  f.name = j.at("name").get<std::string>();
+  f.probe = num(j, "probe");
+  f.mu_r = num(j, "mu_r");
+  auto numbers = [&](const char* key) {
+    std::vector<double> v;
+    for (const json& e : j.at(key)) v.push_back(json_number(e));
+    return v;
+  };
+  f.angle_deg = numbers("angle_deg");
+  f.angle_se_deg = numbers("angle_se_deg");
+  f.h_mm = numbers("H_mm");
+  f.d_mm = numbers("D_mm");
+  return f;
+}
+
+UnavailableCandidate unavailable_candidate_from_json(const json& j) {
+  return {j.at("name").get<std::string>(), j.at("why").get<std::string>()};
+}
+
+RefitTrialRecord refit_trial_record_from_json(const json& j) {
+  return {num(j, "simulated_at"), num(j, "response_fraction"), num(j, "t"), num(j, "mu_r"),
+          num(j, "rmse_calibrate_deg")};
+}
+
+ChosenEffect chosen_effect_from_json(const json& j) {
+  ChosenEffect c;
+  c.refit = refit_from_json(j);
+  c.kind = j.at("kind").get<std::string>();
+  c.key = j.at("key").get<std::string>();
+  c.units = j.at("units").get<std::string>();
+  c.off = num(j, "off");
+  c.probe = num(j, "probe");
+  c.value = num(j, "value");
+  c.value_se = num(j, "value_se");
+  c.t_at_limit = j.at("t_at_limit").get<bool>();
+  c.mu_r_se = num(j, "mu_r_se");
+  return c;
+}
+
+NotConfirmed not_confirmed_from_json(const json& j) {
+  return {refit_from_json(j), num(j, "rmse_calibrate_deg"), j.at("reason").get<std::string>()};
+}
+
+RefitFailed refit_failed_from_json(const json& j) {
+  return {j.at("name").get<std::string>(), j.at("refit_failed").get<std::string>(),
+          num(j, "linear_estimate")};
+}
+
+IterationRecord iteration_record_from_json(const json& j) {
+  IterationRecord it;
+  it.iteration = j.at("iteration").get<int>();
+  it.mu_r = num(j, "mu_r");
+  it.null = null_score_from_json(j.at("null"));
+  it.candidates = array_from_json<CandidateScore>(j.at("candidates"), candidate_score_from_json);
+  const json& chosen = j.at("chosen");
+  if (chosen.is_object() && chosen.contains("refit_failed")) {
+    it.refit_failed = refit_failed_from_json(chosen);
+  } else if (!chosen.is_null()) {
+    it.chosen = chosen_effect_from_json(chosen);
+  }
+  if (j.contains("stopped")) it.stopped = j.at("stopped").get<std::string>();
+  if (j.contains("not_confirmed")) it.not_confirmed = not_confirmed_from_json(j.at("not_confirmed"));
+  return it;
+}
+
+FinalRecord final_record_from_json(const json& j) {
+  FinalRecord f;
+  f.fit.mu = num(j, "mu_r");
+  f.fit.mu_se = num(j, "mu_r_se");
+  f.effects = array_from_json<ChosenEffect>(j.at("effects"), chosen_effect_from_json);
+  f.residuals = array_from_json<ResidualRow>(j.at("residuals"), residual_row_from_json);
+  f.rmse = role_rmse_from_json(j.at("rmse"));
+  return f;
+}
+
+LoopProvenance loop_provenance_from_json(const json& j) {
+  LoopProvenance p;
+  p.code_version = j.at("code_version").get<std::string>();
+  p.data = j.at("data").get<std::string>();
+  p.seeds = j.at("seeds").get<std::vector<std::uint64_t>>();
+  p.angle_measure = j.at("angle_measure").get<std::string>();
+  p.angle_method = j.at("angle_method").get<std::string>();
+  p.lab_angle_source = j.at("lab_angle_source").get<std::string>();
+  p.mu_grid = j.at("mu_grid").get<std::vector<double>>();
+  p.mu_key = j.at("mu_key").get<std::string>();
+  p.image = j.at("image").get<std::string>();
+  p.max_pours = j.at("max_pours").get<int>();
+  p.cache = j.at("cache").get<std::string>();
+  p.finished = j.at("finished").get<std::string>();
+  p.scenes = j.at("scenes").get<std::vector<std::string>>();
+  if (j.contains("run")) p.run = j.at("run");
+  return p;
+}
+
+SimulationCounts simulation_counts_from_json(const json& j) {
+  return {j.at("pile_runs_started").get<int>(), j.at("photos_started").get<int>(),
+          num(j, "wall_s")};
 }
 
 }  // namespace reposetwin::experiments

@@ -205,4 +205,23 @@ nlohmann::json to_json(const SimulationCounts& s);
 /// loop.json: the records, the candidate registry, the rule and a summary.
 nlohmann::json to_json(const LoopRecord& loop);
 
+// Each record back from its JSON (loop.json read by a report or a later run). A number written
+// as null (NaN) reads back as NaN; a missing field throws nlohmann::json::exception naming it.
+// BaselineRecord and FinalRecord carry the fit's fields loop.json holds (mu_r, mu_r_se and, for
+// the baseline, mu_r_at_grid_edge); the weight t of a refit is in the chosen effects.
+ResidualRow residual_row_from_json(const nlohmann::json& j);
+RoleRmse role_rmse_from_json(const nlohmann::json& j);
+BaselineCurve baseline_curve_from_json(const nlohmann::json& j);
+BaselineRecord baseline_record_from_json(const nlohmann::json& j);
+FingerprintRecord fingerprint_record_from_json(const nlohmann::json& j);
+UnavailableCandidate unavailable_candidate_from_json(const nlohmann::json& j);
+RefitTrialRecord refit_trial_record_from_json(const nlohmann::json& j);
+ChosenEffect chosen_effect_from_json(const nlohmann::json& j);
+NotConfirmed not_confirmed_from_json(const nlohmann::json& j);
+RefitFailed refit_failed_from_json(const nlohmann::json& j);
+IterationRecord iteration_record_from_json(const nlohmann::json& j);
+FinalRecord final_record_from_json(const nlohmann::json& j);
+LoopProvenance loop_provenance_from_json(const nlohmann::json& j);
+SimulationCounts simulation_counts_from_json(const nlohmann::json& j);
+
 }  // namespace reposetwin::experiments

@@ -16,7 +16,6 @@
 #include "experiments/io/overrides.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/scene.hpp"
-#include "experiments/io/toml_reader.hpp"
 #include "experiments/io/vtk_output.hpp"
 #include "experiments/photos/photographs.hpp"
 #include "experiments/pile/pile_run.hpp"
@@ -43,16 +42,14 @@ struct PhotoJob {
   ImageVariant variant;
 };
 
-toml::table scene_doc(const SimJob& job) {
-  toml::table doc = parse_toml(read_file(job.scene_path), job.scene_path);
+SceneConfig job_scene(const SimJob& job) {
   std::vector<Override> overrides;
   for (const std::string& s : job.sets) overrides.push_back(parse_override(s, job.scene_path));
-  apply_overrides(doc, overrides, job.scene_path);
-  if (toml::table* t = doc["scene"].as_table())
-    t->insert_or_assign("seed", static_cast<std::int64_t>(job.seed));
+  SceneDoc doc(job.scene_path, overrides, job.scene_path);
+  doc.set_seed(job.seed);
   // The loop needs the final pile only: no frame series.
-  if (toml::table* o = doc["output"].as_table()) o->insert_or_assign("frame_interval_s", 0.0);
-  return doc;
+  doc.final_frame_only();
+  return doc.config();
 }
 
 Campaign cache_campaign(const std::string& dir) {
@@ -212,7 +209,7 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     spec.scene_path = job.scene_path;
     spec.scene_hash = scene_hash[job.scene_path];
     for (std::size_t k = 0; k < job.sets.size(); ++k)
-      spec.overrides.insert(std::to_string(k), job.sets[k]);
+      set_override(spec.overrides, string_override(std::to_string(k), job.sets[k]));
     sim_specs.push_back(spec);
   }
   RunnerSettings rs;
@@ -223,7 +220,7 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     if (!fs::exists(fs::path(dir_) / s.relative_dir() / "result.json")) ++started_sims_;
   const CaseFn sim_fn = [sim_jobs](const CaseSpec& spec, const std::string& case_dir) -> json {
     const SimJob& job = sim_jobs.at(spec.id());
-    const SceneConfig scene = parse_scene_table(scene_doc(job), job.scene_path);
+    const SceneConfig scene = job_scene(job);
     RunOptions opt;
     opt.out_dir = (fs::path(case_dir) / "run").string();
     opt.progress = false;

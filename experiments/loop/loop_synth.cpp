@@ -9,7 +9,7 @@
 
 #include "experiments/io/format.hpp"
 #include "experiments/io/provenance.hpp"
-#include "experiments/io/toml_reader.hpp"
+#include "experiments/io/synth_design_file.hpp"
 #include "experiments/loop/loop_effects.hpp"
 
 namespace reposetwin::experiments {
@@ -23,71 +23,29 @@ std::string num(double v) { return significant(v, 10); }
 }  // namespace
 
 SynthDesign read_synth_design(const std::string& path) {
-  const toml::table doc = parse_toml(read_file(path), path);
-  TableReader r(doc, path);
   SynthDesign d;
-  const fs::path dir = fs::absolute(path).parent_path();
-  d.scene = (dir / r.string("scene")).lexically_normal().string();
-  if (!fs::exists(d.scene)) r.fail("scene", "= \"" + d.scene + "\" does not exist");
-  d.mu_key = r.string("mu_key", d.mu_key);
-  d.mu_r = r.number("mu_r", d.mu_r);
-  if (!(d.mu_r >= 0.0)) r.fail("mu_r", "= " + num(d.mu_r) + " must not be negative");
-  if (r.has("seeds")) {
-    d.seeds.clear();
-    for (double s : r.numbers("seeds")) {
-      if (!(s >= 0.0) || s != std::floor(s)) r.fail("seeds", "must hold whole numbers >= 0");
-      d.seeds.push_back(static_cast<std::uint64_t>(s));
-    }
-    if (d.seeds.empty()) r.fail("seeds", "must not be empty");
-  }
-  if (auto c = r.table("camera", true)) {
-    d.camera.distance_radii = c->number("distance_radii", d.camera.distance_radii);
-    d.camera.noise_sd = c->number("noise_sd", d.camera.noise_sd);
-    d.camera.width_px = static_cast<int>(c->integer("width_px", d.camera.width_px));
-    d.camera.height_px = static_cast<int>(c->integer("height_px", d.camera.height_px));
-    d.camera.side_views = static_cast<int>(c->integer("side_views", d.camera.side_views));
-    c->finish();
-  }
-  if (auto h = r.table("hidden", true)) {
-    for (const std::string& k : h->keys()) {
-      try {
-        (void)find_effect(k);
-      } catch (const std::invalid_argument& e) {
-        h->fail(k, e.what());
-      }
-      d.hidden.emplace_back(k, h->number(k));
-    }
-    h->finish();
-  }
-  r.mark_used("test");
-  const toml::array* tests = doc["test"].as_array();
-  if (!tests || tests->empty()) r.fail("test", "at least one [[test]] table is required");
-  std::set<std::string> columns, text_columns;
+  SynthDesignFile defaults;
+  defaults.mu_key = d.mu_key;
+  defaults.mu_r = d.mu_r;
+  defaults.seeds = d.seeds;
+  defaults.camera = {d.camera.distance_radii, d.camera.noise_sd, d.camera.width_px,
+                     d.camera.height_px, d.camera.side_views};
+  SynthDesignRules rules;
+  rules.check_effect = [](const std::string& name) { (void)find_effect(name); };
   for (const auto& c : condition_columns())
-    (c.factor != 0.0 ? columns : text_columns).insert(c.column);
-  for (std::size_t i = 0; i < tests->size(); ++i) {
-    const toml::table* t = (*tests)[i].as_table();
-    if (!t) r.fail("test", "entry " + std::to_string(i) + " must be a table");
-    TableReader tr(*t, path, "test." + std::to_string(i));
-    SynthTest st;
-    st.id = tr.string("id");
-    st.role = tr.string("role", st.role);
-    for (const std::string& k : tr.keys()) {
-      if (k == "id" || k == "role") continue;
-      if (text_columns.count(k)) {
-        st.labels[k] = tr.string(k);
-        if (st.labels[k].empty() || st.labels[k].find_first_of(",\"\n") != std::string::npos)
-          tr.fail(k, "= \"" + st.labels[k] + "\" must be a non-empty name without , or \"");
-        continue;
-      }
-      if (!columns.count(k) && k.rfind("set:", 0) != 0)
-        tr.fail(k, "is not a condition column (docs/loop.md)");
-      st.conditions[k] = tr.number(k);
-    }
-    tr.finish();
-    d.tests.push_back(st);
-  }
-  r.finish();
+    (c.factor != 0.0 ? rules.numeric_columns : rules.text_columns).insert(c.column);
+  SynthDesignFile f = read_synth_design_file(path, std::move(defaults), rules);
+  d.scene = std::move(f.scene);
+  d.mu_key = std::move(f.mu_key);
+  d.mu_r = f.mu_r;
+  d.seeds = std::move(f.seeds);
+  d.camera.distance_radii = f.camera.distance_radii;
+  d.camera.noise_sd = f.camera.noise_sd;
+  d.camera.width_px = f.camera.width_px;
+  d.camera.height_px = f.camera.height_px;
+  d.camera.side_views = f.camera.side_views;
+  d.hidden = std::move(f.hidden);
+  d.tests = std::move(f.tests);
   return d;
 }
 

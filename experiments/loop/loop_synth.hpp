@@ -36,17 +36,10 @@
 #include <utility>
 #include <vector>
 
+#include "experiments/io/synth_design_file.hpp"
 #include "experiments/loop/loop_sim.hpp"
 
 namespace reposetwin::experiments {
-
-/// One synthetic lab test.
-struct SynthTest {
-  std::string id;
-  std::string role = "calibrate";
-  std::map<std::string, double> conditions;  // numeric condition column (docs/loop.md) -> value
-  std::map<std::string, std::string> labels;  // text condition column ("plate") -> value
-};
 
 /// A synthetic dataset's design, hidden settings included.
 struct SynthDesign {

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "experiments/io/format.hpp"
+#include "experiments/io/json_fields.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -255,6 +256,30 @@ nlohmann::json to_json(const NullScore& s) {
           {"rmse_before_deg", s.rmse_before},
           {"rmse_mu_only_deg", s.rmse_fit},
           {"loo_rmse_mu_only_deg", s.loo_rmse}};
+}
+
+CandidateScore candidate_score_from_json(const nlohmann::json& j) {
+  CandidateScore s;
+  s.name = j.at("name").get<std::string>();
+  s.coef = json_number(j.at("coef"));
+  s.coef_se = json_number(j.at("coef_se"));
+  s.t = json_number(j.at("t"));
+  s.mu_shift = json_number(j.at("mu_shift"));
+  s.mu_shift_at_bound = j.at("mu_shift_at_bound").get<bool>();
+  s.rmse_fit = json_number(j.at("rmse_fit_deg"));
+  s.loo_rmse = json_number(j.at("loo_rmse_deg"));
+  s.loo_gain = json_number(j.at("loo_gain_deg"));
+  s.explained = json_number(j.at("explained"));
+  s.significant = j.at("significant").get<bool>();
+  s.predictive = j.at("predictive").get<bool>();
+  s.accepted = j.at("accepted").get<bool>();
+  s.why = j.at("why").get<std::string>();
+  return s;
+}
+
+NullScore null_score_from_json(const nlohmann::json& j) {
+  return {json_number(j.at("mu_shift")), json_number(j.at("rmse_before_deg")),
+          json_number(j.at("rmse_mu_only_deg")), json_number(j.at("loo_rmse_mu_only_deg"))};
 }
 
 }  // namespace reposetwin::experiments

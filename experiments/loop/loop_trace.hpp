@@ -122,5 +122,8 @@ double rmse(const std::vector<double>& v);
 
 nlohmann::json to_json(const CandidateScore& s);
 nlohmann::json to_json(const NullScore& s);
+/// The scores back from their JSON (loop.json's candidates and null fields).
+CandidateScore candidate_score_from_json(const nlohmann::json& j);
+NullScore null_score_from_json(const nlohmann::json& j);
 
 }  // namespace reposetwin::experiments

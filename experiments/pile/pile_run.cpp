@@ -28,8 +28,6 @@ using nlohmann::json;
 
 namespace {
 
-constexpr int kPlate = 0, kContainer = 1;
-
 enum class Phase { kFill, kLift, kSettle, kDone };
 
 const char* phase_name(Phase p) {
@@ -428,7 +426,7 @@ class PileRunner {
     const double limit = scene_.procedure.fill_settle_max;
     if (!((ke < ctl_.ke_threshold && in_phase > 0.05) || in_phase > limit)) return;
     if (in_phase > limit) event("fill settling reached its time limit");
-    world_->set_wall_velocity(kContainer, sim::Vec3(0, 0, scene_.procedure.lift_speed));
+    world_->set_wall_velocity(kContainerWall, sim::Vec3(0, 0, scene_.procedure.lift_speed));
     ctl_.phase = Phase::kLift;
     ctl_.phase_start = ctl_.lift_start = state().time;
     ctl_.inside_last = count_inside(*world_, scene_.container);
@@ -445,7 +443,7 @@ class PileRunner {
     const std::int64_t inside = count_inside(*world_, scene_.container);
     const bool flow_stopped = inside != 0 && inside == ctl_.inside_last &&
                               t - ctl_.inside_changed > pc.clog_window &&
-                              state().walls[kContainer].offset.z() > 4.0 * ctl_.r_max;
+                              state().walls[kContainerWall].offset.z() > 4.0 * ctl_.r_max;
     const bool little_left =
         static_cast<double>(inside) <= pc.max_retained_fraction * static_cast<double>(n0_);
     if (inside == 0 || (flow_stopped && little_left)) {
@@ -455,8 +453,8 @@ class PileRunner {
         what = "flow stopped; " + std::to_string(ctl_.retained) +
                " particles stayed in the container and were lifted away with it";
       }
-      world_->set_wall_velocity(kContainer, sim::Vec3::Zero());
-      world_->set_wall_enabled(kContainer, false);
+      world_->set_wall_velocity(kContainerWall, sim::Vec3::Zero());
+      world_->set_wall_enabled(kContainerWall, false);
       ctl_.phase = Phase::kSettle;
       ctl_.phase_start = ctl_.lift_end = t;
       event(what);
@@ -503,7 +501,7 @@ class PileRunner {
     if (ctl_.phase == Phase::kLift) {
       double top = 0;
       for (const sim::Vec3& x : st.particles.x) top = std::max(top, x.z());
-      remaining += std::max(0.0, top - scene_.container.gap - st.walls[kContainer].offset.z()) /
+      remaining += std::max(0.0, top - scene_.container.gap - st.walls[kContainerWall].offset.z()) /
                    pc.lift_speed;
     }
     const double sim_rate = (st.time - (step0_ * dt)) / std::max(wall, 1e-9);

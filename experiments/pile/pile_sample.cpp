@@ -15,8 +15,6 @@ namespace reposetwin::experiments {
 
 namespace {
 
-constexpr int kContainer = 1;  // wall 1 of build_model
-
 // A uniformly distributed rotation (Shoemake 1992, Graphics Gems III, "Uniform random
 // rotations"): three uniforms give a unit quaternion uniform on the 3-sphere.
 sim::Quat random_orientation(sim::Rng& rng) {
@@ -136,8 +134,8 @@ std::vector<char> inside_mask(const sim::World& world, const ContainerConfig& c)
   const sim::State& st = world.state();
   const sim::Particles& p = st.particles;
   std::vector<char> in(p.size(), 0);
-  if (!st.walls[kContainer].enabled) return in;
-  const double z0 = c.gap + st.walls[kContainer].offset.z();
+  if (!st.walls[kContainerWall].enabled) return in;
+  const double z0 = c.gap + st.walls[kContainerWall].offset.z();
   for (std::size_t i = 0; i < in.size(); ++i) {
     const sim::Vec3& x = p.body[i] >= 0 ? st.bodies.x[static_cast<std::size_t>(p.body[i])] : p.x[i];
     const double z_rel = x.z() - z0;

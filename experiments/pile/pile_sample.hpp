@@ -45,6 +45,9 @@ void add_grain_templates(sim::Model& model, const SceneConfig& scene, const Pile
 /// A hex FNV-1a of the model's clump templates (offsets, radii, volume, inertia; "" without).
 std::string template_fingerprint(const sim::Model& model);
 
+/// The model's walls (io/scene.hpp, build_model): wall 0 is the plate, wall 1 the container.
+inline constexpr int kPlateWall = 0, kContainerWall = 1;
+
 /// Places the sample on a loose staggered lattice inside the container, bottom up; above the
 /// container's top the lattice continues in a column of the top's radius (it falls in).
 void fill_container(sim::World& world, const SceneConfig& scene, const PileSample& sample,

@@ -352,6 +352,9 @@ json paper_comparison(const std::vector<std::string>& dirs, const std::string& p
           {"caption_html", caption_html(conventions, paper)}};
 }
 
+// The comparison's section of the campaign report: its table rows and the measured-against-
+// simulated plot, made from the rows paper_comparison built above.
+
 namespace report {
 namespace {
 

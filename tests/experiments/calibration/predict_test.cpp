@@ -80,12 +80,11 @@ constexpr double kFlankAboveImage = 4.0;
 CaseFn synthetic_case(const fs::path& log, bool overlay = false) {
   return [log, overlay](const CaseSpec& s, const std::string& dir) {
     std::ofstream(log, std::ios::app) << s.id() << "\n";
-    const toml::table scene = build_case_scene(s);
-    const double mu = scene["contacts"]["rock-rock"]["rolling_friction"].value<double>().value();
-    const double plate =
-        scene["contacts"]["rock-plate"]["rolling_friction"].value<double>().value();
+    const SceneDoc scene = build_case_scene(s);
+    const double mu = scene.number("contacts.rock-rock.rolling_friction").value();
+    const double plate = scene.number("contacts.rock-plate.rolling_friction").value();
     EXPECT_DOUBLE_EQ(plate, mu);  // both calibration keys take the value
-    const double a = closed_form(mu, scene["sample"]["mass_kg"].value<double>().value(), s.seed);
+    const double a = closed_form(mu, scene.number("sample.mass_kg").value(), s.seed);
     if (overlay) {
       fs::create_directories(fs::path(dir) / "run" / "images");
       cv::imwrite((fs::path(dir) / "run" / "images" / "side_az000.measured.png").string(),
@@ -157,10 +156,9 @@ TEST(Predict, ParsesPredictEntries) {
   // A prediction run sets every calibration key on the other test's scene.
   const CaseSpec s = prediction_run(c, p, 0.25, 3);
   EXPECT_EQ(s.case_name, "predict_sample4_rolling_friction_0.25");
-  const toml::table scene = build_case_scene(s);
-  EXPECT_DOUBLE_EQ(scene["contacts"]["rock-plate"]["rolling_friction"].value<double>().value(),
-                   0.25);
-  EXPECT_DOUBLE_EQ(scene["sample"]["mass_kg"].value<double>().value(), 2.0);
+  const SceneDoc scene = build_case_scene(s);
+  EXPECT_DOUBLE_EQ(scene.number("contacts.rock-plate.rolling_friction").value(), 0.25);
+  EXPECT_DOUBLE_EQ(scene.number("sample.mass_kg").value(), 2.0);
 }
 
 TEST(Predict, BadEntriesNameFileKeyAndValue) {

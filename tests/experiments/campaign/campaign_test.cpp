@@ -95,9 +95,9 @@ CaseFn fake_case(const fs::path& log, int sleep_ms) {
       throw std::runtime_error("run folder not clean: " + dir);
     std::ofstream(fs::path(dir) / "partial.out") << "partial output\n";
     std::this_thread::sleep_for(std::chrono::milliseconds(sleep_ms));
-    const toml::table scene = build_case_scene(s);
-    const double mu = scene["rolling"]["mu_r"].value<double>().value();
-    const double mass = scene["sample"]["mass"].value<double>().value();
+    const SceneDoc scene = build_case_scene(s);
+    const double mu = scene.number("rolling.mu_r").value();
+    const double mass = scene.number("sample.mass").value();
     if (mu < 0.0) throw std::runtime_error("negative mu_r");
     return nlohmann::json{{"mu_r", mu}, {"mass", mass}, {"value", 1000.0 * mu + mass + s.seed}};
   };
@@ -157,11 +157,11 @@ TEST(Campaign, ParsesCasesCrossedWithSeeds) {
   EXPECT_EQ(c.runs[3].index, 3u);
   // Common overrides apply to every case; a case's own override wins; unquoted dotted keys work.
   const auto low = build_case_scene(c.runs[0]);
-  EXPECT_DOUBLE_EQ(low["rolling"]["mu_r"].value<double>().value(), 0.05);
-  EXPECT_DOUBLE_EQ(low["sample"]["mass"].value<double>().value(), 0.9);
+  EXPECT_DOUBLE_EQ(low.number("rolling.mu_r").value(), 0.05);
+  EXPECT_DOUBLE_EQ(low.number("sample.mass").value(), 0.9);
   const auto high = build_case_scene(c.runs[2]);
-  EXPECT_DOUBLE_EQ(high["rolling"]["mu_r"].value<double>().value(), 0.2);
-  EXPECT_DOUBLE_EQ(high["sample"]["mass"].value<double>().value(), 1.0);
+  EXPECT_DOUBLE_EQ(high.number("rolling.mu_r").value(), 0.2);
+  EXPECT_DOUBLE_EQ(high.number("sample.mass").value(), 1.0);
   EXPECT_FALSE(c.calibration.has_value());
 }
 
@@ -188,7 +188,7 @@ angle = "image_flank"
   ASSERT_EQ(c.runs.size(), 9u);
   EXPECT_EQ(c.runs[0].case_name, "mu_r_0.05");
   EXPECT_EQ(c.runs[8].id(), "mu_r_0.15/seed_3");
-  EXPECT_DOUBLE_EQ(build_case_scene(c.runs[4])["rolling"]["mu_r"].value<double>().value(), 0.1);
+  EXPECT_DOUBLE_EQ(build_case_scene(c.runs[4]).number("rolling.mu_r").value(), 0.1);
   ASSERT_TRUE(c.calibration.has_value());
   EXPECT_EQ(c.calibration->key, "contacts.rock-rock.rolling_friction");  // the scene format's
   EXPECT_DOUBLE_EQ(c.calibration->target.angle_deg, 33.47);
@@ -507,7 +507,7 @@ TEST(Campaign, ResumeRefusesChangedInputsAndAnotherCampaign) {
   const fs::path out = dir / "out";
   run_campaign(c, out.string(), fake_case(dir / "log", 1), quiet(WorkerMode::kThreads));
   auto edited = c;
-  edited.runs[1].overrides.insert_or_assign("rolling.mu_r", 0.07);
+  set_override(edited.runs[1].overrides, number_override("rolling.mu_r", 0.07));
   try {
     run_campaign(edited, out.string(), fake_case(dir / "log", 1), quiet());
     FAIL() << "expected an error";
@@ -597,9 +597,9 @@ max_simulations = 20
   // The "simulation": angle = 20 + 100 mu_r plus a small deterministic seed effect.
   CaseFn sim = [log](const CaseSpec& s, const std::string&) {
     log_start(log, s);
-    const toml::table scene = build_case_scene(s);
-    const double mu = scene["rolling"]["mu_r"].value<double>().value();
-    EXPECT_DOUBLE_EQ(scene["sample"]["mass"].value<double>().value(), 0.9);  // common override
+    const SceneDoc scene = build_case_scene(s);
+    const double mu = scene.number("rolling.mu_r").value();
+    EXPECT_DOUBLE_EQ(scene.number("sample.mass").value(), 0.9);  // common override
     return nlohmann::json{{"angle_deg", 20.0 + 100.0 * mu + (s.seed % 2 ? 0.1 : -0.1)}};
   };
   auto calibrate_in = [&](const fs::path& where) {
@@ -631,8 +631,7 @@ max_simulations = 20
   EXPECT_EQ(second.simulations, first.simulations);
 
   // A bad override in an extra run names the campaign and the run.
-  toml::table bad;
-  bad.insert("rolling.spring.k", 1.0);
+  const std::vector<Override> bad = {{"rolling.spring.k", "1.0"}};
   try {
     make_run(c, "extra", bad, 1);
     FAIL() << "expected an error";

@@ -99,13 +99,13 @@ void leave_interrupted_run(const fs::path& out, const CaseSpec& spec, std::int64
   write_json_atomic((dir / "started.json").string(),
                     {{"spec", stored_spec}, {"started", "2026-11-22T00:00:00Z"},
                      {"code_version", "earlier"}});
-  toml::table doc = build_case_scene(spec);
-  doc["scene"].as_table()->insert_or_assign("seed", static_cast<std::int64_t>(spec.seed));
+  SceneDoc doc = build_case_scene(spec);
+  doc.set_seed(spec.seed);
   RunOptions opt;
   opt.out_dir = (dir / "run").string();
   opt.progress = false;
   opt.stop_after_steps = steps;
-  ASSERT_FALSE(run_pile_test(parse_scene_table(doc, spec.scene_path), opt).has_value());
+  ASSERT_FALSE(run_pile_test(doc.config(), opt).has_value());
 }
 
 TEST(CampaignPileRun, AnInterruptedRunContinuesFromItsCheckpoint) {

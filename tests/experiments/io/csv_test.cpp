@@ -47,6 +47,15 @@ TEST(Csv, MalformedQuotesAreErrorsWithTheLine) {
   EXPECT_THROW(read_csv_file("/nonexistent/dir/x.csv"), InputError);
 }
 
+TEST(Csv, ByteOrderMarkAndLinesOfSpaces) {
+  const CsvTable t = parse_csv("\xEF\xBB\xBFid,v\r\n   \r\n\t\na,1\r\n", "t");
+  ASSERT_EQ(t.header.size(), 2u);
+  EXPECT_EQ(t.header[0], "id");  // the mark is not part of the first name
+  ASSERT_EQ(t.rows.size(), 1u);
+  EXPECT_EQ(t.rows[0].line, 4);
+  EXPECT_EQ(t.rows[0].fields[1], "1");
+}
+
 TEST(Csv, ReadsAFile) {
   const auto p = std::filesystem::temp_directory_path() / "reposetwin_csv_test.csv";
   write_file_atomic(p.string(), "# c\nsample,mu_r\n1,0.15\n");

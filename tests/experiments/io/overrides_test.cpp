@@ -1,4 +1,4 @@
-#include "experiments/io/overrides.hpp"
+#include "experiments/io/toml_edit.hpp"
 
 #include <gtest/gtest.h>
 

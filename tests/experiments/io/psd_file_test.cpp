@@ -1,6 +1,7 @@
 // Tests of the sieve-table file reader: good files (ours and the shipped defaults) parse into the
 // values written in them; every kind of bad file gives an error naming the file, field and value.
 #include "experiments/io/psd_file.hpp"
+#include "experiments/io/toml_tables.hpp"
 
 #include <gtest/gtest.h>
 

@@ -3,6 +3,7 @@
 // engine's pair constants, are written into the resolved scene, can be set with --set, and bad
 // values are errors naming the file, the key and the value. Absent keys leave a run unchanged.
 #include <gtest/gtest.h>
+#include <toml++/toml.h>
 
 #include <filesystem>
 #include <fstream>

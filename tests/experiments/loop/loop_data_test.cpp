@@ -11,6 +11,7 @@
 #include "experiments/loop/loop_data.hpp"
 #include "experiments/loop/loop_effects.hpp"
 #include "experiments/loop/loop_sim.hpp"
+#include "experiments/io/csv.hpp"
 #include "experiments/io/provenance.hpp"
 
 namespace reposetwin::experiments {
@@ -169,6 +170,38 @@ TEST(LoopData, CachedPileRunsAreKeyedByCodeVersion) {
   EXPECT_NE(base, sim_case_name("0123", {"c.d=2", "a.b=1"}, "1.0+abc"));
 }
 
+// The CSV's quoting is RFC 4180's (io/csv over libcsv): a quoted field keeps its commas and
+// doubled quotes, CRLF line ends and a spreadsheet's byte-order mark read as plain LF text, and
+// a stray or unterminated quote is an error naming the file and the line.
+TEST(LoopData, QuotingLineEndsAndByteOrderMark) {
+  const std::string head = "id,role,scene,mass_kg,W_mm,angle_deg,note\n";
+  const std::string good = head + "t1,calibrate," + kScene + ",0.006,20,30,\"a, \"\"b\"\"\"\n" +
+                           "t2,validate,\"" + kScene + "\",0.004,20,28,plain\n";
+  const LabData plain = read_lab_csv(write_csv("quoted", good));
+  ASSERT_EQ(plain.tests.size(), 2u);
+  EXPECT_EQ(plain.tests[1].scene_path, fs::path(kScene).lexically_normal().string());
+  EXPECT_EQ(plain.tests[1].line, 3);
+  std::string crlf;
+  for (char c : good) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  const LabData dos = read_lab_csv(write_csv("crlf", "\xEF\xBB\xBF" + crlf));
+  ASSERT_EQ(dos.tests.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(dos.tests[k].id, plain.tests[k].id);
+    EXPECT_EQ(dos.tests[k].overrides, plain.tests[k].overrides);
+    EXPECT_EQ(dos.tests[k].angle_deg, plain.tests[k].angle_deg);
+  }
+  // A line of spaces is blank, as an empty line is.
+  EXPECT_EQ(read_lab_csv(write_csv("spaces", head + "   \n" + good.substr(head.size()))).tests.size(),
+            2u);
+  std::string e = error_of("unterminated", head + "t1,calibrate," + kScene + ",0.006,20,30,\"open\n");
+  EXPECT_NE(e.find("unterminated.csv:2"), std::string::npos) << e;
+  e = error_of("stray", head + "t1,calibrate," + kScene + ",0.006,20,30,a\"b\n");
+  EXPECT_NE(e.find("stray.csv:2"), std::string::npos) << e;
+  // A quoted comma does not split a field: this row has five fields, not six.
+  e = error_of("count", head + "t1,calibrate," + kScene + ",0.006,\"20,30\"\n");
+  EXPECT_NE(e.find("line 2: 5 fields for 7 columns"), std::string::npos) << e;
+}
+
 TEST(LoopData, BadInputNamesTheLineAndColumn) {
   const std::string head = "id,role,scene,mass_kg,W_mm,angle_deg\n";
   auto row = [&](const std::string& rest) { return head + "t1,calibrate," + kScene + "," + rest + "\n"; };
@@ -224,13 +257,14 @@ TEST(LoopData, PhotosWithoutAUsableScaleAreRejected) {
   EXPECT_NE(e.find("column mm_per_px"), std::string::npos) << e;
 }
 
+// The loop's rows are split by the one CSV reader (io/csv.hpp): the same quote rules.
 TEST(LoopData, CsvFieldsFollowQuotes) {
-  const auto f = split_csv_line("a,\"b,c\",\"d\"\"e\",", "x");
+  const auto f = parse_csv("h1,h2,h3,h4\na,\"b,c\",\"d\"\"e\",\n", "x").rows.at(0).fields;
   ASSERT_EQ(f.size(), 4u);
   EXPECT_EQ(f[1], "b,c");
   EXPECT_EQ(f[2], "d\"e");
   EXPECT_EQ(f[3], "");
-  EXPECT_THROW(split_csv_line("a,\"b", "x"), std::invalid_argument);
+  EXPECT_THROW(parse_csv("h1,h2\na,\"b", "x"), std::invalid_argument);
 }
 
 }  // namespace

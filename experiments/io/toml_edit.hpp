@@ -1,0 +1,45 @@
+// Overrides applied to a parsed TOML document: io's own machinery behind io/scene_doc.hpp and the
+// campaign file's checks; not for use outside io/ (everything else passes io::Override and reads
+// typed SceneConfig values).
+#pragma once
+
+#include <toml++/toml.h>
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "experiments/io/overrides.hpp"
+
+namespace reposetwin::experiments {
+
+/// Sets the value at `dotted_key` in `doc` to a copy of `value`. Throws std::invalid_argument
+/// naming `origin` (e.g. "campaign.toml, case m200"), the key and the value when a parent on the
+/// path is missing or not a table/array, an array index is out of range, or the new value's type
+/// differs from the existing value's type (an integer replacing a float is converted to float).
+void apply_override(toml::table& doc, std::string_view dotted_key, const toml::node& value,
+                    std::string_view origin = {});
+
+/// Applies every entry of `overrides` (keys are dotted paths, e.g. { "sample.mass_kg" = 0.9 }) to
+/// `doc` in key order, so a whole-table override ("sample") precedes its members
+/// ("sample.mass_kg").
+void apply_overrides(toml::table& doc, const toml::table& overrides, std::string_view origin = {});
+
+/// Applies `overrides` to `doc` in order; each value text is parsed as TOML first. Throws
+/// InputError naming `origin`, the key and the value when a value is not TOML or does not apply
+/// (see apply_override).
+void apply_overrides(toml::table& doc, const std::vector<Override>& overrides,
+                     std::string_view origin);
+
+/// Renders a TOML value in TOML syntax for error messages, case names and Override::value ("0.1",
+/// "'x'", "[ 1, 2 ]"); floats are written to read back to the same bits.
+std::string toml_value_text(const toml::node& value);
+
+/// An Override from a parsed TOML value.
+Override override_of(std::string key, const toml::node& value);
+
+/// A TOML value as JSON (dates and times as their text).
+nlohmann::json toml_to_json(const toml::node& n);
+
+}  // namespace reposetwin::experiments

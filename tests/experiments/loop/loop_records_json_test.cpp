@@ -1,0 +1,157 @@
+// Every loop record back from its loop.json fields: filled with distinct values (so a swapped or
+// dropped field shows), written, read and written again, the JSON and the fields unchanged.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "experiments/loop/loop_records.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+
+using nlohmann::json;
+
+ResidualRow residual(double x) {
+  ResidualRow r{"t" + std::to_string(x), "validate", x + 0.1, x + 0.2, x + 0.3, x + 0.4,
+                x + 0.5,                 x + 0.6,    x + 0.7, {},      x + 0.8};
+  return r;
+}
+
+RefitSummary refit() {
+  return {"lift_speed", 2.5, 3.0, 0.75, 0.21, {{1.0, 0.5, 0.6, 0.2, 1.1}, {3.0, 0.9, 0.75, 0.21, 0.8}},
+          "at 5: no pile; "};
+}
+
+ChosenEffect chosen() {
+  ChosenEffect c;
+  c.refit = refit();
+  c.kind = "physics";
+  c.key = "procedure.lift_speed_m_s";
+  c.units = "x declared";
+  c.off = 1.0;
+  c.probe = 4.0;
+  c.value = 2.5;
+  c.value_se = 0.3;
+  c.t_at_limit = true;
+  c.mu_r_se = 0.01;
+  return c;
+}
+
+CandidateScore score() {
+  return {"plate_friction", 0.8, 0.1, 8.0, 0.02, true, 1.2, 1.4, 0.6, 0.7, true, false, false,
+          "t = 8 > 2; LOO gain 0.6 < 0.9"};
+}
+
+// write(read(write(x))) == write(x) through the file's text: every field loop.json holds comes
+// back (a NaN is written as null and read back as NaN).
+template <typename T, typename F>
+void expect_round_trip(const T& x, F from) {
+  const std::string text = to_json(x).dump();
+  EXPECT_EQ(to_json(from(json::parse(text))).dump(), text);
+}
+
+TEST(LoopRecordsJson, SmallRecordsRoundTrip) {
+  expect_round_trip(residual(1.0), residual_row_from_json);
+  ResidualRow both = residual(2.0);
+  both.residual_h_mm = -0.25;
+  expect_round_trip(both, residual_row_from_json);
+  expect_round_trip(RoleRmse{2.5, 1.5, 3, 2}, role_rmse_from_json);
+  expect_round_trip(RoleRmse{2.5, std::nullopt, 3, 0}, role_rmse_from_json);
+  EXPECT_FALSE(role_rmse_from_json(to_json(RoleRmse{2.5, std::nullopt, 3, 0})).validate_deg);
+  expect_round_trip(UnavailableCandidate{"fines", "the declared d_min is 0"},
+                    unavailable_candidate_from_json);
+  expect_round_trip(RefitTrialRecord{1.0, 0.5, 0.6, 0.2, 1.1}, refit_trial_record_from_json);
+  expect_round_trip(RefitFailed{"cohesion", "at 1e4: clogged; ", 5000.0}, refit_failed_from_json);
+  expect_round_trip(SimulationCounts{12, 7, 301.5}, simulation_counts_from_json);
+  expect_round_trip(score(), candidate_score_from_json);
+  expect_round_trip(NullScore{0.01, 2.0, 1.5, 1.8}, null_score_from_json);
+  const CandidateScore s = candidate_score_from_json(to_json(score()));
+  EXPECT_EQ(s.why, score().why);
+  EXPECT_TRUE(s.mu_shift_at_bound);
+  EXPECT_FALSE(s.predictive);
+}
+
+TEST(LoopRecordsJson, BaselineAndFingerprintRoundTrip) {
+  BaselineRecord b;
+  b.fit = {0.21, 0.02, 0.0, 0.0, true};
+  b.seed_sd_deg = 0.9;
+  b.seed_se_deg = 0.6;
+  b.residuals = {residual(1.0), residual(2.0)};
+  b.rmse = {1.2, 0.8, 1, 1};
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  b.curves = {{"m4", {0.1, 0.3}, {25.0, 31.0}, {{24.5, 25.5}, {30.0, nan}}, {{1001, 1002}, {1001, 1003}},
+               {0, 1}}};
+  expect_round_trip(b, baseline_record_from_json);
+  const BaselineRecord back = baseline_record_from_json(to_json(b));
+  EXPECT_TRUE(back.fit.at_edge);
+  EXPECT_TRUE(std::isnan(back.curves[0].angle_seeds_deg[1][1]));  // NaN is null and back
+  EXPECT_EQ(back.curves[0].pour_seeds[1][1], 1003u);
+
+  FingerprintRecord f{"plate_friction", 0.15, 0.3, {1.0, -0.5}, {0.2, 0.3}, {0.4, 0.1}, {-2.0, 3.0}};
+  expect_round_trip(f, fingerprint_record_from_json);
+  EXPECT_EQ(fingerprint_record_from_json(to_json(f)).d_mm, f.d_mm);
+}
+
+TEST(LoopRecordsJson, EffectsAndIterationsRoundTrip) {
+  expect_round_trip(chosen(), chosen_effect_from_json);
+  expect_round_trip(NotConfirmed{refit(), 1.7, "t = 0.2 below 1"}, not_confirmed_from_json);
+  const ChosenEffect c = chosen_effect_from_json(to_json(chosen()));
+  EXPECT_EQ(c.refit.trials.size(), 2u);
+  EXPECT_EQ(c.refit.refit_notes, "at 5: no pile; ");
+
+  IterationRecord it;
+  it.iteration = 2;
+  it.mu_r = 0.2;
+  it.null = {0.01, 2.0, 1.5, 1.8};
+  it.candidates = {score()};
+  expect_round_trip(it, iteration_record_from_json);  // chosen: null
+  it.stopped = "max_effects (1) reached";
+  it.not_confirmed = NotConfirmed{refit(), 1.7, "no gain"};
+  expect_round_trip(it, iteration_record_from_json);
+  IterationRecord failed = it;
+  failed.refit_failed = RefitFailed{"cohesion", "every pour clogged", 5000.0};
+  expect_round_trip(failed, iteration_record_from_json);
+  EXPECT_TRUE(iteration_record_from_json(to_json(failed)).refit_failed.has_value());
+  EXPECT_FALSE(iteration_record_from_json(to_json(failed)).chosen.has_value());
+  IterationRecord with = it;
+  with.chosen = chosen();
+  expect_round_trip(with, iteration_record_from_json);
+  EXPECT_TRUE(iteration_record_from_json(to_json(with)).chosen.has_value());
+}
+
+TEST(LoopRecordsJson, FinalAndProvenanceRoundTrip) {
+  FinalRecord f;
+  f.fit = {0.19, 0.015, 0.75, 0.1, false};
+  f.effects = {chosen()};
+  f.residuals = {residual(3.0)};
+  f.rmse = {0.7, std::nullopt, 1, 0};
+  expect_round_trip(f, final_record_from_json);
+
+  LoopProvenance p;
+  p.code_version = "v1-abc";
+  p.data = "/lab/measured.csv";
+  p.angle_measure = "image";
+  p.angle_method = "atan(2H/D) on renders";
+  p.lab_angle_source = "photos";
+  p.seeds = {1001, 1002};
+  p.mu_grid = {0.1, 0.3};
+  p.mu_key = "contacts.{sample}-{sample}.rolling_friction";
+  p.image = "960x720";
+  p.cache = "/cache";
+  p.finished = "2026-01-01T00:00:00Z";
+  p.max_pours = 3;
+  p.scenes = {"/a.toml", "/b.toml"};
+  expect_round_trip(p, loop_provenance_from_json);
+  p.run = json{{"code_version", "v1-abc"}, {"threads", 1}};
+  expect_round_trip(p, loop_provenance_from_json);
+}
+
+TEST(LoopRecordsJson, AMissingFieldIsAnError) {
+  json j = to_json(chosen());
+  j.erase("value_se");
+  EXPECT_THROW(chosen_effect_from_json(j), nlohmann::json::exception);
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
