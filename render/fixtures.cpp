@@ -1,6 +1,7 @@
 #include "render/fixtures.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -69,6 +70,7 @@ TriangleMesh build_fixtures(const Scene& scene, const camera::Camera& cam, View 
     const Plate& p = scene.plate;
     add_box(mesh, Eigen::Vector3d(0, 0, -0.5 * p.thickness_m), ex, ey, ez,
             Eigen::Vector3d(p.half_size_m, p.half_size_m, 0.5 * p.thickness_m), p.color, true);
+    if (p.texture > 0.0) std::fill(mesh.lit.begin(), mesh.lit.end(), std::uint8_t{2});
   }
   for (const Shell& s : scene.shells) add_shell(mesh, s);
 

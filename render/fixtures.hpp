@@ -21,7 +21,8 @@ struct TriangleMesh {
   std::vector<Eigen::Vector3d> positions;  // (3t) vertex positions, world frame [m]
   std::vector<Eigen::Vector3d> normals;    // (3t) unit normals (faces are drawn two-sided)
   std::vector<Rgb> colors;                 // (3t) base colour
-  std::vector<std::uint8_t> lit;           // (3t) 1 = shaded by the light, 0 = drawn as is
+  std::vector<std::uint8_t> lit;           // (3t) 1 = shaded by the light, 0 = drawn as is,
+                                           // 2 = shaded, with the board's grain
 };
 
 /// Appends a box with centre `center`, unit axes `a`, `b`, `c` (orthogonal) and half sizes

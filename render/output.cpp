@@ -77,6 +77,14 @@ nlohmann::json make_sidecar(const Scene& scene, const camera::Camera& cam,
       {"mm_per_px_at_axis", camera::mm_per_px_at(cam, point)},
       {"scale_point_m", vec3(point)},
       {"scale_reference", scale_ref},
+      {"look",
+       {{"backdrop_gradient", scene.backdrop.gradient},
+        {"plate_texture", scene.plate.texture},
+        {"tint_fraction", options.tint_fraction},
+        {"tone_warmth", options.tone_warmth},
+        {"shadows", options.shadows},
+        {"shadow_strength", options.shadow_strength},
+        {"supersample", options.supersample}}},
       {"provenance", provenance}};
 }
 

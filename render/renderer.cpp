@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
@@ -15,129 +16,22 @@
 
 #include "render/fixtures.hpp"
 #include "render/gl_context.hpp"
+#include "render/prepare.hpp"
+#include "render/shaders.hpp"
+#include "render/shadow_map.hpp"
 
 namespace reposetwin::render {
 namespace {
 
-// ---------------------------------------------------------------------------------------------
-// Shaders. Camera frame: x right, y down, z forward. Pixel (u, v) has its centre at integer
-// coordinates; the GL window coordinate of pixel centre (u, v) is (u + 0.5, v + 0.5), i.e. the
-// framebuffer's row 0 is the image's top row, so glReadPixels gives rows top first.
-// u_f: focal length [px] or pixels per metre; u_c: principal point [px]; u_size: canvas [px];
-// u_depth: (A, B) with ndc_z = A + B / z (perspective) or A z + B (orthographic).
+using detail::Canvas;
+using detail::make_canvas;
+using detail::sphere_colors;
+using detail::visible_spheres;
 
-constexpr const char* kCommon = R"(#version 450 core
-uniform int u_ortho;
-uniform float u_f;
-uniform vec2 u_c;
-uniform vec2 u_size;
-uniform vec2 u_depth;
-uniform vec3 u_light;
-uniform float u_ambient;
-uniform float u_diffuse;
-vec2 pixel_to_ndc(vec2 pix) { return 2.0 * (pix + 0.5) / u_size - 1.0; }
-)";
-
-constexpr const char* kSphereVertex = R"(
-layout(location = 0) in vec4 a_sphere;  // centre (camera frame) [m], radius [m]
-layout(location = 1) in vec3 a_color;
-flat out vec4 v_sphere;
-flat out vec3 v_color;
-void main() {
-  vec3 c = a_sphere.xyz;
-  float r = a_sphere.w;
-  vec2 lo, hi;
-  if (u_ortho == 1) {
-    lo = u_c + u_f * (c.xy - r);
-    hi = u_c + u_f * (c.xy + r);
-  } else {
-    // Planes through the eye tangent to the sphere bound x/z and y/z exactly.
-    float d = c.z * c.z - r * r;
-    vec2 q = sqrt(c.xy * c.xy + vec2(d));
-    lo = u_c + u_f * (c.xy * c.z - r * q) / d;
-    hi = u_c + u_f * (c.xy * c.z + r * q) / d;
-  }
-  lo -= 1.0;
-  hi += 1.0;
-  vec2 corner = vec2(float(gl_VertexID & 1), float(gl_VertexID >> 1));
-  gl_Position = vec4(pixel_to_ndc(mix(lo, hi, corner)), 0.0, 1.0);
-  v_sphere = a_sphere;
-  v_color = a_color;
-}
-)";
-
-constexpr const char* kSphereFragment = R"(
-flat in vec4 v_sphere;
-flat in vec3 v_color;
-out vec4 o_color;
-void main() {
-  vec2 n = (gl_FragCoord.xy - 0.5 - u_c) / u_f;
-  vec3 o = vec3(0.0);
-  vec3 d = vec3(0.0, 0.0, 1.0);
-  if (u_ortho == 1) {
-    o = vec3(n, 0.0);
-  } else {
-    d = normalize(vec3(n, 1.0));
-  }
-  vec3 oc = v_sphere.xyz - o;
-  float r = v_sphere.w;
-  float b = dot(oc, d);
-  vec3 p = oc - b * d;          // from the ray's closest point to the centre
-  float h2 = r * r - dot(p, p);
-  if (h2 < 0.0) discard;
-  float s = sqrt(h2);
-  float z = (o + (b - s) * d).z;
-  vec3 normal = -(p + s * d) / r;  // hit - centre, free of cancellation
-  float ndc = (u_ortho == 1) ? u_depth.x * z + u_depth.y : u_depth.x + u_depth.y / z;
-  gl_FragDepth = 0.5 * ndc + 0.5;
-  float light = u_ambient + u_diffuse * max(dot(normal, u_light), 0.0);
-  o_color = vec4(v_color * light, 1.0);
-}
-)";
-
-constexpr const char* kMeshVertex = R"(
-layout(location = 0) in vec3 a_position;  // camera frame [m]
-layout(location = 1) in vec3 a_normal;
-layout(location = 2) in vec4 a_color;     // rgb, a = 1 when lit
-out vec3 v_position;
-out vec3 v_normal;
-out vec4 v_color;
-void main() {
-  vec3 p = a_position;
-  vec2 k = 2.0 * (u_c + 0.5) / u_size - 1.0;
-  vec2 s = 2.0 * u_f / u_size;
-  if (u_ortho == 1) {
-    gl_Position = vec4(s * p.xy + k, u_depth.x * p.z + u_depth.y, 1.0);
-  } else {
-    gl_Position = vec4(s * p.xy + k * p.z, u_depth.x * p.z + u_depth.y, p.z);
-  }
-  v_position = p;
-  v_normal = a_normal;
-  v_color = a_color;
-}
-)";
-
-constexpr const char* kMeshFragment = R"(
-in vec3 v_position;
-in vec3 v_normal;
-in vec4 v_color;
-out vec4 o_color;
-void main() {
-  if (v_color.a < 0.5) {
-    o_color = vec4(v_color.rgb, 1.0);
-    return;
-  }
-  vec3 view = (u_ortho == 1) ? vec3(0.0, 0.0, 1.0) : normalize(v_position);
-  vec3 normal = normalize(v_normal);
-  if (dot(normal, view) > 0.0) normal = -normal;  // two-sided: light the side we see
-  float light = u_ambient + u_diffuse * max(dot(normal, u_light), 0.0);
-  o_color = vec4(v_color.rgb * light, 1.0);
-}
-)";
 
 GLuint compile(GLenum type, const char* body) {
   const GLuint shader = glCreateShader(type);
-  const char* sources[2] = {kCommon, body};
+  const char* sources[2] = {shaders::kCommon, body};
   glShaderSource(shader, 2, sources, nullptr);
   glCompileShader(shader);
   GLint ok = 0;
@@ -171,229 +65,11 @@ GLuint link(const char* vertex, const char* fragment) {
   return program;
 }
 
-// ---------------------------------------------------------------------------------------------
-// Colours.
-
-// SplitMix64: a counter-based hash, so particle i's tint depends only on (seed, i).
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-
-// Distinct colours for materials (Okabe-Ito palette, readable by colour-blind readers).
-constexpr std::array<Rgb, 8> kMaterialPalette = {{{230, 159, 0},
-                                                  {86, 180, 233},
-                                                  {0, 158, 115},
-                                                  {240, 228, 66},
-                                                  {0, 114, 178},
-                                                  {213, 94, 0},
-                                                  {204, 121, 167},
-                                                  {120, 115, 108}}};
-
-std::vector<std::array<float, 3>> sphere_colors(const Scene& scene, const RenderOptions& options) {
-  const std::size_t n = scene.positions.size();
-  std::vector<std::array<float, 3>> colors(n);
-  auto to_float = [](Rgb c) {
-    return std::array<float, 3>{c.r / 255.0f, c.g / 255.0f, c.b / 255.0f};
-  };
-  switch (options.shading) {
-    case Shading::kPhoto: {
-      const std::array<float, 3> base = to_float(options.particle_color);
-      const std::uint64_t seed_hash = splitmix64(options.tint_seed);
-      for (std::size_t i = 0; i < n; ++i) {
-        const double u = static_cast<double>(splitmix64(seed_hash ^ i) >> 11) * 0x1.0p-53;
-        const float k = static_cast<float>(1.0 + options.tint_fraction * (2.0 * u - 1.0));
-        for (int c = 0; c < 3; ++c) colors[i][c] = std::min(base[c] * k, 1.0f);
-      }
-      break;
-    }
-    case Shading::kBySize: {
-      const auto [lo, hi] = std::minmax_element(scene.radii.begin(), scene.radii.end());
-      cv::Mat ramp(256, 1, CV_8UC1);
-      for (int i = 0; i < 256; ++i) ramp.at<std::uint8_t>(i) = static_cast<std::uint8_t>(i);
-      cv::Mat lut;
-      cv::applyColorMap(ramp, lut, cv::COLORMAP_VIRIDIS);  // BGR
-      const double span = *hi - *lo;
-      for (std::size_t i = 0; i < n; ++i) {
-        const double t = span > 0.0 ? (scene.radii[i] - *lo) / span : 0.5;
-        const cv::Vec3b bgr = lut.at<cv::Vec3b>(static_cast<int>(std::lround(255.0 * t)));
-        colors[i] = to_float(Rgb{bgr[2], bgr[1], bgr[0]});
-      }
-      break;
-    }
-    case Shading::kByMaterial:
-      for (std::size_t i = 0; i < n; ++i) {
-        const int m = scene.material_ids.empty() ? 0 : scene.material_ids[i];
-        colors[i] =
-            to_float(kMaterialPalette[static_cast<std::size_t>(m) % kMaterialPalette.size()]);
-      }
-      break;
-  }
-  return colors;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Distortion: the undistorted canvas and the maps from output pixels to canvas pixels.
-
-struct Canvas {
-  int width = 0;
-  int height = 0;
-  double cx = 0.0;  // principal point on the canvas [px]
-  double cy = 0.0;
-  cv::Mat map_u;  // (H x W) CV_32F: canvas u for each output pixel; empty without distortion
-  cv::Mat map_v;
-};
-
-Canvas make_canvas(const camera::Camera& cam) {
-  Canvas c;
-  const int w = cam.intrinsics.width_px;
-  const int h = cam.intrinsics.height_px;
-  const double f = camera::focal_px(cam);
-  const double cx = camera::principal_u(cam);
-  const double cy = camera::principal_v(cam);
-  if (cam.intrinsics.k1 == 0.0 && cam.intrinsics.k2 == 0.0) {
-    c.width = w;
-    c.height = h;
-    c.cx = cx;
-    c.cy = cy;
-    return c;
-  }
-  std::vector<double> us(static_cast<std::size_t>(w) * h), vs(us.size());
-  double u_lo = std::numeric_limits<double>::infinity(), u_hi = -u_lo, v_lo = u_lo, v_hi = -u_lo;
-  double worst = 0.0;
-  for (int v = 0; v < h; ++v) {
-    for (int u = 0; u < w; ++u) {
-      const Eigen::Vector2d xd((u - cx) / f, (v - cy) / f);
-      const Eigen::Vector2d xu = camera::undistort_normalised(cam, xd);
-      worst = std::max(worst, (camera::distort_normalised(cam, xu) - xd).norm() * f);
-      const double cu = cx + f * xu.x(), cv_ = cy + f * xu.y();
-      us[static_cast<std::size_t>(v) * w + u] = cu;
-      vs[static_cast<std::size_t>(v) * w + u] = cv_;
-      u_lo = std::min(u_lo, cu);
-      u_hi = std::max(u_hi, cu);
-      v_lo = std::min(v_lo, cv_);
-      v_hi = std::max(v_hi, cv_);
-    }
-  }
-  const std::string field = "camera.intrinsics.k1/k2 (" + std::to_string(cam.intrinsics.k1) + ", " +
-                            std::to_string(cam.intrinsics.k2) + ")";
-  if (!(worst < 1e-3) || !std::isfinite(u_lo + u_hi + v_lo + v_hi)) {
-    throw std::invalid_argument("render: " + field +
-                                " cannot be inverted over the image (the lens model folds)");
-  }
-  const double u0 = std::floor(u_lo) - 2.0, v0 = std::floor(v_lo) - 2.0;
-  const double cw = std::ceil(u_hi) + 3.0 - u0, ch = std::ceil(v_hi) + 3.0 - v0;
-  if (cw > std::min(4.0 * w, 16384.0) || ch > std::min(4.0 * h, 16384.0)) {
-    throw std::invalid_argument("render: " + field +
-                                " is too strong: the undistorted field would need a " +
-                                std::to_string(cw) + " x " + std::to_string(ch) + " px canvas");
-  }
-  c.width = static_cast<int>(cw);
-  c.height = static_cast<int>(ch);
-  c.cx = cx - u0;
-  c.cy = cy - v0;
-  c.map_u.create(h, w, CV_32F);
-  c.map_v.create(h, w, CV_32F);
-  for (int v = 0; v < h; ++v) {
-    for (int u = 0; u < w; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * w + u;
-      c.map_u.at<float>(v, u) = static_cast<float>(us[i] - u0);
-      c.map_v.at<float>(v, u) = static_cast<float>(vs[i] - v0);
-    }
-  }
-  return c;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Occlusion culling. Most spheres of a pile are buried: drawing them costs fragment work (the
-// ray-cast depth defeats early depth tests) and changes no pixel. Per pixel we record the
-// smallest "back" depth z + r of the spheres that certainly cover its centre: the ray through it
-// hits such a sphere no deeper than that. The image of a sphere contains the disc of radius
-// f r / z about its projected centre (the image of its cross-section facing the camera), shrunk
-// here by a safety margin for the shader's float arithmetic. A sphere whose bounding box (with
-// the drawn quad's margin) holds only pixels with a recorded depth clearly below its front
-// z - r wins no depth test anywhere, so leaving it out gives the same bytes; a test checks that.
-
-struct PixelBox {
-  double u_lo, u_hi, v_lo, v_hi;
-};
-
-// The bounding box of a sphere's image on the canvas [px], as the vertex shader computes it.
-PixelBox sphere_box(const Eigen::Vector3d& c, double r, double f, double cx, double cy,
-                    bool ortho) {
-  if (ortho) {
-    return {cx + f * (c.x() - r), cx + f * (c.x() + r), cy + f * (c.y() - r), cy + f * (c.y() + r)};
-  }
-  const double d = c.z() * c.z() - r * r;
-  const double qx = std::sqrt(c.x() * c.x() + d), qy = std::sqrt(c.y() * c.y() + d);
-  return {cx + f * (c.x() * c.z() - r * qx) / d, cx + f * (c.x() * c.z() + r * qx) / d,
-          cy + f * (c.y() * c.z() - r * qy) / d, cy + f * (c.y() * c.z() + r * qy) / d};
-}
-
-std::vector<char> visible_spheres(const std::vector<Eigen::Vector3d>& centres,
-                                  const std::vector<double>& radii, const std::vector<char>& drawn,
-                                  double f, double cx, double cy, bool ortho, int width, int height,
-                                  double depth_range) {
-  constexpr double kMarginPx = 0.02;     // inner disc shrink [px]
-  constexpr double kDepthMargin = 1e-5;  // depth gap required to cull, relative to the larger
-                                         // of the sphere's depth and the depth range [-]
-  std::vector<float> occluder(static_cast<std::size_t>(width) * height,
-                              std::numeric_limits<float>::infinity());
-  const std::size_t n = centres.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!drawn[i]) continue;
-    const Eigen::Vector3d& c = centres[i];
-    const double scale = ortho ? f : f / c.z();
-    const double u0 = cx + scale * c.x(), v0 = cy + scale * c.y();
-    const double rho = scale * radii[i] * (1.0 - 1e-4) - kMarginPx;
-    if (rho <= 0.0) continue;
-    // Rounded up, so a float compared below is never nearer than the true back depth.
-    const float back = std::nextafter(static_cast<float>(c.z() + radii[i]),
-                                      std::numeric_limits<float>::infinity());
-    const int v_lo = std::max(static_cast<int>(std::ceil(v0 - rho)), 0);
-    const int v_hi = std::min(static_cast<int>(std::floor(v0 + rho)), height - 1);
-    for (int v = v_lo; v <= v_hi; ++v) {
-      const double w = std::sqrt(std::max(rho * rho - (v - v0) * (v - v0), 0.0));
-      const int u_lo = std::max(static_cast<int>(std::ceil(u0 - w)), 0);
-      const int u_hi = std::min(static_cast<int>(std::floor(u0 + w)), width - 1);
-      float* row = occluder.data() + static_cast<std::size_t>(v) * width;
-      for (int u = u_lo; u <= u_hi; ++u) row[u] = std::min(row[u], back);
-    }
-  }
-  std::vector<char> visible(n, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!drawn[i]) continue;
-    const PixelBox b = sphere_box(centres[i], radii[i], f, cx, cy, ortho);
-    const double front_exact = centres[i].z() - radii[i];
-    const double front_d =
-        front_exact - kDepthMargin * std::max(std::abs(front_exact), depth_range);
-    const float front = static_cast<float>(front_d);
-    // The drawn quad's one-pixel margin, plus one for rounding.
-    const int u_lo = std::max(static_cast<int>(std::floor(b.u_lo - 2.0)), 0);
-    const int u_hi = std::min(static_cast<int>(std::ceil(b.u_hi + 2.0)), width - 1);
-    const int v_lo = std::max(static_cast<int>(std::floor(b.v_lo - 2.0)), 0);
-    const int v_hi = std::min(static_cast<int>(std::ceil(b.v_hi + 2.0)), height - 1);
-    bool hidden = u_lo <= u_hi && v_lo <= v_hi;  // off the canvas: leave it to the clipper
-    for (int v = v_lo; v <= v_hi && hidden; ++v) {
-      const float* row = occluder.data() + static_cast<std::size_t>(v) * width;
-      for (int u = u_lo; u <= u_hi; ++u) {
-        if (!(row[u] < front)) {
-          hidden = false;
-          break;
-        }
-      }
-    }
-    visible[i] = hidden ? 0 : 1;
-  }
-  return visible;
-}
-
 struct MeshVertex {
   float position[3];
   float normal[3];
   float color[4];
+  float world[3];
 };
 
 struct SphereInstance {
@@ -413,6 +89,8 @@ struct Renderer::Impl {
   GLuint mesh_vao = 0, mesh_vbo = 0;
   GLuint fbo = 0, color_rb = 0, depth_rb = 0;
   int fbo_width = 0, fbo_height = 0;
+  GLuint shadow_fbo = 0, shadow_tex = 0;
+  int shadow_size = 0;
   RenderProfile profile;
   // The last canvas and distortion maps, reused while the lens and resolution stay the same
   // (the maps cost one iterative undistortion per pixel).
@@ -436,8 +114,8 @@ struct Renderer::Impl {
   }
 
   Impl() {
-    sphere_program = link(kSphereVertex, kSphereFragment);
-    mesh_program = link(kMeshVertex, kMeshFragment);
+    sphere_program = link(shaders::kSphereVertex, shaders::kSphereFragment);
+    mesh_program = link(shaders::kMeshVertex, shaders::kMeshFragment);
 
     glGenVertexArrays(1, &sphere_vao);
     glGenBuffers(1, &sphere_vbo);
@@ -465,6 +143,9 @@ struct Renderer::Impl {
     glEnableVertexAttribArray(2);
     glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, sizeof(MeshVertex),
                           reinterpret_cast<void*>(offsetof(MeshVertex, color)));
+    glEnableVertexAttribArray(3);
+    glVertexAttribPointer(3, 3, GL_FLOAT, GL_FALSE, sizeof(MeshVertex),
+                          reinterpret_cast<void*>(offsetof(MeshVertex, world)));
     glBindVertexArray(0);
     check("renderer set-up");
   }
@@ -477,6 +158,8 @@ struct Renderer::Impl {
     }
     glDeleteRenderbuffers(1, &color_rb);
     glDeleteRenderbuffers(1, &depth_rb);
+    glDeleteTextures(1, &shadow_tex);
+    glDeleteFramebuffers(1, &shadow_fbo);
     glDeleteFramebuffers(1, &fbo);
     glDeleteBuffers(1, &sphere_vbo);
     glDeleteBuffers(1, &mesh_vbo);
@@ -539,6 +222,124 @@ struct Renderer::Impl {
                 static_cast<float>(light.y()), static_cast<float>(light.z()));
     glUniform1f(glGetUniformLocation(program, "u_ambient"), static_cast<float>(options.ambient));
     glUniform1f(glGetUniformLocation(program, "u_diffuse"), static_cast<float>(options.diffuse));
+  }
+
+  // The shadow and board-grain uniforms of a main-pass program; `light` is null without shadows.
+  void set_look_uniforms(GLuint program, const Scene& scene, const RenderOptions& options,
+                         const LightFrame* light, double softness_m) {
+    glUseProgram(program);
+    glUniform1f(glGetUniformLocation(program, "u_texture"),
+                static_cast<float>(scene.plate.texture));
+    glUniform1f(glGetUniformLocation(program, "u_texture_scale"),
+                static_cast<float>(scene.plate.texture_scale_m));
+    glUniform1i(glGetUniformLocation(program, "u_shadows"), light ? 1 : 0);
+    if (!light) return;
+    const Eigen::Matrix4f m = light->to_light().cast<float>();
+    // Eigen stores column-major, as GL expects without transposition.
+    glUniformMatrix4fv(glGetUniformLocation(program, "u_to_light"), 1, GL_FALSE, m.data());
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, shadow_tex);
+    glUniform1i(glGetUniformLocation(program, "u_shadow_map"), 0);
+    glUniform1i(glGetUniformLocation(program, "u_map_size"), light->size);
+    const double texel_m = 1.0 / light->f;
+    glUniform1f(glGetUniformLocation(program, "u_shadow_radius"),
+                static_cast<float>(softness_m * light->f));
+    // Against a sphere shadowing itself: offset along the normal and a depth bias, each about
+    // two texels plus half the penumbra (the taps reach that far over the curved surface).
+    const double slack_m = 2.0 * texel_m + 0.5 * softness_m;
+    glUniform1f(glGetUniformLocation(program, "u_shadow_offset"), static_cast<float>(slack_m));
+    glUniform1f(glGetUniformLocation(program, "u_shadow_bias"),
+                static_cast<float>(slack_m / (light->far_z - light->near_z)));
+    glUniform1f(glGetUniformLocation(program, "u_shadow_strength"),
+                static_cast<float>(options.shadow_strength));
+  }
+
+  // The light's depth map of the spheres (camera-frame centres): an orthographic view along the
+  // light drawn by the sphere program into a depth texture.
+  LightFrame draw_shadow_map(const std::vector<Eigen::Vector3d>& centres,
+                             const std::vector<double>& radii, const RenderOptions& options) {
+    const int size = options.shadow_map_px;
+    const LightFrame light = frame_light(centres, radii, options.light_direction_camera, size);
+    if (shadow_fbo == 0) {
+      glGenFramebuffers(1, &shadow_fbo);
+      glGenTextures(1, &shadow_tex);
+    }
+    if (shadow_size != size) {
+      glBindTexture(GL_TEXTURE_2D, shadow_tex);
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT32F, size, size, 0, GL_DEPTH_COMPONENT,
+                   GL_FLOAT, nullptr);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_NONE);
+      glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, shadow_tex, 0);
+      glDrawBuffer(GL_NONE);
+      glReadBuffer(GL_NONE);
+      if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw std::runtime_error("render: shadow map framebuffer of " + std::to_string(size) +
+                                 " px is incomplete");
+      shadow_size = size;
+    }
+    std::vector<SphereInstance> instances(centres.size());
+    for (std::size_t i = 0; i < centres.size(); ++i) {
+      const Eigen::Vector3d c = light.rotation * centres[i];
+      instances[i] = {{static_cast<float>(c.x()), static_cast<float>(c.y()),
+                       static_cast<float>(c.z()), static_cast<float>(radii[i])},
+                      {0.0f, 0.0f, 0.0f}};
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+    glViewport(0, 0, size, size);
+    glClearDepth(1.0);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glClear(GL_DEPTH_BUFFER_BIT);
+    const double depth = light.far_z - light.near_z;
+    glUseProgram(sphere_program);
+    glUniform1i(glGetUniformLocation(sphere_program, "u_ortho"), 1);
+    glUniform1i(glGetUniformLocation(sphere_program, "u_shadows"), 0);
+    glUniform1f(glGetUniformLocation(sphere_program, "u_f"), static_cast<float>(light.f));
+    glUniform2f(glGetUniformLocation(sphere_program, "u_c"), static_cast<float>(light.cx),
+                static_cast<float>(light.cy));
+    glUniform2f(glGetUniformLocation(sphere_program, "u_size"), static_cast<float>(size),
+                static_cast<float>(size));
+    glUniform2f(glGetUniformLocation(sphere_program, "u_depth"), static_cast<float>(2.0 / depth),
+                static_cast<float>(-(light.far_z + light.near_z) / depth));
+    glBindVertexArray(sphere_vao);
+    glBindBuffer(GL_ARRAY_BUFFER, sphere_vbo);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(instances.size() * sizeof(SphereInstance)),
+                 instances.data(), GL_STREAM_DRAW);
+    glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(instances.size()));
+    glBindVertexArray(0);
+    check("shadow map");
+    return light;
+  }
+
+  // The backdrop paper: a quad just inside the far plane over the whole canvas, its colour
+  // affine in the pixel position (so the two triangles interpolate it exactly), drawn first
+  // without depth so everything else covers it.
+  std::vector<MeshVertex> backdrop_quad(const Backdrop& bd, const camera::Camera& cam,
+                                        const Canvas& canvas, double far_z) const {
+    const bool ortho = cam.projection == camera::Projection::kOrthographic;
+    const double f = camera::focal_px(cam);
+    const double z = ortho ? far_z : 0.999 * far_z;
+    const double w = canvas.width, h = canvas.height;
+    auto corner = [&](double u, double v) {
+      const double scale = ortho ? 1.0 / f : z / f;
+      const double k = 1.0 + bd.gradient * (0.5 - 0.5 * (u / w + v / h));
+      MeshVertex m{};
+      m.position[0] = static_cast<float>((u - canvas.cx) * scale);
+      m.position[1] = static_cast<float>((v - canvas.cy) * scale);
+      m.position[2] = static_cast<float>(z);
+      m.normal[2] = -1.0f;
+      m.color[0] = static_cast<float>(std::min(bd.color.r * k / 255.0, 1.0));
+      m.color[1] = static_cast<float>(std::min(bd.color.g * k / 255.0, 1.0));
+      m.color[2] = static_cast<float>(std::min(bd.color.b * k / 255.0, 1.0));
+      m.color[3] = 0.0f;
+      return m;
+    };
+    const MeshVertex a = corner(-1.0, -1.0), b = corner(w + 1.0, -1.0), c = corner(w + 1.0, h + 1.0),
+                     d = corner(-1.0, h + 1.0);
+    return {a, b, c, a, c, d};
   }
 
   cv::Mat render(const Scene& scene, const camera::Camera& cam, const RenderOptions& options) {
@@ -618,10 +419,23 @@ struct Renderer::Impl {
           {static_cast<float>(mesh_cam[i].x()), static_cast<float>(mesh_cam[i].y()),
            static_cast<float>(mesh_cam[i].z())},
           {static_cast<float>(nrm.x()), static_cast<float>(nrm.y()), static_cast<float>(nrm.z())},
-          {col.r / 255.0f, col.g / 255.0f, col.b / 255.0f, fixtures.lit[i] ? 1.0f : 0.0f}};
+          {col.r / 255.0f, col.g / 255.0f, col.b / 255.0f, static_cast<float>(fixtures.lit[i])},
+          {static_cast<float>(fixtures.positions[i].x()),
+           static_cast<float>(fixtures.positions[i].y()),
+           static_cast<float>(fixtures.positions[i].z())}};
     }
 
     const auto t1 = std::chrono::steady_clock::now();
+    std::optional<LightFrame> light;
+    double softness_m = options.shadow_softness_m;
+    if (options.shadows) {
+      if (softness_m == 0.0) {
+        double sum = 0.0;
+        for (const double r : scene.radii) sum += r;
+        softness_m = 0.5 * sum / static_cast<double>(n);
+      }
+      light = draw_shadow_map(centres, scene.radii, options);
+    }
     ensure_framebuffer(canvas.width, canvas.height);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo);
     glViewport(0, 0, canvas.width, canvas.height);
@@ -634,8 +448,21 @@ struct Renderer::Impl {
     glDisable(GL_BLEND);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
 
+    set_uniforms(mesh_program, cam, canvas, near_z, far_z, options);
+    set_look_uniforms(mesh_program, scene, options, light ? &*light : nullptr, softness_m);
+    if (scene.backdrop.gradient > 0.0) {
+      const std::vector<MeshVertex> quad = backdrop_quad(scene.backdrop, cam, canvas, far_z);
+      glDisable(GL_DEPTH_TEST);
+      glDepthMask(GL_FALSE);
+      glBindVertexArray(mesh_vao);
+      glBindBuffer(GL_ARRAY_BUFFER, mesh_vbo);
+      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(quad.size() * sizeof(MeshVertex)),
+                   quad.data(), GL_STREAM_DRAW);
+      glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(quad.size()));
+      glDepthMask(GL_TRUE);
+      glEnable(GL_DEPTH_TEST);
+    }
     if (!vertices.empty()) {
-      set_uniforms(mesh_program, cam, canvas, near_z, far_z, options);
       glBindVertexArray(mesh_vao);
       glBindBuffer(GL_ARRAY_BUFFER, mesh_vbo);
       glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(MeshVertex)),
@@ -644,6 +471,7 @@ struct Renderer::Impl {
     }
     if (!instances.empty()) {
       set_uniforms(sphere_program, cam, canvas, near_z, far_z, options);
+      set_look_uniforms(sphere_program, scene, options, light ? &*light : nullptr, softness_m);
       glBindVertexArray(sphere_vao);
       glBindBuffer(GL_ARRAY_BUFFER, sphere_vbo);
       glBufferData(GL_ARRAY_BUFFER,

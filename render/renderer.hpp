@@ -19,6 +19,13 @@
 // the discs certainly covered by nearer spheres) are not drawn: most of a pile seen from the side.
 // The test suite checks that this changes no byte.
 //
+// The lab-photograph look (scene.hpp's apply_lab_look) adds, still in one GL pass each: a
+// backdrop paper graded across the frame (a quad drawn first), a board grain on the plate
+// (procedural noise in the mesh shader, shaders.hpp), a tone per grain (per body for clumps) and
+// soft shadows by shadow mapping: the spheres are first drawn by the same ray-casting shader
+// into a depth texture seen along the light (shadow_map.hpp), then every fragment of the main
+// pass counts the lit taps of a fixed percentage-closer kernel around itself in that map.
+//
 // Determinism: fixed draw order, no blending, per-particle tints from a counter-based hash of
 // (seed, index); llvmpipe's tiled rasterisation is deterministic, so the same input gives the
 // same bytes.

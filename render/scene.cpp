@@ -72,6 +72,15 @@ void validate(const Scene& scene) {
     const double r = scene.radii[i];
     if (!(r > 0.0) || !std::isfinite(r)) require_positive(r, "scene.radii[" + str(i) + "]");
   }
+  if (!scene.body_ids.empty() && scene.body_ids.size() != n) {
+    fail("scene.body_ids",
+         "has " + str(scene.body_ids.size()) + " entries but scene.positions has " + str(n));
+  }
+  if (!(scene.plate.texture >= 0.0 && scene.plate.texture <= 0.5))
+    fail("scene.plate.texture", "must be in [0, 0.5], got " + str(scene.plate.texture));
+  require_positive(scene.plate.texture_scale_m, "scene.plate.texture_scale_m");
+  if (!(scene.backdrop.gradient >= 0.0 && scene.backdrop.gradient <= 0.5))
+    fail("scene.backdrop.gradient", "must be in [0, 0.5], got " + str(scene.backdrop.gradient));
   for (std::size_t i = 0; i < scene.material_ids.size(); ++i) {
     if (scene.material_ids[i] < 0)
       fail("scene.material_ids[" + str(i) + "]",
@@ -117,6 +126,12 @@ void validate(const Scene& scene, const camera::Camera& cam, const RenderOptions
   validate_color_fraction(options.tint_fraction, "options.tint_fraction");
   if (options.supersample < 1 || options.supersample > 8)
     fail("options.supersample", "must be in [1, 8], got " + str(options.supersample));
+  validate_color_fraction(options.tone_warmth, "options.tone_warmth");
+  validate_color_fraction(options.shadow_strength, "options.shadow_strength");
+  if (!(options.shadow_softness_m >= 0.0) || !std::isfinite(options.shadow_softness_m))
+    fail("options.shadow_softness_m", "must be non-negative, got " + str(options.shadow_softness_m));
+  if (options.shadow_map_px < 64 || options.shadow_map_px > 8192)
+    fail("options.shadow_map_px", "must be in [64, 8192], got " + str(options.shadow_map_px));
   validate_color_fraction(options.ambient, "options.ambient");
   validate_color_fraction(options.diffuse, "options.diffuse");
   if (!options.light_direction_camera.allFinite() || options.light_direction_camera.norm() < 1e-12)
@@ -152,6 +167,17 @@ void validate(const Scene& scene, const camera::Camera& cam, const RenderOptions
              str(pile.center_m) + " projects outside the image" +
              (uv ? " at (" + str(uv->x()) + ", " + str(uv->y()) + ") px" : std::string()));
   }
+}
+
+void apply_lab_look(Scene& scene, RenderOptions& options) {
+  // Figures chosen by eye against the lab's photographs, each small enough that vision's
+  // flat field, Otsu split and coverage edges read the pile as they read the plain renders
+  // (tests/experiments/photos measure the same cones both ways).
+  scene.backdrop.gradient = 0.12;
+  scene.plate.texture = 0.06;
+  options.tint_fraction = 0.16;
+  options.tone_warmth = 0.35;
+  options.shadows = true;
 }
 
 std::optional<Eigen::Vector3d> scale_reference_center(const Scene& scene, const camera::Camera& cam,
@@ -194,15 +220,36 @@ camera::Camera lab_side_camera(const Scene& scene, const LabCameraSettings& sett
     half_width = std::max(half_width, std::abs(offset) + 0.5e-3 * sr.width_mm);
     top = std::max(top, 1e-3 * sr.band_mm * sr.count);
   }
-  const double half_height =
-      std::max(top - settings.side_height_m, settings.side_height_m - bottom);
+  for (const Shell& shell : scene.shells) {  // a funnel in the picture is in it whole
+    half_width = std::max({half_width, shell.r_bottom_m, shell.r_top_m});
+    top = std::max(top, shell.z_top_m);
+  }
   const double aspect = static_cast<double>(settings.width_px) / settings.height_px;
   // The pile's front is nearer than the axis by up to a pile radius: it looks that much larger.
   const double near_factor = distance / (distance - pile.radius_m);
-  const double field =
-      settings.margin * near_factor * std::max(2.0 * half_width, 2.0 * half_height * aspect);
-  return camera::side_view(distance, field, settings.side_height_m, settings.azimuth_deg,
-                           settings.width_px, settings.height_px);
+  const double h = settings.side_height_m;
+  if (!settings.shift_lens) {
+    const double half_height = std::max(top - h, h - bottom);
+    const double field =
+        settings.margin * near_factor * std::max(2.0 * half_width, 2.0 * half_height * aspect);
+    return camera::side_view(distance, field, h, settings.azimuth_deg, settings.width_px,
+                             settings.height_px);
+  }
+  // Vertical extent as tangents of the viewing angle: the pile's top at its front, the bar's at
+  // the axis, and the plate's underside at its near edge (which looks lowest).
+  const double near_plate = scene.plate.enabled
+                                ? std::max(distance - scene.plate.half_size_m, 0.25 * distance)
+                                : distance - pile.radius_m;
+  const double t_top = std::max((pile.z_max_m - h) / (distance - pile.radius_m), (top - h) / distance);
+  const double t_bottom = std::min((bottom - h) / near_plate, (pile.z_min_m - h) / distance);
+  const double field = settings.margin * std::max(near_factor * 2.0 * half_width,
+                                                  distance * (t_top - t_bottom) * aspect);
+  camera::Camera cam = camera::side_view(distance, field, h, settings.azimuth_deg,
+                                         settings.width_px, settings.height_px);
+  // Image rows grow downwards: the middle of the extent goes to the middle row.
+  cam.intrinsics.cy_px =
+      0.5 * (settings.height_px - 1) + camera::focal_px(cam) * 0.5 * (t_top + t_bottom);
+  return cam;
 }
 
 camera::Camera lab_top_camera(const Scene& scene, const LabCameraSettings& settings) {
@@ -216,20 +263,40 @@ camera::Camera lab_top_camera(const Scene& scene, const LabCameraSettings& setti
   if (settings.height_px <= 0)
     fail("settings.height_px", "must be positive, got " + str(settings.height_px));
   const PileExtent pile = pile_extent(scene);
-  const double top = std::max(pile.z_max_m, 0.0);
+  double top = std::max(pile.z_max_m, 0.0);
+  for (const Shell& shell : scene.shells) top = std::max(top, shell.z_top_m);
   const double height = top + settings.distance_radii * pile.radius_m;
   const ScaleReference& sr = scene.scale_reference;
-  double half_extent = pile.radius_m;
+  const double aspect = static_cast<double>(settings.width_px) / settings.height_px;
+  const double near_factor = height / (height - top);
+  // The pile's footprint and the card on the plate, as a box (x_lo, y_lo, x_hi, y_hi) [m].
+  Eigen::Vector4d box(-pile.radius_m, -pile.radius_m, pile.radius_m, pile.radius_m);
   if (sr.enabled) {
     const Eigen::Vector2d c =
         sr.card_center_m.value_or(Eigen::Vector2d(pile.radius_m + 0.035, 0.0));
     const double half_card = 0.5e-3 * sr.band_mm * sr.squares;
-    half_extent = std::max(half_extent, c.cwiseAbs().maxCoeff() + half_card);
+    box.head<2>() = box.head<2>().cwiseMin(c - Eigen::Vector2d::Constant(half_card));
+    box.tail<2>() = box.tail<2>().cwiseMax(c + Eigen::Vector2d::Constant(half_card));
   }
-  const double aspect = static_cast<double>(settings.width_px) / settings.height_px;
-  const double near_factor = height / (height - top);
-  const double field = settings.margin * near_factor * 2.0 * half_extent * std::max(1.0, aspect);
-  return camera::top_view(height, field, settings.width_px, settings.height_px);
+  for (const Shell& shell : scene.shells) {
+    const double r = std::max(shell.r_bottom_m, shell.r_top_m);
+    box.head<2>() = box.head<2>().cwiseMin(Eigen::Vector2d::Constant(-r));
+    box.tail<2>() = box.tail<2>().cwiseMax(Eigen::Vector2d::Constant(r));
+  }
+  if (!settings.shift_lens) {
+    const double half_extent = box.cwiseAbs().maxCoeff();
+    const double field = settings.margin * near_factor * 2.0 * half_extent * std::max(1.0, aspect);
+    return camera::top_view(height, field, settings.width_px, settings.height_px);
+  }
+  const double field = settings.margin * near_factor *
+                       std::max(box.z() - box.x(), (box.w() - box.y()) * aspect);
+  camera::Camera cam = camera::top_view(height, field, settings.width_px, settings.height_px);
+  // The box's centre to the image centre (the principal point moves with the image).
+  const Eigen::Vector3d mid(0.5 * (box.x() + box.z()), 0.5 * (box.y() + box.w()), 0.0);
+  const Eigen::Vector2d uv = *camera::project(cam, mid);
+  cam.intrinsics.cx_px = camera::principal_u(cam) + 0.5 * (settings.width_px - 1) - uv.x();
+  cam.intrinsics.cy_px = camera::principal_v(cam) + 0.5 * (settings.height_px - 1) - uv.y();
+  return cam;
 }
 
 }  // namespace reposetwin::render

@@ -31,6 +31,11 @@ struct Plate {
   double half_size_m = 0.25;   // half the side of the square board [m]
   double thickness_m = 0.015;  // board thickness below z = 0 [m]
   Rgb color{70, 80, 95};       // dark blue-grey
+  // A board's surface grain: a procedural, deterministic pattern (hashed value noise of the
+  // world position, stretched along x like the fibres of a laminated board) that changes the
+  // brightness by up to +-texture; 0 = a uniform board [-].
+  double texture = 0.0;
+  double texture_scale_m = 0.004;  // size of the pattern's features across the fibres [m]
 };
 
 /// An open axisymmetric shell about the z axis: a conical frustum (funnel) or a cylinder
@@ -44,8 +49,13 @@ struct Shell {
 };
 
 /// The backdrop behind the scene (lab backdrop paper); it fills every pixel nothing else covers.
+/// A lab's backdrop paper is lit from one side and falls off away from the light: `gradient` is
+/// the brightness change from the image's top-left corner to its bottom-right (top-left
+/// lighter by gradient / 2, bottom-right darker by as much), linear in the pixel position, so a
+/// flat field fitted by vision removes it exactly; 0 = flat [-].
 struct Backdrop {
   Rgb color{225, 225, 220};
+  double gradient = 0.0;
 };
 
 /// The scale reference (marker.md): in the side view a bar of black and white bands standing on
@@ -72,6 +82,9 @@ struct Scene {
   std::vector<Eigen::Vector3d> positions;  // (n) sphere centres [m]
   std::vector<double> radii;               // (n) sphere radii [m]
   std::vector<int> material_ids;           // (n) material of each sphere, or empty (all 0)
+  // (n) the rigid body each sphere belongs to, or empty (every sphere its own body): the
+  // components of one clump share one tone, as one grain of rock has one colour.
+  std::vector<std::int64_t> body_ids;
   Plate plate;
   std::vector<Shell> shells;  // funnel and/or column; may be empty
   Backdrop backdrop;
@@ -100,10 +113,24 @@ struct RenderOptions {
   double diffuse = 0.65;              // diffuse light fraction [-]
   Eigen::Vector3d light_direction_camera{-0.35, -0.6, -1.0};  // towards the light, camera frame
                                                               // (x right, y down, z forward)
+  double tone_warmth = 0.0;  // per-grain hue spread (kPhoto): each grain is shifted between its
+                             // grey and a brown of the same brightness by a hashed fraction of
+                             // this (rock varies warm, never blue, so it stays unlike the plate)
+  // Soft shadows of the spheres (on each other, the plate and the funnel) from the light, by
+  // shadow mapping with a fixed percentage-closer kernel: deterministic like the rest.
+  bool shadows = false;
+  double shadow_strength = 0.75;   // fraction of the direct light a full shadow removes [-]
+  double shadow_softness_m = 0.0;  // penumbra radius [m]; 0 = half the mean sphere radius
+  int shadow_map_px = 2048;        // shadow map side [px]
   bool occlusion_culling = true;  // skip spheres provably hidden by others: same bytes, faster
   int supersample = 1;  // render at this many times the resolution, then average s x s blocks:
                         // anti-aliased edges like a photograph's; 1 = exact binary coverage [-]
 };
+
+/// The lab-photograph look (backdrop gradient, board grain, varied grain tones, soft shadows)
+/// applied to a scene and its options; the geometry is unchanged. The plain defaults stay for
+/// tests that need exact binary silhouettes and flat colours.
+void apply_lab_look(Scene& scene, RenderOptions& options);
 
 /// The extent of the pile of spheres (bounding cylinder about the z axis).
 struct PileExtent {
@@ -138,18 +165,25 @@ struct LabCameraSettings {
   int height_px = 1080;
   double distance_radii = 12.0;  // camera distance from the axis (side) or above the pile top
                                  // (top), in pile radii; at least 10 [-]
-  double margin = 1.25;          // field of view / extent of pile, fixtures and scale ref [-]
+  double margin = 1.1;           // field of view / extent of pile, fixtures and scale ref [-]
   double side_height_m = 0.0;    // side camera height; 0 = level with the plate [m]
+  // Side view: frame only what stands between the plate's underside and the top of the pile
+  // or bar, by shifting the principal point (a shift lens, as architecture and lab
+  // photographers use), so the camera stays level and sees the plate edge-on while the pile
+  // fills the frame; false = centred on the camera height (half the frame below the plate).
+  // Top view: likewise the pile and the card beside it, together, fill the frame.
+  bool shift_lens = true;
   double azimuth_deg = 0.0;      // side camera azimuth about z, 0 = from -y [deg]
 };
 
 /// The lab's side view of this scene (camera::side_view): level with the plate, distance
 /// max(10, distance_radii) pile radii from the axis, field of view just covering the pile, the
-/// plate band and the scale bar with `margin` to spare.
+/// plate band and the scale bar with `margin` to spare (see shift_lens).
 camera::Camera lab_side_camera(const Scene& scene, const LabCameraSettings& settings = {});
 
 /// The lab's top view of this scene (camera::top_view): straight down the axis from
-/// distance_radii pile radii above the pile top, field covering the pile and the scale card.
+/// distance_radii pile radii above the pile top, field covering the pile and the scale card
+/// (see shift_lens).
 camera::Camera lab_top_camera(const Scene& scene, const LabCameraSettings& settings = {});
 
 }  // namespace reposetwin::render

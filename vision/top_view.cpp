@@ -121,6 +121,22 @@ TopProfile measure_on_levels(const cv::Mat& gray, const cv::Point2d& seed, const
     throw std::runtime_error(where + ": the footprint touches the border of the " +
                              std::string(s.roi.empty() ? "image" : "region of interest") +
                              " (no footprint, or it is cut)");
+  // A speckled footprint (grains with dark gaps or shadows between them, seen large) can fall
+  // apart on one cue into one region per grain; the seed's region is then one grain, not the
+  // footprint, and stands among many like it. The footprint holds most of the pile-like pixels
+  // around it (strays are few), so a region holding less than half of those in a box three
+  // times its size is a fragment, and the next cue is tried.
+  {
+    const cv::Rect around =
+        cv::Rect(box.x - box.width, box.y - box.height, 3 * box.width, 3 * box.height) &
+        cv::Rect(0, 0, roi.width, roi.height);
+    const double inside = cv::countNonZero(mask(around) & blob(around));
+    const double all = cv::countNonZero(mask(around));
+    if (inside < 0.5 * all)
+      throw std::runtime_error(where + ": the region at the seed is a fragment (" +
+                               str(std::round(100.0 * inside / all)) +
+                               "% of the pile-like pixels around it), not the footprint");
+  }
   const cv::Moments mo = cv::moments(blob, true);
   if (mo.m00 < 50.0)
     throw std::runtime_error(where + ": no footprint found (blob of " + str(mo.m00) + " px)");

@@ -19,6 +19,10 @@
 // speckled, a board is uniform: local standard deviation). So the same segmentation and
 // sub-pixel outline are run on these cues in turn (grey level, then colour, then texture) and
 // the first that isolates a footprint not touching the border is used; its name is reported.
+// A cue also fails when the seed's region is only a fragment: grains seen large, with shadowed
+// gaps between them, split the grey-level region into one region per grain, and the seed's one
+// grain does not touch the border either. The footprint holds most of the pile-like pixels in a
+// box three times its size (strays are few); a fragment holds a small share of them.
 #pragma once
 
 #include <opencv2/core.hpp>

@@ -331,6 +331,7 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
     o.frame_interval = t->number("frame_interval_s", o.frame_interval);
     o.checkpoint_interval = t->number("checkpoint_interval_s", o.checkpoint_interval);
     o.progress_interval = t->number("progress_interval_s", o.progress_interval);
+    o.contact_forces = t->boolean("contact_forces", o.contact_forces);
     if (o.frame_interval < 0)
       t->fail("frame_interval_s", "= " + num(o.frame_interval) + " must not be negative");
     if (!(o.checkpoint_interval > 0))

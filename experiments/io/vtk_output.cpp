@@ -1,6 +1,9 @@
 #include "experiments/io/vtk_output.hpp"
 
 #include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkFieldData.h>
+#include <vtkStringArray.h>
 #include <vtkDoubleArray.h>
 #include <vtkIntArray.h>
 #include <vtkNew.h>
@@ -11,7 +14,9 @@
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
 
+#include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -20,10 +25,95 @@
 #include <stdexcept>
 
 #include "experiments/io/provenance.hpp"
+#include "sim/world.hpp"
 
 namespace reposetwin::experiments {
 
 namespace {
+
+// One per-particle point array: its VTK name, components and how to read particle i.
+struct PointArray {
+  const char* name;
+  int components;
+  void (*get)(const sim::Particles& p, std::size_t i, double* out);
+};
+
+// The particle snapshot's point arrays. Integer arrays are written as integers below.
+constexpr PointArray kPointArrays[] = {
+    {"radius", 1, [](const sim::Particles& p, std::size_t i, double* o) { o[0] = p.radius[i]; }},
+    {"diameter", 1,
+     [](const sim::Particles& p, std::size_t i, double* o) { o[0] = 2.0 * p.radius[i]; }},
+    {"velocity", 3,
+     [](const sim::Particles& p, std::size_t i, double* o) {
+       for (int k = 0; k < 3; ++k) o[k] = p.v[i][k];
+     }},
+    {"angular_velocity", 3,
+     [](const sim::Particles& p, std::size_t i, double* o) {
+       for (int k = 0; k < 3; ++k) o[k] = p.w[i][k];
+     }},
+};
+
+void write_poly(const std::string& path, vtkPolyData* poly, const char* what) {
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  const std::string tmp = path + ".tmp.vtp";
+  vtkNew<vtkXMLPolyDataWriter> writer;
+  writer->SetFileName(tmp.c_str());
+  writer->SetInputData(poly);
+  writer->SetDataModeToAppended();
+  writer->EncodeAppendedDataOff();
+  if (writer->Write() != 1)
+    throw std::runtime_error(path + ": VTK could not write the " + std::string(what));
+  std::filesystem::rename(tmp, path);
+}
+
+void add_field(vtkFieldData* fd, const char* name, std::initializer_list<double> values) {
+  vtkNew<vtkDoubleArray> a;
+  a->SetName(name);
+  for (const double v : values) a->InsertNextValue(v);
+  fd->AddArray(a);
+}
+
+void add_field(vtkFieldData* fd, const char* name, const std::vector<std::string>& values) {
+  vtkNew<vtkStringArray> a;
+  a->SetName(name);
+  for (const std::string& v : values) a->InsertNextValue(v);
+  fd->AddArray(a);
+}
+
+void write_frame_info(vtkFieldData* fd, const FrameInfo& info) {
+  add_field(fd, "time_s", {info.time_s});
+  add_field(fd, "phase", std::vector<std::string>{info.phase});
+  add_field(fd, "settled", {info.settled ? 1.0 : 0.0});
+  add_field(fd, "plate", {info.plate_half_size_m, info.plate_thickness_m});
+  if (info.container) {
+    const ShellPlacement& c = *info.container;
+    add_field(fd, "container", {c.z_bottom_m, c.z_top_m, c.r_bottom_m, c.r_top_m});
+  }
+  add_field(fd, "material_names", info.material_names);
+}
+
+std::optional<FrameInfo> read_frame_info(vtkFieldData* fd) {
+  auto* time = fd ? vtkDoubleArray::SafeDownCast(fd->GetAbstractArray("time_s")) : nullptr;
+  if (!time) return std::nullopt;
+  FrameInfo info;
+  info.time_s = time->GetValue(0);
+  if (auto* phase = vtkStringArray::SafeDownCast(fd->GetAbstractArray("phase")))
+    info.phase = phase->GetValue(0);
+  if (auto* settled = vtkDoubleArray::SafeDownCast(fd->GetAbstractArray("settled")))
+    info.settled = settled->GetValue(0) != 0.0;
+  if (auto* plate = vtkDoubleArray::SafeDownCast(fd->GetAbstractArray("plate"));
+      plate && plate->GetNumberOfValues() == 2) {
+    info.plate_half_size_m = plate->GetValue(0);
+    info.plate_thickness_m = plate->GetValue(1);
+  }
+  if (auto* c = vtkDoubleArray::SafeDownCast(fd->GetAbstractArray("container"));
+      c && c->GetNumberOfValues() == 4)
+    info.container = ShellPlacement{c->GetValue(0), c->GetValue(1), c->GetValue(2), c->GetValue(3)};
+  if (auto* names = vtkStringArray::SafeDownCast(fd->GetAbstractArray("material_names")))
+    for (vtkIdType k = 0; k < names->GetNumberOfValues(); ++k)
+      info.material_names.push_back(names->GetValue(k));
+  return info;
+}
 
 // The clump arrays of the design note, added to `poly`.
 void add_body_arrays(vtkPolyData* poly, const sim::Particles& p, const sim::Bodies& bodies) {
@@ -59,54 +149,120 @@ void add_body_arrays(vtkPolyData* poly, const sim::Particles& p, const sim::Bodi
 
 }  // namespace
 
-void write_vtp(const std::string& path, const sim::Particles& p, const sim::Bodies* bodies) {
+void write_vtp(const std::string& path, const sim::Particles& p, const FrameInfo& info,
+               const sim::Bodies* bodies) {
   const vtkIdType n = static_cast<vtkIdType>(p.size());
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
   points->SetNumberOfPoints(n);
   vtkNew<vtkCellArray> verts;
-  vtkNew<vtkDoubleArray> radius, velocity, omega;
-  vtkNew<vtkIntArray> material;
-  vtkNew<vtkTypeInt64Array> id;
-  radius->SetName("radius");
-  velocity->SetName("velocity");
-  velocity->SetNumberOfComponents(3);
-  omega->SetName("angular_velocity");
-  omega->SetNumberOfComponents(3);
-  material->SetName("material");
-  id->SetName("id");
-  radius->SetNumberOfTuples(n);
-  velocity->SetNumberOfTuples(n);
-  omega->SetNumberOfTuples(n);
-  material->SetNumberOfTuples(n);
-  id->SetNumberOfTuples(n);
+  vtkNew<vtkPolyData> poly;
   for (vtkIdType i = 0; i < n; ++i) {
     points->SetPoint(i, p.x[i].data());
     verts->InsertNextCell(1, &i);
-    radius->SetValue(i, p.radius[i]);
-    velocity->SetTuple(i, p.v[i].data());
-    omega->SetTuple(i, p.w[i].data());
+  }
+  for (const PointArray& spec : kPointArrays) {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(spec.name);
+    a->SetNumberOfComponents(spec.components);
+    a->SetNumberOfTuples(n);
+    double v[3];
+    for (vtkIdType i = 0; i < n; ++i) {
+      spec.get(p, static_cast<std::size_t>(i), v);
+      a->SetTuple(i, v);
+    }
+    poly->GetPointData()->AddArray(a);
+  }
+  vtkNew<vtkIntArray> material;
+  vtkNew<vtkTypeInt64Array> id;
+  material->SetName("material");
+  id->SetName("id");
+  material->SetNumberOfTuples(n);
+  id->SetNumberOfTuples(n);
+  for (vtkIdType i = 0; i < n; ++i) {
     material->SetValue(i, p.material[i]);
     id->SetValue(i, p.id[i]);
   }
-  vtkNew<vtkPolyData> poly;
   poly->SetPoints(points);
   poly->SetVerts(verts);
-  poly->GetPointData()->AddArray(radius);
-  poly->GetPointData()->AddArray(velocity);
-  poly->GetPointData()->AddArray(omega);
   poly->GetPointData()->AddArray(material);
   poly->GetPointData()->AddArray(id);
   if (bodies && bodies->size() > 0) add_body_arrays(poly, p, *bodies);
-  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
-  const std::string tmp = path + ".tmp.vtp";
-  vtkNew<vtkXMLPolyDataWriter> writer;
-  writer->SetFileName(tmp.c_str());
-  writer->SetInputData(poly);
-  writer->SetDataModeToAppended();
-  writer->EncodeAppendedDataOff();
-  if (writer->Write() != 1) throw std::runtime_error(path + ": VTK could not write the snapshot");
-  std::filesystem::rename(tmp, path);
+  write_frame_info(poly->GetFieldData(), info);
+  write_poly(path, poly, "snapshot");
+}
+
+void write_plate_vtp(const std::string& path, const FrameInfo& info) {
+  const double h = info.plate_half_size_m, t = info.plate_thickness_m;
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  for (int k = 0; k < 8; ++k)  // corner k: bit 0 = +x, bit 1 = +y, bit 2 = top (z = 0)
+    points->InsertNextPoint(k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? 0.0 : -t);
+  // Six faces, each wound outwards.
+  const vtkIdType faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                 {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  vtkNew<vtkCellArray> quads;
+  for (const auto& f : faces) quads->InsertNextCell(4, f);
+  vtkNew<vtkPolyData> poly;
+  poly->SetPoints(points);
+  poly->SetPolys(quads);
+  write_poly(path, poly, "plate");
+}
+
+void write_shell_vtp(const std::string& path, const ShellPlacement& shell, int segments) {
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  vtkNew<vtkCellArray> quads;
+  for (int i = 0; i < segments; ++i) {
+    const double a = 2.0 * std::numbers::pi * i / segments;
+    points->InsertNextPoint(shell.r_bottom_m * std::cos(a), shell.r_bottom_m * std::sin(a),
+                            shell.z_bottom_m);
+    points->InsertNextPoint(shell.r_top_m * std::cos(a), shell.r_top_m * std::sin(a),
+                            shell.z_top_m);
+  }
+  for (int i = 0; i < segments; ++i) {
+    const vtkIdType j = (i + 1) % segments;
+    const vtkIdType q[4] = {2 * i, 2 * j, 2 * j + 1, 2 * i + 1};
+    quads->InsertNextCell(4, q);
+  }
+  vtkNew<vtkPolyData> poly;
+  poly->SetPoints(points);
+  poly->SetPolys(quads);
+  write_poly(path, poly, "shell");
+}
+
+std::size_t write_contacts_vtp(const std::string& path, const sim::State& st) {
+  const sim::NeighborList& nl = st.neighbors;
+  const sim::Particles& p = st.particles;
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  vtkNew<vtkCellArray> lines;
+  vtkNew<vtkDoubleArray> force, magnitude;
+  force->SetName("force");
+  force->SetNumberOfComponents(3);
+  magnitude->SetName("force_magnitude");
+  // The reactions are those of the last force phase, stored by incoming slot.
+  const bool usable = st.forces_valid && nl.start.size() == p.size() + 1 &&
+                      nl.in_slot.size() == nl.pairs() && st.reaction.size() >= nl.pairs();
+  for (std::size_t i = 0; usable && i < p.size(); ++i) {
+    for (std::int32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
+      const sim::Vec3& f = st.reaction[static_cast<std::size_t>(nl.in_slot[k])].force;
+      if (f.squaredNorm() == 0.0) continue;  // not touching
+      const vtkIdType a = points->InsertNextPoint(p.x[i].data());
+      const vtkIdType b = points->InsertNextPoint(p.x[static_cast<std::size_t>(nl.second[k])].data());
+      const vtkIdType ends[2] = {a, b};
+      lines->InsertNextCell(2, ends);
+      force->InsertNextTuple(f.data());
+      magnitude->InsertNextValue(f.norm());
+    }
+  }
+  vtkNew<vtkPolyData> poly;
+  poly->SetPoints(points);
+  poly->SetLines(lines);
+  poly->GetCellData()->AddArray(force);
+  poly->GetCellData()->AddArray(magnitude);
+  write_poly(path, poly, "contacts");
+  return static_cast<std::size_t>(lines->GetNumberOfCells());
 }
 
 SnapshotParticles read_vtp(const std::string& path) {
@@ -131,16 +287,22 @@ SnapshotParticles read_vtp(const std::string& path) {
     s.material.push_back(material ? material->GetValue(i) : 0);
     if (body) s.body.push_back(static_cast<std::int64_t>(body->GetComponent(i, 0)));
   }
+  s.info = read_frame_info(poly->GetFieldData());
   return s;
 }
 
 void PvdSeries::add(double time, const std::string& relative_file) {
-  entries_.emplace_back(time, relative_file);
+  add(time, std::vector<std::string>{relative_file});
+}
+
+void PvdSeries::add(double time, const std::vector<std::string>& relative_files) {
+  for (std::size_t k = 0; k < relative_files.size(); ++k)
+    entries_.push_back({time, static_cast<int>(k), relative_files[k]});
   write();
 }
 
 void PvdSeries::truncate_after(double time) {
-  while (!entries_.empty() && entries_.back().first > time) entries_.pop_back();
+  while (!entries_.empty() && entries_.back().time > time) entries_.pop_back();
   write();
 }
 
@@ -148,11 +310,11 @@ void PvdSeries::load() {
   entries_.clear();
   std::ifstream in(path_);
   if (!in) return;
-  const std::regex re(R"re(timestep="([^"]+)"[^>]*file="([^"]+)")re");
+  const std::regex re(R"re(timestep="([^"]+)"\s+part="([0-9]+)"\s+file="([^"]+)")re");
   std::string line;
   while (std::getline(in, line)) {
     std::smatch m;
-    if (std::regex_search(line, m, re)) entries_.emplace_back(std::stod(m[1]), m[2]);
+    if (std::regex_search(line, m, re)) entries_.push_back({std::stod(m[1]), std::stoi(m[2]), m[3]});
   }
 }
 
@@ -161,9 +323,9 @@ void PvdSeries::write() const {
   os << "<?xml version=\"1.0\"?>\n"
      << "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
      << "  <Collection>\n";
-  for (const auto& [t, f] : entries_)
-    os << "    <DataSet timestep=\"" << std::setprecision(10) << t << "\" part=\"0\" file=\"" << f
-       << "\"/>\n";
+  for (const Entry& e : entries_)
+    os << "    <DataSet timestep=\"" << std::setprecision(10) << e.time << "\" part=\"" << e.part
+       << "\" file=\"" << e.file << "\"/>\n";
   os << "  </Collection>\n</VTKFile>\n";
   write_file_atomic(path_, os.str());
 }

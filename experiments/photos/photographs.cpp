@@ -1,10 +1,12 @@
 #include "experiments/photos/photographs.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "experiments/io/input_error.hpp"
 #include "render/output.hpp"
@@ -29,6 +31,12 @@ render::Scene centred_pile_scene(const PileSpheres& pile, std::optional<Eigen::V
   if (shift) *shift = *centre;
   scene.radii = pile.radius;
   scene.material_ids = pile.material;
+  // A clump's components share their grain's tone; a loose sphere (-1) is a grain of its own.
+  if (!pile.body.empty()) {
+    scene.body_ids.resize(pile.body.size());
+    for (std::size_t i = 0; i < pile.body.size(); ++i)
+      scene.body_ids[i] = pile.body[i] >= 0 ? pile.body[i] : -static_cast<std::int64_t>(i) - 1;
+  }
   // The plate is as large as the lab's board must be: wider than the pile's footprint.
   scene.plate.half_size_m =
       std::max(scene.plate.half_size_m, 1.3 * render::pile_extent(scene).radius_m);
@@ -58,6 +66,33 @@ void add_noise(cv::Mat& image, double sd, cv::RNG& rng) {
   f.convertTo(image, image.type());  // saturating
 }
 
+// A lab picks a ruler to suit its pile: the bar stands a little taller than the pile, so the
+// frame, which must hold both, is filled by the pile. At least 7 bands (4 black): the bottom
+// black band meets the dark plate edge and merges with it in vision's dark class, and vision's
+// bar finder needs 3 black bands clear of it.
+int bar_bands(const render::Scene& scene) {
+  const double band = 1e-3 * scene.scale_reference.band_mm;
+  const double height = std::max(render::pile_extent(scene).z_max_m, 0.0);
+  const int bands = static_cast<int>(std::ceil(1.2 * height / band));
+  return std::clamp(bands, 7, std::max(scene.scale_reference.count, 7));
+}
+
+// The warning across the top of an overlay, white on red, readable at any image size.
+cv::Mat stamp_warning(cv::Mat overlay, const std::string& warning) {
+  if (warning.empty()) return overlay;
+  const double scale = std::max(0.5, overlay.cols / 1600.0);
+  const int thickness = std::max(1, static_cast<int>(2 * scale));
+  int baseline = 0;
+  const cv::Size text =
+      cv::getTextSize(warning, cv::FONT_HERSHEY_SIMPLEX, scale, thickness, &baseline);
+  const int pad = static_cast<int>(10 * scale);
+  cv::rectangle(overlay, cv::Rect(0, 0, overlay.cols, text.height + baseline + 2 * pad),
+                cv::Scalar(40, 40, 200), cv::FILLED);
+  cv::putText(overlay, warning, cv::Point(pad, pad + text.height), cv::FONT_HERSHEY_SIMPLEX, scale,
+              cv::Scalar(255, 255, 255), thickness, cv::LINE_AA);
+  return overlay;
+}
+
 std::string side_stem(double azimuth_deg) {
   char stem[32];
   std::snprintf(stem, sizeof stem, "side_az%03d", static_cast<int>(azimuth_deg + 0.5));
@@ -71,11 +106,15 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
                            std::optional<Eigen::Vector2d> centre) {
   if (s.side_views < 1) throw InputError("images: side_views must be at least 1");
   PilePhotos photos;
+  if (!s.shells.empty()) centre = Eigen::Vector2d::Zero();
   render::Scene scene = centred_pile_scene(pile, centre, &photos.centre_shift);
   scene.scale_reference.enabled = s.scale_reference;
+  scene.scale_reference.count = bar_bands(scene);
+  scene.shells = s.shells;
   if (s.write_photos || s.write_overlays) fs::create_directories(out_dir);
   render::Renderer renderer;
   render::RenderOptions options;
+  if (s.lab_look) render::apply_lab_look(scene, options);
   options.tint_seed = s.tint_seed;
   options.view = render::View::kSide;
   render::LabCameraSettings cams;
@@ -102,7 +141,8 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
       view.measured = vision::measure_side_camera(image, declared, {}, base + ".png");
       measured.push_back(*view.measured);
       if (s.write_overlays)
-        cv::imwrite(base + ".measured.png", vision::draw_side_overlay(image, *view.measured));
+        cv::imwrite(base + ".measured.png",
+                    stamp_warning(vision::draw_side_overlay(image, *view.measured), s.warning));
     } catch (const std::exception& e) {
       if (s.views_must_measure) throw;
       view.error = e.what();  // one view of a small pile may defeat vision; the others count
@@ -122,7 +162,8 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
   try {
     photos.top = vision::measure_top_camera(image, cam, {}, base + ".png");
     if (s.write_overlays)
-      cv::imwrite(base + ".measured.png", vision::draw_top_overlay(image, *photos.top));
+      cv::imwrite(base + ".measured.png",
+                  stamp_warning(vision::draw_top_overlay(image, *photos.top), s.warning));
   } catch (const std::exception& e) {
     // The footprint is a secondary quantity (the angle comes from the side views): a top view
     // that cannot be measured (a thin, patchy pile) is reported, not fatal.

@@ -48,6 +48,15 @@ struct PhotoSettings {
   bool write_photos = true;                 // write each PNG with its sidecar [-]
   bool write_overlays = true;               // write each measured view's overlay PNG [-]
   bool views_must_measure = true;           // a side view vision cannot measure is an error [-]
+  bool lab_look = true;  // backdrop gradient, board grain, grain tones, soft shadows
+                         // (render::apply_lab_look); false = the plain flat render [-]
+  // Fixtures standing in the picture besides the plate (the funnel of a mid-run frame, at its
+  // position then), on the world z axis; with any, the pile is not re-centred, since the
+  // funnel's axis is the pile's [m].
+  std::vector<render::Shell> shells;
+  // Not empty: the picture is not of a settled pile (a mid-run frame); the sentence is stamped
+  // on every overlay, so no overlay passes for a pile's measurement.
+  std::string warning;
 };
 
 /// One side view.

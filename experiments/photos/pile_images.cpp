@@ -1,6 +1,8 @@
 #include "experiments/photos/pile_images.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 
 #include "experiments/io/input_error.hpp"
@@ -26,17 +28,10 @@ json measurement_json(const PilePhotos& photos, const ImageSettings& settings,
     j["azimuth_deg"] = v.azimuth_deg;
     views.push_back(j);
   }
-  const std::optional<vision::SideSummary>& summary = photos.summary;
   json out = {{"method",
                "vision on renders: theta = atan(2H/D) per side view, perspective "
                "corrected with the render's camera; mean and spread over azimuths"},
               {"side_views", views},
-              {"side_summary", summary ? vision::to_json(*summary) : json()},
-              {"theta_deg", summary ? json(summary->theta_deg.mean) : json()},
-              {"theta_sd_deg", summary ? json(summary->theta_deg.stddev) : json()},
-              {"height_m", summary ? json(summary->height_m.mean) : json()},
-              {"diameter_m", summary ? json(summary->diameter_m.mean) : json()},
-              {"flank_deg", summary ? json(summary->flank_deg.mean) : json()},
               {"pile_centre_shift_m", {photos.centre_shift.x(), photos.centre_shift.y()}},
               {"settings",
                {{"width_px", settings.width_px},
@@ -47,6 +42,23 @@ json measurement_json(const PilePhotos& photos, const ImageSettings& settings,
                 {"k1", settings.k1}}},
               {"provenance", provenance},
               {"gl", photos.gl}};
+  if (photos.summary) {
+    const vision::SideSummary& summary = *photos.summary;
+    out["side_summary"] = vision::to_json(summary);
+    // A picture that is not the settled pile has no headline: its numbers stay in the views,
+    // under the warning, and nothing reads them as the pile's angle.
+    if (settings.warning.empty()) {
+      out["theta_deg"] = summary.theta_deg.mean;
+      out["theta_sd_deg"] = summary.theta_deg.stddev;
+      out["height_m"] = summary.height_m.mean;
+      out["diameter_m"] = summary.diameter_m.mean;
+      out["flank_deg"] = summary.flank_deg.mean;
+    }
+  }
+  if (!settings.warning.empty()) {
+    out["settled_pile"] = false;
+    out["warning"] = settings.warning;
+  }
   if (photos.top_taken) {
     out["top"] = photos.top ? vision::to_json(*photos.top) : json{{"error", photos.top_error}};
     out["top"]["image"] = "top.png";
@@ -89,6 +101,35 @@ json photograph_run(const PileRun& run, const PileSpheres& spheres, const std::s
   return render_and_measure(spheres, out.string(), settings, prov, centre);
 }
 
+// A frame of the series is photographed as it was: the funnel where it stood, and, unless the
+// run recorded it as the settled pile, with a warning instead of a headline, and views vision
+// cannot read (a pile still pouring) recorded rather than fatal.
+void frame_settings(const SnapshotParticles& p, const std::string& snapshot, ImageSettings& s) {
+  if (p.info && p.info->container) {
+    // The engine's wall is the funnel's inner surface; the camera sees the outer one, a steel
+    // sheet's thickness out (grains touching the wall overlap it by a hair and would show
+    // through a surface drawn exactly there).
+    constexpr double kWallThickness = 1.5e-3;  // [m]
+    const ShellPlacement& c = *p.info->container;
+    const double out =
+        kWallThickness * std::hypot(1.0, (c.r_top_m - c.r_bottom_m) / (c.z_top_m - c.z_bottom_m));
+    render::Shell shell;
+    shell.z_bottom_m = c.z_bottom_m;
+    shell.z_top_m = c.z_top_m;
+    shell.r_bottom_m = c.r_bottom_m + out;
+    shell.r_top_m = c.r_top_m + out;
+    s.shells.push_back(shell);
+  }
+  if (p.info && p.info->settled) return;
+  char when[96] = "";
+  if (p.info)
+    std::snprintf(when, sizeof when, " (t = %.3f s, phase %s)", p.info->time_s,
+                  p.info->phase.c_str());
+  s.warning = "NOT A SETTLED PILE: " + fs::path(snapshot).filename().string() + when +
+              (p.info ? "" : " carries no phase record") + "; not a measurement";
+  s.views_must_measure = false;
+}
+
 }  // namespace
 
 json render_and_measure_run(const PileRun& run, const std::string& run_dir,
@@ -115,8 +156,10 @@ json render_and_measure_run(const std::string& run_dir, const ImageSettings& set
                      "); nothing to photograph");
   const SnapshotParticles p = read_vtp(snapshot.string());
   const fs::path out = frame.empty() ? dir / "images" : dir / "images" / snapshot.stem();
+  ImageSettings s = settings;
+  if (!frame.empty()) frame_settings(p, snapshot.string(), s);
   return photograph_run(run, PileSpheres{p.x, p.radius, p.material, p.body}, run_dir,
-                        snapshot.filename().string(), out, settings);
+                        snapshot.filename().string(), out, s);
 }
 
 }  // namespace reposetwin::experiments

@@ -522,11 +522,52 @@ class PileRunner {
     write_json_atomic(path("controller.json").string(), c.to_json());
   }
 
-  void write_frame() {
-    char name[64];
-    std::snprintf(name, sizeof name, "frames/frame_%05d.vtp", ctl_.frames++);
-    write_vtp((out_ / name).string(), state().particles, &state().bodies);
-    series_->add(state().time, name);
+  // What a frame shows besides the particles: the phase, whether it is the settled pile (the
+  // final state of a run that ended settling), the container where it stands, the plate and
+  // the material names.
+  FrameInfo frame_info(bool final_state) const {
+    const sim::State& st = state();
+    const ContainerConfig& c = scene_.container;
+    FrameInfo info;
+    info.time_s = st.time;
+    info.phase = phase_name(ctl_.phase);
+    info.settled = final_state && (ctl_.stop.reason == StopReason::kSettled ||
+                                   ctl_.stop.reason == StopReason::kSettleTimeLimit);
+    if (st.walls[kContainerWall].enabled) {
+      const double z0 = c.gap + st.walls[kContainerWall].offset.z();
+      info.container =
+          ShellPlacement{z0, z0 + c.height, 0.5 * c.bottom_diameter, 0.5 * c.top_diameter};
+    }
+    // The engine's plate is a plane; ParaView shows the lab's board, wider than the funnel.
+    info.plate_half_size_m = std::max(0.25, c.top_diameter);
+    for (const sim::Material& m : world_->model().materials) info.material_names.push_back(m.name);
+    return info;
+  }
+
+  // One time step of the series: the particles, the plate, the container while it stands and,
+  // if asked, the contacts, as parts of one ParaView time step.
+  void write_frame(bool final_state = false) {
+    const int k = ctl_.frames++;
+    auto name = [k](const char* stem) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "frames/%s_%05d.vtp", stem, k);
+      return std::string(buf);
+    };
+    const FrameInfo info = frame_info(final_state);
+    std::vector<std::string> parts = {name("frame")};
+    write_vtp((out_ / parts[0]).string(), state().particles, info, &state().bodies);
+    if (!fs::exists(out_ / "frames" / "plate.vtp"))
+      write_plate_vtp((out_ / "frames" / "plate.vtp").string(), info);
+    parts.push_back("frames/plate.vtp");
+    if (info.container) {
+      parts.push_back(name("container"));
+      write_shell_vtp((out_ / parts.back()).string(), *info.container);
+    }
+    if (scene_.output.contact_forces) {
+      parts.push_back(name("contacts"));
+      write_contacts_vtp((out_ / parts.back()).string(), state());
+    }
+    series_->add(state().time, parts);
   }
 
   // The pile measured from the particle positions, the final files and the record.
@@ -540,8 +581,8 @@ class PileRunner {
       r.pile = clogged_pile(ctl_.inside_last, ctl_.stop.detail);
     else
       r.pile = pile_measure(sim::measure_pile(st.particles.x, st.particles.radius, scene_.pile));
-    write_vtp(path("final.vtp").string(), st.particles, &st.bodies);
-    write_frame();  // the series always ends with the final state
+    write_vtp(path("final.vtp").string(), st.particles, frame_info(true), &st.bodies);
+    write_frame(true);  // the series always ends with the final state
     save_checkpoint();
     const double wall_total = ctl_.wall_seconds + wall_now();
     r.provenance = provenance_;

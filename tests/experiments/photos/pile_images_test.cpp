@@ -121,6 +121,11 @@ TEST(RenderedConeViews, AViewVisionCannotMeasureIsListedWithItsError) {
 #include "experiments/pile/pile_run.hpp"
 #include "experiments/io/scene.hpp"
 #include "experiments/io/input_error.hpp"
+#include "experiments/io/vtk_output.hpp"
+
+#include <cstdio>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 namespace reposetwin::experiments {
 namespace {
@@ -144,6 +149,87 @@ TEST(RenderRun, FinalPileAndChosenFramesArePhotographed) {
   EXPECT_TRUE(fs::exists(dir / "run" / "images" / "frame_00000" / "measurement.json"));
   EXPECT_THROW(render_and_measure_run(opt.out_dir, s, "frames/nope.vtp"), InputError);
   EXPECT_THROW(render_and_measure_run((dir / "empty").string(), s), InputError);
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
+
+namespace reposetwin::experiments {
+namespace {
+
+// A frame of the series that is not the settled pile is photographed with the funnel where it
+// stood and gets a warning instead of a headline angle; the run's last frame (the settled pile)
+// gets neither.
+TEST(RenderRun, MidRunFrameShowsTheFunnelAndIsNoMeasurement) {
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_render_frames";
+  fs::remove_all(dir);
+  RunOptions opt;
+  opt.out_dir = (dir / "run").string();
+  opt.progress = false;
+  const std::string text =
+      std::string(test_support::kTinyScene) + "[output]\nframe_interval_s = 0.05\n";
+  run_pile_test(parse_scene_text(text, (dir / "tiny.toml").string()), opt);
+  ImageSettings s;
+  s.width_px = 640;
+  s.height_px = 360;
+  s.side_views = 1;
+  s.top_view = false;
+  const nlohmann::json first = render_and_measure_run(opt.out_dir, s, "frames/frame_00000.vtp");
+  EXPECT_FALSE(first.contains("theta_deg"));
+  EXPECT_EQ(first["settled_pile"], false);
+  EXPECT_NE(first["warning"].get<std::string>().find("NOT A SETTLED PILE"), std::string::npos);
+  EXPECT_NE(first["warning"].get<std::string>().find("phase fill"), std::string::npos);
+  // The funnel is in the picture: the frame rendered without it differs where it stands.
+  const cv::Mat with = cv::imread((dir / "run/images/frame_00000/side_az000.png").string());
+  ASSERT_FALSE(with.empty());
+  const SnapshotParticles p = read_vtp((dir / "run/frames/frame_00000.vtp").string());
+  ASSERT_TRUE(p.info && p.info->container);
+  ImageSettings bare = s;
+  bare.views_must_measure = false;  // a pouring frame may defeat vision; only its picture counts
+  render_and_measure(PileSpheres{p.x, p.radius, p.material}, (dir / "bare").string(), bare,
+                     nlohmann::json::object(), Eigen::Vector2d::Zero());
+  const cv::Mat without = cv::imread((dir / "bare/side_az000.png").string());
+  ASSERT_EQ(with.size(), without.size());
+  EXPECT_GT(cv::norm(with, without, cv::NORM_L1), 1000.0);
+  // The last frame is the settled pile: a measurement, no warning.
+  auto frame_name = [](int k) {
+    char name[64];
+    std::snprintf(name, sizeof name, "frames/frame_%05d.vtp", k);
+    return std::string(name);
+  };
+  int last = 0;
+  while (fs::exists(dir / "run" / frame_name(last + 1))) ++last;
+  const std::string name = frame_name(last);
+  ASSERT_GT(last, 1);
+  ASSERT_TRUE(read_vtp((dir / "run" / name).string()).info->settled) << name;
+  const nlohmann::json settled = render_and_measure_run(opt.out_dir, s, name);
+  EXPECT_FALSE(settled.contains("warning"));
+  EXPECT_GT(settled["theta_deg"].get<double>(), 5.0);
+}
+
+// The lab-photograph look (backdrop gradient, board grain, grain tones, soft shadows) is read by
+// vision as the plain render is: the same cone, both ways, within 0.5 deg and 2% in H and D.
+// At the lab's full 1920 x 1080 the grains of a pile filling the frame are 20-30 px across and
+// their shadowed gaps split the top view's grey-level region into one region per grain (the
+// seed's grain read as a 5 mm footprint): vision must see through that as well.
+TEST(RenderedConeLook, LabLookMeasuresLikeThePlainRender) {
+  const double big_r = 0.04;
+  const double h = big_r * std::tan(30.0 * 3.14159265358979 / 180.0);
+  const test_support::Spheres c = test_support::make_cone(h, big_r, 0.002, -0.001, 1e-3, 5, 0.3);
+  ImageSettings s;  // the lab's 1920 x 1080
+  s.side_views = 1;
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_cone_look";
+  fs::remove_all(dir);
+  const std::vector<int> mats(c.r.size(), 0);
+  const nlohmann::json look = render_and_measure(c.x, c.r, mats, (dir / "look").string(), s);
+  s.lab_look = false;
+  const nlohmann::json plain = render_and_measure(c.x, c.r, mats, (dir / "plain").string(), s);
+  EXPECT_NEAR(look["theta_deg"].get<double>(), plain["theta_deg"].get<double>(), 0.5);
+  EXPECT_NEAR(look["height_m"].get<double>(), plain["height_m"].get<double>(), 0.02 * h);
+  EXPECT_NEAR(look["diameter_m"].get<double>(), plain["diameter_m"].get<double>(),
+              0.02 * 2 * big_r);
+  EXPECT_NEAR(look["top"]["D_circle_m"].get<double>(), plain["top"]["D_circle_m"].get<double>(),
+              0.02 * 2 * big_r);
 }
 
 }  // namespace
