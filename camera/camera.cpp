@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -11,6 +12,10 @@
 
 namespace reposetwin::camera {
 namespace {
+
+// The largest image side a sidecar may declare [px]: the largest camera sensors are about 15,000
+// pixels wide; the bound keeps a typo (10^12) from wrapping an int.
+constexpr std::int64_t kMaxSidePx = 100000;
 
 [[noreturn]] void fail(const std::string& where, const std::string& field, const std::string& what) {
   throw std::invalid_argument(where + ": " + field + " " + what);
@@ -243,10 +248,15 @@ Camera from_json(const nlohmann::json& j, const std::string& where) {
                     "k1", "k2", "cx_px", "cy_px"},
                    w);
     Intrinsics& in = cam.intrinsics;
+    // Checked before the conversion to int: 10^12 would wrap to a negative width.
     auto integer = [&](const char* key, int& out) {
       if (!ji.contains(key)) return;
-      if (!ji[key].is_number_integer()) fail(w, key, "must be an integer, got " + ji[key].dump());
-      out = ji[key].get<int>();
+      const nlohmann::json& v = ji[key];
+      if (!v.is_number_integer()) fail(w, key, "must be an integer, got " + v.dump());
+      const std::int64_t n = v.get<std::int64_t>();  // above 2^63 wraps negative: refused too
+      if (n < 1 || n > kMaxSidePx)
+        fail(w, key, "must be from 1 to " + std::to_string(kMaxSidePx) + " pixels, got " + v.dump());
+      out = v.get<int>();
     };
     integer("width_px", in.width_px);
     integer("height_px", in.height_px);

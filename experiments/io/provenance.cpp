@@ -100,6 +100,11 @@ void write_json_atomic(const std::string& path, const nlohmann::json& j) {
 }
 
 std::string read_file(const std::string& path) {
+  // A directory opens as an empty stream on Linux: read as "", it would surface later as a
+  // missing table or column instead of the real mistake.
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw std::runtime_error(path + ": is a directory, not a file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot open");
   std::ostringstream os;

@@ -131,6 +131,10 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
                                         ? std::filesystem::current_path()
                                         : std::filesystem::absolute(file).parent_path();
   TableReader root(doc, file);
+  // The top-level tables first: a misspelt [sampel] is the mistake to name, not the missing
+  // [sample] it leaves behind.
+  root.known_keys({"scene", "materials", "sample", "contacts", "container", "plate", "procedure",
+                   "numerics", "output", "measure"});
   {
     TableReader t = *root.table("scene");
     s.name = t.string("name");

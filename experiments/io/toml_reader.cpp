@@ -1,10 +1,28 @@
 #include "experiments/io/toml_reader.hpp"
 
+#include <algorithm>
 #include <sstream>
+#include <vector>
 
 namespace reposetwin::experiments {
 namespace {
 thread_local std::set<std::string>* g_recorded_keys = nullptr;
+
+// Levenshtein distance: insertions, deletions and substitutions of one character each.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
 }  // namespace
 
 void record_keys(std::set<std::string>* keys) { g_recorded_keys = keys; }
@@ -131,11 +149,18 @@ void TableReader::finish() const {
 
 void TableReader::known_keys(const std::set<std::string>& allowed) const {
   for (const auto& [key, node] : *table_) {
-    if (allowed.count(std::string(key.str()))) continue;
-    std::string list;
-    for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-    fail(std::string(key.str()),
-         "is an unknown key (value " + show_node(node) + "; allowed: " + list + ")");
+    const std::string k(key.str());
+    if (allowed.count(k)) continue;
+    std::string list, best;
+    std::size_t best_d = std::string::npos;
+    for (const auto& a : allowed) {
+      list += (list.empty() ? "" : ", ") + a;
+      if (const std::size_t d = edit_distance(k, a); d < best_d) best_d = d, best = a;
+    }
+    // A misspelling is a letter or two away; a name farther off is something else.
+    const bool close = best_d <= std::max<std::size_t>(2, k.size() / 3);
+    fail(k, "is an unknown key (value " + show_node(node) + ")" +
+                (close ? "; did you mean " + best + "?" : "") + " allowed: " + list);
   }
 }
 

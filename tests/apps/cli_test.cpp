@@ -2,49 +2,21 @@
 // exit code and messages checked. Only commands that finish in seconds (the refusals come
 // before any work).
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 
+#include "tests/apps/cli_support.hpp"
+
 namespace {
 namespace fs = std::filesystem;
+using reposetwin::test_support::fresh_dir;
+using reposetwin::test_support::touch;
+using Result = reposetwin::test_support::CliResult;
 
-struct Result {
-  int code = -1;
-  std::string out;  // stdout and stderr together
-};
-
-// Runs reposetwin with `args` (shell words) and stdin from /dev/null, as a script would.
-Result run(const std::string& args) {
-  const fs::path log = fs::temp_directory_path() / "reposetwin_cli_test.log";
-  const std::string cmd =
-      std::string("'") + REPOSETWIN_BIN + "' " + args + " </dev/null >'" + log.string() + "' 2>&1";
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(log);
-  std::stringstream s;
-  s << in.rdbuf();
-  r.out = s.str();
-  return r;
-}
-
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("reposetwin_cli_" + name);
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-void touch(const fs::path& p) {
-  fs::create_directories(p.parent_path());
-  std::ofstream(p) << "{}";
-}
+Result run(const std::string& args) { return reposetwin::test_support::run_cli(args); }
 
 TEST(Cli, TypoedCommandGetsDidYouMean) {
   const Result r = run("runn --out /nonexistent");
