@@ -55,7 +55,7 @@ void add_render_command(CLI::App& app) {
       if (v.contains("error"))
         std::cerr << "warning: " << args->run_dir << "/images/" << v["image"].get<std::string>()
                   << " not measured: " << v["error"].get<std::string>() << "\n";
-    if (m["theta_deg"].is_null())
+    if (!m.contains("theta_deg") || m.at("theta_deg").is_null())
       throw std::runtime_error(args->run_dir + "/images: no side view could be measured (" +
                                "the photos and measurement.json are written)");
     std::cout << nlohmann::json{{"theta_deg", m["theta_deg"]},

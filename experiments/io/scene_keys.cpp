@@ -120,6 +120,8 @@ std::vector<SceneKey> build_keys() {
        "wall time between checkpoints"},
       {"output.progress_interval_s", "number", n(o.progress_interval), "s",
        "wall time between progress lines"},
+      {"output.contact_forces", "boolean", o.contact_forces ? "true" : "false", "-",
+       "also write each frame's particle contacts (force per pair) for ParaView"},
       {"measure.slice_azimuths", "integer", std::to_string(g.slice_azimuths), "-",
        "protractor slices over 180 degrees (>= 8)"},
       {"measure.flank_low", "number", n(g.flank_low), "-",

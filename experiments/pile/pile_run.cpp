@@ -189,7 +189,7 @@ class PileRunner {
   const sim::State& state() const { return world_->state(); }
   void event(const std::string& what) { ctl_.events.push_back(run_event(state().time, what)); }
   void end(StopReason reason, const std::string& detail) {
-    ctl_.stop = {reason, sim::Status::kOk, detail};
+    ctl_.stop = {reason, sim::Status::kOk, detail, ""};
     ctl_.phase = Phase::kDone;
   }
 

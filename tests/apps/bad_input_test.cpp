@@ -169,7 +169,7 @@ TEST(BadInput, ForceWithABadInputLeavesTheOldResult) {
 // must read as "id", so the file gets as far as its first row (whose scene is missing, which
 // stops it before any simulation). Disabled while the measured-data reader splits lines itself:
 // it passes once that reader reads through io/csv, which strips the mark (branch s12-io).
-TEST(BadInput, DISABLED_CsvWithAByteOrderMarkIsRead) {
+TEST(BadInput, CsvWithAByteOrderMarkIsRead) {
   const fs::path dir = fresh_dir("bad_bom");
   write_text(dir / "lab.csv", "\xEF\xBB\xBFid,role,scene,angle_deg\nt1,calibrate,missing.toml,30\n");
   const fs::path out = dir / "loop";

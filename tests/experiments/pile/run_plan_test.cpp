@@ -16,7 +16,7 @@ namespace reposetwin::experiments {
 namespace {
 
 TEST(RunPlan, ParticleCountMatchesTheSamplersDraw) {
-  const SceneConfig s = load_scene("", {});
+  const SceneConfig s = load_scene("");
   const RunPlan p = plan_run(s, 1);
   sim::Rng rng(s.seed);
   const double density = s.materials[material_index(s, s.sample_material, "")].density;
@@ -55,7 +55,7 @@ TEST(RunPlan, SmallerCutOffMeansMoreParticlesAndASmallerStep) {
 }
 
 TEST(RunPlan, AboveTheLimitsItIsRefusedNamingTheCutOffKey) {
-  const RunPlan p = plan_run(load_scene("", {}), 1);
+  const RunPlan p = plan_run(load_scene(""), 1);
   EXPECT_EQ(plan_refusal(p), "");
   PlanSettings few;
   few.max_particles = 100;
@@ -65,7 +65,7 @@ TEST(RunPlan, AboveTheLimitsItIsRefusedNamingTheCutOffKey) {
   EXPECT_NE(why.find("--yes"), std::string::npos) << why;
   PlanSettings slow;
   slow.particle_steps_per_s_per_thread = 10.0;  // days
-  const std::string late = plan_refusal(plan_run(load_scene("", {}), 1, slow), slow);
+  const std::string late = plan_refusal(plan_run(load_scene(""), 1, slow), slow);
   EXPECT_NE(late.find("above the limit of 1h0m"), std::string::npos) << late;
   EXPECT_NE(plan_text(p).find("particle-steps/s"), std::string::npos);
 }
