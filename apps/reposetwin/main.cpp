@@ -9,24 +9,9 @@
 
 #include "apps/reposetwin/commands.hpp"
 #include "experiments/io/provenance.hpp"
+#include "experiments/io/suggest.hpp"
 
 namespace {
-
-// Levenshtein distance: how far a typed word is from a command's name.
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diag = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diag = up;
-    }
-  }
-  return row[b.size()];
-}
 
 // CLI11 (2.1) reads an unknown first word as a missing subcommand; a user who typed "runn"
 // wants to hear which command was meant. Returns the message, or "" when `word` is a command.
@@ -37,7 +22,7 @@ std::string unknown_command(CLI::App& app, const std::string& word) {
     const std::string& name = sub->get_name();
     if (name == word) return "";
     names += (names.empty() ? "" : ", ") + name;
-    const std::size_t d = edit_distance(word, name);
+    const std::size_t d = reposetwin::experiments::edit_distance(word, name);
     if (d < best_d) best_d = d, best = name;
   }
   std::string msg = "reposetwin: '" + word + "' is not a command";
