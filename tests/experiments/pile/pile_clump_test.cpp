@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "../../support/tiny_scene.hpp"
 #include "experiments/io/scene.hpp"
 #include "experiments/io/vtk_output.hpp"
 #include "experiments/pile/pile_run.hpp"
@@ -59,14 +60,6 @@ progress_interval_s = 1000.0
 )" + shape;
 }
 
-const char* kRod = R"(
-[sample.shape]
-name = "rod"
-kind = "generated"
-elongation = 1.5
-spheres = 4
-)";
-
 fs::path temp_dir(const std::string& name) {
   const fs::path p = fs::temp_directory_path() / ("reposetwin_test_clump_" + name);
   fs::remove_all(p);
@@ -95,7 +88,7 @@ PileRun run(const SceneConfig& scene, const fs::path& out, std::int64_t stop_aft
 
 TEST(PileClumps, ATinyPourOfRodsFormsAPileAndResumesBitIdentically) {
   const fs::path dir = temp_dir("rods");
-  const SceneConfig scene = scene_from(scene_text(kRod), dir);
+  const SceneConfig scene = scene_from(scene_text(test_support::kTinyRods), dir);
   const PileRun a = run(scene, dir / "full");
   EXPECT_EQ(a.stop.reason, StopReason::kSettled) << a.stop.detail;
   ASSERT_TRUE(a.pile_ok()) << a.pile.detail;
@@ -138,7 +131,7 @@ TEST(PileClumps, ATinyPourOfRodsFormsAPileAndResumesBitIdentically) {
 // The same rod pour on two threads ends in the same bits as on one.
 TEST(PileClumps, TwoThreadsGiveTheSameRodPile) {
   const fs::path dir = temp_dir("threads");
-  const SceneConfig scene = scene_from(scene_text(kRod), dir);
+  const SceneConfig scene = scene_from(scene_text(test_support::kTinyRods), dir);
   const PileRun a = run(scene, dir / "one", 0, false, 1), b = run(scene, dir / "two", 0, false, 2);
   EXPECT_EQ(a.performance.steps, b.performance.steps);
   EXPECT_EQ(a.pile.theta_hd_deg, b.pile.theta_hd_deg);
@@ -149,7 +142,7 @@ TEST(PileClumps, TwoThreadsGiveTheSameRodPile) {
 // the templates would not reproduce is refused on resume (here the fingerprint is edited).
 TEST(PileClumps, AResumeWithOtherTemplatesIsRefused) {
   const fs::path dir = temp_dir("fingerprint");
-  const SceneConfig scene = scene_from(scene_text(kRod), dir);
+  const SceneConfig scene = scene_from(scene_text(test_support::kTinyRods), dir);
   EXPECT_THROW(run(scene, dir / "run", 300), std::runtime_error);
   const fs::path ctl = dir / "run" / "controller.json";
   nlohmann::json j = nlohmann::json::parse(std::ifstream(ctl));
