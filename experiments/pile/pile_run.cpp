@@ -16,6 +16,7 @@
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/vtk_output.hpp"
 #include "experiments/pile/pile_sample.hpp"
+#include "experiments/pile/run_controller.hpp"
 #include "experiments/pile/stop_hint.hpp"
 #include "sim/checkpoint.hpp"
 #include "sim/psd.hpp"
@@ -28,109 +29,9 @@ using nlohmann::json;
 
 namespace {
 
-enum class Phase { kFill, kLift, kSettle, kDone };
-
-const char* phase_name(Phase p) {
-  switch (p) {
-    case Phase::kFill:
-      return "fill";
-    case Phase::kLift:
-      return "lift";
-    case Phase::kSettle:
-      return "settle";
-    case Phase::kDone:
-      return "done";
-  }
-  return "?";
-}
-
-Phase phase_from(const std::string& s) {
-  if (s == "fill") return Phase::kFill;
-  if (s == "lift") return Phase::kLift;
-  if (s == "settle") return Phase::kSettle;
-  return Phase::kDone;
-}
-
-/// The controller's own state: saved beside each engine checkpoint (controller.json).
-struct Controller {
-  Phase phase = Phase::kFill;
-  double phase_start = 0.0;       // [s]
-  double lift_start = -1.0;       // [s]
-  double lift_end = -1.0;         // [s]
-  std::int64_t inside_last = -1;  // particles inside the container at the last check
-  double inside_changed = 0.0;    // when that count last changed [s]
-  double next_frame = 0.0;        // [s]
-  int frames = 0;
-  double ke_threshold = 0.0;        // KE per particle below which the pile is settled [J]
-  double r_min = 0.0, r_max = 0.0;  // particle radii the model was built for [m]
-  double wall_seconds = 0.0;        // wall time of earlier sessions of this run [s]
-  double max_overlap_seen = 0.0;    // largest overlap / smaller radius at any check [-]
-  std::int64_t retained = 0;        // particles left in the container and lifted away with it
-  double retained_mass = 0.0;       // their mass [kg]
-  std::string scene_hash;           // FNV-1a of the resolved scene the run was started from
-  std::string templates_hash;       // FNV-1a of the clump templates ("" for spheres)
-  std::string code_version;         // the engine that wrote this state
-  std::int64_t step = -1;           // the engine step of the checkpoint written with it
-  RunStop stop;                     // why the run ended (when phase is kDone)
-  PsdRecord psd;                    // the PSD sampling
-  std::vector<RunEvent> events;     // phase changes with their times
-
-  json to_json() const {
-    using experiments::to_json;
-    return {{"phase", phase_name(phase)},
-            {"phase_start", phase_start},
-            {"lift_start", lift_start},
-            {"lift_end", lift_end},
-            {"inside_last", inside_last},
-            {"inside_changed", inside_changed},
-            {"next_frame", next_frame},
-            {"frames", frames},
-            {"ke_threshold", ke_threshold},
-            {"r_min", r_min},
-            {"r_max", r_max},
-            {"wall_seconds", wall_seconds},
-            {"max_overlap_seen", max_overlap_seen},
-            {"stop_reason", phase == Phase::kDone ? stop_reason_text(stop) : ""},
-            {"stop_detail", stop.detail},
-            {"scene_fnv1a", scene_hash},
-            {"templates_fnv1a", templates_hash},
-            {"code_version", code_version},
-            {"step", step},
-            {"retained", retained},
-            {"retained_mass", retained_mass},
-            {"psd", to_json(psd)},
-            {"events", to_json(events)}};
-  }
-  static Controller from_json(const json& j) {
-    Controller c;
-    c.phase = phase_from(j.at("phase").get<std::string>());
-    c.phase_start = j.at("phase_start");
-    c.lift_start = j.at("lift_start");
-    c.lift_end = j.at("lift_end");
-    c.inside_last = j.at("inside_last");
-    c.inside_changed = j.at("inside_changed");
-    c.next_frame = j.at("next_frame");
-    c.frames = j.at("frames");
-    c.ke_threshold = j.at("ke_threshold");
-    c.r_min = j.at("r_min");
-    c.r_max = j.at("r_max");
-    c.wall_seconds = j.at("wall_seconds");
-    c.max_overlap_seen = j.at("max_overlap_seen");
-    if (!j.at("stop_reason").get<std::string>().empty())
-      c.stop = stop_from_json({{"reason", j.at("stop_reason")}, {"detail", j.at("stop_detail")}});
-    // Controller files written before these stamps have none, and are not checked.
-    c.scene_hash = j.value("scene_fnv1a", std::string());
-    c.code_version = j.value("code_version", std::string());
-    c.templates_hash = j.value("templates_fnv1a", std::string());
-    c.step = j.value("step", std::int64_t{-1});
-    // Controller files from before the retained-material rule have none retained.
-    c.retained = j.value("retained", std::int64_t{0});
-    c.retained_mass = j.value("retained_mass", 0.0);
-    c.psd = psd_record_from_json(j.at("psd"));
-    c.events = run_events_from_json(j.at("events"));
-    return c;
-  }
-};
+using pile_detail::Controller;
+using pile_detail::Phase;
+using pile_detail::phase_name;
 
 PileSpheres spheres_of(const sim::State& st) {
   const sim::Particles& p = st.particles;
