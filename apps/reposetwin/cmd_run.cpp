@@ -90,7 +90,7 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("scene", args->scene, "Scene file (TOML); default: the embedded quick scene");
   cmd->add_option("--out,-o", args->run.out_dir, "Run folder for results, snapshots, checkpoint")
       ->capture_default_str();
-  cmd->add_option("--set", args->sets, "Override a scene key: dotted.key=value (repeatable)");
+  cmd->add_option("--set", args->sets, "Override a scene key: dotted.key=value; the value is TOML or a bare word (repeatable)");
   cmd->add_option("--threads", args->run.threads, "OpenMP threads (0: the scene's setting)")
       ->check(CLI::Range(0, 4096));
   cmd->add_flag("--force", args->run.force, "Overwrite a finished result in the run folder");

@@ -3,6 +3,7 @@
 // their own conventions, report/format.hpp, built on the same printf rules.)
 #pragma once
 
+#include <charconv>
 #include <cstdio>
 #include <string>
 
@@ -13,6 +14,14 @@ inline std::string significant(double v, int digits = 6) {
   char b[64];
   std::snprintf(b, sizeof b, "%.*g", digits, v);
   return b;
+}
+
+/// The shortest text that reads back to the same double ("0.1", "1e-30", "1000000000000"): a
+/// value quoted back to the user as they typed it, not to seventeen digits.
+inline std::string shortest_text(double v) {
+  char b[64];
+  const auto r = std::to_chars(b, b + sizeof b, v);
+  return std::string(b, r.ptr);
 }
 
 /// A float in TOML syntax: significant(v, digits) with ".0" added where it would read as an

@@ -38,6 +38,15 @@ void store(const toml::node& value, toml::node_type existing, Sink&& sink) {
   value.visit([&](const auto& v) { sink(v); });
 }
 
+// A value keeps its type: a word where the scene has a number is a typo, not a new experiment.
+std::string type_change(const toml::node& existing, const toml::node& value) {
+  std::string why =
+      "the scene has a " + type_name(existing.type()) + " here, not a " + type_name(value.type());
+  if (value.is_string() && existing.is_number())
+    why += " (a value that is not a number is read as a word)";
+  return why;
+}
+
 }  // namespace
 
 std::string toml_value_text(const toml::node& value) {
@@ -66,7 +75,7 @@ std::vector<std::string> split_dotted_key(std::string_view dotted_key, std::stri
 }
 
 void apply_override(toml::table& doc, std::string_view dotted_key, const toml::node& value,
-                    std::string_view origin) {
+                    std::string_view origin, bool create_tables) {
   const auto parts = split_dotted_key(dotted_key, origin);
   const std::string key(dotted_key);
   auto fail = [&](const std::string& why) -> std::invalid_argument {
@@ -89,6 +98,8 @@ void apply_override(toml::table& doc, std::string_view dotted_key, const toml::n
       next = a->get(idx);
     }
     path += (path.empty() ? "" : ".") + seg;
+    if (next == nullptr && create_tables && parent->is_table())
+      next = parent->as_table()->insert_or_assign(seg, toml::table{}).first->second.as_table();
     if (next == nullptr) throw fail("'" + path + "' does not exist in the scene");
     if (!next->is_table() && !next->is_array())
       throw fail("'" + path + "' is a " + type_name(next->type()) + ", not a table");
@@ -104,8 +115,7 @@ void apply_override(toml::table& doc, std::string_view dotted_key, const toml::n
     }
     const bool int_to_float = existing->is_floating_point() && value.is_integer();
     if (existing->type() != value.type() && !int_to_float)
-      throw fail("changes the type of '" + key + "' from " + type_name(existing->type()) + " to " +
-                 type_name(value.type()));
+      throw fail(type_change(*existing, value));
     store(value, existing->type(), [&](const auto& v) { t->insert_or_assign(leaf, v); });
     return;
   }
@@ -118,9 +128,7 @@ void apply_override(toml::table& doc, std::string_view dotted_key, const toml::n
                std::to_string(a->size()) + " elements)");
   const toml::node* existing = a->get(idx);
   const bool int_to_float = existing->is_floating_point() && value.is_integer();
-  if (existing->type() != value.type() && !int_to_float)
-    throw fail("changes the type of '" + key + "' from " + type_name(existing->type()) + " to " +
-               type_name(value.type()));
+  if (existing->type() != value.type() && !int_to_float) throw fail(type_change(*existing, value));
   store(value, existing->type(),
         [&](const auto& v) { a->replace(a->cbegin() + static_cast<std::ptrdiff_t>(idx), v); });
 }
@@ -138,7 +146,7 @@ Override parse_override(std::string_view text, std::string_view origin) {
 }
 
 void apply_overrides(toml::table& doc, const std::vector<Override>& overrides,
-                     std::string_view origin) {
+                     std::string_view origin, bool create_tables) {
   for (const Override& o : overrides) {
     toml::table value_doc;
     try {
@@ -148,11 +156,29 @@ void apply_overrides(toml::table& doc, const std::vector<Override>& overrides,
                        "\": the value is not a TOML value (" + std::string(e.description()) + ")");
     }
     try {
-      apply_override(doc, o.key, *value_doc.get("v"), origin);
+      apply_override(doc, o.key, *value_doc.get("v"), origin, create_tables);
     } catch (const std::invalid_argument& e) {
       throw InputError(e.what());
     }
   }
+}
+
+Override typed_override(std::string key, std::string_view text, std::string_view origin) {
+  if (text.empty()) throw InputError(where(origin) + " \"" + key + "=\": the value is empty");
+  if (is_toml_value(text)) return {std::move(key), std::string(text)};
+  // Text that starts like a TOML string, array or table but is not one is a typo in it; any
+  // other text is a word.
+  if (std::string_view("\"'[{").find(text.front()) != std::string_view::npos) {
+    std::string why;
+    try {
+      (void)toml::parse("v = " + std::string(text));
+    } catch (const toml::parse_error& e) {
+      why = std::string(e.description());
+    }
+    throw InputError(where(origin) + " \"" + key + "=" + std::string(text) +
+                     "\": the value is not a TOML value (" + why + ")");
+  }
+  return string_override(std::move(key), text);
 }
 
 Override number_override(std::string key, double v) {

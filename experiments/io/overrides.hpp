@@ -8,7 +8,9 @@
 // a typo cannot silently produce a different experiment: every parent on the path must already
 // exist, and a value keeps its type (an integer may stand for a float, nothing else converts). A
 // new leaf under an existing table is allowed; the strict scene parser then rejects it if the
-// scene format does not know it. A numeric segment indexes an array ("walls.0.friction").
+// scene format does not know it. A numeric segment indexes an array ("walls.0.friction"). A
+// command line's --set may also create missing tables ("output.vtk_interval_s" in a scene
+// without [output]): the strict parser still refuses a table or key it does not know.
 //
 // The value is kept as canonical TOML text ("0.10000000000000001", "'epsd'", "[ 1, 2 ]"): that is
 // exactly what a user types and what a result file records, it round-trips every TOML value
@@ -37,6 +39,12 @@ std::vector<std::string> split_dotted_key(std::string_view dotted_key,
 /// Parses "dotted.key=value". Throws InputError naming `origin` (e.g. "--set") and the text when
 /// the '=' or the key is missing.
 Override parse_override(std::string_view text, std::string_view origin);
+
+/// An override from a value as a person types it on a command line or in a CSV column: a TOML
+/// value ("0.1", "'epsd'", "[1, 2]") as it is, and any other text as a string ("cdt",
+/// "data/my psd.toml"), so string keys take bare words. Throws InputError naming `origin` when
+/// the text is empty or starts like a TOML value it is not (an open quote or bracket).
+Override typed_override(std::string key, std::string_view text, std::string_view origin);
 
 /// An override setting `key` to the float `v`, its text read back to the same bits.
 Override number_override(std::string key, double v);

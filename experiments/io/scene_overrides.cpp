@@ -28,6 +28,30 @@ void SceneDoc::apply(std::span<const Override> overrides, std::string_view origi
   apply_overrides(tree_->doc, std::vector<Override>(overrides.begin(), overrides.end()), origin);
 }
 
+void SceneDoc::apply_command_line(std::span<const std::string> sets) {
+  std::vector<Override> overrides;
+  try {
+    for (const std::string& text : sets) {
+      const Override raw = parse_override(text, "--set");
+      Override o = typed_override(raw.key, raw.value, "--set");
+      if (o.key == "sample.psd_file") {
+        const auto path = toml::parse("v = " + o.value)["v"].value<std::string>();
+        if (path)
+          o = string_override(o.key, std::filesystem::absolute(*path).lexically_normal().string());
+      }
+      overrides.push_back(std::move(o));
+    }
+    apply_overrides(tree_->doc, overrides, "--set", /*create_tables=*/true);
+  } catch (const InputError& e) {
+    throw InputError(file_ + ": " + e.what());
+  }
+  // A sieve file given on the command line replaces the scene's own table, as a person means it.
+  for (const Override& o : overrides)
+    if (o.key == "sample.psd_file")
+      if (toml::table* sample = tree_->doc["sample"].as_table()) sample->erase("psd");
+  sets_.insert(sets_.end(), sets.begin(), sets.end());
+}
+
 SceneDoc::~SceneDoc() = default;
 SceneDoc::SceneDoc(SceneDoc&&) noexcept = default;
 SceneDoc& SceneDoc::operator=(SceneDoc&&) noexcept = default;
@@ -56,10 +80,31 @@ bool SceneDoc::has(std::string_view dotted_key) const {
 
 SceneConfig SceneDoc::config() const { return parse_scene_table(tree_->doc, file_); }
 
+SceneConfig SceneDoc::config_after_command_line() const {
+  try {
+    return config();
+  } catch (const InputError& e) {
+    // The key in error, or a table holding it, or a key inside it, came from a --set.
+    auto related = [&](const std::string& set_key) {
+      const std::string& k = e.key();
+      auto under = [](const std::string& a, const std::string& b) {
+        return a.size() > b.size() && a.compare(0, b.size(), b) == 0 && a[b.size()] == '.';
+      };
+      return !k.empty() && (k == set_key || under(k, set_key) || under(set_key, k));
+    };
+    for (const std::string& text : sets_)
+      if (related(parse_override(text, "--set").key))
+        throw InputError(std::string(e.what()) + " (set by --set " + text + ")", e.key());
+    throw;
+  }
+}
+
 SceneConfig load_scene(const std::string& path, const std::vector<std::string>& sets) {
-  std::vector<Override> overrides;
-  for (const std::string& s : sets) overrides.push_back(parse_override(s, "--set"));
-  return load_scene(path, overrides);
+  if (!path.empty() && !std::filesystem::exists(path))
+    throw InputError(path + ": scene file does not exist");
+  SceneDoc doc(path);
+  doc.apply_command_line(sets);
+  return doc.config_after_command_line();
 }
 
 SceneConfig load_scene(const std::string& path, std::span<const Override> overrides) {

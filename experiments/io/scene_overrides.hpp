@@ -40,6 +40,13 @@ class SceneDoc {
   /// an override that is not TOML or does not apply (see io/overrides.hpp for the rules).
   void apply(std::span<const Override> overrides, std::string_view origin);
 
+  /// Applies a command line's --set texts ("dotted.key=value"): a value that is not TOML is a
+  /// word (a string), missing tables are created, and `sample.psd_file` takes the place of an
+  /// inline [sample.psd] table, its path relative to the working directory (where the person
+  /// typing it stands), not to the scene file. Throws InputError naming --set, the text and the
+  /// file.
+  void apply_command_line(std::span<const std::string> sets);
+
   /// Sets [scene] seed (a run's seed is given apart from its overrides); nothing when the file
   /// has no [scene] table, whose default seed then stands.
   void set_seed(std::uint64_t seed);
@@ -55,6 +62,8 @@ class SceneDoc {
 
   /// The scene read strictly (unknown keys refused; see io/scene.hpp).
   SceneConfig config() const;
+  /// The same; an error about a key a --set changed says so, with the text as typed.
+  SceneConfig config_after_command_line() const;
   /// The file name the document reports in messages ("<embedded>" for the quick scene).
   const std::string& file() const { return file_; }
 
@@ -62,11 +71,12 @@ class SceneDoc {
   struct Tree;
   std::string file_;
   std::unique_ptr<Tree> tree_;
+  std::vector<std::string> sets_;  // the --set texts applied, as typed
 };
 
 /// Loads a scene file (or the embedded quick scene when `path` is empty) and applies
-/// "dotted.key=value" overrides (--set; the value is TOML: 0.1, "epsd", true, [1, 2]) before
-/// parsing. Throws InputError naming the file for a missing file and, with the key, for a bad
+/// "dotted.key=value" overrides (--set: a TOML value, 0.1, "epsd", true, [1, 2], or a bare word;
+/// see SceneDoc::apply_command_line) before parsing. Throws InputError naming the file for a missing file and, with the key, for a bad
 /// override.
 SceneConfig load_scene(const std::string& path, const std::vector<std::string>& sets = {});
 

@@ -18,8 +18,10 @@ namespace reposetwin::experiments {
 /// naming `origin` (e.g. "campaign.toml, case m200"), the key and the value when a parent on the
 /// path is missing or not a table/array, an array index is out of range, or the new value's type
 /// differs from the existing value's type (an integer replacing a float is converted to float).
+/// With `create_tables`, missing tables on the path are created instead (a missing array element
+/// is still an error).
 void apply_override(toml::table& doc, std::string_view dotted_key, const toml::node& value,
-                    std::string_view origin = {});
+                    std::string_view origin = {}, bool create_tables = false);
 
 /// Applies every entry of `overrides` (keys are dotted paths, e.g. { "sample.mass_kg" = 0.9 }) to
 /// `doc` in key order, so a whole-table override ("sample") precedes its members
@@ -30,7 +32,7 @@ void apply_overrides(toml::table& doc, const toml::table& overrides, std::string
 /// InputError naming `origin`, the key and the value when a value is not TOML or does not apply
 /// (see apply_override).
 void apply_overrides(toml::table& doc, const std::vector<Override>& overrides,
-                     std::string_view origin);
+                     std::string_view origin, bool create_tables = false);
 
 /// Renders a TOML value in TOML syntax for error messages, case names and Override::value ("0.1",
 /// "'x'", "[ 1, 2 ]"); floats are written to read back to the same bits.

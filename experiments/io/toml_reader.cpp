@@ -4,6 +4,7 @@
 #include <sstream>
 #include <vector>
 
+#include "experiments/io/format.hpp"
 #include "experiments/io/suggest.hpp"
 
 namespace reposetwin::experiments {
@@ -19,6 +20,8 @@ std::string show_node(const toml::node& node) {
     os << '"' << s->get() << '"';
   } else if (const auto* t = node.as_table()) {
     os << "{table with " << t->size() << " keys}";
+  } else if (const auto* f = node.as_floating_point()) {
+    os << shortest_text(f->get());  // as typed ("1e-30"), not to seventeen digits
   } else {
     node.visit([&os](const auto& v) { os << v; });
   }
@@ -44,7 +47,7 @@ std::string TableReader::where(const std::string& key) const {
 }
 
 void TableReader::fail(const std::string& key, const std::string& what) const {
-  throw InputError(file_ + ": " + where(key) + " " + what);
+  throw InputError(file_ + ": " + where(key) + " " + what, where(key));
 }
 
 bool TableReader::has(const std::string& key) const { return table_->contains(key); }

@@ -159,7 +159,7 @@ void read_overrides(LabTest& test, const Row& row, const Where& w) {
     if (h.rfind("set:", 0) != 0) continue;
     const std::string v = row.get(h);
     if (v.empty()) continue;
-    test.overrides.emplace_back(h.substr(4), is_toml_value(v) ? v : "\"" + v + "\"");
+    test.overrides.emplace_back(h.substr(4), typed_override(h.substr(4), v, h).value);
     test.override_columns.push_back(h);
     try {
       test.conditions[h] = std::stod(v);
