@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "../../support/scratch.hpp"
 #include "../../support/tiny_scene.hpp"
 #include "experiments/io/scene.hpp"
 #include "experiments/io/vtk_output.hpp"
@@ -26,7 +27,8 @@ std::string scene_text(const std::string& shape, double mass = 0.006) {
 name = "tiny-clumps"
 seed = 5
 [sample]
-mass_kg = )" + std::to_string(mass) +
+mass_kg = )" +
+         std::to_string(mass) +
          R"(
 material = "rock"
 [sample.psd]
@@ -60,18 +62,9 @@ progress_interval_s = 1000.0
 )" + shape;
 }
 
-fs::path temp_dir(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("reposetwin_test_clump_" + name);
-  fs::remove_all(p);
-  fs::create_directories(p);
-  return p;
-}
-
-SceneConfig scene_from(const std::string& text, const fs::path& dir) {
-  const fs::path file = dir / "scene.toml";
-  std::ofstream(file) << text;
-  return parse_scene_file(file.string());
-}
+using test_support::scene_from;
+// Clump runs get folders of their own beside the sphere tests'.
+fs::path temp_dir(const std::string& name) { return test_support::temp_dir("clump_" + name); }
 
 PileRun run(const SceneConfig& scene, const fs::path& out, std::int64_t stop_after = 0,
             bool resume = false, int threads = 1) {
@@ -163,10 +156,10 @@ TEST(PileClumps, OneSphereClumpsGiveTheSphereEnginesPile) {
   fs::create_directories(dir / "s");
   fs::create_directories(dir / "c");
   const SceneConfig spheres = scene_from(scene_text(""), dir / "s");
-  const SceneConfig ones = scene_from(
-      scene_text("[sample.shape]\nkind = \"template\"\noffsets = [[0.0, 0.0, 0.0]]\n"
-                 "radii = [0.5]\n"),
-      dir / "c");
+  const SceneConfig ones =
+      scene_from(scene_text("[sample.shape]\nkind = \"template\"\noffsets = [[0.0, 0.0, 0.0]]\n"
+                            "radii = [0.5]\n"),
+                 dir / "c");
   const PileRun a = run(spheres, dir / "s" / "run"), b = run(ones, dir / "c" / "run");
   EXPECT_FALSE(a.shape.has_value());
   ASSERT_TRUE(b.shape.has_value());

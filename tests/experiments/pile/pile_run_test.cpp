@@ -11,6 +11,7 @@
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/scene.hpp"
 #include "experiments/io/scene_overrides.hpp"
+#include "../../support/scratch.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -74,18 +75,8 @@ progress_interval_s = 1000.0
 )" + extra;
 }
 
-fs::path temp_dir(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("reposetwin_test_" + name);
-  fs::remove_all(p);
-  fs::create_directories(p);
-  return p;
-}
-
-SceneConfig scene_from(const std::string& text, const fs::path& dir) {
-  const fs::path file = dir / "scene.toml";
-  std::ofstream(file) << text;
-  return parse_scene_file(file.string());
-}
+using test_support::scene_from;
+using test_support::temp_dir;
 
 TEST(PileTest, TinyPileSettlesAndIsMeasured) {
   const fs::path dir = temp_dir("tiny");
