@@ -161,7 +161,7 @@ void settle(World& world, const Options& o, const char* what) {
             << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()
             << " s: KE " << d.kinetic_energy << " J, " << touching_per_sphere(world)
             << " contacts (pairs + walls) per sphere, max overlap " << d.max_overlap_ratio << ", status "
-            << status_name(d.status) << "\n";
+            << status_name(d.status) << std::endl;  // kept if a long run is cut off later
   if (d.status != Status::kOk) throw std::runtime_error(std::string("settle: ") + d.detail);
 }
 
