@@ -16,10 +16,16 @@
 //
 // With --beds PREFIX the settled beds are read from PREFIX.clumps.ckpt and PREFIX.spheres.ckpt if
 // they exist, and written there otherwise, so that builds can be timed on the same start.
+// With --write-yade DIR the settled clump bed is also written for Yade (bench/compare_yade.sh):
+// DIR/bed.txt (per clump its velocity, angular velocity, mass, principal moments and component
+// spheres in world coordinates) and DIR/run.py, a Yade script that builds the same bed, walls
+// and Hertz-Mindlin physics and times the same number of steps. --no-spheres skips the sphere
+// bed (the Yade comparison needs only the clumps). Each thread count's times are also printed as
+// one machine-readable line, "TIMING threads=T clump_seconds=.. clump_cpu_seconds=.. ...".
 //
 // Usage: bench_clumps [--quick] [--clumps N] [--steps N] [--threads 1,2] [--settle N]
 //                     [--relax N] [--settle-gravity G] [--settle-threads N] [--seed S]
-//                     [--beds PREFIX]
+//                     [--beds PREFIX] [--no-spheres] [--write-yade DIR]
 #include <omp.h>
 #include <time.h>
 
@@ -28,6 +34,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <string>
@@ -58,6 +65,8 @@ struct Options {
   std::vector<int> threads{1, 2};
   std::uint64_t seed = 1;
   std::string beds;
+  bool no_spheres = false;
+  std::string yade_dir;
 };
 
 Model make_model(double gravity_factor) {
@@ -152,7 +161,7 @@ void settle(World& world, const Options& o, const char* what) {
             << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()
             << " s: KE " << d.kinetic_energy << " J, " << touching_per_sphere(world)
             << " contacts (pairs + walls) per sphere, max overlap " << d.max_overlap_ratio << ", status "
-            << status_name(d.status) << "\n";
+            << status_name(d.status) << std::endl;  // kept if a long run is cut off later
   if (d.status != Status::kOk) throw std::runtime_error(std::string("settle: ") + d.detail);
 }
 
@@ -195,6 +204,98 @@ Timing timed(const World& settled, int steps, int threads, const char* what) {
   return t;
 }
 
+/// The settled clump bed as Yade input (design note): bed.txt and run.py in `dir`.
+void write_yade(const World& w, const Options& o, const std::string& dir) {
+  namespace fs = std::filesystem;
+  fs::create_directories(dir);
+  const Particles& p = w.state().particles;
+  const Bodies& b = w.state().bodies;
+  std::vector<std::vector<std::size_t>> members(b.size());
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.body[i] >= 0) members[static_cast<std::size_t>(p.body[i])].push_back(i);
+  {
+    std::ofstream f(fs::path(dir) / "bed.txt");
+    f << std::setprecision(17);
+    f << "# bench_clumps settled bed: " << b.size() << " clumps. Per line: vx vy vz wx wy wz mass "
+         "I1 I2 I3 n, then n times x y z r (world frame, SI)\n";
+    for (std::size_t k = 0; k < b.size(); ++k) {
+      f << b.v[k].x() << " " << b.v[k].y() << " " << b.v[k].z() << " " << b.w[k].x() << " "
+        << b.w[k].y() << " " << b.w[k].z() << " " << b.mass[k] << " " << b.inertia[k].x() << " "
+        << b.inertia[k].y() << " " << b.inertia[k].z() << " " << members[k].size();
+      for (std::size_t i : members[k])
+        f << " " << p.x[i].x() << " " << p.x[i].y() << " " << p.x[i].z() << " " << p.radius[i];
+      f << "\n";
+    }
+    if (!f) throw std::runtime_error("--write-yade: cannot write " + dir + "/bed.txt");
+  }
+  const Model& m = w.model();
+  const Material& rock = m.materials[0];
+  const PairParams pair;  // every pair of make_model has the defaults
+  std::ofstream f(fs::path(dir) / "run.py");
+  f << std::setprecision(17);
+  f << "# Yade script written by bench_clumps: its settled clump bed (bed.txt), the same walls,\n"
+       "# Hertz-Mindlin contact, E, nu, e, mu_s and dt; times the same number of steps.\n"
+       "# Run in this folder: yade -j1 -n -x run.py (bench/compare_yade.sh). Not modelled\n"
+       "# here: rolling resistance (bench/README.md lists the differences).\n"
+       "import math, os, time\n"
+       "from yade import geom\n"
+       "E, NU, DENSITY, E_REST, MU_S = "
+    << m.youngs_modulus_used(0) << ", " << rock.poisson_ratio << ", " << rock.density
+    << ", " << pair.restitution << ", " << pair.friction << "\n"
+    << "DT, SKIN, STEPS, CONTAINER_R, CONTAINER_TOP = " << m.dt << ", "
+    << w.state().neighbors.skin << ", " << o.steps << ", " << kContainer << ", "
+    << m.walls[1].z_top << "\n"
+    << R"PY(here = os.getcwd()  # run in its folder: Yade's __file__ names the yade binary
+mat = O.materials.append(FrictMat(young=E, poisson=NU, density=DENSITY,
+                                  frictionAngle=math.atan(MU_S), label='rock'))
+# The plate z = 0 and the cylindrical container (side only), as bench_clumps' two walls.
+O.bodies.append(wall((0, 0, 0), axis=2, sense=1, material=mat))
+O.bodies.append(geom.facetCylinder((0, 0, 0.5 * CONTAINER_TOP), CONTAINER_R, CONTAINER_TOP,
+                                   segmentsNumber=128, wallMask=4, material=mat))
+clumps = 0
+with open(os.path.join(here, 'bed.txt')) as bed:
+    for line in bed:
+        if line.startswith('#'):
+            continue
+        v = [float(t) for t in line.split()]
+        n = int(v[10])
+        spheres = [sphere((v[11 + 4 * i], v[12 + 4 * i], v[13 + 4 * i]), v[14 + 4 * i],
+                          material=mat) for i in range(n)]
+        cid, _ = O.bodies.appendClumped(spheres)
+        s = O.bodies[cid].state
+        # Mass and principal moments of the union of the spheres, as ours (Yade's default sums
+        # the members' own, counting overlaps twice); a tetrahedral clump's inertia is isotropic
+        # up to the integration error, so the principal frame Yade chose does not matter.
+        s.mass = v[6]
+        s.inertia = Vector3(v[7], v[8], v[9])
+        s.vel = Vector3(v[0], v[1], v[2])
+        s.angVel = Vector3(v[3], v[4], v[5])
+        clumps += 1
+O.engines = [
+    ForceResetter(),
+    InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Facet_Aabb(), Bo1_Wall_Aabb()],
+                          verletDist=SKIN),
+    InteractionLoop(
+        [Ig2_Sphere_Sphere_ScGeom(), Ig2_Facet_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom()],
+        [Ip2_FrictMat_FrictMat_MindlinPhys(en=E_REST, es=E_REST)],
+        [Law2_ScGeom_MindlinPhys_Mindlin()]),
+    NewtonIntegrator(damping=0.0, gravity=(0, 0, -9.81)),
+]
+O.dt = DT
+O.run(1, True)  # the collider's first sort and the contacts' creation, untimed
+ke0 = sum(0.5 * b.state.mass * b.state.vel.squaredNorm() for b in O.bodies if b.isClump)
+t0, c0 = time.perf_counter(), time.process_time()
+O.run(STEPS, True)
+seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+ke1 = sum(0.5 * b.state.mass * b.state.vel.squaredNorm() for b in O.bodies if b.isClump)
+spheres = sum(1 for b in O.bodies if b.isClumpMember)
+print('YADE clumps=%d spheres=%d steps=%d seconds=%.6g cpu_seconds=%.6g interactions=%d '
+      'ke_start=%.6g ke_end=%.6g' % (clumps, spheres, STEPS, seconds, cpu,
+                                     O.interactions.countReal(), ke0, ke1))
+)PY";
+  if (!f) throw std::runtime_error("--write-yade: cannot write " + dir + "/run.py");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -212,6 +313,8 @@ int main(int argc, char** argv) {
   app.add_option("--threads", o.threads, "thread counts to time, e.g. 1,2")->delimiter(',');
   app.add_option("--seed", o.seed, "seed of the sizes and orientations");
   app.add_option("--beds", o.beds, "read or write the settled beds as PREFIX.*.ckpt");
+  app.add_flag("--no-spheres", o.no_spheres, "time the clump bed only");
+  app.add_option("--write-yade", o.yade_dir, "also write the settled clump bed for Yade here");
   CLI11_PARSE(app, argc, argv);
   if (quick) {
     if (app.count("--clumps") == 0) o.clumps = 1000;
@@ -227,8 +330,11 @@ int main(int argc, char** argv) {
               << reach * 1e3 << " mm) and " << 4 * o.clumps << " spheres, r " << kRadiusMin * 1e3
               << "-" << kRadiusMax * 1e3 << " mm; dt " << model.dt << " s\n";
     World clumps = make_bed(model, o.clumps, true, 2.0 * reach + 0.05e-3, o.seed);
-    World spheres = make_bed(model, 4 * o.clumps, false, 2.0 * kRadiusMax + 0.05e-3, o.seed);
-    for (auto [bed, what] : {std::pair{&clumps, "clumps"}, std::pair{&spheres, "spheres"}}) {
+    World spheres = make_bed(model, o.no_spheres ? 0 : 4 * o.clumps, false,
+                             2.0 * kRadiusMax + 0.05e-3, o.seed);
+    std::vector<std::pair<World*, const char*>> beds{{&clumps, "clumps"}};
+    if (!o.no_spheres) beds.emplace_back(&spheres, "spheres");
+    for (auto [bed, what] : beds) {
       const std::string file = o.beds + "." + what + ".ckpt";
       if (!o.beds.empty() && std::filesystem::exists(file)) {
         read_checkpoint(*bed, file);
@@ -239,17 +345,32 @@ int main(int argc, char** argv) {
       settle(*bed, o, what);
       if (!o.beds.empty()) write_checkpoint(*bed, file);
     }
+    if (!o.yade_dir.empty()) {
+      write_yade(clumps, o, o.yade_dir);
+      std::cout << "wrote " << o.yade_dir << "/bed.txt and " << o.yade_dir << "/run.py\n";
+    }
     bool same = true;
-    std::cout << "RESULT clumps=" << o.clumps << " spheres=" << 4 * o.clumps
-              << " steps=" << o.steps << "\n";
+    std::cout << "RESULT clumps=" << o.clumps << " spheres=" << (o.no_spheres ? 0 : 4 * o.clumps)
+              << " components=" << clumps.state().particles.size() << " steps=" << o.steps
+              << "\n";
     for (int t : o.threads) {
       const Timing c = timed(clumps, o.steps, t, "clumps");
+      static std::uint64_t first_c = c.hash;
+      same = same && c.hash == first_c;
+      if (o.no_spheres) {
+        std::cout << std::setprecision(6) << "TIMING threads=" << t
+                  << " clump_seconds=" << c.seconds << " clump_cpu_seconds=" << c.cpu << "\n";
+        continue;
+      }
       const Timing s = timed(spheres, o.steps, t, "spheres");
+      std::cout << std::setprecision(6) << "TIMING threads=" << t << " clump_seconds=" << c.seconds
+                << " clump_cpu_seconds=" << c.cpu << " sphere_seconds=" << s.seconds
+                << " sphere_cpu_seconds=" << s.cpu << "\n";
       std::cout << "  threads " << t << ": time per component-step / per sphere particle-step = "
                 << std::setprecision(4) << c.seconds / s.seconds << " (CPU " << c.cpu / s.cpu
                 << ")\n";
-      static std::uint64_t first_c = c.hash, first_s = s.hash;
-      same = same && c.hash == first_c && s.hash == first_s;
+      static std::uint64_t first_s = s.hash;
+      same = same && s.hash == first_s;
     }
     std::cout << "final states " << (same ? "identical" : "DIFFER") << " across thread counts\n";
     return same ? 0 : 1;

@@ -62,6 +62,7 @@ void add_campaign_command(CLI::App& app) {
   add_pool_options(cmd, *a, "Redo finished runs too");
   cmd->callback([a]() {
     const experiments::Campaign c = experiments::load_campaign(a->file);
+    experiments::check_pile_cases(c);
     const std::string out = a->out.empty() ? "runs/" + c.name : a->out;
     const experiments::CampaignSummary s =
         experiments::run_campaign(c, out, case_fn(*a), runner(*a));

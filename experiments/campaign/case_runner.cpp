@@ -1,6 +1,7 @@
 #include "experiments/campaign/case_runner.hpp"
 
 #include <filesystem>
+#include <set>
 #include <stdexcept>
 
 #include "experiments/io/json_fields.hpp"
@@ -23,6 +24,7 @@ json to_json(const CaseResult& r) {
     out["image"] = {{"theta_deg", r.image->theta_deg}, {"theta_sd_deg", r.image->theta_sd_deg},
                     {"height_m", r.image->height_m},   {"diameter_m", r.image->diameter_m},
                     {"flank_deg", r.image->flank_deg}, {"images", r.image->images}};
+  if (r.shape) out["shape"] = to_json(*r.shape);
   // The one headline angle, named as in a run's result.json (pile/headline.hpp).
   if (!r.pile.clogged && !r.pile.not_measured && r.pile.status != sim::PileStatus::kNoPile) {
     Headline h = headline_from_particles(r.pile);
@@ -54,6 +56,7 @@ CaseResult case_result_from_json(const json& j) {
                      json_number(m, "height_m"),  json_number(m, "diameter_m"),
                      json_number(m, "flank_deg"), m.value("images", std::string("run/images"))};
     }
+    if (res.contains("shape")) r.shape = shape_record_from_json(res.at("shape"));
     return r;
   } catch (const json::exception& e) {
     throw std::invalid_argument(std::string("not a pile case's result: ") + e.what());
@@ -70,6 +73,7 @@ CaseResult case_result_of(const PileRun& run) {
   r.performance = run.performance;
   r.provenance = run.provenance;
   r.psd_fines_fraction = run.psd.fines_fraction_not_simulated;
+  r.shape = run.shape;
   return r;
 }
 
@@ -97,6 +101,18 @@ CaseFn pile_case_fn(const CaseRunSettings& settings) {
       r.image = case_images_of(render_and_measure_run(*run, opt.out_dir, settings.image));
     return to_json(r);
   };
+}
+
+void check_pile_cases(const Campaign& campaign) {
+  std::set<std::string> checked;
+  for (const CaseSpec& spec : campaign.runs) {
+    if (!checked.insert(spec.case_name).second) continue;  // seeds do not change the scene read
+    try {
+      (void)build_case_scene(spec).config();
+    } catch (const InputError& e) {
+      throw InputError(campaign.file + ": case " + spec.case_name + ": " + e.what());
+    }
+  }
 }
 
 bool case_made_no_pile(const json& r) {

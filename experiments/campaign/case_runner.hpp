@@ -43,6 +43,8 @@ struct CaseResult {
   double psd_fines_fraction = 0.0;  // mass fraction of the PSD below d_min, not simulated [-]
   std::string run_dir = "run";      // the pile run's folder, relative to the case folder
   std::optional<CaseImages> image;  // absent: not photographed (--no-images, or no pile)
+  std::optional<ShapeRecord> shape;  // a clump sample's shapes as run; absent for spheres, so a
+                                     // campaign over shape keys says in each case what it ran
 };
 nlohmann::json to_json(const CaseResult& r);
 /// Reads a case result, or a run's whole result.json (its "result" member); std::invalid_argument
@@ -50,6 +52,13 @@ nlohmann::json to_json(const CaseResult& r);
 CaseResult case_result_from_json(const nlohmann::json& j);
 
 CaseFn pile_case_fn(const CaseRunSettings& settings);
+
+/// Reads every case's scene as its pile run will (overrides applied, strict parser), so that an
+/// override the scene parser refuses (an elongation below 1, a mass fraction that no longer sums
+/// to 1) is an InputError naming the campaign file, the case and the scene's key and value before
+/// any case runs. load_campaign() checks only that each override applies to its scene file, since
+/// a campaign is not always over pile scenes.
+void check_pile_cases(const Campaign& campaign);
 
 /// True when the case made no pile (a clogged outlet: every particle lodged in the container).
 bool case_made_no_pile(const nlohmann::json& case_result);

@@ -1,6 +1,9 @@
 #include "experiments/io/scene_keys.hpp"
 
+#include <cctype>
+
 #include "experiments/io/format.hpp"
+#include "experiments/io/grain_shape.hpp"
 #include "experiments/io/scene.hpp"
 
 namespace reposetwin::experiments {
@@ -9,21 +12,21 @@ namespace {
 std::string n(double v) { return significant(v); }
 std::string q(const std::string& s) { return "\"" + s + "\""; }
 
-std::vector<SceneKey> build_keys() {
-  const ContainerConfig c;
-  const ProcedureConfig p;
-  const OutputConfig o;
-  const sim::Settings s;
-  const sim::Material m;
-  const sim::PairParams pp;
-  const sim::PileGeometrySettings g;
-  const sim::PsdSpec psd;
+// [scene].
+std::vector<SceneKey> scene_table_keys() {
   const SceneConfig scene;
   return {
       {"scene.name", "string", "required", "-", "the scene's name (run folders and reports)"},
       {"scene.description", "string", q(""), "-", "one line on what the scene is"},
       {"scene.seed", "integer", std::to_string(scene.seed), "-",
        "seed of the PSD draw and the fill lattice (same seed, same run)"},
+  };
+}
+
+// [materials.<name>].
+std::vector<SceneKey> material_keys() {
+  const sim::Material m;
+  return {
       {"materials.<name>", "table", "required (one at least)", "-",
        "a material, named by its key; sample, container and plate name one"},
       {"materials.<name>.density_kg_m3", "number", n(m.density), "kg/m^3",
@@ -32,6 +35,14 @@ std::vector<SceneKey> build_keys() {
        "the material's real Young's modulus (numerics.softened_youngs_modulus_pa replaces it)"},
       {"materials.<name>.poisson_ratio", "number", n(m.poisson_ratio), "-",
        "Poisson's ratio, in (-1, 0.5)"},
+  };
+}
+
+// [sample] and its sieve table (the grain shapes are shape_keys()).
+std::vector<SceneKey> sample_keys() {
+  const sim::PsdSpec psd;
+  const SceneConfig scene;
+  return {
       {"sample.mass_kg", "number", "required", "kg", "mass of the (scalped) sample poured"},
       {"sample.material", "string", q(scene.sample_material), "-", "the sample's material"},
       {"sample.psd_file", "string", "-", "-",
@@ -56,6 +67,60 @@ std::vector<SceneKey> build_keys() {
        "overrides the sieve table's cut-off (the key a large run is shrunk with)"},
       {"sample.d_max_mm", "number", "the PSD's d_max_mm", "mm",
        "overrides the sieve table's scalping size"},
+  };
+}
+
+// The keys of one grain shape (io/grain_shape.hpp), under `table` ("sample.shape" or
+// "sample.shapes[<k>]"); `mass_fraction_default` differs between the two.
+std::vector<SceneKey> one_shape_keys(const std::string& table,
+                                     const std::string& mass_fraction_default) {
+  const GrainShape g;
+  const std::string t = table + ".";
+  return {
+      {t + "name", "string", q("shape <k>") + " (k from 0)", "-",
+       "the shape's name in results and messages"},
+      {t + "kind", "string", "required", "-",
+       "\"template\" (offsets and radii as given) or \"generated\" (elongation, flatness, "
+       "spheres, roundness)"},
+      {t + "mass_fraction", "number", mass_fraction_default, "-",
+       "share of the sample's mass drawn as this shape, in [0, 1]; the shapes' shares sum to 1"},
+      {t + "offsets", "array of [x, y, z]", "required (template)", "any length",
+       "component centres; the template is scaled so its intermediate extent is the sieve size"},
+      {t + "radii", "array of numbers", "required (template)", "as offsets",
+       "component radii, > 0, one per offset; the components must make one connected body"},
+      {t + "elongation", "number", n(g.elongation), "-",
+       "generated: L/I, longest over intermediate principal extent, >= 1"},
+      {t + "flatness", "number", n(g.flatness), "-",
+       "generated: I/S, intermediate over shortest extent, >= 1 (> 1: two rows of spheres)"},
+      {t + "spheres", "integer", "required (generated)", "-",
+       "generated: component spheres, 1 to 64 (even for flatness > 1; 2 per row at least for "
+       "elongation > 1)"},
+      {t + "roundness", "number", n(g.roundness), "-",
+       "generated: end radius / thickest radius, in (0, 1] (1: capsule; smaller: tapered ends)"},
+  };
+}
+
+// [sample.shape] and [[sample.shapes]]: absent, the grains are spheres.
+std::vector<SceneKey> shape_keys() {
+  std::vector<SceneKey> keys = {
+      {"sample.shape", "table", "-", "-",
+       "every grain a rigid clump of this one shape, keys below (with neither this nor "
+       "sample.shapes, every grain is a sphere)"},
+  };
+  for (SceneKey& k : one_shape_keys("sample.shape", "1")) keys.push_back(std::move(k));
+  keys.push_back({"sample.shapes", "array of tables", "-", "-",
+                  "a mix of clump shapes by mass fraction, one [[sample.shapes]] each (not with "
+                  "sample.shape); keys below"});
+  for (SceneKey& k :
+       one_shape_keys("sample.shapes[<k>]", "required (1 when there is one shape)"))
+    keys.push_back(std::move(k));
+  return keys;
+}
+
+// [contacts.<a>-<b>].
+std::vector<SceneKey> contact_keys() {
+  const sim::PairParams pp;
+  return {
       {"contacts.<a>-<b>", "table", "required for every pair the test uses", "-",
        "contact parameters of materials a and b (symmetric)"},
       {"contacts.<a>-<b>.restitution", "number", n(pp.restitution), "-",
@@ -73,6 +138,14 @@ std::vector<SceneKey> build_keys() {
        "alpha of mu_r,eff = mu_r (d_c/d_ref)^alpha; 0 = mu_r at every size"},
       {"contacts.<a>-<b>.rolling_reference_diameter_m", "number", n(pp.rolling_reference_diameter),
        "m", "d_ref of the size-dependent rolling (> 0 if alpha != 0)"},
+  };
+}
+
+// [container] and [plate].
+std::vector<SceneKey> container_keys() {
+  const ContainerConfig c;
+  const SceneConfig scene;
+  return {
       {"container.kind", "string", q(c.kind), "-", "\"funnel\" (frustum) or \"cylinder\""},
       {"container.material", "string", q(c.material), "-", "the container's material"},
       {"container.bottom_diameter_m", "number", n(c.bottom_diameter), "m", "outlet diameter W"},
@@ -81,6 +154,13 @@ std::vector<SceneKey> build_keys() {
       {"container.height_m", "number", n(c.height), "m", "the container's height"},
       {"container.gap_m", "number", n(c.gap), "m", "clearance between its rim and the plate"},
       {"plate.material", "string", q(scene.plate_material), "-", "the base plate's material"},
+  };
+}
+
+// [procedure].
+std::vector<SceneKey> procedure_keys() {
+  const ProcedureConfig p;
+  return {
       {"procedure.lift_speed_m_s", "number", n(p.lift_speed), "m/s", "container lift speed"},
       {"procedure.settle_speed_m_s", "number", n(p.settle_speed), "m/s",
        "settled when KE per particle < 1/2 m_mean v^2 with this v"},
@@ -97,6 +177,13 @@ std::vector<SceneKey> build_keys() {
        "fill lattice spacing = d_max (1 + this)"},
       {"procedure.fill_max_speed_m_s", "number", n(p.fill_max_speed), "m/s",
        "speeds capped at this while filling (a gentle pour)"},
+  };
+}
+
+// [numerics].
+std::vector<SceneKey> numerics_keys() {
+  const sim::Settings s;
+  return {
       {"numerics.rayleigh_fraction", "number", n(s.rayleigh_fraction), "-",
        "dt as a fraction of the smallest particle's Rayleigh time"},
       {"numerics.time_step_s", "number", n(s.time_step), "s",
@@ -114,6 +201,13 @@ std::vector<SceneKey> build_keys() {
        "largest overlap allowed at the start"},
       {"numerics.escape_distance_m", "number", "max(1, 10 x container height)", "m",
        "a particle farther than this from the origin has escaped (a physics stop)"},
+  };
+}
+
+// [output].
+std::vector<SceneKey> output_keys() {
+  const OutputConfig o;
+  return {
       {"output.frame_interval_s", "number", n(o.frame_interval), "s",
        "simulated time between series.pvd frames; 0 = the final state only"},
       {"output.checkpoint_interval_s", "number", n(o.checkpoint_interval), "s",
@@ -122,6 +216,13 @@ std::vector<SceneKey> build_keys() {
        "wall time between progress lines"},
       {"output.contact_forces", "boolean", o.contact_forces ? "true" : "false", "-",
        "also write each frame's particle contacts (force per pair) for ParaView"},
+  };
+}
+
+// [measure].
+std::vector<SceneKey> measure_keys() {
+  const sim::PileGeometrySettings g;
+  return {
       {"measure.slice_azimuths", "integer", std::to_string(g.slice_azimuths), "-",
        "protractor slices over 180 degrees (>= 8)"},
       {"measure.flank_low", "number", n(g.flank_low), "-",
@@ -131,6 +232,14 @@ std::vector<SceneKey> build_keys() {
       {"measure.sectors", "integer", std::to_string(g.sectors), "-",
        "azimuth sectors of the footprint (>= 4)"},
   };
+}
+
+std::vector<SceneKey> build_keys() {
+  std::vector<SceneKey> keys;
+  for (auto* table : {scene_table_keys, material_keys, sample_keys, shape_keys, contact_keys,
+                      container_keys, procedure_keys, numerics_keys, output_keys, measure_keys})
+    for (SceneKey& k : table()) keys.push_back(std::move(k));
+  return keys;
 }
 
 // "|" would end a Markdown table cell.
@@ -147,6 +256,17 @@ const std::vector<SceneKey>& scene_keys() {
 }
 
 std::string scene_key_pattern(const std::string& dotted) {
+  // The k-th of [[sample.shapes]]: "sample.shapes[1].elongation" (as the reader names it) and
+  // "sample.shapes.1.elongation" (as an override writes it).
+  for (const std::string prefix : {"sample.shapes[", "sample.shapes."}) {
+    if (dotted.rfind(prefix, 0) != 0) continue;
+    std::size_t end = prefix.size();
+    while (end < dotted.size() && std::isdigit(static_cast<unsigned char>(dotted[end]))) ++end;
+    if (end == prefix.size()) break;
+    const bool bracket = prefix.back() == '[';
+    if (bracket && (end == dotted.size() || dotted[end] != ']')) break;
+    return "sample.shapes[<k>]" + dotted.substr(bracket ? end + 1 : end);
+  }
   for (const auto& [table, placeholder] :
        {std::pair{"materials.", "<name>"}, std::pair{"contacts.", "<a>-<b>"}}) {
     const std::string prefix = table;
@@ -164,7 +284,9 @@ std::string scene_keys_markdown() {
       "(experiments/io/scene_keys.cpp); a test fails when the parser accepts a key missing here "
       "and when this file is not current. Unknown keys are refused. Tables `[procedure]`, "
       "`[numerics]`, `[output]` and `[measure]` are optional; `--set key=value` overrides "
-      "any key.\n\n"
+      "any key. Without `[sample.shape]` or `[[sample.shapes]]` every grain is a sphere; with "
+      "one, every grain is a rigid clump of spheres (the k-th of a mix is overridden as "
+      "`--set sample.shapes.<k>.elongation=2`).\n\n"
       "| key | type | default | unit | meaning |\n|---|---|---|---|---|\n";
   for (const SceneKey& k : scene_keys())
     t += "| `" + k.key + "` | " + k.type + " | " + cell(k.default_text) + " | " + k.unit + " | " +

@@ -7,7 +7,9 @@
 // tests/experiments/io/scene_keys_test.cpp records every key the parser looks up while it reads
 // scenes that use every table (TableReader's key recorder) and every key the PSD reader allows,
 // and fails for one the reference lacks. Keys under a table of user-chosen names are written
-// with a placeholder: materials.<name>.density_kg_m3, contacts.<a>-<b>.friction.
+// with a placeholder: materials.<name>.density_kg_m3, contacts.<a>-<b>.friction, and the k-th
+// grain shape of a mix as sample.shapes[<k>].elongation. The table is built from one function per
+// scene table, in the order of a scene file.
 #pragma once
 
 #include <string>
@@ -17,7 +19,7 @@ namespace reposetwin::experiments {
 
 struct SceneKey {
   std::string key;           // dotted, with <name> / <a>-<b> placeholders
-  std::string type;          // "string", "number", "integer", "array of numbers", "table"
+  std::string type;          // "string", "number", "integer", "array of numbers", "table", ...
   std::string default_text;  // "required", "-" (optional, no default) or the default value
   std::string unit;          // SI unit, or "-"
   std::string meaning;       // one line
@@ -27,7 +29,9 @@ struct SceneKey {
 const std::vector<SceneKey>& scene_keys();
 
 /// The reference key of a dotted key as written in a scene ("materials.rock.poisson_ratio" ->
-/// "materials.<name>.poisson_ratio"); the key itself when no placeholder applies.
+/// "materials.<name>.poisson_ratio", "sample.shapes[1].spheres" and the override form
+/// "sample.shapes.1.spheres" -> "sample.shapes[<k>].spheres"); the key itself when no placeholder
+/// applies.
 std::string scene_key_pattern(const std::string& dotted);
 
 /// The reference as a Markdown page (docs/scene.md is this text).

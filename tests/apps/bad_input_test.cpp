@@ -215,3 +215,21 @@ TEST(BadInput, SidecarWidthTooLargeIsNamed) {
 }
 
 }  // namespace
+
+// A campaign over shape keys whose case sets a value the shape reader refuses: the campaign
+// command reads every case's scene before running any, so nothing runs and no output is made.
+TEST(BadInput, ACampaignCaseWithARefusedShapeValueRunsNothing) {
+  const fs::path dir = fresh_dir("bad_shape_campaign");
+  write_text(dir / "scene.toml", std::string(reposetwin::test_support::kTinyScene) +
+                                     reposetwin::test_support::kTinyRods);
+  write_text(dir / "shapes.toml",
+             "name = \"shapes\"\nscene = \"scene.toml\"\nseeds = [1]\n"
+             "[[case]]\nname = \"fine\"\noverrides = { \"sample.shape.elongation\" = 2.0 }\n"
+             "[[case]]\nname = \"squat\"\noverrides = { \"sample.shape.elongation\" = 0.5 }\n");
+  const fs::path out = dir / "out";
+  const CliResult r = run_cli("campaign " + quoted(dir / "shapes.toml") + " --out " +
+                              quoted(out) + " --no-images --workers 1");
+  EXPECT_EQ(r.code, 2) << r.out;
+  expect_mentions(r, {"shapes.toml", "case squat", "sample.shape.elongation", "0.5"});
+  EXPECT_FALSE(fs::exists(out)) << "a refused campaign wrote " << out;
+}
