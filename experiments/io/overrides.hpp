@@ -9,8 +9,9 @@
 // exist, and a value keeps its type (an integer may stand for a float, nothing else converts). A
 // new leaf under an existing table is allowed; the strict scene parser then rejects it if the
 // scene format does not know it. A numeric segment indexes an array ("walls.0.friction"). A
-// command line's --set may also create missing tables ("output.vtk_interval_s" in a scene
-// without [output]): the strict parser still refuses a table or key it does not know.
+// command line's --set may also create missing tables ("output.frame_interval_s" in a scene
+// without [output]): the strict parser still refuses a table or key it does not know. (A
+// campaign case that gives a sphere scene a grain shape names a scene file that has one.)
 //
 // The value is kept as canonical TOML text ("0.10000000000000001", "'epsd'", "[ 1, 2 ]"): that is
 // exactly what a user types and what a result file records, it round-trips every TOML value
