@@ -65,6 +65,9 @@ double flank_angle_on_meridian(const camera::Camera& cam, const FlankFit& f, con
   return std::atan2(std::abs(e.z()), e.head<2>().norm()) * kRadToDeg;
 }
 
+void measure_through_camera(SideMeasurement& m, const camera::Camera& cam,
+                            const Eigen::Vector3d& axis_foot, const std::string& where);
+
 }  // namespace
 
 std::string to_string(ScaleSource source) {
@@ -167,15 +170,7 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
     m.warnings.push_back("flank angles differ by " +
                          fixed(std::abs(p.left.angle_deg - p.right.angle_deg), 1) +
                          " deg: asymmetric pile or camera off the pile axis");
-  if (scale.camera) {
-    const auto foot = camera::project(*scale.camera, scale.axis_foot);
-    if (foot && std::abs(foot->y() - p.plate.v_at(foot->x())) > 2.0)
-      m.warnings.push_back(
-          "the camera puts the axis foot " + fixed(p.plate.v_at(foot->x()) - foot->y(), 1) +
-          " px from the detected plate line (camera above the plate, or the camera does not "
-          "match the image): H is read from the plate line, D and the flank angles through the "
-          "given camera may be biased");
-  }
+  m.crest = measure_crest(p, {}, where);
 
   if (!scale.camera) {
     double k;  // [m/px]
@@ -200,16 +195,47 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
     m.flank_right_deg = p.right.angle_deg;
     m.sigma_flank_left_deg = p.left.sigma_deg;
     m.sigma_flank_right_deg = p.right.sigma_deg;
+    m.crest_width_m = m.crest.width_px * k;
+    m.sigma_crest_width_m = std::hypot(m.crest.sigma_px * k, m.crest_width_m * m.sigma_scale_rel);
     return m;
   }
 
-  // Perspective correction with the known camera.
-  const camera::Camera& cam = *scale.camera;
+  // Perspective correction with the known camera, once the photo's own pose agrees with it: a
+  // photo taken from above and pitched down but declared level, measured through the declared
+  // camera, read atan(2H/D) degrees too steep (the toe line through the middle of the pile's
+  // base, D far too short); it is refused with the numbers instead.
+  camera::Camera cam = *scale.camera;
+  if (scale.check_pose) {
+    m.pose = estimate_side_pose(prepared, p, cam, scale.axis_foot);
+    const std::string why = m.pose ? pose_contradiction(*m.pose) : std::string();
+    if (!why.empty())
+      throw std::runtime_error(where + ": not measured through the declared camera: " + why);
+  }
+  // Without the plate's top face in the picture there is no base ellipse to check the pose
+  // with; a camera that puts the axis foot off the plate line does not match the image.
+  const auto foot = camera::project(cam, scale.axis_foot);
+  if (!p.far_edge && foot && std::abs(foot->y() - p.plate.v_at(foot->x())) > 2.0)
+    m.warnings.push_back(
+        "the camera puts the axis foot " + fixed(p.plate.v_at(foot->x()) - foot->y(), 1) +
+        " px from the detected plate line and the photo shows no plate top face to check its "
+        "pose with: the camera does not match the image; D and the flank angles through it may "
+        "be biased");
+  measure_through_camera(m, cam, scale.axis_foot, where);
+  return m;
+}
+
+namespace {
+
+// H, D, the flank angles and the crest of a measured silhouette through a known camera:
+// perspective corrected on the vertical plane through the base centre facing the camera.
+void measure_through_camera(SideMeasurement& m, const camera::Camera& cam,
+                            const Eigen::Vector3d& axis_foot, const std::string& where) {
+  const SideProfile& p = m.pixels;
   m.scale_source = ScaleSource::kCamera;
   m.perspective_corrected = true;
   const camera::Ray rl = camera::unproject(cam, ev(p.toe_left));
   const camera::Ray rr = camera::unproject(cam, ev(p.toe_right));
-  const Eigen::Vector2d axis = scale.axis_foot.head<2>();
+  const Eigen::Vector2d axis = axis_foot.head<2>();
   Eigen::Vector2d dl = rl.direction.head<2>(), dr = rr.direction.head<2>();
   if (dl.norm() < 1e-6 || dr.norm() < 1e-6)
     throw std::runtime_error(where + ": the camera looks straight down; not a side view");
@@ -234,7 +260,7 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
     center = axis + n * (0.5 * (sl + sr) - n.dot(axis));
     toward_camera = -dl;
   }
-  const Eigen::Vector3d plane_point(center.x(), center.y(), scale.axis_foot.z());
+  const Eigen::Vector3d plane_point(center.x(), center.y(), axis_foot.z());
   const Eigen::Vector3d plane_normal(toward_camera.x(), toward_camera.y(), 0.0);
   const auto apex = camera::pixel_on_plane(cam, ev(p.apex), plane_point, plane_normal);
   if (!apex) throw std::runtime_error(where + ": the apex ray misses the pile's axis plane");
@@ -249,7 +275,7 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
   // (the apex's z alone read 4 mm for a 14 mm pile photographed from 10 mm up).
   if (p.far_edge && !plate_at_axis)
     throw std::runtime_error(where + ": the plate line's ray misses the pile's axis plane");
-  m.height_m = apex->z() - (p.far_edge ? m.plate_line_z_m : scale.axis_foot.z());
+  m.height_m = apex->z() - (p.far_edge ? m.plate_line_z_m : axis_foot.z());
   m.diameter_m = 2.0 * radius;
   if (!(m.height_m > 0.0))
     throw std::runtime_error(where + ": the apex maps below the plate (H = " + str(m.height_m) +
@@ -268,8 +294,16 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
       flank_angle_on_meridian(cam, p.right, p.plate, rr, plane_point, where + ": right flank");
   m.sigma_flank_left_deg = p.left.sigma_deg;
   m.sigma_flank_right_deg = p.right.sigma_deg;
-  return m;
+  // The crest's ends lie at the apex height on the pile's silhouette plane, as the apex does.
+  const auto cl = camera::pixel_on_plane(cam, ev(m.crest.left), plane_point, plane_normal);
+  const auto cr = camera::pixel_on_plane(cam, ev(m.crest.right), plane_point, plane_normal);
+  if (!cl || !cr) throw std::runtime_error(where + ": the crest's rays miss the pile's axis plane");
+  const double crest_raw = (*cr - *cl).norm() * (m.crest.raw_width_px < 0.0 ? -1.0 : 1.0);
+  m.crest_width_m = std::max(0.0, crest_raw);
+  m.sigma_crest_width_m = m.crest.sigma_px * k;
 }
+
+}  // namespace
 
 TopMeasurement measure_top(const cv::Mat& image, const ScaleSpec& scale,
                            const TopSettings& settings, const std::string& where) {
@@ -387,6 +421,8 @@ SideSummary combine_sides(const std::vector<SideMeasurement>& views) {
                             [](const SideMeasurement& v) { return v.sigma_flank_left_deg; });
   s.flank_right_deg = spread([](const SideMeasurement& v) { return v.flank_right_deg; },
                              [](const SideMeasurement& v) { return v.sigma_flank_right_deg; });
+  s.crest_width_m = spread([](const SideMeasurement& v) { return v.crest_width_m; },
+                           [](const SideMeasurement& v) { return v.sigma_crest_width_m; });
   s.flank_deg =
       spread([](const SideMeasurement& v) { return 0.5 * (v.flank_left_deg + v.flank_right_deg); },
              [](const SideMeasurement& v) {
@@ -438,6 +474,8 @@ nlohmann::json to_json(const SideMeasurement& m) {
       {"flank_right_deg", m.flank_right_deg},
       {"sigma_flank_left_deg", m.sigma_flank_left_deg},
       {"sigma_flank_right_deg", m.sigma_flank_right_deg},
+      {"crest_width_m", m.crest_width_m},
+      {"sigma_crest_width_m", m.sigma_crest_width_m},
       {"method",
        "theta = atan(2H/D); H perpendicular to the detected plate line; D between the toe points "
        "on it; flanks: cv::fitLine DIST_HUBER over a middle band of H"},
@@ -464,11 +502,22 @@ nlohmann::json to_json(const SideMeasurement& m) {
           {"residual_px", p.plate.residual_px},
           {"support_columns", p.plate.support},
           {"from", p.far_edge ? "toes on the plate's top face" : "plate edge"}}},
+        {"crest",
+         {{"width_px", m.crest.width_px},
+          {"raw_width_px", m.crest.raw_width_px},
+          {"sigma_px", m.crest.sigma_px},
+          {"depth_px", m.crest.depth_px},
+          {"left", pt(m.crest.left)},
+          {"right", pt(m.crest.right)},
+          {"rule",
+           "silhouette width within max(3 px, 5% of H) of the apex, less the flank lines' "
+           "spread over that depth (vision/crest.hpp)"}}},
         {"flank_left", flank_json(p.left)},
         {"flank_right", flank_json(p.right)},
         {"pile_level", p.pile_level},
         {"threshold", p.threshold}}}};
   j["warnings"] = m.warnings;
+  if (m.pose) j["camera_pose"] = to_json(*m.pose);
   if (m.perspective_corrected) {
     j["camera_correction"] = {
         {"base_center_m", {m.base_center_m.x(), m.base_center_m.y(), m.base_center_m.z()}},
@@ -517,7 +566,8 @@ nlohmann::json to_json(const SideSummary& s) {
           {"theta_deg", spread_json(s.theta_deg)},
           {"flank_left_deg", spread_json(s.flank_left_deg)},
           {"flank_right_deg", spread_json(s.flank_right_deg)},
-          {"flank_deg", spread_json(s.flank_deg)}};
+          {"flank_deg", spread_json(s.flank_deg)},
+          {"crest_width_m", spread_json(s.crest_width_m)}};
 }
 
 namespace {
@@ -588,6 +638,7 @@ cv::Mat draw_side_overlay(const cv::Mat& image, const SideMeasurement& m) {
   cv::line(img, ip(p.apex), ip(p.apex + down * p.height_px), cv::Scalar(0, 140, 255), t,
            cv::LINE_AA);
   cv::line(img, ip(p.toe_left), ip(p.toe_right), cv::Scalar(255, 0, 255), 2 * t, cv::LINE_AA);
+  cv::line(img, ip(m.crest.left), ip(m.crest.right), cv::Scalar(0, 220, 255), 2 * t, cv::LINE_AA);
   cv::circle(img, ip(p.apex), r, cv::Scalar(0, 220, 255), t, cv::LINE_AA);
   cv::circle(img, ip(p.toe_left), r, cv::Scalar(255, 0, 255), t, cv::LINE_AA);
   cv::circle(img, ip(p.toe_right), r, cv::Scalar(255, 0, 255), t, cv::LINE_AA);
@@ -598,6 +649,11 @@ cv::Mat draw_side_overlay(const cv::Mat& image, const SideMeasurement& m) {
                 fixed(1000.0 * m.sigma_diameter_m, 1) + " mm",
             "theta = atan(2H/D) = " + fixed(m.theta_deg, 2) + " +- " + fixed(m.sigma_theta_deg, 2) +
                 " deg",
+            "crest (flat top) = " + fixed(1000.0 * m.crest_width_m, 1) + " +- " +
+                fixed(1000.0 * m.sigma_crest_width_m, 1) + " mm" +
+                (m.pose ? "   camera pitch from the photo: " + fixed(m.pose->pitch_deg, 1) +
+                              " deg"
+                        : std::string()),
             "flanks: left " + fixed(m.flank_left_deg, 2) + " +- " +
                 fixed(m.sigma_flank_left_deg, 2) + ", right " + fixed(m.flank_right_deg, 2) +
                 " +- " + fixed(m.sigma_flank_right_deg, 2) + " deg",

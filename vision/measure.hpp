@@ -37,6 +37,8 @@
 #include <vector>
 
 #include "camera/camera.hpp"
+#include "vision/camera_pose.hpp"
+#include "vision/crest.hpp"
 #include "vision/scale_marker.hpp"
 #include "vision/side_view.hpp"
 #include "vision/top_view.hpp"
@@ -56,6 +58,9 @@ struct ScaleSpec {
   bool search_marker = true;                 // else look for the scale marker in the image
   MarkerSettings marker;                     // the marker's dimensions
   Eigen::Vector3d axis_foot{0.0, 0.0, 0.0};  // the pile axis meets the plate here [m]
+  // Check the camera's pose against the photo's base ellipse (vision/camera_pose.hpp) and refuse
+  // the photo, with both numbers, when they contradict.
+  bool check_pose = true;
   std::string note;                          // recorded with the result (e.g. the sidecar's path)
 };
 
@@ -77,6 +82,12 @@ struct SideMeasurement {
   double flank_right_deg = 0.0;        // right flank angle [deg]
   double sigma_flank_left_deg = 0.0;   // its uncertainty [deg]
   double sigma_flank_right_deg = 0.0;  // its uncertainty [deg]
+  Crest crest;                         // the flat top in pixels (vision/crest.hpp's rule)
+  double crest_width_m = 0.0;          // its width at the apex height [m]
+  double sigma_crest_width_m = 0.0;    // its uncertainty [m]
+  // The side camera's pose as the photo shows it (vision/camera_pose.hpp), when the declared
+  // camera was checked against it (and agreed: a contradiction is refused).
+  std::optional<PoseEstimate> pose;
   ScaleSource scale_source = ScaleSource::kMmPerPx;
   double mm_per_px = 0.0;                        // scale at the pile axis [mm/px]
   double sigma_scale_rel = 0.0;                  // relative uncertainty of the scale [-]
@@ -137,6 +148,7 @@ struct Spread {
 struct SideSummary {
   int views = 0;
   Spread height_m, diameter_m, theta_deg, flank_left_deg, flank_right_deg, flank_deg;
+  Spread crest_width_m;  // the flat top's width [m]
 };
 
 /// Averages side measurements. Throws std::invalid_argument for an empty list.

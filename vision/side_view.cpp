@@ -373,6 +373,37 @@ std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob
   out.pile = pile;
   return out;
 }
+// Grains spread flat over the plate, apart from each other in the picture, are no heap: the
+// largest dark blob resting on the plate is then one clump of a few grains, and measured as a
+// pile it read atan(2H/D) of 40-60 deg (two grains side by side: 45 deg) for a layer one grain
+// tall. A heap's blob stands out: strays and loose grains around it are a small fraction of its
+// area. So when at least two other blobs resting on the plate are each at least 30% of the
+// largest's area, the picture is refused with the numbers.
+void refuse_scattered_grains(const cv::Mat& stats, int n_labels, int best, const PlateLine& plate,
+                             int morph_radius_px, const std::string& where) {
+  const int best_area = stats.at<int>(best, cv::CC_STAT_AREA);
+  int similar = 0;
+  int u0 = std::numeric_limits<int>::max(), u1 = std::numeric_limits<int>::min();
+  for (int i = 1; i < n_labels; ++i) {
+    const int area = stats.at<int>(i, cv::CC_STAT_AREA);
+    const int x = stats.at<int>(i, cv::CC_STAT_LEFT), w = stats.at<int>(i, cv::CC_STAT_WIDTH);
+    const int bottom = stats.at<int>(i, cv::CC_STAT_TOP) + stats.at<int>(i, cv::CC_STAT_HEIGHT) - 1;
+    const double line_v = std::min(plate.v_at(x), plate.v_at(x + w - 1));
+    if (bottom < std::floor(line_v - 0.5) - (morph_radius_px + 3)) continue;
+    if (10 * area < 3 * best_area) continue;
+    u0 = std::min(u0, x);
+    u1 = std::max(u1, x + w - 1);
+    if (i != best) ++similar;
+  }
+  if (similar < 2) return;
+  throw std::runtime_error(
+      where + ": no heap: the largest dark blob on the plate (" + str(best_area) + " px, " +
+      str(stats.at<int>(best, cv::CC_STAT_HEIGHT)) + " px tall, " +
+      str(stats.at<int>(best, cv::CC_STAT_WIDTH)) + " px wide) is one of " + str(similar + 1) +
+      " blobs of similar size spread over " + str(u1 - u0 + 1) +
+      " px of the plate: grains lying flat, apart, not a pile with an angle");
+}
+
 }  // namespace
 
 double PlateLine::height_above(const cv::Point2d& p) const {
@@ -702,6 +733,7 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
     throw std::runtime_error(where + ": no pile found (no dark blob of at least " +
                              str(std::round(min_area)) + " px resting on the plate line at row " +
                              str(std::round(plate.v_at(0.5 * flat.cols) + roi.y)) + ")");
+  refuse_scattered_grains(stats, n_labels, best, plate, s.morph_radius_px, where);
   cv::Mat blob = labels == best;
   {
     std::vector<std::vector<cv::Point>> contours;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
+#include "camera/camera.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/photos/pile_images.hpp"
 
@@ -16,6 +17,7 @@ void add_render_command(CLI::App& app) {
     std::string run_dir;
     experiments::ImageSettings images;
     std::vector<std::string> frames;
+    std::vector<std::string> cameras;
     bool force = false;
   };
   auto args = std::make_shared<Args>();
@@ -31,6 +33,9 @@ void add_render_command(CLI::App& app) {
   cmd->add_flag("!--no-top", args->images.top_view, "Skip the top view");
   cmd->add_option("--frame", args->frames,
                   "Also photograph these snapshots of the series (e.g. frames/frame_00004.vtp)");
+  cmd->add_option("--camera", args->cameras,
+                  "Photograph with the lab's side camera of this sidecar JSON (repeat for each "
+                  "view): its pose, lens and resolution, as many views at its azimuths");
   cmd->add_flag("--force", args->force, "Replace the run's earlier photographs");
   cmd->callback([args]() {
     // Photographs are results: an earlier set (run's own, or an earlier render) stays unless
@@ -45,6 +50,13 @@ void add_render_command(CLI::App& app) {
         throw experiments::InputError(p.string() +
                                       ": photographs are already there; pass --force to replace "
                                       "them");
+    for (const std::string& path : args->cameras) {
+      try {
+        args->images.lab_cameras.push_back(camera::read_sidecar(path));
+      } catch (const std::exception& e) {
+        throw experiments::InputError(std::string("--camera: ") + e.what());
+      }
+    }
     // Each view is measured on its own: one view vision cannot read is reported, and the others
     // still give the angle.
     args->images.views_must_measure = false;

@@ -52,6 +52,7 @@ LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
   const bool declared_scale = !scale.camera_json.empty() || scale.mm_per_px.has_value();
   const SingleOpenCvThread one_thread;
   std::vector<vision::SideMeasurement> views;
+  std::vector<camera::Camera> cameras;
   json unmeasured = json::array();
   for (const std::string& p : photos) {
     cv::Mat image;
@@ -72,6 +73,7 @@ LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
       }
       this_scale.search_marker = false;
     }
+    if (this_scale.camera) cameras.push_back(*this_scale.camera);
     try {
       views.push_back(vision::measure_side(image, this_scale, {}, p));
     } catch (const std::exception& e) {
@@ -96,6 +98,7 @@ LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
   m.record["views"] = json::array();
   for (const auto& v : views) m.record["views"].push_back(vision::to_json(v));
   m.record["unmeasured"] = unmeasured;
+  m.cameras = std::move(cameras);
   return m;
 }
 

@@ -40,6 +40,9 @@ struct LabPhotoScale {
 struct LabPhotoMeasurement {
   vision::SideSummary summary;  // means and spreads over the measured photos
   nlohmann::json record;        // summary, "views" (one per measured photo), "unmeasured"
+  // The lab's camera of every photo that has one (a common camera sidecar or the photo's own),
+  // in photo order: what PhotoSettings::lab_cameras takes, so the twin photographs like for like.
+  std::vector<camera::Camera> cameras;
 };
 
 /// Measures the side photos (paths as given) of one pile test. Uses one OpenCV thread, so that a

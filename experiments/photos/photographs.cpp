@@ -99,6 +99,32 @@ std::string side_stem(double azimuth_deg) {
   return stem;
 }
 
+// A side camera's azimuth about the pile axis in camera::side_view's convention (0 = from -y,
+// 90 = from +x) [deg], in [0, 360).
+double azimuth_of(const camera::Camera& cam) {
+  const Eigen::Vector3d& p = cam.extrinsics.position;
+  const double a = std::atan2(p.x(), -p.y()) * 180.0 / 3.14159265358979323846;
+  return a < 0.0 ? a + 360.0 : a;
+}
+
+// The side views' true cameras: the lab's, or the twin's framing at azimuths over 180 degrees.
+std::vector<camera::Camera> side_cameras(const render::Scene& scene, const PhotoSettings& s,
+                                         render::LabCameraSettings cams) {
+  if (!s.lab_cameras.empty()) {
+    for (std::size_t i = 0; i < s.lab_cameras.size(); ++i)
+      camera::validate(s.lab_cameras[i], "images: lab camera " + std::to_string(i + 1));
+    return s.lab_cameras;
+  }
+  std::vector<camera::Camera> out;
+  for (int k = 0; k < s.side_views; ++k) {
+    cams.azimuth_deg = 180.0 * k / s.side_views;
+    camera::Camera truth = render::lab_side_camera(scene, cams);
+    truth.intrinsics.k1 = s.k1;
+    out.push_back(truth);
+  }
+  return out;
+}
+
 }  // namespace
 
 PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
@@ -124,14 +150,18 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
   cams.side_height_m = s.camera_height_m;
   cv::RNG rng(s.noise_seed * 7919 + 17);
   std::vector<vision::SideMeasurement> measured;
-  for (int k = 0; k < s.side_views; ++k) {
-    cams.azimuth_deg = 180.0 * k / s.side_views;
-    camera::Camera truth = render::lab_side_camera(scene, cams);
-    truth.intrinsics.k1 = s.k1;
+  std::vector<std::string> stems;
+  for (const camera::Camera& truth : side_cameras(scene, s, cams)) {
     const camera::Camera declared = declared_camera(truth, s);
     SideView view;
-    view.azimuth_deg = cams.azimuth_deg;
-    view.stem = side_stem(cams.azimuth_deg);
+    view.azimuth_deg = s.lab_cameras.empty() ? 180.0 * photos.sides.size() / s.side_views
+                                             : azimuth_of(truth);
+    view.camera = truth;
+    view.stem = side_stem(view.azimuth_deg);
+    // Two lab photos from one azimuth keep apart: the second is side_az045_2, ...
+    const auto same = std::count(stems.begin(), stems.end(), view.stem);
+    stems.push_back(view.stem);
+    if (same > 0) view.stem += "_" + std::to_string(same + 1);
     const std::string base = (fs::path(out_dir) / view.stem).string();
     cv::Mat image = renderer.render(scene, truth, options);
     if (s.noise_sd > 0.0) add_noise(image, s.noise_sd, rng);
@@ -153,7 +183,7 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
   photos.gl = renderer.gl_description();
   if (!s.top_view) return photos;
   options.view = render::View::kTop;
-  const camera::Camera cam = render::lab_top_camera(scene, cams);
+  const camera::Camera cam = s.lab_top_camera.value_or(render::lab_top_camera(scene, cams));
   const std::string base = (fs::path(out_dir) / "top").string();
   const cv::Mat image = renderer.render(scene, cam, options);
   if (s.write_photos)

@@ -50,6 +50,14 @@ struct PhotoSettings {
   bool views_must_measure = true;           // a side view vision cannot measure is an error [-]
   bool lab_look = true;  // backdrop gradient, board grain, grain tones, soft shadows
                          // (render::apply_lab_look); false = the plain flat render [-]
+  // The lab's own side cameras, one per photo (read from its sidecars, camera::read_sidecar):
+  // when given, the twin photographs its pile with exactly these, like for like: the same pose,
+  // lens, resolution and scale, as many side views at the same azimuths; the measurement assumes
+  // them (as the lab declares them; declared_height_m / declared_k1 still override). width_px,
+  // height_px, side_views, distance_radii, camera_height_m and k1 then do not apply to the side
+  // views. Empty: the twin frames its own cameras from the pile's size.
+  std::vector<camera::Camera> lab_cameras;
+  std::optional<camera::Camera> lab_top_camera;  // the same for the top view
   // Fixtures standing in the picture besides the plate (the funnel of a mid-run frame, at its
   // position then), on the world z axis; with any, the pile is not re-centred, since the
   // funnel's axis is the pile's [m].
@@ -62,6 +70,7 @@ struct PhotoSettings {
 /// One side view.
 struct SideView {
   double azimuth_deg = 0.0;
+  camera::Camera camera;                            // the camera the view was taken with
   std::string stem;                                 // "side_az045": file names stem.png, ...
   std::optional<vision::SideMeasurement> measured;  // absent: vision could not measure it
   std::string error;                                // why not (when absent)
@@ -90,7 +99,8 @@ render::Scene centred_pile_scene(const PileSpheres& pile,
 /// Photographs `pile` with `settings` into `out_dir` (files only as the settings ask; sidecars
 /// carry `provenance`) and measures every photograph with vision/ through the declared camera.
 /// `centre` as for centred_pile_scene. Throws InputError for settings out of range, and the
-/// vision error of the first side view that fails when settings.views_must_measure.
+/// vision error of the first side view that fails when settings.views_must_measure. With
+/// settings.lab_cameras, the side views are theirs (in the order given).
 PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& settings,
                            const std::string& out_dir, const nlohmann::json& provenance = nullptr,
                            std::optional<Eigen::Vector2d> centre = std::nullopt);

@@ -39,7 +39,12 @@ json measurement_json(const PilePhotos& photos, const ImageSettings& settings,
                 {"side_views", settings.side_views},
                 {"camera_height_m", settings.camera_height_m},
                 {"distance_radii", settings.distance_radii},
-                {"k1", settings.k1}}},
+                {"k1", settings.k1},
+                {"cameras", settings.lab_cameras.empty()
+                                ? "the twin's framing (distance_radii pile radii away)"
+                                : "the lab's sidecar cameras (" +
+                                      std::to_string(settings.lab_cameras.size()) +
+                                      " side views), as given"}}},
               {"provenance", provenance},
               {"gl", photos.gl}};
   if (photos.summary) {
@@ -53,6 +58,7 @@ json measurement_json(const PilePhotos& photos, const ImageSettings& settings,
       out["height_m"] = summary.height_m.mean;
       out["diameter_m"] = summary.diameter_m.mean;
       out["flank_deg"] = summary.flank_deg.mean;
+      out["crest_width_m"] = summary.crest_width_m.mean;
     }
   }
   if (!settings.warning.empty()) {

@@ -49,6 +49,10 @@ const std::vector<MeasureDefinition>& measure_definitions() {
       {"flank_deg", "images/measurement.json",
        "image flank angle: slope of lines fitted (Huber) to the silhouette's flanks between 20% "
        "and 80% of H, mean of both flanks over the side views"},
+      {"crest_width_m", "images/measurement.json",
+       "width of the flat top: the side silhouette's width within max(3 px, 5% of H) of the apex, "
+       "less the fitted flank lines' spread over that depth (0 for a sharp cone), mean over the "
+       "side views"},
       {"height_m, diameter_m", "images/measurement.json",
        "H from the plate line to the apex, D between the toe points, from the side photographs"},
       {"top.D_circle_m", "images/measurement.json",

@@ -33,6 +33,7 @@ std::map<std::string, std::string> measure_values(const PileRun& run,
   if (images) {
     v["theta_deg"] = number_at(*images, "theta_deg") + " deg";
     v["flank_deg"] = number_at(*images, "flank_deg") + " deg";
+    v["crest_width_m"] = number_at(*images, "crest_width_m", 1, 1e3) + " mm";
     v["height_m, diameter_m"] = number_at(*images, "height_m", 1, 1e3) + " mm, " +
                                 number_at(*images, "diameter_m", 1, 1e3) + " mm";
     if (images->contains("top"))
@@ -231,6 +232,8 @@ RunSummary finish_run(const PileRun& run, const SceneConfig& scene, const RunSum
         {"theta_deg", (*in.images)["theta_deg"]}, {"theta_sd_deg", (*in.images)["theta_sd_deg"]},
         {"height_m", (*in.images)["height_m"]},   {"diameter_m", (*in.images)["diameter_m"]},
         {"flank_deg", (*in.images)["flank_deg"]}, {"images", "images"}};
+  if (in.images && in.images->contains("crest_width_m"))
+    r["image"]["crest_width_m"] = (*in.images)["crest_width_m"];
   write_json_atomic(result.string(), r);
   s.page = (dir / "summary.html").string();
   write_file_atomic(s.page, run_summary_html(run, scene, in, s.headline));

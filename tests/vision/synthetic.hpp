@@ -46,6 +46,7 @@ struct SideScene {
   // meeting under the pile (orthographic scenes only) [-].
   double plate_right_shade = 1.0;
   double apex_radius_mm = 0.0;     // round the apex with this radius (0 = sharp) [mm]
+  double top_width_mm = 0.0;       // a truncated cone: its flat top's diameter (0 = sharp) [mm]
   int strays = 0;                  // loose particles (disks) lying on the plate beyond each toe [-]
   double stray_diameter_mm = 3.0;  // their diameter [mm]
   // A monolayer of such disks lying on the plate beyond each toe, the first centred on the toe
@@ -231,7 +232,10 @@ inline cv::Mat draw_side(const SideScene& s) {
     // The cone reaches 2 px into the plate so that it, not the plate, owns the toe row.
     const double r = 0.5 * s.diameter_mm, below = 2.0 * s.mm_per_px;
     const double rb = r * (1.0 + below / s.height_mm);
-    if (s.apex_radius_mm <= 0.0) {
+    if (s.top_width_mm > 0.0) {
+      const double rt = 0.5 * s.top_width_mm;
+      pile.push_back({px(-rb, -below), px(rb, -below), px(rt, s.height_mm), px(-rt, s.height_mm)});
+    } else if (s.apex_radius_mm <= 0.0) {
       pile.push_back({px(-rb, -below), px(rb, -below), px(0, s.height_mm)});
     } else {
       // Apex rounded by an arc tangent to both flanks: centre on the axis rho / cos(phi) below
@@ -296,9 +300,11 @@ inline cv::Mat draw_side(const SideScene& s) {
     plate.push_back(hull(project_all(cam, box)));
     const double h = s.height_mm / 1000.0, r = 0.5 * s.diameter_mm / 1000.0;
     const double below = 2.0 * camera::mm_per_px_at(cam, Eigen::Vector3d(0, 0, 0)) / 1000.0;
+    const double rt = 0.5 * s.top_width_mm / 1000.0;
     std::vector<Eigen::Vector3d> cone{Eigen::Vector3d(0, 0, h)};
     for (int i = 0; i < 1440; ++i) {
       const double a = 2.0 * std::numbers::pi * i / 1440;
+      if (rt > 0.0) cone.emplace_back(rt * std::cos(a), rt * std::sin(a), h);
       cone.emplace_back(r * std::cos(a), r * std::sin(a), 0.0);
       const double rb = r * (1.0 + below / h);
       cone.emplace_back(rb * std::cos(a), rb * std::sin(a), -below);
