@@ -231,8 +231,11 @@ DesignRecord describe_design(int n_cal, int n_val) {
   d.can.push_back("mu_r is fitted on the " + ncal + " calibration test(s)");
   if (n_cal == 1)
     d.cannot.push_back(
-        "the one calibration test is matched exactly by mu_r: its residual is zero by "
-        "construction and says nothing of the model; the evidence is in the predictions");
+        "the one calibration test is matched exactly by mu_r (where the grid lets it): its "
+        "residual is then zero by construction and says nothing of the model; the evidence is "
+        "in the predictions");
+  if (n_val == 0)
+    d.cannot.push_back("no test is held out: the out-of-sample evidence is the leave-one-out");
   if (d.can_trace)
     d.can.push_back("the residuals of all " + nall + " tests (" + ncal + " calibration, " +
                     std::to_string(n_val) +
@@ -243,8 +246,7 @@ DesignRecord describe_design(int n_cal, int n_val) {
                        " test(s) nothing can be traced: a leave-one-out check of a mu_r "
                        "correction and one effect needs at least 4 tests; the residuals are "
                        "reported as they are");
-  if (n_val == 0)
-    d.cannot.push_back("no test is held out: the out-of-sample evidence is the leave-one-out");
+  // The statement why nothing can be traced stays the last one (the loop quotes it).
   if (d.can_trace && d.refit_on_all)
     d.cannot.push_back(
         "a joint refit of mu_r and an effect on fewer than 3 calibration tests is not "

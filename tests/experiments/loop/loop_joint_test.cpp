@@ -263,6 +263,8 @@ TEST(LoopJoint, TheDesignSaysWhatItCanDecide) {
   const DesignRecord tiny = describe_design(1, 2);
   EXPECT_FALSE(tiny.can_trace);
   EXPECT_TRUE(holds(tiny.cannot, "at least 4 tests"));
+  // The loop quotes the last statement as the reason nothing was traced.
+  EXPECT_NE(describe_design(3, 0).cannot.back().find("nothing can be traced"), std::string::npos);
   // The synthetic design: the refit stays on the calibration tests, the held-out one is
   // out-of-sample.
   const DesignRecord synth = describe_design(7, 1);
