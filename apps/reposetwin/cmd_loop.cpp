@@ -41,6 +41,7 @@ void add_loop_command(CLI::App& app) {
     std::string seeds;
     std::string candidates;
     std::string angle = "image";
+    std::string at_bound = "extend";
     experiments::LoopSettings settings;
     bool quiet = false;
   };
@@ -58,7 +59,8 @@ void add_loop_command(CLI::App& app) {
                   "({sample}, {plate} stand for the test's materials)")
       ->capture_default_str();
   cmd->add_option("--candidates", args->candidates,
-                  "Candidate effects to try, comma separated (default: all in the registry)");
+                  "Candidate effects to try, comma separated (default: all in the registry but the "
+                  "opt-in grain_shape)");
   cmd->add_option("--max-effects", args->settings.max_effects,
                   "Stop after this many effects (0: trace and rank only, no refit)")
       ->check(CLI::Range(0, 10))
@@ -69,6 +71,28 @@ void add_loop_command(CLI::App& app) {
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
   cmd->add_option("--min-t", args->settings.rule.min_t, "Significance threshold |c|/se")
+      ->capture_default_str();
+  cmd->add_option("--min-delta-chi2", args->settings.rule.min_delta_chi2,
+                  "A candidate is named only when its joint chi^2 (angle, H, D) beats every "
+                  "other accepted candidate's by more than this; else they are reported as "
+                  "indistinguishable")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--at-bound", args->at_bound,
+                  "When the calibrated mu_r sits on an end of the grid: extend (add grid points "
+                  "beyond it, at most --grid-extensions, then refuse), refuse (trace nothing, "
+                  "saying so), trace (trace anyway with mu_r held inside the grid)")
+      ->capture_default_str();
+  cmd->add_option("--grid-extensions", args->settings.grid_extensions,
+                  "Grid points the loop may add beyond a bound mu_r lands on")
+      ->check(CLI::Range(0, 10))
+      ->capture_default_str();
+  cmd->add_option("--mu-max", args->settings.mu_max, "The grid is never extended above this")
+      ->capture_default_str();
+  cmd->add_option("--probe-scalings", args->settings.probe_scalings,
+                  "Doublings of a candidate's probe while its fingerprint does not stand out "
+                  "of the seed noise")
+      ->check(CLI::Range(0, 10))
       ->capture_default_str();
   cmd->add_option("--workers", args->settings.workers, "Concurrent simulations")
       ->capture_default_str();
@@ -106,6 +130,7 @@ void add_loop_command(CLI::App& app) {
       }
     }
     s.angle = experiments::parse_angle_measure(args->angle, "--angle");
+    s.at_bound = experiments::parse_grid_bound(args->at_bound, "--at-bound");
     s.progress = !args->quiet;
     const experiments::LabData data = experiments::read_lab_csv(args->data);
     const nlohmann::json loop = experiments::run_loop(data, args->out, s);

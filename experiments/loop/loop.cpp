@@ -34,21 +34,31 @@ json Loop::run() {
   rec.tests = data_.tests;
   rec.rule = s_.rule;
 
-  const Surface& base = simulate_baseline();
-  set_seed_noise(base);
-  rec.baseline = calibrate_baseline(base);
+  rec.design = design_;
 
-  const std::size_t node = nearest_grid_point(rec.baseline.fit.mu);
-  rec.fingerprints = fingerprint_candidates(base, node, rec.unavailable);
+  const Surface* base = &simulate_baseline();
+  set_seed_noise(*base);
+  rec.baseline = calibrate_baseline(*base);
+  rec.grid = settle_grid(base, rec.baseline);
 
   LoopState state;
-  state.model.terms = {{1.0, &base}};
+  state.model.terms = {{1.0, base}};
   state.fit = rec.baseline.fit;
-  for (int it = 0; it < s_.max_effects + 1; ++it)
-    if (!iterate(it, state, rec.fingerprints, node, rec.iterations)) break;
+  if (!design_.can_trace)
+    rec.not_traced = design_.cannot.back();
+  else if (rec.grid.at_bound && s_.at_bound != GridBound::kTrace)
+    rec.not_traced = rec.grid.statement;
+  if (rec.not_traced) {
+    say("nothing traced: " + *rec.not_traced);
+  } else {
+    const std::size_t node = nearest_grid_point(rec.baseline.fit.mu);
+    rec.fingerprints = fingerprint_candidates(*base, node, rec.unavailable);
+    for (int it = 0; it < s_.max_effects + 1; ++it)
+      if (!iterate(it, state, rec.fingerprints, node, rec.iterations)) break;
+  }
 
   rec.final_model = final_record(state);
-  rec.provenance = provenance(base);
+  rec.provenance = provenance(*base);
   rec.simulations = {
       cache_.simulations_started(), cache_.photos_started(),
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count()};
@@ -74,20 +84,30 @@ void Loop::check_settings() {
       std::adjacent_find(s_.mu_grid.begin(), s_.mu_grid.end()) != s_.mu_grid.end() ||
       s_.mu_grid.front() < 0.0)
     throw InputError("loop: mu_grid must hold at least two increasing values >= 0");
+  if (s_.grid_extensions < 0 || !(s_.mu_max >= s_.mu_grid.back()))
+    throw InputError("loop: grid_extensions must be >= 0 and mu_max (" +
+                     std::to_string(s_.mu_max) + ") at least the grid's top");
+  if (s_.probe_scalings < 0) throw InputError("loop: probe_scalings must be >= 0");
   if (s_.seeds.size() < 2) throw InputError("loop: at least two seeds are needed (seed noise)");
   for (const LabTest& t : data_.tests) check_mu_key(t, s_.mu_key);
-  for (std::size_t i = 0; i < data_.tests.size(); ++i)
+  grid_ = s_.mu_grid;
+  for (std::size_t i = 0; i < data_.tests.size(); ++i) {
     (data_.tests[i].role == "calibrate" ? cal_ : val_).push_back(i);
-  if (cal_.size() < 3)
-    throw InputError(data_.file + ": at least 3 tests with role calibrate are needed, got " +
-                     std::to_string(cal_.size()));
+    trace_.push_back(i);
+  }
+  if (cal_.empty())
+    throw InputError(data_.file +
+                     ": no test has role calibrate: mu_r is fitted on the calibration tests, "
+                     "and at least one is needed");
+  design_ = describe_design(static_cast<int>(cal_.size()), static_cast<int>(val_.size()));
+  fit_ = design_.refit_on_all ? trace_ : cal_;
 }
 
 Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
-  const std::size_t n = data_.tests.size(), g = s_.mu_grid.size(), k = s_.seeds.size();
+  const std::size_t n = data_.tests.size(), g = grid_.size(), k = s_.seeds.size();
   std::vector<SimRequest> req;
   for (std::size_t i = 0; i < n; ++i)
-    for (double m : s_.mu_grid)
+    for (double m : grid_)
       for (std::uint64_t seed : s_.seeds)
         req.push_back(make_request(data_.tests[i], s_.mu_key, m, seed, effects, s_.image));
   const std::vector<SimOutcome> out = pour(req);
@@ -98,7 +118,7 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
   std::size_t q = 0;
   for (std::size_t i = 0; i < n; ++i) {
     Curve& c = surf.curve[i];
-    c.mu = s_.mu_grid;
+    c.mu = grid_;
     std::vector<Observation> obs;
     for (std::size_t j = 0; j < g; ++j) {
       std::vector<double> a, h, d;
@@ -111,7 +131,7 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
         // refit trial steps back).
         if (!o.pile)
           throw std::runtime_error("test " + data_.tests[i].id + " formed no pile at mu_r " +
-                                   std::to_string(s_.mu_grid[j]) + ", seed " +
+                                   std::to_string(grid_[j]) + ", seed " +
                                    std::to_string(s_.seeds[r]) + ", in " +
                                    std::to_string(s_.max_pours) + " pour(s) (last: " + o.sim_dir +
                                    (o.no_pile.empty() ? "" : "; its photographs: " + o.no_pile) +
@@ -122,7 +142,7 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
         a.push_back(angle);
         h.push_back(o.height_mm);
         d.push_back(o.diameter_mm);
-        obs.push_back({s_.mu_grid[j], o.seed, std::clamp(angle, 0.0, 90.0)});
+        obs.push_back({grid_[j], o.seed, std::clamp(angle, 0.0, 90.0)});
       }
       c.angle.push_back(sample_stats(a).mean);
       c.h.push_back(sample_stats(h).mean);
@@ -139,17 +159,18 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
 
 const Surface& Loop::simulate_baseline() {
   say("baseline: " + std::to_string(data_.tests.size()) + " tests x " +
-      std::to_string(s_.mu_grid.size()) + " mu_r x " + std::to_string(s_.seeds.size()) + " seeds");
+      std::to_string(grid_.size()) + " mu_r x " + std::to_string(s_.seeds.size()) + " seeds");
   surfaces_.push_back(std::make_unique<Surface>(simulate_surface({})));
   return *surfaces_.back();
 }
 
-// The seed spread of one pile's angle, pooled over every test and grid point.
-double Loop::pooled_seed_sd(const Surface& base) const {
+// The seed spread of one pile's angle (channel 0), H (1) or D (2), pooled over every test and
+// grid point.
+double Loop::pooled_seed_sd(const Surface& base, int channel) const {
   double ss = 0.0;
   int dof = 0;
   for (const Curve& c : base.curve)
-    for (const auto& a : c.angle_seeds) {
+    for (const auto& a : channel == 0 ? c.angle_seeds : channel == 1 ? c.h_seeds : c.d_seeds) {
       const double m = sample_stats(a).mean;
       for (double x : a) ss += (x - m) * (x - m);
       dof += static_cast<int>(a.size()) - 1;
@@ -160,18 +181,27 @@ double Loop::pooled_seed_sd(const Surface& base) const {
 
 // The seed noise every residual and prediction carries (loop.hpp's design note).
 void Loop::set_seed_noise(const Surface& base) {
-  noise_sd_ = pooled_seed_sd(base);
+  noise_sd_ = pooled_seed_sd(base, 0);
+  noise_sd_h_ = pooled_seed_sd(base, 1);
+  noise_sd_d_ = pooled_seed_sd(base, 2);
   seed_se_ = noise_sd_ / std::sqrt(double(s_.seeds.size()));
-  const double se_pred2 = noise_sd_ * noise_sd_ / static_cast<double>(s_.seeds.size());
-  for (const LabTest& t : data_.tests)
-    sigma_.push_back(std::sqrt(noise_sd_ * noise_sd_ / t.repeats + se_pred2));
+  const double k = static_cast<double>(s_.seeds.size());
+  auto sigma = [k](double sd, int repeats) { return std::sqrt(sd * sd / repeats + sd * sd / k); };
+  sigma_.clear();
+  sigma_h_.clear();
+  sigma_d_.clear();
+  for (const LabTest& t : data_.tests) {
+    sigma_.push_back(sigma(noise_sd_, t.repeats));
+    sigma_h_.push_back(sigma(noise_sd_h_, t.repeats));
+    sigma_d_.push_back(sigma(noise_sd_d_, t.repeats));
+  }
 }
 
 BaselineRecord Loop::calibrate_baseline(const Surface& base) const {
   BaselineRecord b;
   Model model;
   model.terms = {{1.0, &base}};
-  b.fit = fit_mu(model, nullptr, s_.t_max);
+  b.fit = fit_mu(model, nullptr, s_.t_max, cal_);
   b.seed_sd_deg = noise_sd_;
   b.seed_se_deg = seed_se_;
   b.residuals = residuals(model, b.fit.mu);
@@ -195,188 +225,20 @@ BaselineRecord Loop::calibrate_baseline(const Surface& base) const {
   return b;
 }
 
-std::size_t Loop::nearest_grid_point(double mu) const {
-  std::size_t node = 0;
-  for (std::size_t j = 1; j < s_.mu_grid.size(); ++j)
-    if (std::abs(s_.mu_grid[j] - mu) < std::abs(s_.mu_grid[node] - mu)) node = j;
-  return node;
-}
-
-// The registry's candidates (those named in the settings) that every test's scene can express.
-std::vector<const CandidateEffect*> Loop::available_candidates(
-    std::vector<UnavailableCandidate>& unavailable) {
-  std::vector<const CandidateEffect*> cands;
-  for (const CandidateEffect& e : candidate_effects()) {
-    if (!s_.candidates.empty() &&
-        std::find(s_.candidates.begin(), s_.candidates.end(), e.name) == s_.candidates.end())
-      continue;
-    std::string why;
-    for (const LabTest& t : data_.tests)
-      if (why.empty()) {
-        why = effect_unavailable(t, e);
-        if (!why.empty()) why = "test " + t.id + ": " + why;
-      }
-    if (!why.empty()) {
-      unavailable.push_back({e.name, why});
-      say("candidate " + e.name + " unavailable: " + why);
-      continue;
-    }
-    cands.push_back(&e);
-  }
-  return cands;
-}
-
-// Fingerprints at the grid point nearest the calibrated mu_r, with the baseline's seeds.
-std::vector<FingerprintRecord> Loop::fingerprint_candidates(
-    const Surface& base, std::size_t node, std::vector<UnavailableCandidate>& unavailable) {
-  const std::vector<const CandidateEffect*> cands = available_candidates(unavailable);
-  say("fingerprints: " + std::to_string(cands.size()) +
-      " candidates at mu_r = " + std::to_string(s_.mu_grid[node]));
-  // One batch per candidate, so that a candidate whose runs or photographs fail (a lens
-  // model that folds, a pile vision cannot find from that camera) is reported, not fatal.
-  std::vector<SimOutcome> on;
-  std::vector<const CandidateEffect*> ok;
-  for (const CandidateEffect* e : cands) {
-    // Each pair starts from the seed of the baseline pile it is compared with (a repeated
-    // pour's seed if the first one jammed), so a measurement effect re-photographs that pile.
-    std::vector<SimRequest> req;
-    for (std::size_t i = 0; i < data_.tests.size(); ++i)
-      for (const SimOutcome& off : base.raw[i][node])
-        req.push_back(make_request(data_.tests[i], s_.mu_key, s_.mu_grid[node], off.seed,
-                                   {{e, e->probe}}, s_.image));
-    try {
-      const std::vector<SimOutcome> got = pour(req);
-      bool all = true;
-      for (const SimOutcome& o : got) all = all && o.pile;
-      if (!all) throw std::runtime_error("a run formed no pile with the effect at its probe");
-      on.insert(on.end(), got.begin(), got.end());
-      ok.push_back(e);
-    } catch (const std::exception& ex) {
-      unavailable.push_back({e->name, ex.what()});
-      say("candidate " + e->name + " failed at its probe: " + ex.what());
-    }
-  }
-  std::vector<FingerprintRecord> fps;
-  const std::size_t per = data_.tests.size() * s_.seeds.size();
-  for (std::size_t c = 0; c < ok.size(); ++c) {
-    FingerprintRecord f = fingerprint(*ok[c], base, node, on, c * per);
-    const std::string why = untraceable(f);
-    if (!why.empty()) {
-      unavailable.push_back({f.name, why});
-      say("candidate " + f.name + " not traceable: " + why);
-      continue;
-    }
-    fps.push_back(std::move(f));
-  }
-  return fps;
-}
-
-// The mean paired change of every test's angle, H and D, from on[first...] (test-major, seeds
-// in the baseline's order) against the baseline's piles at the grid point.
-FingerprintRecord Loop::fingerprint(const CandidateEffect& e, const Surface& base, std::size_t node,
-                                    const std::vector<SimOutcome>& on, std::size_t first) const {
-  FingerprintRecord f{e.name, e.probe, s_.mu_grid[node], {}, {}, {}, {}};
-  std::size_t q = first;
-  for (std::size_t i = 0; i < data_.tests.size(); ++i) {
-    std::vector<double> da, dh, dd;
-    for (std::size_t r = 0; r < s_.seeds.size(); ++r, ++q) {
-      const SimOutcome& off = base.raw[i][node][r];
-      da.push_back(twin_angle(on[q], s_.angle) - twin_angle(off, s_.angle));
-      dh.push_back(on[q].height_mm - off.height_mm);
-      dd.push_back(on[q].diameter_mm - off.diameter_mm);
-    }
-    const double mean_da = sample_stats(da).mean;
-    f.angle_deg.push_back(mean_da);
-    f.h_mm.push_back(sample_stats(dh).mean);
-    f.d_mm.push_back(sample_stats(dd).mean);
-    double v = 0.0;
-    for (double x : da) v += (x - mean_da) * (x - mean_da);
-    f.angle_se_deg.push_back(std::sqrt(v / (da.size() - 1) / da.size()));
-  }
-  return f;
-}
-
-// Why a fingerprint cannot be traced (empty: it can).
-std::string Loop::untraceable(const FingerprintRecord& f) const {
-  // An effect that moves the angle by less than the seed noise of a predicted angle at its
-  // probe cannot be traced: any residual would need an absurd strength (a lens whose
-  // distortion shifts the angle by 0.01 deg "explains" 5 deg with k1 = 100).
-  double ms = 0.0;
-  for (std::size_t i : cal_) ms += f.angle_deg[i] * f.angle_deg[i];
-  const double rms = std::sqrt(ms / static_cast<double>(cal_.size()));
-  char why[240];
-  if (rms < seed_se_) {
-    std::snprintf(why, sizeof why,
-                  "its fingerprint at the probe (RMS %.3g deg over the calibration tests) "
-                  "is below the seed noise of a predicted angle (%.3g deg)",
-                  rms, seed_se_);
-    return why;
-  }
-  // Nor can an effect whose fingerprint does not stand out of its own seed noise. A
-  // fingerprint is a mean of paired differences whose noise (about sd sqrt(2 / seeds) for a
-  // physical effect, which re-draws the piles) is larger than the seed noise above, so a pure
-  // noise column passes the first test. Under "no effect", n RMS^2 / se^2 (se^2 the mean
-  // squared standard error of the per-test means, n calibration tests) is about chi^2(n);
-  // the fingerprint must exceed its 95% point (Wilson-Hilferty).
-  double se2 = 0.0;
-  for (std::size_t i : cal_) se2 += f.angle_se_deg[i] * f.angle_se_deg[i];
-  const double n = static_cast<double>(cal_.size());
-  se2 /= n;
-  const double a = 2.0 / (9.0 * n);
-  const double chi2_95_per_n = std::pow(1.0 - a + 1.645 * std::sqrt(a), 3);
-  if (rms * rms < chi2_95_per_n * se2) {
-    std::snprintf(why, sizeof why,
-                  "its fingerprint at the probe (RMS %.3g deg over the calibration tests) "
-                  "does not stand out of its own seed noise (standard error %.3g deg per "
-                  "test; 95%% point %.3g deg)",
-                  rms, std::sqrt(se2), std::sqrt(chi2_95_per_n * se2));
-    return why;
-  }
-  return "";
-}
-
-// The residual of the current model regressed on every unused fingerprint, ranked.
-IterationRecord Loop::trace(int it, const LoopState& state,
-                            const std::vector<FingerprintRecord>& fps) const {
-  const MuFit& fit = state.fit;
-  TraceProblem p;
-  const Eigen::Index n = static_cast<Eigen::Index>(cal_.size());
-  p.residual.resize(n);
-  p.sigma.resize(n);
-  p.mu_sensitivity.resize(n);
-  p.seed_noise_deg = seed_se_;
-  p.mu_shift_lo = s_.mu_grid.front() - fit.mu;
-  p.mu_shift_hi = s_.mu_grid.back() - fit.mu;
-  const double span = s_.mu_grid.back() - s_.mu_grid.front();
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const std::size_t i = cal_[k];
-    p.residual[k] = data_.tests[i].angle_deg - state.model.angle(i, fit.mu);
-    p.sigma[k] = sigma_[i];
-    // Slope over a tenth of the grid span (the monotone fit is piecewise linear).
-    const double a = std::max(s_.mu_grid.front(), fit.mu - 0.05 * span);
-    const double b = std::min(s_.mu_grid.back(), fit.mu + 0.05 * span);
-    p.mu_sensitivity[k] = (state.model.angle(i, b) - state.model.angle(i, a)) / (b - a);
-  }
-  // A flat mu_r response (all slopes ~0) still leaves mu_r free as a constant shift.
-  if (p.mu_sensitivity.cwiseAbs().maxCoeff() < 1e-6) p.mu_sensitivity.setOnes();
-  IterationRecord rec;
-  rec.iteration = it;
-  rec.mu_r = fit.mu;
-  rec.null = score_null(p);
-  for (const FingerprintRecord& f : fps) {
-    if (state.used.count(f.name)) continue;
-    Eigen::VectorXd col(n);
-    for (Eigen::Index k = 0; k < n; ++k) col[k] = f.angle_deg[cal_[k]];
-    rec.candidates.push_back(score_candidate(p, f.name, col, rec.null, s_.rule));
-  }
-  return rec;
-}
-
 // One iteration: trace, accept, refit by simulation, confirm. Returns whether the loop goes on.
 bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord>& fps,
                    std::size_t node, std::vector<IterationRecord>& iterations) {
   IterationRecord& iter = iterations.emplace_back(trace(it, state, fps));
-  const int best = rank_candidates(iter.candidates);
+  rank_candidates(iter.candidates);
+  // The acceptance rule names contenders; the joint decision names one, or none when the data
+  // cannot tell them apart or point at the measurement (loop_joint.hpp).
+  iter.decision =
+      decide_trace(iter.candidates, iter.joint, *iter.offset, *iter.mu_only, s_.rule);
+  int best = -1;
+  for (std::size_t q = 0; q < iter.candidates.size(); ++q)
+    if (iter.decision.verdict == TraceVerdict::kNamed &&
+        iter.candidates[q].name == iter.decision.named)
+      best = static_cast<int>(q);
   if (best < 0 || it == s_.max_effects) {
     if (best >= 0) {
       // The rule holds for a candidate, but the effect limit stops the loop before its refit
@@ -386,19 +248,21 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
                      " meets the acceptance rule but was not refitted";
       say("iteration " + std::to_string(it) + ": " + *iter.stopped);
     } else {
-      say("iteration " + std::to_string(it) + ": no candidate accepted");
+      say("iteration " + std::to_string(it) + ": " + iter.decision.statement);
     }
     return false;
   }
   const CandidateScore sc = iter.candidates[static_cast<std::size_t>(best)];
   const CandidateEffect& e = find_effect(sc.name);
   const double off = e.off_from_scene ? scene_value(data_.tests.front(), e.key) : e.off;
-  const double p1 = std::clamp(off + sc.coef * (e.probe - off), e.lo, e.hi);
-  say("iteration " + std::to_string(it) + ": " + e.name + " accepted (" + sc.why +
-      "); linear estimate " + std::to_string(p1) + " " + e.units + ", simulating the grid");
   const FingerprintRecord& fp =
       *std::find_if(fps.begin(), fps.end(), [&](const auto& f) { return f.name == e.name; });
-  const Refit refit = refit_by_simulation(e, off, p1, sc.coef, fp, s_.mu_grid[node], state);
+  // c is in units of the probe the fingerprint was simulated at (scaled when the registry's
+  // probe was lost in the seed noise).
+  const double p1 = std::clamp(off + sc.coef * (fp.probe - off), e.lo, e.hi);
+  say("iteration " + std::to_string(it) + ": " + e.name + " accepted (" + sc.why +
+      "); linear estimate " + std::to_string(p1) + " " + e.units + ", simulating the grid");
+  const Refit refit = refit_by_simulation(e, off, p1, sc.coef, fp, grid_[node], state);
   if (refit.trials.empty()) {
     iter.refit_failed = RefitFailed{e.name, refit.notes, p1};
     return false;
@@ -424,7 +288,7 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
   c.key = e.key;
   c.units = e.units;
   c.off = off;
-  c.probe = e.probe;
+  c.probe = fp.probe;
   c.value = value;
   c.value_se = joint.t_se * std::abs(best_trial.p - off);
   c.t_at_limit = joint.t <= 0.0 || joint.t >= s_.t_max;
@@ -455,7 +319,7 @@ LoopProvenance Loop::provenance(const Surface& base) const {
   p.angle_measure = angle_measure_name(s_.angle);
   p.angle_method = angle_measure_method(s_.angle);
   p.lab_angle_source = lab_angle_source(s_.angle);
-  p.mu_grid = s_.mu_grid;
+  p.mu_grid = grid_;
   p.mu_key = s_.mu_key;
   p.image = s_.image.key();
   p.max_pours = s_.max_pours;
@@ -527,6 +391,24 @@ double twin_angle(const SimOutcome& o, AngleMeasure measure) {
       break;
   }
   throw std::runtime_error("the loop compares image, image_flank or particles angles, not slice");
+}
+
+std::string grid_bound_name(GridBound g) {
+  switch (g) {
+    case GridBound::kExtend:
+      return "extend";
+    case GridBound::kRefuse:
+      return "refuse";
+    case GridBound::kTrace:
+      return "trace";
+  }
+  return "extend";
+}
+
+GridBound parse_grid_bound(const std::string& text, const std::string& option) {
+  for (GridBound g : {GridBound::kExtend, GridBound::kRefuse, GridBound::kTrace})
+    if (grid_bound_name(g) == text) return g;
+  throw InputError(option + ": \"" + text + "\" is not one of extend, refuse, trace");
 }
 
 json run_loop(const LabData& data, const std::string& out_dir, const LoopSettings& settings) {

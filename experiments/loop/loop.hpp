@@ -12,16 +12,25 @@
 //    curves, so no linearisation), with its standard error from the curves' slopes. H and D are
 //    interpolated linearly. Predictions carry the seed standard error sd / sqrt(seeds); the noise
 //    of a residual is sqrt(sd^2 / repeats + sd^2 / seeds), sd the pooled seed spread of one pile.
+//  * Roles and the grid. mu_r is fitted on the calibration tests (one is enough); every test,
+//    the held-out ones included, is traced (loop_joint.hpp's describe_design says what a design
+//    can decide; too few tests is a statement in loop.json, not an error). A mu_r on an end of
+//    its grid cannot take up what it should, so the grid is extended there (settings.at_bound)
+//    before anything is traced, or the loop says why it traces nothing.
 //  * Fingerprints. At the grid point nearest the calibrated mu_r, each available candidate is
 //    switched on at its probe value with the baseline's seeds; the fingerprint is the mean change
 //    of angle (and of H and D). Measurement candidates re-photograph the same piles. Fingerprints
 //    are computed once, on the baseline model, and reused in later iterations (first order): the
-//    residual after adding an effect is regressed on the same columns. A candidate whose
-//    fingerprint (RMS over the calibration tests) is below the seed standard error of a
-//    predicted angle is not traceable and is listed as unavailable: it could "explain" any
-//    residual only with an absurd strength.
+//    residual after adding an effect is regressed on the same columns. A fingerprint lost in the
+//    seed noise (below the seed standard error of a predicted angle, or not standing out of its
+//    own noise) is probed again at twice its distance from off, probe_scalings times at most;
+//    one still lost is listed as unavailable with the largest probe tried: it could "explain"
+//    any residual only with an absurd strength.
 //  * Selection: loop_trace.hpp (WLS with the mu_r correction bounded to the grid, leave-one-
-//    test-out ranking, accept when |c| > 3 se and the LOO RMSE gain beats the seed noise).
+//    test-out ranking, accept when |c| > 3 se and the LOO RMSE gain beats the seed noise) and
+//    loop_joint.hpp (angle, H and D jointly: one candidate named only when it beats the others
+//    by more than the noise allows, else none; a uniform offset beyond mu_r's reach flagged as a
+//    suspected measurement error).
 //  * Refit by simulation. The chosen effect's linear estimate p1 = off + c (probe - off) (clamped
 //    to its range) is simulated on the whole mu_r grid. The model becomes
 //    twin(mu_r, p) = (1 - t) twin_before(mu_r) + t twin_p1(mu_r), t = (p - off) / (p1 - off),
@@ -60,6 +69,17 @@
 
 namespace reposetwin::experiments {
 
+/// What the loop does when the calibrated mu_r lands on an end of its grid (docs/loop.md): there
+/// mu_r cannot take up what it should, and the rest would be handed to the effects.
+enum class GridBound {
+  kExtend,  // add grid points beyond the bound (at most grid_extensions), then refuse
+  kRefuse,  // trace nothing, saying so
+  kTrace,   // trace with the mu_r correction held inside the grid, saying so
+};
+std::string grid_bound_name(GridBound g);
+/// "extend", "refuse" or "trace"; throws InputError naming `option` and the value otherwise.
+GridBound parse_grid_bound(const std::string& text, const std::string& option);
+
 /// Settings of the loop.
 struct LoopSettings {
   std::string mu_key = "contacts.{sample}-{sample}.rolling_friction";  // calibrated scene key
@@ -68,7 +88,11 @@ struct LoopSettings {
   std::vector<std::uint64_t> seeds = {1001, 1002, 1003};  // baseline seeds (common numbers)
   ImageVariant image;                      // how the twin photographs its piles
   AcceptanceRule rule;                     // significance and LOO thresholds
-  std::vector<std::string> candidates;     // registry names to try; empty = all
+  std::vector<std::string> candidates;     // registry names to try; empty = all not opt-in
+  GridBound at_bound = GridBound::kExtend;  // mu_r on the grid's bound
+  int grid_extensions = 2;                 // grid points added beyond a bound, one at a time
+  double mu_max = 1.0;                     // the grid is never extended above this [-]
+  int probe_scalings = 2;                  // doublings of a probe lost in the seed noise
   int max_effects = 2;                     // stop after adding this many effects
   int max_pours = 3;                       // pours per pile when the funnel jams (new seeds)
   double t_max = 3.0;                      // largest t = (p - off) / (p1 - off) of a refit [-]
@@ -98,8 +122,9 @@ double twin_angle(const SimOutcome& o, AngleMeasure measure);
 
 /// Runs the loop on measured data and writes OUT/loop.json (and OUT/index.html). Returns the
 /// loop.json content. Throws InputError when OUT already holds a finished loop.json and `force`
-/// is not set, when the data have fewer than three calibration tests, or when the grid or seeds
-/// are invalid; std::runtime_error when simulations fail.
+/// is not set, when the data have no calibration test, or when the grid or seeds are invalid;
+/// std::runtime_error when simulations fail. A design the data cannot decide (too few tests,
+/// mu_r on the grid's bound) is not an error: loop.json states what could not be traced.
 nlohmann::json run_loop(const LabData& data, const std::string& out_dir,
                         const LoopSettings& settings = {});
 

@@ -96,6 +96,13 @@ const std::vector<CandidateEffect>& candidate_effects() {
       {"lens_k1", EffectKind::kMeasurement, EffectApply::kImageK1, "image.k1", 0.0, false, -0.1,
        -0.25, 0.25, "-",
        "Radial lens distortion of the lab camera, measured as if undistorted.", {}},
+      {"grain_shape", EffectKind::kPhysics, EffectApply::kShape, "sample.shape.elongation", 1.0,
+       false, 1.5, 1.0, 3.0, "L/I",
+       "The grains are elongated, not round: every grain a rod of four spheres with this "
+       "elongation L/I (sieve size its intermediate extent); the paper names grain shape for "
+       "the gap between sphere piles and its rock.",
+       {},
+       true},
   };
   return k;
 }
@@ -210,6 +217,11 @@ SimRequest make_request(const LabTest& test, const std::string& mu_key, double m
       case EffectApply::kImageK1:
         r.image.k1 = r.image.declared_k1 + s.value;
         break;
+      case EffectApply::kShape:
+        r.extra.emplace_back("sample.shape", "{name = \"elongated\", kind = \"generated\", "
+                                             "elongation = " + num(s.value) + ", spheres = " +
+                                             std::to_string(kShapeSpheres) + "}");
+        break;
     }
   }
   return r;
@@ -224,6 +236,8 @@ std::string effect_unavailable(const LabTest& test, const CandidateEffect& e) {
         return "the plate is made of the sample's material (" + s.plate_material +
                "), so its friction cannot differ";
     }
+    if (e.apply == EffectApply::kShape && !load_scene(test.scene_path, sets_of(test)).shapes.empty())
+      return "the scene declares its own grain shapes";
     // A factor on a declared value of 0 (no simulated cut-off d_min) changes nothing: its
     // fingerprint would be zero and its simulations a waste.
     if (e.apply == EffectApply::kFactorScene && scene_value(test, e.key) == 0.0)
@@ -245,6 +259,7 @@ json to_json(const CandidateEffect& e) {
           {"probe", e.probe},
           {"range", {e.lo, e.hi}},
           {"units", e.units},
+          {"opt_in", e.opt_in},
           {"description", e.description}};
 }
 

@@ -19,6 +19,12 @@
 // tells it from mu_r; and mu_r's meaning changes with alpha, so the joint refit of (mu_r, alpha)
 // may need a mu_r outside the calibrated grid. With d_ref at the typical grain, mu_r stays the
 // typical grain's rolling friction and alpha only tilts it between fine and coarse grains.
+//
+// Grain shape (`grain_shape`, opt-in) is the paper's own candidate for what spheres lack: every
+// grain becomes a generated clump (io/grain_shape.hpp) of a fixed number of spheres in a row,
+// and the one parameter is its elongation L/I (off: spheres, the base model; at L/I = 1 the
+// rod's spheres coincide into one round grain, so the refit's line from off to the simulated
+// value runs along the family). A scene that declares its own shapes cannot take it.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -39,7 +45,12 @@ enum class EffectApply {
   kFactorScene,  // scene key = value x the test's resolved value of that key
   kImageHeight,  // true camera height = value [m] (the lab declares its own, default level)
   kImageK1,      // true lens distortion k1 = value (the lab declares 0)
+  kShape,        // every grain a generated clump of kShapeSpheres spheres, elongation = value
 };
+
+/// The grain_shape candidate's sphere count: the family varies elongation L/I at a fixed
+/// number of spheres per grain, so one parameter moves and the cost per grain stays the same.
+inline constexpr int kShapeSpheres = 4;
 
 /// One row of the registry.
 struct CandidateEffect {
@@ -58,6 +69,9 @@ struct CandidateEffect {
   /// Extra keys set together with `key` whenever the effect is on (e.g. the reference size);
   /// the value "{d_ref}" stands for the test's reference_diameter_m [m].
   std::vector<std::pair<std::string, std::string>> companions;
+  /// Tried only when named (--candidates): its simulations cost several times a sphere
+  /// pile's, and a dataset must be designed for it.
+  bool opt_in = false;
 };
 
 /// The registry (see the design note).

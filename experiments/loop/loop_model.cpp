@@ -42,8 +42,9 @@ double Model::d(std::size_t i, double m) const {
 // simulated surface, with standard errors from the Jacobian. With one test, no surface and a
 // monotone curve both give the crossing of the interpolated curve, but neither generalises to the
 // other's problem, so they stay two estimators.
-MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max) const {
-  const double lo = s_.mu_grid.front(), hi = s_.mu_grid.back();
+MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max,
+                   const std::vector<std::size_t>& tests) const {
+  const double lo = grid_.front(), hi = grid_.back();
   const int steps = 2000;
   MuFit best;
   double best_sse = 1e300;
@@ -51,7 +52,7 @@ MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max) const
     const double m = lo + (hi - lo) * q / steps;
     double swdy = 0.0, swdd = 0.0;
     std::vector<double> y, dd, w;
-    for (std::size_t i : cal_) {
+    for (std::size_t i : tests) {
       const double base = model.angle(i, m);
       const double di = extra ? extra->curve[i].at(m) - base : 0.0;
       y.push_back(data_.tests[i].angle_deg - base);
@@ -72,9 +73,9 @@ MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max) const
   best.at_edge = best.mu <= lo + 1e-12 || best.mu >= hi - 1e-12;
   // Standard errors from the Jacobian of the prediction in (mu, t).
   const double h = (hi - lo) / 100.0;
-  Eigen::MatrixXd jac(cal_.size(), extra ? 2 : 1);
-  for (std::size_t k = 0; k < cal_.size(); ++k) {
-    const std::size_t i = cal_[k];
+  Eigen::MatrixXd jac(tests.size(), extra ? 2 : 1);
+  for (std::size_t k = 0; k < tests.size(); ++k) {
+    const std::size_t i = tests[k];
     auto pred = [&](double m) {
       const double base = model.angle(i, m);
       return extra ? base + best.t * (extra->curve[i].at(m) - base) : base;

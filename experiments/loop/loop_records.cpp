@@ -78,7 +78,13 @@ json to_json(const FingerprintRecord& f) {
           {"angle_deg", f.angle_deg},
           {"angle_se_deg", f.angle_se_deg},
           {"H_mm", f.h_mm},
-          {"D_mm", f.d_mm}};
+          {"D_mm", f.d_mm},
+          {"probes_tried", f.probes_tried}};
+}
+
+json to_json(const GridRecord& g) {
+  return {{"initial", g.initial}, {"final", g.final_grid}, {"added", g.added},
+          {"policy", g.policy},   {"mu_r_at_bound", g.at_bound}, {"statement", g.statement}};
 }
 
 json to_json(const UnavailableCandidate& u) { return {{"name", u.name}, {"why", u.why}}; }
@@ -135,7 +141,13 @@ json to_json(const IterationRecord& it) {
   json j = {{"iteration", it.iteration},
             {"mu_r", it.mu_r},
             {"null", to_json(it.null)},
-            {"candidates", to_json_array(it.candidates)}};
+            {"candidates", to_json_array(it.candidates)},
+            {"channels", it.channels},
+            {"channels_left_out", it.channels_left_out},
+            {"joint", to_json_array(it.joint)},
+            {"offset", it.offset ? to_json(*it.offset) : json()},
+            {"mu_only", it.mu_only ? to_json(*it.mu_only) : json()},
+            {"decision", to_json(it.decision)}};
   if (it.chosen)
     j["chosen"] = to_json(*it.chosen);
   else if (it.refit_failed)
@@ -184,8 +196,39 @@ json to_json(const LoopRecord& loop) {
   const double after = loop.final_model.rmse.calibrate_deg;
   json names = json::array();
   for (const ChosenEffect& c : loop.final_model.effects) names.push_back(c.refit.name);
+  // Every test's residual, the predictions included: with one calibration test the calibration
+  // RMSE is zero by construction, and the prediction residuals are what the loop traced.
+  auto all_rmse = [](const std::vector<ResidualRow>& rows) {
+    std::vector<double> r;
+    for (const ResidualRow& x : rows) r.push_back(x.residual_deg);
+    return rmse(r);
+  };
+  const double all_before = all_rmse(loop.baseline.residuals);
+  const double all_after = all_rmse(loop.final_model.residuals);
+  // An effect chosen makes the verdict "named"; otherwise it is the last iteration's. The
+  // statement gives every iteration's decision in order.
+  json verdict = json();
+  json statement = json();
+  if (!loop.iterations.empty()) {
+    verdict = loop.final_model.effects.empty()
+                  ? trace_verdict_name(loop.iterations.back().decision.verdict)
+                  : trace_verdict_name(TraceVerdict::kNamed);
+    std::string text;
+    for (const IterationRecord& it : loop.iterations)
+      text += (text.empty() ? "" : " | ") + ("iteration " + std::to_string(it.iteration) + ": ") +
+              it.decision.statement;
+    statement = text;
+  }
+  if (loop.not_traced) {
+    verdict = "not_traced";
+    statement = *loop.not_traced;
+  }
   const json summary = {
       {"chosen", loop.final_model.effects.empty() ? json() : json(names.back())},
+      {"verdict", verdict},
+      {"statement", statement},
+      {"rmse_all_before_deg", all_before},
+      {"rmse_all_after_deg", all_after},
       {"effects", names},
       {"rmse_calibrate_before_deg", before},
       {"rmse_calibrate_after_deg", after},
@@ -196,9 +239,18 @@ json to_json(const LoopRecord& loop) {
                      {"loo_margin_deg", loop.rule.loo_margin_factor * loop.baseline.seed_se_deg},
                      {"text",
                       "accept the best-ranked candidate with |c|/se > min_t and a leave-one-"
-                      "test-out RMSE below the mu_r-only LOO RMSE by more than the seed "
-                      "standard error of a predicted angle"}};
+                      "test-out RMSE (over every test, the predicted ones included) below the "
+                      "mu_r-only LOO RMSE by more than the seed standard error of a predicted "
+                      "angle; among those, name the one whose joint chi^2 over angle, H and D "
+                      "is lower than every other's by more than min_delta_chi2, else report "
+                      "them as indistinguishable; a significant uniform offset that mu_r cannot "
+                      "take up and no candidate beats is flagged as a suspected measurement "
+                      "error, nothing named"},
+                     {"min_delta_chi2", loop.rule.min_delta_chi2}};
   return {{"tests", to_json_array(loop.tests)},
+          {"design", to_json(loop.design)},
+          {"grid", to_json(loop.grid)},
+          {"not_traced", loop.not_traced ? json(*loop.not_traced) : json()},
           {"candidate_registry", to_json_array(candidate_effects())},
           {"unavailable_candidates", to_json_array(loop.unavailable)},
           {"rule", rule},
@@ -309,7 +361,19 @@ FingerprintRecord fingerprint_record_from_json(const json& j) {
   f.angle_se_deg = numbers("angle_se_deg");
   f.h_mm = numbers("H_mm");
   f.d_mm = numbers("D_mm");
+  if (j.contains("probes_tried")) f.probes_tried = numbers("probes_tried");
   return f;
+}
+
+GridRecord grid_record_from_json(const json& j) {
+  GridRecord g;
+  g.initial = j.at("initial").get<std::vector<double>>();
+  g.final_grid = j.at("final").get<std::vector<double>>();
+  g.added = j.at("added").get<std::vector<double>>();
+  g.policy = j.at("policy").get<std::string>();
+  g.at_bound = j.at("mu_r_at_bound").get<bool>();
+  g.statement = j.at("statement").get<std::string>();
+  return g;
 }
 
 UnavailableCandidate unavailable_candidate_from_json(const json& j) {
@@ -359,6 +423,15 @@ IterationRecord iteration_record_from_json(const json& j) {
   }
   if (j.contains("stopped")) it.stopped = j.at("stopped").get<std::string>();
   if (j.contains("not_confirmed")) it.not_confirmed = not_confirmed_from_json(j.at("not_confirmed"));
+  // Written by a loop that traced jointly; older loop.json files have none of these.
+  if (j.contains("channels")) {
+    it.channels = j.at("channels").get<std::vector<std::string>>();
+    it.channels_left_out = j.at("channels_left_out").get<std::vector<std::string>>();
+    it.joint = array_from_json<JointScore>(j.at("joint"), joint_score_from_json);
+    if (!j.at("offset").is_null()) it.offset = joint_score_from_json(j.at("offset"));
+    if (!j.at("mu_only").is_null()) it.mu_only = joint_score_from_json(j.at("mu_only"));
+    it.decision = trace_decision_from_json(j.at("decision"));
+  }
   return it;
 }
 

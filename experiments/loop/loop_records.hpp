@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "experiments/loop/loop_data.hpp"
+#include "experiments/loop/loop_joint.hpp"
 #include "experiments/loop/loop_trace.hpp"
 
 namespace reposetwin::experiments {
@@ -85,6 +86,16 @@ struct FingerprintRecord {
   std::vector<double> angle_se_deg;  // per test: its standard error over the seeds [deg]
   std::vector<double> h_mm;          // per test: mean change of H [mm]
   std::vector<double> d_mm;          // per test: mean change of D [mm]
+  std::vector<double> probes_tried;  // every probe simulated, the one used last
+};
+
+/// The mu_r grid as the loop settled it: extended beyond a bound mu_r landed on, or left.
+struct GridRecord {
+  std::vector<double> initial, final_grid;  // [-]
+  std::vector<double> added;                // points added, in order [-]
+  std::string policy;                       // "extend", "refuse" or "trace"
+  bool at_bound = false;                    // mu_r still on an end of the final grid
+  std::string statement;                    // what was done, in words
 };
 
 /// A candidate left out of the tracing, with the reason.
@@ -143,6 +154,12 @@ struct IterationRecord {
   double mu_r = 0.0;  // mu_r the residual was taken at [-]
   NullScore null;
   std::vector<CandidateScore> candidates;  // ranked
+  std::vector<std::string> channels;       // observables traced jointly
+  std::vector<std::string> channels_left_out;  // and why the others were not
+  std::vector<JointScore> joint;           // per candidate (matched by name)
+  std::optional<JointScore> offset;        // the uniform-offset hypothesis
+  std::optional<JointScore> mu_only;       // the mu_r correction alone, jointly
+  TraceDecision decision;
   std::optional<std::string> stopped;      // an accepted candidate the effect limit stopped
   std::optional<ChosenEffect> chosen;
   std::optional<NotConfirmed> not_confirmed;
@@ -178,6 +195,9 @@ struct SimulationCounts {
 /// The whole of loop.json.
 struct LoopRecord {
   std::vector<LabTest> tests;
+  DesignRecord design;
+  GridRecord grid;
+  std::optional<std::string> not_traced;  // why nothing was traced (design or grid)
   std::vector<UnavailableCandidate> unavailable;
   AcceptanceRule rule;
   BaselineRecord baseline;
@@ -193,6 +213,7 @@ nlohmann::json to_json(const RoleRmse& r);
 nlohmann::json to_json(const BaselineCurve& c);
 nlohmann::json to_json(const BaselineRecord& b);
 nlohmann::json to_json(const FingerprintRecord& f);
+nlohmann::json to_json(const GridRecord& g);
 nlohmann::json to_json(const UnavailableCandidate& u);
 nlohmann::json to_json(const RefitTrialRecord& t);
 nlohmann::json to_json(const ChosenEffect& c);
@@ -214,6 +235,7 @@ RoleRmse role_rmse_from_json(const nlohmann::json& j);
 BaselineCurve baseline_curve_from_json(const nlohmann::json& j);
 BaselineRecord baseline_record_from_json(const nlohmann::json& j);
 FingerprintRecord fingerprint_record_from_json(const nlohmann::json& j);
+GridRecord grid_record_from_json(const nlohmann::json& j);
 UnavailableCandidate unavailable_candidate_from_json(const nlohmann::json& j);
 RefitTrialRecord refit_trial_record_from_json(const nlohmann::json& j);
 ChosenEffect chosen_effect_from_json(const nlohmann::json& j);

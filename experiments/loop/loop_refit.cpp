@@ -31,7 +31,7 @@ double secant_value(const std::vector<std::pair<double, double>>& pts, double co
 
 double Loop::calibration_rmse(const Model& model, double mu) const {
   std::vector<double> r;
-  for (std::size_t i : cal_) r.push_back(data_.tests[i].angle_deg - model.angle(i, mu));
+  for (std::size_t i : fit_) r.push_back(data_.tests[i].angle_deg - model.angle(i, mu));
   return rmse(r);
 }
 
@@ -59,7 +59,7 @@ bool Loop::run_trial(const CandidateEffect& e, double off, double p, const Finge
   tr.p = p;
   tr.surf = surfaces_.back().get();
   double num = 0.0, den = 0.0;
-  for (std::size_t i : cal_) {
+  for (std::size_t i : fit_) {
     num += (tr.surf->curve[i].at(mu_node) - state.model.angle(i, mu_node)) * fp.angle_deg[i];
     den += fp.angle_deg[i] * fp.angle_deg[i];
   }
@@ -67,7 +67,7 @@ bool Loop::run_trial(const CandidateEffect& e, double off, double p, const Finge
   // t may extrapolate beyond the simulated value, but never past the effect's range.
   const double bound = (p < off ? e.lo : e.hi) - off;
   const double t_max = p != off ? std::min(s_.t_max, std::max(1.0, bound / (p - off))) : s_.t_max;
-  tr.joint = fit_mu(state.model, tr.surf, t_max);
+  tr.joint = fit_mu(state.model, tr.surf, t_max, fit_);
   for (const auto& [w, sf] : state.model.terms)
     tr.model.terms.push_back({(1.0 - tr.joint.t) * w, sf});
   tr.model.terms.push_back({tr.joint.t, tr.surf});
@@ -90,7 +90,7 @@ Refit Loop::refit_by_simulation(const CandidateEffect& e, double off, double p1,
   for (int k = 0; k < kMaxRefinements; ++k) {
     const Trial& last = refit.trials.back();
     if (std::abs(last.fraction - coef) <= 0.5 * std::abs(coef)) break;
-    std::vector<std::pair<double, double>> pts = {{off, 0.0}, {e.probe, 1.0}};
+    std::vector<std::pair<double, double>> pts = {{off, 0.0}, {fp.probe, 1.0}};
     for (const Trial& tr : refit.trials) pts.push_back({tr.p, tr.fraction});
     std::sort(pts.begin(), pts.end());
     double next = secant_value(pts, coef, last.p);

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <utility>
@@ -20,6 +21,7 @@
 
 #include "experiments/calibration/calibration.hpp"
 #include "experiments/loop/loop.hpp"
+#include "experiments/loop/loop_joint.hpp"
 #include "experiments/loop/loop_records.hpp"
 
 namespace reposetwin::experiments::loop_detail {
@@ -96,6 +98,7 @@ class Loop {
   const Surface& simulate_baseline();
   void set_seed_noise(const Surface& base);
   BaselineRecord calibrate_baseline(const Surface& base) const;
+  GridRecord settle_grid(const Surface*& base, BaselineRecord& baseline);
   std::size_t nearest_grid_point(double mu) const;
   std::vector<const CandidateEffect*> available_candidates(
       std::vector<UnavailableCandidate>& unavailable);
@@ -111,13 +114,19 @@ class Loop {
 
   // Building blocks (loop.cpp).
   Surface simulate_surface(const std::vector<EffectSetting>& effects);
-  FingerprintRecord fingerprint(const CandidateEffect& e, const Surface& base, std::size_t node,
-                                const std::vector<SimOutcome>& on, std::size_t first) const;
+  std::optional<FingerprintRecord> probe_candidate(const CandidateEffect& e, const Surface& base,
+                                                   std::size_t node,
+                                                   std::vector<UnavailableCandidate>& unavailable);
+  FingerprintRecord fingerprint(const CandidateEffect& e, double probe, const Surface& base,
+                                std::size_t node, const std::vector<SimOutcome>& on) const;
   std::string untraceable(const FingerprintRecord& f) const;
-  double pooled_seed_sd(const Surface& base) const;
+  JointProblem joint_problem(const LoopState& state, std::vector<std::string>& left_out) const;
+  double mu_slope(const LoopState& state, std::size_t i, int channel) const;
+  double pooled_seed_sd(const Surface& base, int channel) const;
 
-  // The model's fit and residuals (loop_model.cpp).
-  MuFit fit_mu(const Model& model, const Surface* extra, double t_max) const;
+  // The model's fit and residuals (loop_model.cpp). fit_mu fits the tests `tests`.
+  MuFit fit_mu(const Model& model, const Surface* extra, double t_max,
+               const std::vector<std::size_t>& tests) const;
   std::vector<ResidualRow> residuals(const Model& model, double mu) const;
 
   // Refit by simulation (loop_refit.cpp).
@@ -132,10 +141,16 @@ class Loop {
   std::string out_;
   const LoopSettings s_;
   SimCache cache_;
+  std::vector<double> grid_;            // the mu_r grid, extended when mu_r sits on a bound
   std::vector<std::size_t> cal_, val_;  // test indices by role
+  std::vector<std::size_t> trace_;      // the tests traced: all of them
+  std::vector<std::size_t> fit_;        // the tests a refit fits (design_.refit_on_all)
+  DesignRecord design_;
   double noise_sd_ = 0.0;               // pooled seed spread of one pile's angle [deg]
+  double noise_sd_h_ = 0.0, noise_sd_d_ = 0.0;  // the same for H and D [mm]
   double seed_se_ = 0.0;                // seed standard error of a predicted angle [deg]
   std::vector<double> sigma_;           // per test: 1-sigma noise of its residual [deg]
+  std::vector<double> sigma_h_, sigma_d_;  // per test: the same for H and D [mm]
   std::vector<std::unique_ptr<Surface>> surfaces_;
 };
 

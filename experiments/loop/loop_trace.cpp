@@ -35,13 +35,7 @@ Eigen::MatrixXd columns(const Eigen::VectorXd& a, const Eigen::VectorXd* b) {
   return x;
 }
 
-// The fit of y = b s + c f (f optional) with b in [lo, hi] (see the design note): unconstrained
-// first; if b leaves the range, b is fixed on the violated bound and c refitted alone. Throws
-// std::invalid_argument as weighted_least_squares does.
-struct BoundedFit {
-  double b = 0.0, c = 0.0, c_se = 0.0, rmse = 0.0;
-  bool at_bound = false;
-};
+}  // namespace
 
 BoundedFit bounded_fit(const Eigen::VectorXd& s, const Eigen::VectorXd* f, const Eigen::VectorXd& y,
                        const Eigen::VectorXd& sigma, double lo, double hi) {
@@ -53,6 +47,7 @@ BoundedFit bounded_fit(const Eigen::VectorXd& s, const Eigen::VectorXd* f, const
     out.c_se = free.se[1];
   }
   out.rmse = free.rmse;
+  out.chi2 = free.chi2;
   if (out.b >= lo && out.b <= hi) return out;
   out.at_bound = true;
   out.b = out.b < lo ? lo : hi;
@@ -62,11 +57,15 @@ BoundedFit bounded_fit(const Eigen::VectorXd& s, const Eigen::VectorXd* f, const
     out.c = g.beta[0];
     out.c_se = g.se[0];
     out.rmse = g.rmse;
+    out.chi2 = g.chi2;
   } else {
     out.rmse = std::sqrt(rest.squaredNorm() / static_cast<double>(rest.size()));
+    out.chi2 = rest.cwiseQuotient(sigma).squaredNorm();
   }
   return out;
 }
+
+namespace {
 
 // Leave-one-out RMSE of the bounded fit.
 double bounded_loo_rmse(const Eigen::VectorXd& s, const Eigen::VectorXd* f,

@@ -66,9 +66,22 @@ double loo_rmse(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const Eigen:
 struct AcceptanceRule {
   double min_t = 3.0;              // |c| / se(c) must exceed this [-]
   double loo_margin_factor = 1.0;  // LOO gain must exceed this x the seed noise [-]
+  double min_delta_chi2 = 4.0;     // a candidate is told from another when its joint chi^2 is
+                                   // lower by more than this (loop_joint.hpp) [-]
 };
 
-/// The residuals of one loop iteration, on the tests used for tracing (the calibration tests).
+/// The fit y = b s + c f (f optional) with known sigma and b bounded to [lo, hi] (the design
+/// note): unconstrained first; if b leaves the range, b is fixed on the violated bound and c
+/// refitted alone. Throws std::invalid_argument as weighted_least_squares does.
+struct BoundedFit {
+  double b = 0.0, c = 0.0, c_se = 0.0, rmse = 0.0;
+  double chi2 = 0.0;  // sum of squared standardised residuals [-]
+  bool at_bound = false;
+};
+BoundedFit bounded_fit(const Eigen::VectorXd& s, const Eigen::VectorXd* f, const Eigen::VectorXd& y,
+                       const Eigen::VectorXd& sigma, double lo, double hi);
+
+/// The residuals of one loop iteration, on the tests traced (every test, held-out ones included).
 struct TraceProblem {
   Eigen::VectorXd residual;        // (n) measured - predicted angle [deg]
   Eigen::VectorXd sigma;           // (n) 1-sigma noise of each residual [deg]

@@ -126,6 +126,26 @@ std::string iterations_section(const json& loop) {
     x.set("candidates", to_data(t));
     x.set("stopped", it.contains("stopped") ? mustache::data(left(it["stopped"]).text)
                                             : mustache::data(false));
+    // Written by a loop that traced jointly (older loop.json files have no decision).
+    x.set("joint", false);
+    x.set("decision", it.contains("decision") ? left(it["decision"]["statement"]).text
+                                              : std::string("as ranked"));
+    if (it.contains("joint") && !it["joint"].empty()) {
+      Table j = numeric_table({"hypothesis", "c", "se", "|c|/se", "joint chi2", "LOO chi2",
+                               "values"});
+      json rows = it["joint"];
+      for (const char* k : {"offset", "mu_only"})
+        if (!it[k].is_null()) rows.push_back(it[k]);
+      for (const json& c : rows)
+        j.rows.push_back({{left(c["name"]), sig3(c["coef"]), sig3(c["coef_se"]), sig3(c["t"]),
+                           sig3(c["chi2"]), sig3(c["loo_chi2"]), sig3(c["values"])}});
+      std::string channels;
+      for (const json& c : it["channels"])
+        channels += (channels.empty() ? "" : ", ") + c.get<std::string>();
+      mustache::data jd = to_data(j);
+      jd.set("channels", channels);
+      x.set("joint", jd);
+    }
     list.push_back(x);
   }
   mustache::data d;
@@ -160,6 +180,18 @@ std::string notes_section(const json& loop) {
     return d;
   };
   mustache::data d;
+  mustache::data can(mustache::data::type::list), cannot(mustache::data::type::list);
+  if (loop.contains("design")) {
+    for (const json& c : loop["design"]["can"]) can.push_back(mustache::data(left(c).text));
+    for (const json& c : loop["design"]["cannot"]) cannot.push_back(mustache::data(left(c).text));
+  }
+  d.set("can", can);
+  d.set("cannot", listed(cannot));
+  d.set("grid", loop.contains("grid") ? mustache::data(left(loop["grid"]["statement"]).text)
+                                      : mustache::data(false));
+  d.set("not_traced", loop.contains("not_traced") && !loop["not_traced"].is_null()
+                          ? mustache::data(left(loop["not_traced"]).text)
+                          : mustache::data(false));
   d.set("jams", listed(jams));
   d.set("unavailable", listed(unavailable));
   return render(templates::kLoopNotes, d);

@@ -131,12 +131,19 @@ const char* const kLoopEffects = R"(<h2>Chosen effects</h2>
 // iterations: [{n, mu_r, loo, candidates: table, stopped (or false)}].
 const char* const kLoopIterations =
     R"({{#iterations}}<h3>Iteration {{n}} (mu_r {{mu_r}}; mu_r-only LOO {{loo}} deg)</h3>
-{{#candidates}}{{> table}}{{/candidates}}{{#stopped}}<p>Stopped: {{stopped}}.</p>
+{{#candidates}}{{> table}}{{/candidates}}{{#joint}}<p>Traced jointly on {{channels}}:</p>
+{{> table}}{{/joint}}<p>Decision: {{decision}}.</p>
+{{#stopped}}<p>Stopped: {{stopped}}.</p>
 {{/stopped}}{{/iterations}})";
 
-// jams: [{id, n}] or false; unavailable: [{name, why}] or false.
+// design: {can: [..], cannot: [..]}; grid, not_traced: text or false; jams: [{id, n}] or false;
+// unavailable: [{name, why}] or false.
 const char* const kLoopNotes =
-    R"({{#jams}}<p>Baseline pours that formed no pile and were repeated with new seeds (the lab reports none):</p>
+    R"(<p>What this design can decide:</p>
+<ul>{{#can}}<li>{{.}}</li>{{/can}}</ul>{{#cannot}}<p>What it cannot:</p>
+<ul>{{#list}}<li>{{.}}</li>{{/list}}</ul>{{/cannot}}{{#grid}}<p>mu_r grid: {{grid}}.</p>
+{{/grid}}{{#not_traced}}<p><strong>Nothing was traced</strong>: {{not_traced}}.</p>
+{{/not_traced}}{{#jams}}<p>Baseline pours that formed no pile and were repeated with new seeds (the lab reports none):</p>
 <ul>{{#list}}<li>{{id}}: {{n}}</li>{{/list}}</ul>
 {{/jams}}{{#unavailable}}<p>Unavailable candidates:</p>
 <ul>{{#list}}<li>{{name}}: {{why}}</li>{{/list}}</ul>

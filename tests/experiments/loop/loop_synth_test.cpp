@@ -111,6 +111,12 @@ LoopSettings settings(std::vector<double> mu_grid = {0.1, 0.2, 0.35}) {
   s.image.height_px = 720;
   s.image.side_views = 2;
   s.max_effects = 1;
+  // These designs put mu_r on the grid's bound whenever an effect is hidden (a smooth plate or a
+  // fast lift at its low end, cohesion at its top): they test the tracing of what mu_r cannot
+  // take up, with the correction held inside the grid. Extending it would simulate mu_r = 0 (or
+  // 0.5), where the 15 g piles spread too thin to photograph.
+  s.at_bound = GridBound::kTrace;
+  s.grid_extensions = 0;
   s.workers = 2;
   s.progress = false;
   s.force = true;
@@ -244,6 +250,56 @@ TEST(LoopSynth, RollingSizeReferenceIsTheCalibrationTestsTypicalGrain) {
   r = make_request(tests[1], "contacts.{sample}-{sample}.rolling_friction", 0.3, 1, {{&e, 2.0}},
                    ImageVariant{});
   EXPECT_NEAR(value_of(r, ref_key), d_ref, 1e-10 * d_ref);  // 12 digits in the override
+}
+
+// The lab's design: one calibration test (m35_steel_l10), seven predicted. mu_r is matched on
+// that one test; the smooth plate is traced from the prediction residuals, refitted with mu_r
+// on every test (the design statement says the held-out RMSE after is then in-sample).
+TEST(LoopSynth, OneCalibrationTestTracesAPlantedPlateEffect) {
+  SynthDesign d = design({{"plate_friction", 0.16}});
+  for (SynthTest& t : d.tests) t.role = t.id == "m35_steel_l10" ? "calibrate" : "validate";
+  const nlohmann::json loop = run_case("plate_one_calibration", d);
+  EXPECT_EQ(loop["design"]["n_calibrate"], 1);
+  EXPECT_TRUE(loop["design"]["refit_on_all_tests"].get<bool>());
+  ASSERT_TRUE(loop["design"]["can_trace"].get<bool>());
+  ASSERT_FALSE(loop["iterations"].empty());
+  EXPECT_EQ(loop["iterations"][0]["candidates"].size(), loop["iterations"][0]["joint"].size());
+  EXPECT_EQ(loop["summary"]["chosen"], "plate_friction") << loop["iterations"].dump(1);
+  const nlohmann::json& e = loop["final"]["effects"].at(0);
+  EXPECT_LT(e["value"].get<double>(), e["off"].get<double>()) << e.dump();
+  const double before = loop["summary"]["rmse_all_before_deg"].get<double>();
+  const double after = loop["summary"]["rmse_all_after_deg"].get<double>();
+  EXPECT_LT(after, 0.5 * before) << loop["summary"].dump();
+}
+
+// A measurement wrong everywhere: the null dataset with 6 deg added to every lab angle (H and
+// D as measured). mu_r goes to the grid's top and cannot take the rest up; the residual is
+// flagged as a suspected measurement error and no physical effect is named.
+TEST(LoopSynth, AUniformMeasurementOffsetIsFlaggedNotNamed) {
+  SimCache cache((test_root() / "cache").string(), {2, false});
+  const std::string csv =
+      make_synthetic_dataset(design({}), (test_root() / "offset" / "data").string(), cache);
+  LabData data = read_lab_csv(csv);
+  for (LabTest& t : data.tests) {
+    ASSERT_TRUE(t.height_mm && t.diameter_mm) << t.id;
+    t.angle_deg += 6.0;
+    t.photos.clear();  // the angle as typed: the photos would give it back as measured
+  }
+  const nlohmann::json loop = run_loop(data, (test_root() / "offset" / "loop").string(), settings());
+  std::cerr << "offset: " << loop["summary"].dump() << "\n";
+  EXPECT_TRUE(loop["summary"]["chosen"].is_null()) << loop["iterations"].dump(1);
+  EXPECT_EQ(loop["summary"]["verdict"], "measurement_suspected") << loop["iterations"].dump(1);
+  EXPECT_TRUE(loop["grid"]["mu_r_at_bound"].get<bool>());
+  const nlohmann::json& it = loop["iterations"].at(0);
+  EXPECT_EQ(it["channels"].size(), 3u);
+  EXPECT_NEAR(it["offset"]["coef"].get<double>(), 5.0, 2.5) << it["offset"].dump();
+  // A candidate lost in the seed noise was probed at larger values before it was given up.
+  for (const nlohmann::json& u : loop["unavailable_candidates"]) {
+    const std::string why = u["why"].get<std::string>();
+    if (why.find("seed noise") != std::string::npos) {
+      EXPECT_NE(why.find("largest probe tried"), std::string::npos) << u.dump();
+    }
+  }
 }
 
 // No hidden effect: the loop must add nothing.

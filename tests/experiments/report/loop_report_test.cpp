@@ -84,5 +84,40 @@ TEST(ReportLoop, PageShowsEverySectionAndTest) {
             std::string::npos);
 }
 
+// A loop that traced jointly: the design's statements, the grid, the joint table and the
+// decision appear.
+TEST(ReportLoop, PageShowsTheDesignTheGridAndTheJointDecision) {
+  json loop = small_loop(false);
+  loop["design"] = {{"can", {"mu_r is fitted on the 1 calibration test(s)"}},
+                    {"cannot", {"the held-out RMSE after the refit is in-sample"}}};
+  loop["grid"] = {{"statement", "mu_r 0.05 lies inside the grid extended by 0.05"}};
+  loop["not_traced"] = nullptr;
+  const json score = {{"name", "lift_speed"}, {"coef", 0.8}, {"coef_se", 0.1}, {"t", 8.0},
+                      {"chi2", 48.8},         {"loo_chi2", 62.4}, {"values", 24}};
+  json& it = loop["iterations"][0];
+  it["channels"] = {"angle", "H", "D"};
+  it["joint"] = {score};
+  it["offset"] = score;
+  it["offset"]["name"] = "offset";
+  it["mu_only"] = nullptr;
+  it["decision"] = {{"statement", "indistinguishable within the noise, none named"}};
+  const fs::path out = fs::temp_directory_path() / "reposetwin_loop_report_joint_test";
+  fs::remove_all(out);
+  write_loop_html(loop, out.string());
+  const std::string html = read_file((out / "index.html").string());
+  for (const char* s : {"<li>mu_r is fitted on the 1 calibration test(s)</li>",
+                        "<li>the held-out RMSE after the refit is in-sample</li>",
+                        "mu_r grid: mu_r 0.05 lies inside the grid extended by 0.05.",
+                        "Traced jointly on angle, H, D:", "48.8", "62.4", "offset",
+                        "Decision: indistinguishable within the noise, none named."})
+    EXPECT_NE(html.find(s), std::string::npos) << s;
+  EXPECT_EQ(html.find("Nothing was traced"), std::string::npos);
+  loop["not_traced"] = "with 2 test(s) nothing can be traced";
+  write_loop_html(loop, out.string());
+  EXPECT_NE(read_file((out / "index.html").string())
+                .find("<strong>Nothing was traced</strong>: with 2 test(s) nothing can be traced."),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace reposetwin::experiments

@@ -1,0 +1,322 @@
+#include "experiments/loop/loop_joint.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "experiments/io/format.hpp"
+#include "experiments/io/json_fields.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+
+std::string fmt(double v, int digits = 3) { return significant(v, digits); }
+
+// The standardised rows of every channel, test-major within each channel: row c n + i.
+struct Stacked {
+  Eigen::VectorXd y, s, f;
+  bool has_f = false;
+};
+
+Stacked stack(const JointProblem& p, const std::vector<Eigen::VectorXd>& fp) {
+  const Eigen::Index n = p.channels.front().residual.size();
+  const Eigen::Index rows = n * static_cast<Eigen::Index>(p.channels.size());
+  Stacked st;
+  st.y.resize(rows);
+  st.s.resize(rows);
+  st.has_f = !fp.empty();
+  if (st.has_f) st.f.resize(rows);
+  for (std::size_t c = 0; c < p.channels.size(); ++c) {
+    const TraceChannel& ch = p.channels[c];
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Eigen::Index r = static_cast<Eigen::Index>(c) * n + i;
+      st.y[r] = ch.residual[i] / ch.sigma[i];
+      st.s[r] = ch.mu_sensitivity[i] / ch.sigma[i];
+      if (st.has_f) st.f[r] = fp[c][i] / ch.sigma[i];
+    }
+  }
+  return st;
+}
+
+void check(const JointProblem& p, const std::vector<Eigen::VectorXd>& fp, const std::string& name) {
+  if (p.channels.empty()) throw std::invalid_argument("joint trace: no channel");
+  const Eigen::Index n = p.channels.front().residual.size();
+  if (n < 3) throw std::invalid_argument("joint trace: at least 3 tests, got " + std::to_string(n));
+  for (const TraceChannel& ch : p.channels)
+    if (ch.residual.size() != n || ch.sigma.size() != n || ch.mu_sensitivity.size() != n)
+      throw std::invalid_argument("joint trace: channel " + ch.name + " has a different size");
+  if (!fp.empty() && fp.size() != p.channels.size())
+    throw std::invalid_argument("joint trace: " + name + " has " + std::to_string(fp.size()) +
+                                " fingerprint columns for " + std::to_string(p.channels.size()) +
+                                " channels");
+  for (const Eigen::VectorXd& f : fp)
+    if (f.size() != n) throw std::invalid_argument("joint trace: " + name + "'s column size");
+}
+
+// Leave-one-test-out: every row of test i is predicted by the fit on the other tests.
+double loo_chi2(const Stacked& st, Eigen::Index n, std::size_t channels, double lo, double hi) {
+  const Eigen::Index k = static_cast<Eigen::Index>(channels);
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    Eigen::VectorXd y((n - 1) * k), s((n - 1) * k), f((n - 1) * k);
+    Eigen::Index q = 0;
+    for (Eigen::Index r = 0; r < n * k; ++r) {
+      if (r % n == i) continue;
+      y[q] = st.y[r];
+      s[q] = st.s[r];
+      if (st.has_f) f[q] = st.f[r];
+      ++q;
+    }
+    double b = 0.0, c = 0.0;
+    try {
+      const BoundedFit fit =
+          bounded_fit(s, st.has_f ? &f : nullptr, y, Eigen::VectorXd::Ones(y.size()), lo, hi);
+      b = fit.b;
+      c = fit.c;
+    } catch (const std::invalid_argument&) {
+      // Without test i the columns are degenerate: the model cannot predict it.
+    }
+    for (Eigen::Index ch = 0; ch < k; ++ch) {
+      const Eigen::Index r = ch * n + i;
+      const double e = st.y[r] - b * st.s[r] - (st.has_f ? c * st.f[r] : 0.0);
+      sum += e * e;
+    }
+  }
+  return sum;
+}
+
+}  // namespace
+
+JointScore score_joint(const JointProblem& p, const std::string& name,
+                       const std::vector<Eigen::VectorXd>& fp) {
+  check(p, fp, name);
+  const Eigen::Index n = p.channels.front().residual.size();
+  const Stacked st = stack(p, fp);
+  const Eigen::VectorXd ones = Eigen::VectorXd::Ones(st.y.size());
+  JointScore out;
+  out.name = name;
+  out.rows = static_cast<int>(st.y.size());
+  BoundedFit fit;
+  try {
+    fit = bounded_fit(st.s, st.has_f ? &st.f : nullptr, st.y, ones, p.mu_shift_lo, p.mu_shift_hi);
+  } catch (const std::invalid_argument&) {
+    out.identifiable = false;
+    fit = bounded_fit(st.s, nullptr, st.y, ones, p.mu_shift_lo, p.mu_shift_hi);
+  }
+  const bool with_f = st.has_f && out.identifiable;
+  out.mu_shift = fit.b;
+  out.mu_shift_at_bound = fit.at_bound;
+  out.coef = with_f ? fit.c : 0.0;
+  out.coef_se = with_f ? fit.c_se : 0.0;
+  out.t = with_f && fit.c_se > 0.0 ? std::abs(fit.c) / fit.c_se : 0.0;
+  out.chi2 = fit.chi2;
+  for (std::size_t c = 0; c < p.channels.size(); ++c) {
+    double x = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Eigen::Index r = static_cast<Eigen::Index>(c) * n + i;
+      const double e = st.y[r] - out.mu_shift * st.s[r] - (with_f ? out.coef * st.f[r] : 0.0);
+      x += e * e;
+    }
+    out.chi2_by_channel.push_back(x);
+  }
+  Stacked loo = st;
+  loo.has_f = with_f;
+  out.loo_chi2 = loo_chi2(loo, n, p.channels.size(), p.mu_shift_lo, p.mu_shift_hi);
+  return out;
+}
+
+JointScore score_offset(const JointProblem& p) {
+  if (p.channels.empty()) throw std::invalid_argument("joint trace: no channel");
+  const Eigen::Index n = p.channels.front().residual.size();
+  std::vector<Eigen::VectorXd> fp(p.channels.size(), Eigen::VectorXd::Zero(n));
+  fp[0].setOnes();
+  return score_joint(p, "offset", fp);
+}
+
+std::string trace_verdict_name(TraceVerdict v) {
+  switch (v) {
+    case TraceVerdict::kNothing:
+      return "nothing";
+    case TraceVerdict::kNamed:
+      return "named";
+    case TraceVerdict::kIndistinguishable:
+      return "indistinguishable";
+    case TraceVerdict::kMeasurementSuspected:
+      return "measurement_suspected";
+  }
+  return "nothing";
+}
+
+namespace {
+
+std::string describe(const JointScore& s) {
+  return s.name + " (c = " + fmt(s.coef) + " +- " + fmt(s.coef_se) + ", joint chi^2 " +
+         fmt(s.chi2) + " over " + std::to_string(s.rows) + " values, leave-one-out " +
+         fmt(s.loo_chi2) + ")";
+}
+
+}  // namespace
+
+TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
+                           const std::vector<JointScore>& joint, const JointScore& offset,
+                           const JointScore& mu_only, const AcceptanceRule& rule) {
+  std::vector<const JointScore*> contenders;
+  for (const CandidateScore& a : angle) {
+    if (!a.accepted) continue;
+    const auto it = std::find_if(joint.begin(), joint.end(),
+                                 [&](const JointScore& j) { return j.name == a.name; });
+    if (it == joint.end())
+      throw std::invalid_argument("decide_trace: no joint score for " + a.name);
+    contenders.push_back(&*it);
+  }
+  std::stable_sort(contenders.begin(), contenders.end(),
+                   [](const JointScore* x, const JointScore* y) { return x->chi2 < y->chi2; });
+  const bool offset_flag = offset.identifiable && offset.t > rule.min_t &&
+                           mu_only.chi2 - offset.chi2 > rule.min_delta_chi2;
+  TraceDecision d;
+  const std::string offset_words =
+      "a uniform offset of " + fmt(offset.coef) + " +- " + fmt(offset.coef_se) +
+      " deg on every test (|c|/se " + fmt(offset.t) +
+      "), beyond mu_r's reach (joint chi^2 " + fmt(offset.chi2) + " against " +
+      fmt(mu_only.chi2) + " with the mu_r correction alone" +
+      (offset.mu_shift_at_bound ? ", which stops at the grid's bound)" : ")");
+  if (offset_flag &&
+      (contenders.empty() || offset.chi2 - contenders.front()->chi2 <= rule.min_delta_chi2)) {
+    d.verdict = TraceVerdict::kMeasurementSuspected;
+    d.statement = "suspected measurement or declared-condition error, no physical effect named: " +
+                  offset_words +
+                  (contenders.empty()
+                       ? std::string("; no candidate meets the acceptance rule")
+                       : "; the best candidate, " + describe(*contenders.front()) +
+                             ", does not beat it by more than " + fmt(rule.min_delta_chi2));
+    return d;
+  }
+  if (contenders.empty()) {
+    d.statement = "no candidate meets the acceptance rule";
+    return d;
+  }
+  const double best = contenders.front()->chi2;
+  for (const JointScore* c : contenders)
+    if (c->chi2 - best <= rule.min_delta_chi2) d.tied.push_back(c->name);
+  if (d.tied.size() > 1) {
+    d.verdict = TraceVerdict::kIndistinguishable;
+    d.statement = "indistinguishable within the noise, none named:";
+    for (const JointScore* c : contenders)
+      if (c->chi2 - best <= rule.min_delta_chi2) d.statement += " " + describe(*c) + ";";
+    d.statement += " their joint chi^2 differ by " + fmt(rule.min_delta_chi2) +
+                   " or less; a further observable or test must decide";
+    return d;
+  }
+  d.tied.clear();
+  d.verdict = TraceVerdict::kNamed;
+  d.named = contenders.front()->name;
+  d.statement = "named " + describe(*contenders.front());
+  if (contenders.size() > 1)
+    d.statement += "; next " + describe(*contenders[1]) + ", worse by " +
+                   fmt(contenders[1]->chi2 - best) + " > " + fmt(rule.min_delta_chi2);
+  if (offset_flag) d.statement += "; it beats " + offset_words;
+  return d;
+}
+
+DesignRecord describe_design(int n_cal, int n_val) {
+  if (n_cal < 1)
+    throw std::invalid_argument("the loop needs at least one calibration test to fit mu_r");
+  DesignRecord d;
+  d.n_calibrate = n_cal;
+  d.n_validate = n_val;
+  const int n = n_cal + n_val;
+  d.can_trace = n >= 4;
+  d.refit_on_all = n_cal < 3;
+  const std::string ncal = std::to_string(n_cal), nall = std::to_string(n);
+  d.can.push_back("mu_r is fitted on the " + ncal + " calibration test(s)");
+  if (n_cal == 1)
+    d.cannot.push_back(
+        "the one calibration test is matched exactly by mu_r (where the grid lets it): its "
+        "residual is then zero by construction and says nothing of the model; the evidence is "
+        "in the predictions");
+  if (n_val == 0)
+    d.cannot.push_back("no test is held out: the out-of-sample evidence is the leave-one-out");
+  if (d.can_trace)
+    d.can.push_back("the residuals of all " + nall + " tests (" + ncal + " calibration, " +
+                    std::to_string(n_val) +
+                    " predicted) are traced with a mu_r correction, each candidate judged by "
+                    "leave-one-test-out over all of them with the seed noise known");
+  else
+    d.cannot.push_back("with " + nall +
+                       " test(s) nothing can be traced: a leave-one-out check of a mu_r "
+                       "correction and one effect needs at least 4 tests; the residuals are "
+                       "reported as they are");
+  // The statement why nothing can be traced stays the last one (the loop quotes it).
+  if (d.can_trace && d.refit_on_all)
+    d.cannot.push_back(
+        "a joint refit of mu_r and an effect on fewer than 3 calibration tests is not "
+        "determined, so it uses every test: the held-out RMSE after the refit is in-sample, "
+        "the leave-one-out is the out-of-sample measure");
+  else if (d.can_trace && n_val > 0)
+    d.can.push_back("the refit uses the calibration tests: the held-out RMSE after it is "
+                    "out-of-sample");
+  return d;
+}
+
+nlohmann::json to_json(const JointScore& s) {
+  return {{"name", s.name},         {"identifiable", s.identifiable},
+          {"coef", s.coef},         {"coef_se", s.coef_se},
+          {"t", s.t},               {"mu_shift", s.mu_shift},
+          {"mu_shift_at_bound", s.mu_shift_at_bound},
+          {"chi2", s.chi2},         {"loo_chi2", s.loo_chi2},
+          {"values", s.rows},       {"chi2_by_channel", s.chi2_by_channel}};
+}
+
+nlohmann::json to_json(const TraceDecision& d) {
+  return {{"verdict", trace_verdict_name(d.verdict)},
+          {"named", d.named.empty() ? nlohmann::json() : nlohmann::json(d.named)},
+          {"indistinguishable", d.tied},
+          {"statement", d.statement}};
+}
+
+nlohmann::json to_json(const DesignRecord& d) {
+  return {{"n_calibrate", d.n_calibrate}, {"n_validate", d.n_validate},
+          {"can_trace", d.can_trace},     {"refit_on_all_tests", d.refit_on_all},
+          {"can", d.can},                 {"cannot", d.cannot}};
+}
+
+JointScore joint_score_from_json(const nlohmann::json& j) {
+  JointScore s;
+  s.name = j.at("name").get<std::string>();
+  s.identifiable = j.at("identifiable").get<bool>();
+  s.coef = json_number(j.at("coef"));
+  s.coef_se = json_number(j.at("coef_se"));
+  s.t = json_number(j.at("t"));
+  s.mu_shift = json_number(j.at("mu_shift"));
+  s.mu_shift_at_bound = j.at("mu_shift_at_bound").get<bool>();
+  s.chi2 = json_number(j.at("chi2"));
+  s.loo_chi2 = json_number(j.at("loo_chi2"));
+  s.rows = j.at("values").get<int>();
+  for (const auto& x : j.at("chi2_by_channel")) s.chi2_by_channel.push_back(json_number(x));
+  return s;
+}
+
+TraceDecision trace_decision_from_json(const nlohmann::json& j) {
+  TraceDecision d;
+  const std::string v = j.at("verdict").get<std::string>();
+  for (TraceVerdict k : {TraceVerdict::kNothing, TraceVerdict::kNamed,
+                         TraceVerdict::kIndistinguishable, TraceVerdict::kMeasurementSuspected})
+    if (trace_verdict_name(k) == v) d.verdict = k;
+  if (!j.at("named").is_null()) d.named = j.at("named").get<std::string>();
+  d.tied = j.at("indistinguishable").get<std::vector<std::string>>();
+  d.statement = j.at("statement").get<std::string>();
+  return d;
+}
+
+DesignRecord design_record_from_json(const nlohmann::json& j) {
+  DesignRecord d;
+  d.n_calibrate = j.at("n_calibrate").get<int>();
+  d.n_validate = j.at("n_validate").get<int>();
+  d.can_trace = j.at("can_trace").get<bool>();
+  d.refit_on_all = j.at("refit_on_all_tests").get<bool>();
+  d.can = j.at("can").get<std::vector<std::string>>();
+  d.cannot = j.at("cannot").get<std::vector<std::string>>();
+  return d;
+}
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,129 @@
+// Deciding what a residual can be traced to: the observables taken jointly, candidates the data
+// cannot tell apart, a residual that looks like a measurement error, and what a design of
+// calibration and held-out tests can decide at all. Plain numbers in, records out.
+//
+// Design note.
+//  * Channels. The angle is one observable of a pile; H and D are two more, and effects that
+//    move the angle alike can move H and D differently (a smooth plate spreads the pile, a fast
+//    lift flattens its top). Each channel c carries, per traced test i, the residual r_ci, its
+//    known noise sigma_ci (from its own seed spread) and its sensitivity to mu_r s_ci; a
+//    candidate's fingerprint has one column per channel. Rows are standardised by sigma, so the
+//    channels share one weighted fit
+//        r_ci / sigma_ci = b s_ci / sigma_ci + c f_ci / sigma_ci + N(0, 1),
+//    one mu_r correction b (bounded as in loop_trace.hpp) and one strength c for all channels.
+//    A further observable (the crest width) is one more Channel; nothing else changes.
+//  * Telling candidates apart. With the noise known, chi^2 is -2 log likelihood up to a
+//    constant, and every candidate has the same two coefficients, so chi^2_A - chi^2_B is the
+//    log likelihood ratio of A against B. Among the candidates that meet the acceptance rule
+//    (loop_trace.hpp, on the angle), the one with the lowest joint chi^2 is named only when every
+//    other is worse by more than min_delta_chi2 (default 4: the named one at least e^2 = 7.4 times
+//    as likely). Otherwise the loop reports them as indistinguishable with their numbers and
+//    names none: which to believe is for a further observable or test to decide.
+//  * A measurement suspected. A residual nearly the same on every test, that mu_r cannot take
+//    up inside its range, is the mark of a measurement (or a declared condition) wrong
+//    everywhere, not of a physical effect whose pattern follows the conditions. The offset
+//    hypothesis is a pseudo-candidate: a column of ones on the angle (zeros on H and D, which a
+//    wrong angle reading leaves alone). It is beyond mu_r's reach when it explains the residual
+//    better than the mu_r correction alone by more than min_delta_chi2 (mu_r's correction
+//    stops at the grid's bound, or H and D say mu_r did not change); it is flagged when, in
+//    addition, its strength is significant (|c|/se > min_t) and no accepted physical candidate
+//    beats it by more than min_delta_chi2; then nothing is named.
+//  * The design. mu_r is fitted on the calibration tests (one is enough: it is then matched
+//    exactly); every test, held-out ones included, is traced (a prediction's residual is
+//    out-of-sample evidence); leave-one-test-out over all traced tests keeps the rule honest
+//    about the fitted coefficients. describe_design states what a design can and cannot decide.
+#pragma once
+
+#include <Eigen/Core>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "experiments/loop/loop_trace.hpp"
+
+namespace reposetwin::experiments {
+
+/// One observable over the traced tests.
+struct TraceChannel {
+  std::string name;                // "angle", "H", "D"
+  std::string units;               // "deg", "mm"
+  Eigen::VectorXd residual;        // (n) measured - predicted [units]
+  Eigen::VectorXd sigma;           // (n) 1-sigma noise of the residual [units]
+  Eigen::VectorXd mu_sensitivity;  // (n) d value / d mu_r [units per unit mu_r]
+};
+
+/// The channels traced together, with the mu_r correction's range.
+struct JointProblem {
+  std::vector<TraceChannel> channels;
+  double mu_shift_lo = -std::numeric_limits<double>::infinity();  // [-]
+  double mu_shift_hi = std::numeric_limits<double>::infinity();   // [-]
+};
+
+/// One hypothesis fitted to every channel at once.
+struct JointScore {
+  std::string name;
+  bool identifiable = true;         // false: the columns are degenerate
+  double coef = 0.0, coef_se = 0.0;  // c and its standard error [-]
+  double t = 0.0;                    // |c| / se [-]
+  double mu_shift = 0.0;             // b [-]
+  bool mu_shift_at_bound = false;
+  double chi2 = 0.0;                 // sum of squared standardised residuals [-]
+  double loo_chi2 = 0.0;             // the same, each test predicted from the others [-]
+  int rows = 0;                      // tests x channels
+  std::vector<double> chi2_by_channel;
+};
+
+/// Fits the hypothesis with one fingerprint column per channel (`fingerprint[c]` has n rows),
+/// or the mu_r correction alone when `fingerprint` is empty. Throws std::invalid_argument for
+/// mismatched sizes or fewer than 3 tests.
+JointScore score_joint(const JointProblem& p, const std::string& name,
+                       const std::vector<Eigen::VectorXd>& fingerprint);
+
+/// The offset hypothesis: ones on the first channel (the angle), zeros on the others.
+JointScore score_offset(const JointProblem& p);
+
+/// What the tracing concludes.
+enum class TraceVerdict {
+  kNothing,             // no candidate meets the rule
+  kNamed,               // one candidate, told from the others
+  kIndistinguishable,   // two or more explain the residual alike; none named
+  kMeasurementSuspected,  // a uniform offset beyond mu_r's reach; nothing named
+};
+std::string trace_verdict_name(TraceVerdict v);
+
+struct TraceDecision {
+  TraceVerdict verdict = TraceVerdict::kNothing;
+  std::string named;                 // kNamed: the candidate
+  std::vector<std::string> tied;     // kIndistinguishable: the candidates (best first)
+  std::string statement;             // in words, with the numbers
+};
+
+/// Decides among `angle` (the candidates' angle scores; the accepted ones compete) by their
+/// joint scores `joint` (matched by name), the offset hypothesis `offset` and the mu_r
+/// correction alone `mu_only` (design note). Throws std::invalid_argument when an accepted
+/// candidate has no joint score.
+TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
+                           const std::vector<JointScore>& joint, const JointScore& offset,
+                           const JointScore& mu_only, const AcceptanceRule& rule);
+
+/// What a design of calibration and held-out tests can decide.
+struct DesignRecord {
+  int n_calibrate = 0, n_validate = 0;
+  bool can_trace = false;   // enough tests for a leave-one-out check of an effect
+  bool refit_on_all = false;  // the refit of (mu_r, effect) uses every test
+  std::vector<std::string> can, cannot;  // statements
+};
+
+/// The statement for `n_calibrate` (>= 1) and `n_validate` tests. Throws std::invalid_argument
+/// when n_calibrate < 1.
+DesignRecord describe_design(int n_calibrate, int n_validate);
+
+nlohmann::json to_json(const JointScore& s);
+nlohmann::json to_json(const TraceDecision& d);
+nlohmann::json to_json(const DesignRecord& d);
+JointScore joint_score_from_json(const nlohmann::json& j);
+TraceDecision trace_decision_from_json(const nlohmann::json& j);
+DesignRecord design_record_from_json(const nlohmann::json& j);
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,52 @@
+// The grain-shape candidate: a request turns every grain into a rod of four spheres of the
+// requested elongation, the scene accepts it, a scene with shapes of its own refuses it, and it
+// is tried only when named.
+#include "experiments/loop/loop_effects.hpp"
+
+#include <gtest/gtest.h>
+
+#include "experiments/io/scene_overrides.hpp"
+#include "experiments/loop/loop_sim.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+
+const std::string kScene = std::string(REPOSETWIN_SOURCE_DIR) + "/data/loop/small_scene.toml";
+
+LabTest small_test() {
+  LabTest t;
+  t.id = "m15";
+  t.role = "calibrate";
+  t.scene_path = kScene;
+  t.overrides = {{"sample.mass_kg", "0.015"}};
+  return t;
+}
+
+TEST(LoopEffects, GrainShapeMakesEveryGrainARodOfFourSpheres) {
+  const CandidateEffect& e = find_effect("grain_shape");
+  EXPECT_TRUE(e.opt_in);
+  EXPECT_EQ(e.off, 1.0);
+  const LabTest t = small_test();
+  EXPECT_EQ(effect_unavailable(t, e), "");
+  const SimRequest r = make_request(t, "contacts.{sample}-{sample}.rolling_friction", 0.2, 1,
+                                    {{&e, 1.8}}, ImageVariant{});
+  const SceneConfig s = load_scene(t.scene_path, resolved_overrides(r));
+  ASSERT_EQ(s.shapes.size(), 1u);
+  EXPECT_EQ(s.shapes[0].elongation, 1.8);
+  EXPECT_EQ(s.shapes[0].spheres, kShapeSpheres);
+  // Off, the scene is the spheres it was.
+  const SimRequest off =
+      make_request(t, "contacts.{sample}-{sample}.rolling_friction", 0.2, 1, {}, ImageVariant{});
+  EXPECT_TRUE(load_scene(t.scene_path, resolved_overrides(off)).shapes.empty());
+}
+
+TEST(LoopEffects, AScenesOwnShapesRefuseTheShapeCandidate) {
+  LabTest t = small_test();
+  t.overrides.push_back(
+      {"sample.shape", "{name = \"rod\", kind = \"generated\", elongation = 1.5, spheres = 4}"});
+  EXPECT_NE(effect_unavailable(t, find_effect("grain_shape")).find("its own grain shapes"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments

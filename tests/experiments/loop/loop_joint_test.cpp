@@ -1,0 +1,284 @@
+// The loop's joint decision on hand-made fingerprints with known answers: the joint fit against
+// the one-channel fit and leave-one-out it generalises, two candidates alike on the angle told
+// apart by H and D (or reported as indistinguishable, never the wrong one alone), a uniform
+// offset beyond mu_r's reach flagged, and what a design of calibration and held-out tests can
+// decide.
+#include "experiments/loop/loop_joint.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace reposetwin::experiments {
+namespace {
+
+constexpr int kTests = 8;
+
+TraceChannel channel(const std::string& name, const Eigen::VectorXd& residual, double sigma,
+                     double sensitivity) {
+  return {name, "u", residual, Eigen::VectorXd::Constant(residual.size(), sigma),
+          Eigen::VectorXd::Constant(residual.size(), sensitivity)};
+}
+
+// The angle scores of the candidates as the acceptance rule gives them (all accepted here: the
+// decision among contenders is what is tested).
+std::vector<CandidateScore> accepted(const std::vector<std::string>& names) {
+  std::vector<CandidateScore> out;
+  for (const std::string& n : names) {
+    CandidateScore s;
+    s.name = n;
+    s.accepted = true;
+    out.push_back(s);
+  }
+  return out;
+}
+
+// Per test, a condition pattern: what an effect does on the angle (deg), H and D (mm).
+struct Fp {
+  Eigen::VectorXd angle, h, d;
+  std::vector<Eigen::VectorXd> cols(int channels) const {
+    std::vector<Eigen::VectorXd> c = {angle, h, d};
+    c.resize(static_cast<std::size_t>(channels));
+    return c;
+  }
+};
+
+// A and B move the angle almost alike (cosine 0.999) but H and D in opposite ways: A lowers H
+// and widens D (a smooth plate spreads the pile), B lowers H and narrows D.
+void collinear_pair(Fp& a, Fp& b) {
+  a.angle.resize(kTests);
+  a.h.resize(kTests);
+  a.d.resize(kTests);
+  b = a;
+  for (int i = 0; i < kTests; ++i) {
+    a.angle[i] = -3.0 - 1.5 * (i % 4);
+    b.angle[i] = a.angle[i] * (1.0 + 0.01 * (i % 2));
+    a.h[i] = -1.5 - 0.2 * (i % 4);
+    b.h[i] = -1.5 - 0.2 * (i % 4);
+    a.d[i] = 8.0 + (i % 3);
+    b.d[i] = -4.0 - (i % 3);
+  }
+}
+
+JointProblem problem_of(const Fp& truth, double strength, int channels, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const double sigmas[] = {1.0, 0.5, 2.5};
+  const Eigen::VectorXd* cols[] = {&truth.angle, &truth.h, &truth.d};
+  JointProblem p;
+  for (int c = 0; c < channels; ++c) {
+    Eigen::VectorXd r(kTests);
+    for (int i = 0; i < kTests; ++i) r[i] = strength * (*cols[c])[i] + sigmas[c] * unit(rng);
+    p.channels.push_back(channel(c == 0 ? "angle" : c == 1 ? "H" : "D", r, sigmas[c],
+                                 c == 0 ? 40.0 : c == 1 ? 10.0 : -30.0));
+  }
+  p.mu_shift_lo = 0.0;  // mu_r at the grid's low end, as a plate effect puts it
+  p.mu_shift_hi = 0.2;
+  return p;
+}
+
+TEST(LoopJoint, OneChannelMatchesTheAngleFitAndItsLeaveOneOut) {
+  // With the angle alone and no bound, the joint fit is loop_trace's weighted least squares
+  // and its leave-one-out chi^2 is n LOO-RMSE^2 (unit sigmas).
+  JointProblem p;
+  Eigen::VectorXd r(kTests), s(kTests), f(kTests);
+  for (int i = 0; i < kTests; ++i) {
+    s[i] = 30.0 + 2.0 * i;
+    f[i] = (i % 2 ? -1.0 : 2.0) + 0.1 * i;
+    r[i] = 0.01 * s[i] + 0.7 * f[i] + 0.3 * std::sin(3.0 * i);
+  }
+  p.channels.push_back({"angle", "deg", r, Eigen::VectorXd::Ones(kTests), s});
+  const JointScore j = score_joint(p, "A", {f});
+  Eigen::MatrixXd x(kTests, 2);
+  x.col(0) = s;
+  x.col(1) = f;
+  const WlsFit w = weighted_least_squares(x, r, Eigen::VectorXd::Ones(kTests));
+  EXPECT_NEAR(j.coef, w.beta[1], 1e-10);
+  EXPECT_NEAR(j.coef_se, w.se[1], 1e-10);
+  EXPECT_NEAR(j.mu_shift, w.beta[0], 1e-10);
+  EXPECT_NEAR(j.chi2, w.chi2, 1e-9);
+  const double loo = loo_rmse(x, r, Eigen::VectorXd::Ones(kTests));
+  EXPECT_NEAR(j.loo_chi2, kTests * loo * loo, 1e-9);
+  EXPECT_EQ(j.rows, kTests);
+  // Doubling the sigma quarters chi^2 and doubles the standard error; c stays.
+  p.channels[0].sigma *= 2.0;
+  const JointScore j2 = score_joint(p, "A", {f});
+  EXPECT_NEAR(j2.coef, j.coef, 1e-10);
+  EXPECT_NEAR(j2.chi2, j.chi2 / 4.0, 1e-9);
+  EXPECT_NEAR(j2.coef_se, 2.0 * j.coef_se, 1e-10);
+}
+
+TEST(LoopJoint, AngleAlikeCandidatesAreToldApartByHAndD) {
+  Fp a, b;
+  collinear_pair(a, b);
+  int named_a = 0, tied = 0;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    // On the angle alone the pair cannot be told apart: never one of them named.
+    const JointProblem angle_only = problem_of(a, 0.8, 1, seed);
+    const JointScore off1 = score_offset(angle_only);
+    const TraceDecision d1 = decide_trace(
+        accepted({"B", "A"}),
+        {score_joint(angle_only, "A", a.cols(1)), score_joint(angle_only, "B", b.cols(1))}, off1,
+        score_joint(angle_only, "mu", {}), {});
+    EXPECT_EQ(d1.verdict, TraceVerdict::kIndistinguishable) << d1.statement;
+    EXPECT_TRUE(d1.named.empty());
+    EXPECT_EQ(d1.tied.size(), 2u);
+    // With H and D the planted one is named, or both reported; never B alone.
+    const JointProblem all = problem_of(a, 0.8, 3, seed);
+    const TraceDecision d3 = decide_trace(
+        accepted({"B", "A"}), {score_joint(all, "A", a.cols(3)), score_joint(all, "B", b.cols(3))},
+        score_offset(all), score_joint(all, "mu", {}), {});
+    EXPECT_NE(d3.named, "B") << d3.statement;
+    if (d3.verdict == TraceVerdict::kNamed) ++named_a;
+    if (d3.verdict == TraceVerdict::kIndistinguishable) ++tied;
+  }
+  // D's fingerprints differ by 12 mm against a noise of 2.5 mm: A is named every time.
+  EXPECT_EQ(named_a, 20);
+  EXPECT_EQ(tied, 0);
+}
+
+TEST(LoopJoint, IndistinguishableCandidatesAreReportedWithTheirNumbers) {
+  // The residual lies halfway between two angle fingerprints: each explains it alike.
+  Eigen::VectorXd fa(kTests), fb(kTests), r(kTests);
+  for (int i = 0; i < kTests; ++i) {
+    fa[i] = -2.0 - 0.5 * (i % 4);
+    fb[i] = -2.0 - 0.5 * (i % 4) - 0.3 * (i % 2);
+    r[i] = 0.5 * (fa[i] + fb[i]);
+  }
+  JointProblem p;
+  p.channels.push_back(channel("angle", r, 1.0, 40.0));
+  p.mu_shift_lo = 0.0;
+  p.mu_shift_hi = 0.3;
+  const JointScore ja = score_joint(p, "plate_friction", {fa});
+  const JointScore jb = score_joint(p, "lift_speed", {fb});
+  const TraceDecision d =
+      decide_trace(accepted({"plate_friction", "lift_speed"}), {ja, jb}, score_offset(p), score_joint(p, "mu", {}), {});
+  ASSERT_EQ(d.verdict, TraceVerdict::kIndistinguishable);
+  EXPECT_TRUE(d.named.empty());
+  EXPECT_NE(d.statement.find("plate_friction (c = "), std::string::npos) << d.statement;
+  EXPECT_NE(d.statement.find("lift_speed (c = "), std::string::npos) << d.statement;
+  // A stricter rule that counts any chi^2 difference as evidence names the better one.
+  AcceptanceRule eager;
+  eager.min_delta_chi2 = 0.0;
+  const TraceDecision e =
+      decide_trace(accepted({"plate_friction", "lift_speed"}), {ja, jb}, score_offset(p), score_joint(p, "mu", {}), eager);
+  EXPECT_EQ(e.verdict, TraceVerdict::kNamed);
+  EXPECT_EQ(e.named, ja.chi2 < jb.chi2 ? "plate_friction" : "lift_speed");
+  // Only accepted candidates contend; one left alone is named.
+  std::vector<CandidateScore> one = accepted({"plate_friction", "lift_speed"});
+  one[1].accepted = false;
+  EXPECT_EQ(decide_trace(one, {ja, jb}, score_offset(p), score_joint(p, "mu", {}), {}).named, "plate_friction");
+  EXPECT_THROW(decide_trace(accepted({"cohesion"}), {ja, jb}, score_offset(p), score_joint(p, "mu", {}), {}),
+               std::invalid_argument);
+}
+
+TEST(LoopJoint, AUniformOffsetBeyondMuReachIsAMeasurementSuspect) {
+  // +5 deg on every test with mu_r already at the grid's top (no upward correction), H and D as
+  // predicted: a wrong angle reading, not a physical effect. A cohesion-like candidate that
+  // steepens the angle with a condition pattern and moves H too fits worse than the offset.
+  Eigen::VectorXd r(kTests), h(kTests), d(kTests), fa(kTests), fh(kTests), fd(kTests);
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  for (int i = 0; i < kTests; ++i) {
+    r[i] = 5.0 + 0.5 * unit(rng);
+    h[i] = 0.3 * unit(rng);
+    d[i] = 1.5 * unit(rng);
+    fa[i] = 2.0 + 2.0 * (i % 2);
+    fh[i] = 1.0 + 1.0 * (i % 2);
+    fd[i] = -1.0;
+  }
+  JointProblem p;
+  p.channels = {channel("angle", r, 0.5, 20.0), channel("H", h, 0.3, 5.0),
+                channel("D", d, 1.5, -10.0)};
+  p.mu_shift_lo = -0.3;
+  p.mu_shift_hi = 0.0;
+  const JointScore off = score_offset(p);
+  EXPECT_NEAR(off.coef, 5.0, 3.0 * off.coef_se);
+  EXPECT_GT(off.t, 3.0);
+  const JointScore coh = score_joint(p, "cohesion", {fa, fh, fd});
+  const JointScore mu = score_joint(p, "mu", {});
+  const TraceDecision dec = decide_trace(accepted({"cohesion"}), {coh}, off, mu, {});
+  EXPECT_EQ(dec.verdict, TraceVerdict::kMeasurementSuspected) << dec.statement;
+  EXPECT_TRUE(dec.named.empty());
+  EXPECT_NE(dec.statement.find("uniform offset of 4.81 +- 0.177 deg"), std::string::npos)
+      << dec.statement;
+  // With no candidate at all, the same residual is still flagged.
+  EXPECT_EQ(decide_trace({}, {}, off, mu, {}).verdict, TraceVerdict::kMeasurementSuspected);
+
+  // A constant that mu_r can take up (the angle alone, mu_r free, its sensitivity the same on
+  // every test) is a mu_r change: the offset is not identifiable apart from it, nothing flagged.
+  JointProblem angle_only;
+  angle_only.channels = {channel("angle", r, 0.5, 20.0)};
+  const JointScore free_off = score_offset(angle_only);
+  EXPECT_FALSE(free_off.identifiable);
+  EXPECT_EQ(decide_trace({}, {}, free_off, score_joint(angle_only, "mu", {}), {}).verdict,
+            TraceVerdict::kNothing);
+  // And so it is when H and D agree with the mu_r change the angle asks for.
+  JointProblem agree = p;
+  agree.mu_shift_hi = 0.5;
+  agree.channels[1].residual = Eigen::VectorXd::Constant(kTests, 5.0 / 20.0 * 5.0) + h;
+  agree.channels[2].residual = Eigen::VectorXd::Constant(kTests, 5.0 / 20.0 * -10.0) + d;
+  const JointScore mu_agree = score_joint(agree, "mu", {});
+  EXPECT_NEAR(mu_agree.mu_shift, 0.25, 0.02);
+  EXPECT_NE(decide_trace({}, {}, score_offset(agree), mu_agree, {}).verdict,
+            TraceVerdict::kMeasurementSuspected);
+}
+
+TEST(LoopJoint, AConditionPatternBeatsTheOffset) {
+  // A smooth plate: -6 deg on steel, -2 on wood, mu_r at the low end; the offset explains the
+  // mean but not the step between plates, and H and D follow the plate.
+  Fp plate;
+  plate.angle.resize(kTests);
+  plate.h.resize(kTests);
+  plate.d.resize(kTests);
+  for (int i = 0; i < kTests; ++i) {
+    const bool steel = i < kTests / 2;
+    plate.angle[i] = steel ? -6.0 : -2.0;
+    plate.h[i] = steel ? -3.0 : -1.0;
+    plate.d[i] = steel ? 12.0 : 4.0;
+  }
+  const JointProblem p = problem_of(plate, 0.7, 3, 5);
+  const JointScore off = score_offset(p);
+  const TraceDecision d =
+      decide_trace(accepted({"plate_friction"}), {score_joint(p, "plate_friction", plate.cols(3))},
+                   off, score_joint(p, "mu", {}), {});
+  EXPECT_EQ(d.verdict, TraceVerdict::kNamed) << d.statement;
+  EXPECT_EQ(d.named, "plate_friction");
+}
+
+TEST(LoopJoint, TheDesignSaysWhatItCanDecide) {
+  // The lab's design: one calibration test, four predicted.
+  const DesignRecord lab = describe_design(1, 4);
+  EXPECT_TRUE(lab.can_trace);
+  EXPECT_TRUE(lab.refit_on_all);
+  auto holds = [](const std::vector<std::string>& v, const std::string& part) {
+    for (const std::string& s : v)
+      if (s.find(part) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(holds(lab.cannot, "matched exactly"));
+  EXPECT_TRUE(holds(lab.can, "all 5 tests (1 calibration, 4 predicted)"));
+  EXPECT_TRUE(holds(lab.cannot, "in-sample"));
+  // Too few tests to trace anything: stated, not refused.
+  const DesignRecord tiny = describe_design(1, 2);
+  EXPECT_FALSE(tiny.can_trace);
+  EXPECT_TRUE(holds(tiny.cannot, "at least 4 tests"));
+  // The loop quotes the last statement as the reason nothing was traced.
+  EXPECT_NE(describe_design(3, 0).cannot.back().find("nothing can be traced"), std::string::npos);
+  // The synthetic design: the refit stays on the calibration tests, the held-out one is
+  // out-of-sample.
+  const DesignRecord synth = describe_design(7, 1);
+  EXPECT_TRUE(synth.can_trace);
+  EXPECT_FALSE(synth.refit_on_all);
+  EXPECT_TRUE(holds(synth.can, "out-of-sample"));
+  EXPECT_TRUE(holds(describe_design(4, 0).cannot, "no test is held out"));
+  EXPECT_THROW(describe_design(0, 5), std::invalid_argument);
+  // Round trip through loop.json.
+  const DesignRecord back = design_record_from_json(to_json(lab));
+  EXPECT_EQ(back.can, lab.can);
+  EXPECT_EQ(back.cannot, lab.cannot);
+  EXPECT_EQ(back.refit_on_all, lab.refit_on_all);
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
