@@ -88,9 +88,11 @@ TEST(LoopRecordsJson, BaselineAndFingerprintRoundTrip) {
   EXPECT_TRUE(std::isnan(back.curves[0].angle_seeds_deg[1][1]));  // NaN is null and back
   EXPECT_EQ(back.curves[0].pour_seeds[1][1], 1003u);
 
-  FingerprintRecord f{"plate_friction", 0.15, 0.3, {1.0, -0.5}, {0.2, 0.3}, {0.4, 0.1}, {-2.0, 3.0}};
+  FingerprintRecord f{"plate_friction", 0.15, 0.3, {1.0, -0.5}, {0.2, 0.3},
+                      {0.4, 0.1},       {-2.0, 3.0}, {0.075, 0.15}};
   expect_round_trip(f, fingerprint_record_from_json);
   EXPECT_EQ(fingerprint_record_from_json(to_json(f)).d_mm, f.d_mm);
+  EXPECT_EQ(fingerprint_record_from_json(to_json(f)).probes_tried, f.probes_tried);
 }
 
 TEST(LoopRecordsJson, EffectsAndIterationsRoundTrip) {
