@@ -82,9 +82,9 @@ TEST(BracketCampaign, ReadsItsKeys) {
 
 TEST(BracketCampaign, BadKeysAreNamed) {
   const Scratch d("bad");
-  const std::string m1 = load_error(d.path, campaign("").replace(
-                                                 campaign("").find("\"bracket\"\n"), 10,
-                                                 "\"secant\"\n"));
+  std::string secant = campaign("");
+  secant.replace(secant.find("method = \"bracket\""), 18, "method = \"secant\"");
+  const std::string m1 = load_error(d.path, secant);
   EXPECT_NE(m1.find("calibration.method"), std::string::npos) << m1;
   EXPECT_NE(m1.find("secant"), std::string::npos) << m1;
   const std::string m2 = load_error(d.path, campaign("mu_r_start = 0.9\n"));
