@@ -43,12 +43,12 @@ void print_listing(const nlohmann::json& l) {
                 i["status"].get<std::string>().c_str(),
                 detail.empty() ? "" : (" (" + detail + ")").c_str());
   }
-  std::printf("total: %d runs, %.2f CPU-hours planned (budget %.1f, %s); rate %.2g "
-              "particle-steps/s per thread (pile/run_plan.hpp)\n",
-              l["planned_runs"].get<int>(), l["planned_cpu_hours"].get<double>(),
-              l["budget_cpu_hours"].get<double>(),
-              l["within_budget"].get<bool>() ? "within" : "ABOVE",
-              l["items"].empty() ? 0.0 : l["items"][0]["rate_particle_steps_per_s"].get<double>());
+  std::printf(
+      "total: %d runs, %.2f CPU-hours planned (budget %.1f, %s); rate %.2g "
+      "particle-steps/s per thread (pile/run_plan.hpp)\n",
+      l["planned_runs"].get<int>(), l["planned_cpu_hours"].get<double>(),
+      l["budget_cpu_hours"].get<double>(), l["within_budget"].get<bool>() ? "within" : "ABOVE",
+      l["items"].empty() ? 0.0 : l["items"][0]["rate_particle_steps_per_s"].get<double>());
 }
 
 }  // namespace

@@ -275,9 +275,9 @@ void finish(BracketCalibration& c, const Target& target, const BracketSettings& 
   m += std::to_string(c.pours.size()) + " pile runs (" + std::to_string(jams) + " jammed, " +
        std::to_string(stops) + " stopped by the engine)";
   if (c.bracketed)
-    m += "; mu_r uncertainty " + num(c.mu_r_uncertainty) + " (seed spread " +
-         num(c.mu_r_seed_se) + ", interpolation " + num(c.mu_r_interpolation) +
-         ") against the tolerance " + num(s.mu_r_tolerance);
+    m += "; mu_r uncertainty " + num(c.mu_r_uncertainty) + " (seed spread " + num(c.mu_r_seed_se) +
+         ", interpolation " + num(c.mu_r_interpolation) + ") against the tolerance " +
+         num(s.mu_r_tolerance);
   c.result.message = m;
 }
 
@@ -309,9 +309,10 @@ void validate_bracket_settings(const BracketSettings& s) {
                                 " must be > 0 (deg per unit mu_r)");
   if (std::set<std::uint64_t>(s.seeds.begin(), s.seeds.end()).size() < 2 ||
       s.seeds.size() != std::set<std::uint64_t>(s.seeds.begin(), s.seeds.end()).size())
-    throw std::invalid_argument("calibration: the bracketing driver needs at least two distinct "
-                                "seeds (the seed spread is its stop rule); it has " +
-                                std::to_string(s.seeds.size()));
+    throw std::invalid_argument(
+        "calibration: the bracketing driver needs at least two distinct "
+        "seeds (the seed spread is its stop rule); it has " +
+        std::to_string(s.seeds.size()));
   if (!(s.mu_r_tolerance > 0.0) || !std::isfinite(s.mu_r_tolerance))
     throw std::invalid_argument("calibration: mu_r_tolerance = " + num(s.mu_r_tolerance) +
                                 " must be > 0");
@@ -369,8 +370,10 @@ BracketCalibration calibrate_bracket(const PourBatchFn& pour, const Target& targ
     }
     if (!next || log.runs() + k > s.max_runs) {
       finish(c, target, s, CalibrationStatus::kBudgetSpent,
-             "budget of " + std::to_string(s.max_runs) + " pile runs spent before the mu_r "
-             "tolerance of " + num(s.mu_r_tolerance) + " was met" +
+             "budget of " + std::to_string(s.max_runs) +
+                 " pile runs spent before the mu_r "
+                 "tolerance of " +
+                 num(s.mu_r_tolerance) + " was met" +
                  (why.empty() ? std::string() : " (" + why + ")"));
       return c;
     }

@@ -57,11 +57,11 @@ std::string to_string(PourOutcome outcome);
 
 /// One pour: where it ran and what it gave.
 struct Pour {
-  double mu_r = 0.0;        // [-]
-  std::uint64_t seed = 0;   // run seed
+  double mu_r = 0.0;       // [-]
+  std::uint64_t seed = 0;  // run seed
   PourOutcome outcome = PourOutcome::kPile;
-  double angle_deg = 0.0;   // [deg], only for kPile
-  std::string detail;       // why it made no pile (free text), empty for a pile
+  double angle_deg = 0.0;  // [deg], only for kPile
+  std::string detail;      // why it made no pile (free text), empty for a pile
 };
 
 /// The pours run at one mu_r.
@@ -80,16 +80,16 @@ using PourBatchFn =
 
 /// Settings of the bracketing driver (see the design note).
 struct BracketSettings {
-  double mu_r_lo = 0.0;                   // low end of the mu_r range [-], >= 0
-  double mu_r_hi = 0.5;                   // high end of the mu_r range [-], > mu_r_lo
-  std::optional<double> mu_r_start;       // first point [-]; nothing = middle of the range
-  double slope_guess_deg = 25.0;          // expected d(angle)/d(mu_r) [deg per unit mu_r], > 0
+  double mu_r_lo = 0.0;                       // low end of the mu_r range [-], >= 0
+  double mu_r_hi = 0.5;                       // high end of the mu_r range [-], > mu_r_lo
+  std::optional<double> mu_r_start;           // first point [-]; nothing = middle of the range
+  double slope_guess_deg = 25.0;              // expected d(angle)/d(mu_r) [deg per unit mu_r], > 0
   std::vector<std::uint64_t> seeds = {1, 2};  // the seeds run at every point, >= 2 distinct
-  double mu_r_tolerance = 0.02;           // stop when the uncertainty of mu_r is below [-], > 0
-  int max_runs = 6;                       // budget of pours, jams included, >= 2 x seeds
-  double max_jam_rate = 0.5;              // a point with a higher jam rate is beyond the usable
-                                          // range [-], in [0, 1)
-  BootstrapSettings bootstrap;            // the 95% interval of the final fit
+  double mu_r_tolerance = 0.02;               // stop when the uncertainty of mu_r is below [-], > 0
+  int max_runs = 6;                           // budget of pours, jams included, >= 2 x seeds
+  double max_jam_rate = 0.5;                  // a point with a higher jam rate is beyond the usable
+                                              // range [-], in [0, 1)
+  BootstrapSettings bootstrap;                // the 95% interval of the final fit
 };
 
 /// Outcome of a bracketing calibration.

@@ -135,13 +135,18 @@ void check_same_calibration(const PaperIndex& idx, const PaperItem& item, TableR
   const Campaign a = load_campaign(it->file), b = load_campaign(item.file);
   const CampaignCalibration &ca = *a.calibration, &cb = *b.calibration;
   std::string differs;
-  if (a.name != b.name) differs = "campaign name (" + a.name + " / " + b.name + ")";
-  else if (ca.keys != cb.keys) differs = "calibration.key";
-  else if (ca.target.angle_deg != cb.target.angle_deg) differs = "calibration.target_deg";
+  if (a.name != b.name)
+    differs = "campaign name (" + a.name + " / " + b.name + ")";
+  else if (ca.keys != cb.keys)
+    differs = "calibration.key";
+  else if (ca.target.angle_deg != cb.target.angle_deg)
+    differs = "calibration.target_deg";
   else if (ca.settings.mu_r_lo != cb.settings.mu_r_lo || ca.settings.mu_r_hi != cb.settings.mu_r_hi)
     differs = "calibration.mu_r_range";
-  else if (ca.angle != cb.angle) differs = "calibration.angle";
-  else if (ca.method != cb.method) differs = "calibration.method";
+  else if (ca.angle != cb.angle)
+    differs = "calibration.angle";
+  else if (ca.method != cb.method)
+    differs = "calibration.method";
   if (!differs.empty())
     throw bad(idx.file, t.where("calibrated_by"), in_quotes(item.calibrated_by),
               "its file and " + item.file + " differ in " + differs +
@@ -161,8 +166,7 @@ PaperIndex load_paper_index(const std::string& path) {
   idx.title = root.string("title", "");
   idx.budget_cpu_hours = root.number("budget_cpu_hours", idx.budget_cpu_hours);
   if (!(idx.budget_cpu_hours > 0.0))
-    throw bad(idx.file, "budget_cpu_hours", show_node(*doc.get("budget_cpu_hours")),
-              "must be > 0");
+    throw bad(idx.file, "budget_cpu_hours", show_node(*doc.get("budget_cpu_hours")), "must be > 0");
   root.mark_used("item");
   const toml::node* n = doc.get("item");
   const toml::array* arr = n ? n->as_array() : nullptr;
@@ -225,18 +229,16 @@ ItemPlan plan_item(const PaperItem& item, const PlanSettings& settings) {
   } else {
     const CampaignCalibration& cc = *c.calibration;
     const double mid = 0.5 * (cc.settings.mu_r_lo + cc.settings.mu_r_hi);
-    const double mu = cc.method == CalibrationMethod::kBracket ? cc.bracket.mu_r_start.value_or(mid)
-                                                               : mid;
+    const double mu =
+        cc.method == CalibrationMethod::kBracket ? cc.bracket.mu_r_start.value_or(mid) : mid;
     if (item.calibrated_by.empty())
-      p.groups.push_back(plan_group("calibration",
-                                    calibration_run(c, mu, cc.settings.first_seed),
+      p.groups.push_back(plan_group("calibration", calibration_run(c, mu, cc.settings.first_seed),
                                     cc.settings.max_simulations, settings));
     for (const PredictionCase& q : c.predictions) {
       const int runs = static_cast<int>(q.seeds.size()) * (q.interval_ends ? 3 : 1);
       if (runs > 0)
-        p.groups.push_back(
-            plan_group("predict " + q.name, prediction_run(c, q, mu, q.seeds.front()), runs,
-                       settings));
+        p.groups.push_back(plan_group("predict " + q.name,
+                                      prediction_run(c, q, mu, q.seeds.front()), runs, settings));
     }
   }
   for (const PlanGroup& g : p.groups) {

@@ -44,37 +44,37 @@ enum class PaperItemKind {
 
 /// The paper's stated values for an item (FACTS.md), as points where the text gives numbers.
 struct PaperPoints {
-  std::string x_label;         // what x is, e.g. "mu_r (EDEM)", "mass [g]"
+  std::string x_label;                            // what x is, e.g. "mu_r (EDEM)", "mass [g]"
   std::string y_label = "angle of repose [deg]";  // what y is
-  std::vector<double> x;       // the paper's x values
-  std::vector<double> y;       // its values there (same length as x), in [0, 90]
-  std::string source;          // where the paper states them
+  std::vector<double> x;                          // the paper's x values
+  std::vector<double> y;                          // its values there (same length as x), in [0, 90]
+  std::string source;                             // where the paper states them
 };
 
 /// One item of the index.
 struct PaperItem {
-  std::string name;         // filesystem-safe, unique: the results folder OUT/<name>
-  std::string paper;        // the paper's table or figure, e.g. "Fig. 6"
+  std::string name;   // filesystem-safe, unique: the results folder OUT/<name>
+  std::string paper;  // the paper's table or figure, e.g. "Fig. 6"
   PaperItemKind kind = PaperItemKind::kCampaign;
-  std::string file;         // absolute path of the campaign or calibration file ("" derived)
+  std::string file;               // absolute path of the campaign or calibration file ("" derived)
   std::vector<std::string> from;  // derived items: the calibration items it is drawn from
-  std::string calibrated_by;  // calibration items: reuse this earlier item's calibration and
-                              // run only the [[predict]] tests at its mu_r (same [calibration])
-  std::string reductions;   // the declared reductions and why, in words
-  std::string x_key;        // campaign items: the override key whose value is the plot's x
-  std::string x_label;      // its label on the page (default: x_key)
-  double x_scale = 1.0;     // x shown = value x x_scale (e.g. 1000 for kg -> g)
-  std::string trend;        // the paper's shape-only statement, if it gives no numbers
+  std::string calibrated_by;      // calibration items: reuse this earlier item's calibration and
+                                  // run only the [[predict]] tests at its mu_r (same [calibration])
+  std::string reductions;         // the declared reductions and why, in words
+  std::string x_key;              // campaign items: the override key whose value is the plot's x
+  std::string x_label;            // its label on the page (default: x_key)
+  double x_scale = 1.0;           // x shown = value x x_scale (e.g. 1000 for kg -> g)
+  std::string trend;              // the paper's shape-only statement, if it gives no numbers
   std::optional<PaperPoints> paper_points;
   std::string angle = "image";  // campaign items: the angle shown (image, image_flank, ...)
 };
 
 /// A parsed index file.
 struct PaperIndex {
-  std::string file;                 // absolute path
+  std::string file;  // absolute path
   std::string title;
-  double budget_cpu_hours = 15.0;   // the whole set must fit in this [CPU-h]
-  std::vector<PaperItem> items;     // in run order
+  double budget_cpu_hours = 15.0;  // the whole set must fit in this [CPU-h]
+  std::vector<PaperItem> items;    // in run order
 };
 
 /// Reads an index file strictly (see the design note); InputError naming the file, the key as
@@ -83,18 +83,18 @@ PaperIndex load_paper_index(const std::string& path);
 
 /// The plan of one group of an item's runs: the same scene and overrides, different seeds.
 struct PlanGroup {
-  std::string label;            // case name, "calibration" or "predict <name>"
-  int runs = 0;                 // planned runs of this group
-  RunPlan plan;                 // the run plan of one of them (one thread)
-  double softened_e_pa = 0.0;   // the softened Young's modulus (0: the real one) [Pa]
+  std::string label;               // case name, "calibration" or "predict <name>"
+  int runs = 0;                    // planned runs of this group
+  RunPlan plan;                    // the run plan of one of them (one thread)
+  double softened_e_pa = 0.0;      // the softened Young's modulus (0: the real one) [Pa]
   double rayleigh_fraction = 0.0;  // dt as a fraction of the Rayleigh time [-]
-  bool clumps = false;          // grains are clumps of spheres
+  bool clumps = false;             // grains are clumps of spheres
 };
 
 /// What an item will cost and the reductions its runs use.
 struct ItemPlan {
-  int runs = 0;                 // planned pile runs (a calibration: its most)
-  double cpu_hours = 0.0;       // the runs' planned wall time at one thread [CPU-h]
+  int runs = 0;            // planned pile runs (a calibration: its most)
+  double cpu_hours = 0.0;  // the runs' planned wall time at one thread [CPU-h]
   std::vector<PlanGroup> groups;
 };
 
@@ -104,9 +104,9 @@ ItemPlan plan_item(const PaperItem& item, const PlanSettings& settings = {});
 
 /// The state of an item's results folder.
 struct ItemStatus {
-  std::string state;     // "not started", "partial", "done", "cannot reach", "failed"
-  int finished = 0;      // finished runs found (a calibration: pours and prediction runs)
-  std::string detail;    // a short sentence (what is missing, the calibration's status)
+  std::string state;   // "not started", "partial", "done", "cannot reach", "failed"
+  int finished = 0;    // finished runs found (a calibration: pours and prediction runs)
+  std::string detail;  // a short sentence (what is missing, the calibration's status)
 };
 ItemStatus item_status(const PaperItem& item, const std::string& out_dir);
 
@@ -125,9 +125,8 @@ struct PaperRunOptions {
 /// every attempt's start and end), and writes OUT/paper.json (every item's plan and status).
 /// A calibration that cannot reach its target is an outcome (status "cannot reach"), not a stop.
 /// Returns paper.json's content.
-nlohmann::json run_paper(const PaperIndex& index, const std::string& out_dir,
-                         const CaseFn& case_fn, const RunnerSettings& runner,
-                         const PaperRunOptions& options = {});
+nlohmann::json run_paper(const PaperIndex& index, const std::string& out_dir, const CaseFn& case_fn,
+                         const RunnerSettings& runner, const PaperRunOptions& options = {});
 
 /// Listing without running: every item with its plan and status (what `--list` prints).
 nlohmann::json paper_listing(const PaperIndex& index, const std::string& out_dir);

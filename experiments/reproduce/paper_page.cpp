@@ -57,7 +57,8 @@ std::vector<OurPoint> campaign_points(const PaperItem& item, const fs::path& dir
     auto meta = read_json_file(f);
     if (!meta || !meta->contains("result") || !meta->contains("spec")) continue;
     const std::string name = (*meta)["spec"].value("case", std::string("?"));
-    auto it = std::find_if(pts.begin(), pts.end(), [&](const OurPoint& p) { return p.label == name; });
+    auto it =
+        std::find_if(pts.begin(), pts.end(), [&](const OurPoint& p) { return p.label == name; });
     if (it == pts.end()) {
       OurPoint p;
       p.label = name;
@@ -92,15 +93,16 @@ std::string reasons_text(const std::map<std::string, int>& m) {
 
 // The plot of an item: ours with error bars, the paper's points beside them.
 bool item_plot(const PaperItem& item, const std::vector<std::array<double, 3>>& ours,
-               const std::string& our_title, const std::string& x_label,
-               const std::string& y_label, const fs::path& page_dir) {
+               const std::string& our_title, const std::string& x_label, const std::string& y_label,
+               const fs::path& page_dir) {
   if (ours.empty() && !item.paper_points) return false;
   std::ostringstream o, p;
   for (const auto& q : ours) o << q[0] << " " << q[1] << " " << q[2] << "\n";
   if (item.paper_points)
     for (std::size_t i = 0; i < item.paper_points->x.size(); ++i)
       p << item.paper_points->x[i] << " " << item.paper_points->y[i] << "\n";
-  const fs::path od = page_dir / (item.name + "_ours.dat"), pd = page_dir / (item.name + "_paper.dat");
+  const fs::path od = page_dir / (item.name + "_ours.dat"),
+                 pd = page_dir / (item.name + "_paper.dat");
   write_file_atomic(od.string(), o.str());
   write_file_atomic(pd.string(), p.str());
   std::string plot = "plot ";
@@ -111,11 +113,10 @@ bool item_plot(const PaperItem& item, const std::vector<std::array<double, 3>>& 
     plot += std::string(ours.empty() ? "" : ", ") + "'" + pd.filename().string() +
             "' using 1:2 with points pt 5 ps 1.5 title 'paper'";
   const fs::path png = page_dir / (item.name + ".png");
-  const std::string script = "cd '" + page_dir.string() + "'\n" +
-                             png_terminal(png, 720, 420, false) + "set xlabel '" + x_label +
-                             "'\nset ylabel '" + y_label +
-                             "'\nset key top left\nset offsets graph 0.05, graph 0.05, 1, 1\n" +
-                             plot + "\n";
+  const std::string script =
+      "cd '" + page_dir.string() + "'\n" + png_terminal(png, 720, 420, false) + "set xlabel '" +
+      x_label + "'\nset ylabel '" + y_label +
+      "'\nset key top left\nset offsets graph 0.05, graph 0.05, 1, 1\n" + plot + "\n";
   return run_gnuplot(page_dir / (item.name + ".gp"), script, png);
 }
 
@@ -127,16 +128,16 @@ struct ItemSection {
 Table plan_table(const ItemPlan& plan) {
   Table t;
   t.numeric = true;
-  t.header = {"runs of", "runs", "particles", "d [mm]", "fines not simulated", "E (softened)",
-              "dt", "CPU-h"};
+  t.header = {"runs of",      "runs", "particles", "d [mm]", "fines not simulated",
+              "E (softened)", "dt",   "CPU-h"};
   for (const PlanGroup& g : plan.groups) {
     Cell label(g.label);
     label.left = true;
     std::ostringstream e, dt;
     e << (g.softened_e_pa > 0 ? fixed(g.softened_e_pa / 1e6, 3) + " MPa" : "real E");
     dt << sig3(g.plan.time_step_s) << " s (" << fixed(g.rayleigh_fraction, 2) << " T_R)";
-    t.rows.push_back({{label, std::to_string(g.runs), std::to_string(g.plan.particles) +
-                                                           (g.clumps ? " (clumps)" : ""),
+    t.rows.push_back({{label, std::to_string(g.runs),
+                       std::to_string(g.plan.particles) + (g.clumps ? " (clumps)" : ""),
                        fixed(g.plan.d_min_mm, 2) + "-" + fixed(g.plan.d_max_mm, 2),
                        fixed(100.0 * g.plan.fines_fraction, 1) + "%", e.str(), dt.str(),
                        fixed(g.runs * g.plan.wall_s / 3600.0, 2)}});
@@ -159,8 +160,8 @@ void campaign_part(const PaperItem& item, const fs::path& dir, const fs::path& p
     const SampleStats st = sample_stats(p.angles);
     Cell c(p.label);
     c.left = true;
-    t.rows.push_back({{c, fixed(p.x, 3), st.n ? mean_sd(st.mean, st.sd) : "-",
-                       std::to_string(st.n), reasons_text(p.without_pile)}});
+    t.rows.push_back({{c, fixed(p.x, 3), st.n ? mean_sd(st.mean, st.sd) : "-", std::to_string(st.n),
+                       reasons_text(p.without_pile)}});
     if (st.n) plotted.push_back({p.x, st.mean, st.sd});
     s.ours_text += (s.ours_text.empty() ? "" : "; ") + p.label + ": " +
                    (st.n ? mean_sd(st.mean, st.sd) : "no pile");
@@ -186,10 +187,10 @@ void calibration_part(const PaperItem& item, const fs::path& dir, const fs::path
     mu = fixed((*cal)["mu_r"].get<double>(), 3) + " [" +
          fixed_or_dash((*cal)["mu_r_interval"][0], 3) + ", " +
          fixed_or_dash((*cal)["mu_r_interval"][1], 3) + "]";
-  t.rows.push_back({{Cell("calibrated mu_r (95% interval)"), mu,
-                     cal->value("status", std::string()) + ", " +
-                         std::to_string(cal->value("simulations", 0)) + " pile runs (" +
-                         cal->value("method", std::string("sequential")) + ")"}});
+  t.rows.push_back(
+      {{Cell("calibrated mu_r (95% interval)"), mu,
+        cal->value("status", std::string()) + ", " + std::to_string(cal->value("simulations", 0)) +
+            " pile runs (" + cal->value("method", std::string("sequential")) + ")"}});
   if (cal->contains("jam_rate_per_mu_r"))
     for (json& q : (*cal)["jam_rate_per_mu_r"])
       t.rows.push_back({{Cell("pours at mu_r " + fixed_or_dash(q["mu_r"], 3)),
@@ -198,22 +199,22 @@ void calibration_part(const PaperItem& item, const fs::path& dir, const fs::path
                          "jam rate " + fixed_or_dash(q["jam_rate"], 2)}});
   if (auto pred = read_json_file(dir / "predictions.json"))
     for (json& q : (*pred)["predictions"])
-      t.rows.push_back({{Cell("predicted: " + q.value("name", std::string())),
-                         q["mean_deg"].is_number()
-                             ? mean_sd(q["mean_deg"].get<double>(),
-                                       q["seed_sd_deg"].is_number() ? q["seed_sd_deg"].get<double>()
-                                                                    : 0.0) +
-                                   " deg (" + std::to_string(q.value("n", 0)) + " piles)"
-                             : "no pile",
-                         "measured " + fixed_or_dash(q["measured_deg"]) + ", error " +
-                             fixed_or_dash(q["error_deg"])}});
+      t.rows.push_back(
+          {{Cell("predicted: " + q.value("name", std::string())),
+            q["mean_deg"].is_number()
+                ? mean_sd(q["mean_deg"].get<double>(),
+                          q["seed_sd_deg"].is_number() ? q["seed_sd_deg"].get<double>() : 0.0) +
+                      " deg (" + std::to_string(q.value("n", 0)) + " piles)"
+                : "no pile",
+            "measured " + fixed_or_dash(q["measured_deg"]) + ", error " +
+                fixed_or_dash(q["error_deg"])}});
   d.set("ours", to_data(t));
   s.ours_text = "mu_r " + mu + ", " + std::to_string(cal->value("simulations", 0)) + " pile runs";
   std::vector<std::array<double, 3>> obs;
   for (const json& o : cal->value("observations", json::array()))
     obs.push_back({o.value("mu_r", 0.0), o.value("angle_deg", 0.0), 0.0});
-  if (item_plot(item, obs, "our pile runs (" + item.angle + ")", "mu_r",
-                "angle of repose [deg]", page_dir))
+  if (item_plot(item, obs, "our pile runs (" + item.angle + ")", "mu_r", "angle of repose [deg]",
+                page_dir))
     d.set("plot", item.name + ".png");
 }
 
@@ -236,9 +237,9 @@ void derived_part(const PaperItem& item, const PaperIndex& index, const fs::path
     const double lo = iv[0].get<double>(), hi = iv[1].get<double>();
     Cell c(src);
     c.left = true;
-    t.rows.push_back({{c, fixed(dmax, 2), fixed(mu, 3),
-                       "[" + fixed(lo, 3) + ", " + fixed(hi, 3) + "]",
-                       cal->value("rolling_model", json::object()).value("keyword", std::string("?"))}});
+    t.rows.push_back(
+        {{c, fixed(dmax, 2), fixed(mu, 3), "[" + fixed(lo, 3) + ", " + fixed(hi, 3) + "]",
+          cal->value("rolling_model", json::object()).value("keyword", std::string("?"))}});
     pts.push_back({dmax, mu, 0.5 * (hi - lo)});
     s.ours_text += (s.ours_text.empty() ? "" : "; ") + src + " " + fixed(mu, 3);
   }
@@ -309,9 +310,9 @@ std::string build_paper_page(const PaperIndex& index, const std::string& out_dir
     Cell name;
     name.links.push_back({"#" + item.name, item.name});
     const std::string paper = item.paper_points ? paper_text(item) : item.trend;
-    summary.rows.push_back({{Cell(item.paper), name, paper.empty() ? "-" : paper, s.ours_text,
-                             item.reductions, std::to_string(plan.runs), fixed(plan.cpu_hours, 2),
-                             st.state}});
+    summary.rows.push_back(
+        {{Cell(item.paper), name, paper.empty() ? "-" : paper, s.ours_text, item.reductions,
+          std::to_string(plan.runs), fixed(plan.cpu_hours, 2), st.state}});
   }
   mustache::data intro;
   intro.set("built", utc_now());

@@ -129,9 +129,8 @@ nlohmann::json paper_listing(const PaperIndex& index, const std::string& out_dir
           {"items", items}};
 }
 
-nlohmann::json run_paper(const PaperIndex& index, const std::string& out_dir,
-                         const CaseFn& case_fn, const RunnerSettings& runner,
-                         const PaperRunOptions& options) {
+nlohmann::json run_paper(const PaperIndex& index, const std::string& out_dir, const CaseFn& case_fn,
+                         const RunnerSettings& runner, const PaperRunOptions& options) {
   const std::vector<const PaperItem*> todo = selected(index, options.only);
   fs::create_directories(out_dir);
   // Under MPI every rank runs every item (the runs spread over the ranks); rank 0 writes the

@@ -44,8 +44,8 @@ struct FakePours {
         p.detail = "no pile: outlet arched";
       } else {
         const auto mu_key = static_cast<std::uint64_t>(std::llround(mu * 1e9));
-        p.angle_deg = curve(mu) + seed_sd * gauss(stream, seed, 0) +
-                      run_sd * gauss(stream, seed, mu_key + 1);
+        p.angle_deg =
+            curve(mu) + seed_sd * gauss(stream, seed, 0) + run_sd * gauss(stream, seed, mu_key + 1);
       }
       out.push_back(p);
     }
@@ -111,8 +111,7 @@ TEST(BracketCalibration, EveryPointRunsTheSameSeeds) {
   FakePours fake;
   const BracketCalibration c = calibrate_bracket(std::ref(fake), {33.47, 0.0}, sample1_settings());
   for (const PourPoint& q : c.points) EXPECT_EQ(q.pours, 2) << q.mu_r;
-  for (std::size_t i = 0; i < c.pours.size(); ++i)
-    EXPECT_EQ(c.pours[i].seed, i % 2 == 0 ? 1u : 2u);
+  for (std::size_t i = 0; i < c.pours.size(); ++i) EXPECT_EQ(c.pours[i].seed, i % 2 == 0 ? 1u : 2u);
 }
 
 // A target above everything the range reaches is reported as such, with no mu_r, and the search
@@ -160,7 +159,8 @@ TEST(BracketCalibration, JamsCountAsJamRateNotAngles) {
   for (const Observation& o : c.result.observations) EXPECT_GT(o.angle_deg, 20.0);
   int jams = 0;
   for (const Pour& p : c.pours) jams += p.outcome == PourOutcome::kJam;
-  EXPECT_EQ(static_cast<int>(c.result.observations.size()), static_cast<int>(c.pours.size()) - jams);
+  EXPECT_EQ(static_cast<int>(c.result.observations.size()),
+            static_cast<int>(c.pours.size()) - jams);
   const nlohmann::json j = to_json(c, s);
   EXPECT_EQ(j["method"], "bracket");
   EXPECT_EQ(j["pile_runs"], c.pours.size());

@@ -29,12 +29,11 @@ struct Scratch {
     write_file_atomic((path / "sweep.toml").string(),
                       "name = \"tiny_sweep\"\nscene = \"tiny.toml\"\nseeds = [1, 2]\n"
                       "[sweep]\nkey = \"contacts.rock-rock.rolling_friction\"\nvalues = [0.3]\n");
-    write_file_atomic(
-        (path / "cal.toml").string(),
-        "name = \"tiny_cal\"\nscene = \"tiny.toml\"\n[calibration]\n"
-        "key = \"contacts.rock-rock.rolling_friction\"\ntarget_deg = 20.0\n"
-        "mu_r_range = [0.1, 0.5]\nmethod = \"bracket\"\nmax_simulations = 4\n"
-        "angle = \"particles\"\nbootstrap_replicates = 200\n");
+    write_file_atomic((path / "cal.toml").string(),
+                      "name = \"tiny_cal\"\nscene = \"tiny.toml\"\n[calibration]\n"
+                      "key = \"contacts.rock-rock.rolling_friction\"\ntarget_deg = 20.0\n"
+                      "mu_r_range = [0.1, 0.5]\nmethod = \"bracket\"\nmax_simulations = 4\n"
+                      "angle = \"particles\"\nbootstrap_replicates = 200\n");
   }
   ~Scratch() {
     std::error_code ec;

@@ -53,13 +53,14 @@ trend = "stabilises near 36.5 deg"
 // A finished run's result.json, shaped as the campaign runner writes it.
 json fake_run(const std::string& case_name, double mass, std::uint64_t seed, double angle,
               const std::string& status = "ok") {
-  return {{"spec", {{"case", case_name}, {"seed", seed}, {"overrides", {{"sample.mass_kg", mass}}}}},
-          {"result",
-           {{"stop", {{"reason", status == "ok" ? "settled" : "clogged"}}},
-            {"pile", {{"status", status}, {"theta_hd_deg", angle}, {"slice_angle_mean_deg", angle}}},
-            {"image", {{"theta_deg", angle}, {"flank_deg", angle + 4.0}}},
-            {"provenance", {{"code_version", "test"}}},
-            {"run_dir", "run"}}}};
+  return {
+      {"spec", {{"case", case_name}, {"seed", seed}, {"overrides", {{"sample.mass_kg", mass}}}}},
+      {"result",
+       {{"stop", {{"reason", status == "ok" ? "settled" : "clogged"}}},
+        {"pile", {{"status", status}, {"theta_hd_deg", angle}, {"slice_angle_mean_deg", angle}}},
+        {"image", {{"theta_deg", angle}, {"flank_deg", angle + 4.0}}},
+        {"provenance", {{"code_version", "test"}}},
+        {"run_dir", "run"}}}};
 }
 
 struct Tree {
