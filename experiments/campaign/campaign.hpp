@@ -16,7 +16,8 @@
 //  * campaign.json (atomic) summarises every run's status for reports, and, given a classifier,
 //    counts the finished runs that formed a pile apart from the others by reason (a jammed
 //    outlet, a physics stop), so a summary never counts a run without a pile as a result;
-//    run_batch writes batch.json instead, for the runs a driver (calibration, prediction, loop) asks for.
+//    run_batch writes batch.json instead, for the runs a driver (calibration, prediction,
+//    loop) asks for.
 //  * Local runs hold an exclusive lock on the output folder, so two campaign processes cannot
 //    run into the same folder; the kernel releases it when the process ends, even by SIGKILL.
 //  * Under MPI rank r runs the runs i with i % size == r, one at a time (the launcher decides the
