@@ -1,5 +1,4 @@
 #include <iostream>
-#include <limits>
 #include <memory>
 
 #include "apps/reposetwin/commands.hpp"
@@ -42,6 +41,7 @@ experiments::RunnerSettings runner(const PoolArgs& a) {
   s.mode =
       a.mode == "threads" ? experiments::WorkerMode::kThreads : experiments::WorkerMode::kProcesses;
   s.force = a.force;
+  s.outcome_of = experiments::case_outcome;  // counts piles apart from jams and physics stops
   return s;
 }
 
@@ -66,9 +66,14 @@ void add_campaign_command(CLI::App& app) {
     const std::string out = a->out.empty() ? "runs/" + c.name : a->out;
     const experiments::CampaignSummary s =
         experiments::run_campaign(c, out, case_fn(*a), runner(*a));
-    std::cout << nlohmann::json{{"campaign", c.name}, {"out", out},
-                                {"total", s.total},   {"finished", s.finished},
-                                {"failed", s.failed}, {"skipped", s.skipped},
+    std::cout << nlohmann::json{{"campaign", c.name},
+                                {"out", out},
+                                {"total", s.total},
+                                {"finished", s.finished},
+                                {"piles", s.piles},
+                                {"without_pile", s.without_pile},
+                                {"failed", s.failed},
+                                {"skipped", s.skipped},
                                 {"ran", s.ran}}
                      .dump(2)
               << "\n";
@@ -118,43 +123,20 @@ void add_calibrate_command(CLI::App& app) {
       throw std::invalid_argument("--no-images: the angle '" +
                                   experiments::angle_measure_name(measure) +
                                   "' is measured on the renders, so the runs need them");
-    const experiments::CaseFn fn = case_fn(pa);
-    const experiments::RunnerSettings rs = runner(*a);
-    // A clogged run ("no pile", angle 0 in a Fig. 10 report) measures no pile angle: averaged
-    // into a mu_r point it would drag the fit down, so the calibration stops on it and says so.
-    const experiments::AngleFn angle_of = [measure](const nlohmann::json& r) {
-      const nlohmann::json& res = r.contains("result") ? r.at("result") : r;
-      if (experiments::case_made_no_pile(res))
-        throw std::runtime_error(
-            "a calibration run clogged the outlet (" +
-            res.value("stop", nlohmann::json::object()).value("detail", std::string("lodged")) +
-            "): it has no pile angle to fit (its folder: cases/calib_*/seed_*/ with "
-            "result.pile.status \"no pile\"). Narrow mu_r_range below the mu_r that arches "
-            "the outlet, or widen the outlet");
-      return experiments::case_angle_deg(r, measure);
-    };
-    experiments::CalibrateOptions opt;
-    opt.angle_method = experiments::angle_measure_method(measure);
-    opt.extra = {{"code_version", experiments::code_version()},
-                 {"angle", experiments::angle_measure_name(measure)}};
-    const nlohmann::json cal = *predict_only
-                                   ? experiments::read_calibration(c, out, opt.angle_method)
-                                   : experiments::run_calibration(c, out, fn, angle_of, rs, opt);
+    const experiments::CalibrateOutcome o = experiments::calibrate_and_predict(
+        c, out, measure, case_fn(pa), runner(*a), *predict_only);
+    const nlohmann::json& cal = o.calibration;
     if (!*predict_only) std::cout << cal.dump(2) << "\n";
-    if (!cal.contains("mu_r") || !cal["mu_r"].is_number()) {  // cannot reach: exit code 5
+    std::cerr << "reposetwin calibrate: " << cal.value("simulations", 0) << " pile runs ("
+              << cal.value("method", std::string("sequential")) << ")\n";
+    if (!o.reached) {  // cannot reach: exit code 5
       std::cerr << "reposetwin calibrate: " << cal.value("message", "")
                 << (c.predictions.empty() ? "" : "; no predictions run") << "\n";
       set_exit_code(5);
       return;
     }
-    if (c.predictions.empty()) return;
-    // In a prediction a clogged outlet is an outcome to report (no_pile), not a reason to stop.
-    const experiments::AngleFn prediction_angle = [measure](const nlohmann::json& r) {
-      if (experiments::case_made_no_pile(r)) return std::numeric_limits<double>::quiet_NaN();
-      return experiments::case_angle_deg(r, measure);
-    };
-    const nlohmann::json p =
-        experiments::run_predictions(c, cal, out, fn, prediction_angle, rs, opt);
+    if (!o.predictions) return;
+    const nlohmann::json& p = *o.predictions;
     nlohmann::json brief = nlohmann::json::array();
     for (const auto& q : p["predictions"])
       brief.push_back({{"name", q["name"]},

@@ -18,5 +18,6 @@ void add_timestep_command(CLI::App& app);
 void add_measure_command(CLI::App& app);
 void add_loop_command(CLI::App& app);  // loop and loop-synth
 void add_keys_command(CLI::App& app);
+void add_paper_command(CLI::App& app);  // the paper's index: run, list, page
 
 }  // namespace reposetwin::cli

@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
   reposetwin::cli::add_measure_command(app);
   reposetwin::cli::add_loop_command(app);
   reposetwin::cli::add_keys_command(app);
+  reposetwin::cli::add_paper_command(app);
   if (argc > 1 && argv[1][0] != '-') {
     if (const std::string msg = unknown_command(app, argv[1]); !msg.empty()) {
       std::cerr << msg << "\n";

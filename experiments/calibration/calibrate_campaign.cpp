@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
 #include <stdexcept>
 
+#include "experiments/campaign/case_runner.hpp"
 #include "experiments/io/provenance.hpp"
 #include "sim/contact.hpp"
 
@@ -81,7 +83,9 @@ std::optional<FieldDifference> calibration_difference(const nlohmann::json& j, c
       {"mu_r_range", j.value("mu_r_range", nlohmann::json()),
        nlohmann::json{cc.settings.mu_r_lo, cc.settings.mu_r_hi}},
       {"angle_method", stored_angle,
-       angle_method.empty() ? stored_angle : nlohmann::json(angle_method)}};
+       angle_method.empty() ? stored_angle : nlohmann::json(angle_method)},
+      {"method", j.value("method", nlohmann::json("sequential")),
+       cc.method == CalibrationMethod::kBracket ? "bracket" : "sequential"}};
   for (const FieldDifference& f : fields)
     if (f.stored != f.now) return f;
   return std::nullopt;
@@ -269,6 +273,40 @@ nlohmann::json merge_with_earlier(const fs::path& file, double mu,
   return merged;
 }
 
+// A calibration run's result as the bracketing driver sees it: a pile with its angle, a jam (the
+// outlet arched: no pile), or a physics stop; the last two never give an angle.
+Pour pour_of(const nlohmann::json& run, const AngleFn& angle_of) {
+  const nlohmann::json& res = run.contains("result") ? run.at("result") : run;
+  Pour p;
+  const CaseResult r = case_result_from_json(res);
+  if (r.stop.is_physics()) {
+    p.outcome = PourOutcome::kPhysicsStop;
+    p.detail = stop_reason_text(r.stop) + ": " + r.stop.detail;
+  } else if (case_made_no_pile(res)) {
+    p.outcome = PourOutcome::kJam;
+    p.detail = r.stop.detail.empty() ? std::string("no pile") : r.stop.detail;
+  } else {
+    p.angle_deg = angle_of(run);
+  }
+  return p;
+}
+
+// The bracketing driver (method = "bracket") over the campaign's runs.
+nlohmann::json bracket_calibration_json(const Campaign& c, const std::string& out_dir,
+                                        const CaseFn& case_fn, const AngleFn& angle_of,
+                                        const RunnerSettings& runner) {
+  const CampaignCalibration& cc = calibration_of(c);
+  auto pour = [&](const std::vector<std::pair<double, std::uint64_t>>& points) {
+    std::vector<CaseSpec> runs;
+    for (const auto& [mu, seed] : points) runs.push_back(calibration_run(c, mu, seed));
+    std::vector<Pour> out;
+    for (const nlohmann::json& r : run_batch(c, runs, out_dir, case_fn, runner))
+      out.push_back(pour_of(r, angle_of));
+    return out;
+  };
+  return to_json(calibrate_bracket(pour, cc.target, cc.bracket), cc.bracket);
+}
+
 }  // namespace
 
 void keep_only_predictions(Campaign& c, const std::vector<std::string>& names) {
@@ -301,8 +339,11 @@ nlohmann::json run_calibration(const Campaign& c, const std::string& out_dir, co
       angles.push_back(angle_of(r));
     return angles;
   };
-  const CalibrationResult r = calibrate_batch(simulate, cc.target, cc.settings);
-  nlohmann::json j = to_json(r);
+  nlohmann::json j =
+      cc.method == CalibrationMethod::kBracket
+          ? bracket_calibration_json(c, out_dir, case_fn, angle_of, runner)
+          : to_json(calibrate_batch(simulate, cc.target, cc.settings));
+  if (cc.method == CalibrationMethod::kSequential) j["method"] = "sequential";
   j["campaign"] = c.file;
   j["campaign_name"] = c.name;
   j["key"] = cc.key;
@@ -368,6 +409,46 @@ nlohmann::json run_predictions(const Campaign& c, const nlohmann::json& cal,
                         {"predictions", merge_with_earlier(file, m.mu, keys_of(cc), list)}};
   write_result(out, out_dir, kPredictionsFile, runner, options);
   return out;
+}
+
+AngleFn calibration_angle(AngleMeasure measure) {
+  // A clogged run ("no pile", angle 0 in a Fig. 10 report) measures no pile angle: averaged
+  // into a mu_r point it would drag the fit down, so the sequential calibration stops on it.
+  return [measure](const nlohmann::json& r) {
+    const nlohmann::json& res = r.contains("result") ? r.at("result") : r;
+    if (case_made_no_pile(res))
+      throw std::runtime_error(
+          "a calibration run clogged the outlet (" +
+          res.value("stop", nlohmann::json::object()).value("detail", std::string("lodged")) +
+          "): it has no pile angle to fit (its folder: cases/calib_*/seed_*/ with "
+          "result.pile.status \"no pile\"). Narrow mu_r_range below the mu_r that arches "
+          "the outlet, widen the outlet, or calibrate with method = \"bracket\", which counts "
+          "such pours as a jam rate");
+    return case_angle_deg(r, measure);
+  };
+}
+
+AngleFn prediction_angle(AngleMeasure measure) {
+  return [measure](const nlohmann::json& r) {
+    if (case_made_no_pile(r)) return std::numeric_limits<double>::quiet_NaN();
+    return case_angle_deg(r, measure);
+  };
+}
+
+CalibrateOutcome calibrate_and_predict(const Campaign& c, const std::string& out,
+                                       AngleMeasure measure, const CaseFn& fn,
+                                       const RunnerSettings& rs, bool predict_only) {
+  CalibrateOptions opt;
+  opt.angle_method = angle_measure_method(measure);
+  opt.extra = {{"code_version", code_version()}, {"angle", angle_measure_name(measure)}};
+  CalibrateOutcome o;
+  o.calibration = predict_only
+                      ? read_calibration(c, out, opt.angle_method)
+                      : run_calibration(c, out, fn, calibration_angle(measure), rs, opt);
+  o.reached = o.calibration.contains("mu_r") && o.calibration["mu_r"].is_number();
+  if (o.reached && !c.predictions.empty())
+    o.predictions = run_predictions(c, o.calibration, out, fn, prediction_angle(measure), rs, opt);
+  return o;
 }
 
 }  // namespace reposetwin::experiments

@@ -1,6 +1,8 @@
 // Calibrate, then predict: the drivers behind the calibrate and predict commands.
 //
-// Design. run_calibration() drives calibrate_batch() (calibration.hpp) through run_batch()
+// Design. run_calibration() drives calibrate_batch() (calibration.hpp), or with method =
+// "bracket" calibrate_bracket() (bracket_calibration.hpp: a jammed or engine-stopped run is a
+// pour without a pile there, counted per mu_r, never an angle), through run_batch()
 // (campaign/campaign.hpp) and writes calibration.json; run_predictions() runs every [[predict]]
 // test at the calibrated mu_r (and, unless interval_ends = false, at both ends of its 95%
 // interval) through the same resumable pool, and writes predictions.json. A prediction's mu_r
@@ -13,6 +15,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -61,5 +64,27 @@ nlohmann::json run_predictions(const Campaign& campaign, const nlohmann::json& c
                                const std::string& out_dir, const CaseFn& case_fn,
                                const AngleFn& angle_of, const RunnerSettings& runner = {},
                                const CalibrateOptions& options = {});
+
+/// The angle a calibration fits, by `measure`, from a run's result. A clogged run throws: the
+/// sequential driver has no place for a run without a pile (the bracketing driver counts it as
+/// a jam before it asks for an angle).
+AngleFn calibration_angle(AngleMeasure measure);
+
+/// The angle a prediction reports: NaN for a run that made no pile (listed as no_pile).
+AngleFn prediction_angle(AngleMeasure measure);
+
+/// What calibrate_and_predict() wrote.
+struct CalibrateOutcome {
+  nlohmann::json calibration;                // calibration.json's content
+  std::optional<nlohmann::json> predictions;  // predictions.json's, when predictions ran
+  bool reached = false;                      // a calibrated mu_r exists (else: cannot reach)
+};
+
+/// The calibrate command: calibrates (or, with `predict_only`, reads the finished calibration),
+/// then runs the [[predict]] tests when mu_r was reached. Records the angle measure and the code
+/// version in both files.
+CalibrateOutcome calibrate_and_predict(const Campaign& campaign, const std::string& out_dir,
+                                       AngleMeasure measure, const CaseFn& case_fn,
+                                       const RunnerSettings& runner, bool predict_only = false);
 
 }  // namespace reposetwin::experiments

@@ -162,10 +162,13 @@ RunStatus run_status(const fs::path& out_dir, const CaseSpec& spec, const std::s
   return {"pending", "", 0.0};
 }
 
+using OutcomeFn = std::function<std::string(const nlohmann::json&)>;
+
 nlohmann::json build_manifest(const Campaign& c, const fs::path& out_dir,
-                              const std::vector<RunStatus>& st) {
+                              const std::vector<RunStatus>& st, const OutcomeFn& outcome_of) {
   nlohmann::json runs = nlohmann::json::array();
-  int finished = 0, failed = 0, pending = 0;
+  int finished = 0, failed = 0, pending = 0, piles = 0;
+  std::map<std::string, int> without_pile;
   for (std::size_t i = 0; i < c.runs.size(); ++i) {
     const auto& s = c.runs[i];
     nlohmann::json r = {{"case", s.case_name},
@@ -175,6 +178,23 @@ nlohmann::json build_manifest(const Campaign& c, const fs::path& out_dir,
     if (st[i].status == "finished") {
       ++finished;
       r["wall_time_s"] = st[i].wall_time_s;
+      if (outcome_of) {
+        const auto res = read_json(out_dir / s.relative_dir() / kResultFile);
+        std::string outcome = "unreadable result";
+        if (res && res->contains("result")) {
+          try {
+            outcome = outcome_of((*res)["result"]);
+          } catch (const std::exception& e) {
+            outcome = std::string("unreadable result (") + e.what() + ")";
+          }
+        }
+        r["outcome"] = outcome;
+        if (outcome == "pile") {
+          ++piles;
+        } else {
+          ++without_pile[outcome];
+        }
+      }
     } else if (st[i].status == "failed") {
       ++failed;
       r["error"] = st[i].error;
@@ -182,6 +202,12 @@ nlohmann::json build_manifest(const Campaign& c, const fs::path& out_dir,
       ++pending;
     }
     runs.push_back(r);
+  }
+  nlohmann::json counts = {
+      {"total", c.runs.size()}, {"finished", finished}, {"failed", failed}, {"pending", pending}};
+  if (outcome_of) {  // a result is a run that formed a pile; the others by reason
+    counts["piles"] = piles;
+    counts["without_pile"] = without_pile;
   }
   return {{"campaign", c.name},
           {"file", c.file},
@@ -191,11 +217,7 @@ nlohmann::json build_manifest(const Campaign& c, const fs::path& out_dir,
           {"out_dir", fs::absolute(out_dir).string()},
           {"code_version", code_version()},
           {"updated", utc_now()},
-          {"counts",
-           {{"total", c.runs.size()},
-            {"finished", finished},
-            {"failed", failed},
-            {"pending", pending}}},
+          {"counts", counts},
           {"runs", runs}};
 }
 
@@ -312,7 +334,7 @@ CampaignSummary run_impl(const Campaign& campaign, const std::string& out_dir_st
 
   std::vector<RunStatus> status = scan(campaign, out_dir);
   auto write_manifest = [&] {
-    summary.manifest = build_manifest(campaign, out_dir, status);
+    summary.manifest = build_manifest(campaign, out_dir, status, settings.outcome_of);
     if (writes_manifest) write_json_atomic((out_dir / manifest_name).string(), summary.manifest);
   };
   if (!mpi) write_manifest();
@@ -340,11 +362,16 @@ CampaignSummary run_impl(const Campaign& campaign, const std::string& out_dir_st
   if (writes_manifest) {
     write_manifest();
   } else {
-    summary.manifest = build_manifest(campaign, out_dir, scan(campaign, out_dir));
+    summary.manifest =
+        build_manifest(campaign, out_dir, scan(campaign, out_dir), settings.outcome_of);
   }
   const auto& counts = summary.manifest["counts"];
   summary.finished = counts["finished"].get<int>();
   summary.failed = counts["failed"].get<int>();
+  if (counts.contains("piles")) {
+    summary.piles = counts["piles"].get<int>();
+    summary.without_pile = counts["without_pile"].get<std::map<std::string, int>>();
+  }
   if (!writes_manifest) {
     say("this rank's " + std::to_string(summary.ran) + " run(s) done; rank 0 writes the manifest");
   } else {
@@ -395,8 +422,9 @@ nlohmann::json to_json(const CaseSpec& spec) {
           {"overrides", overrides_to_json(spec.overrides)}};
 }
 
-nlohmann::json campaign_manifest(const Campaign& campaign, const std::string& out_dir) {
-  return build_manifest(campaign, out_dir, scan(campaign, out_dir));
+nlohmann::json campaign_manifest(const Campaign& campaign, const std::string& out_dir,
+                                 const OutcomeFn& outcome_of) {
+  return build_manifest(campaign, out_dir, scan(campaign, out_dir), outcome_of);
 }
 
 CampaignSummary run_campaign(const Campaign& campaign, const std::string& out_dir,

@@ -13,8 +13,11 @@
 //    never redone (unless forced) and never overwritten. A finished result made from different
 //    inputs (the campaign file was edited) is an error, not a silent mix. A failing run writes
 //    error.json; the campaign goes on.
-//  * campaign.json (atomic) summarises every run's status for reports; run_batch writes
-//    batch.json instead, for the runs a driver (calibration, prediction, loop) asks for.
+//  * campaign.json (atomic) summarises every run's status for reports, and, given a classifier,
+//    counts the finished runs that formed a pile apart from the others by reason (a jammed
+//    outlet, a physics stop), so a summary never counts a run without a pile as a result;
+//    run_batch writes batch.json instead, for the runs a driver (calibration, prediction,
+//    loop) asks for.
 //  * Local runs hold an exclusive lock on the output folder, so two campaign processes cannot
 //    run into the same folder; the kernel releases it when the process ends, even by SIGKILL.
 //  * Under MPI rank r runs the runs i with i % size == r, one at a time (the launcher decides the
@@ -25,6 +28,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -58,6 +62,10 @@ struct RunnerSettings {
   std::optional<RankInfo> rank = detect_mpi_rank();  // MPI position; nothing = local pool
   double poll_interval_s = 0.5;  // rank 0: pause between checks for other ranks [s]
   double wait_timeout_s = 0.0;   // rank 0: give up waiting after this long [s]; 0 = never
+  /// Classifies a finished run's result (the case function's JSON) for the counts: "pile" when
+  /// it formed one, else the reason it did not ("jam", "physics_stop"); empty = runs are not
+  /// classified (the runner knows nothing of piles: pile campaigns pass case_outcome).
+  std::function<std::string(const nlohmann::json& case_result)> outcome_of;
 };
 
 /// What run_campaign did.
@@ -67,6 +75,8 @@ struct CampaignSummary {
   int failed = 0;           // runs with an error
   int skipped = 0;          // finished runs found and not redone
   int ran = 0;              // runs started by this call (this rank)
+  int piles = 0;            // finished runs that formed a pile (with RunnerSettings::outcome_of)
+  std::map<std::string, int> without_pile;  // the other finished runs, by reason
   nlohmann::json manifest;  // the manifest written (rank 0) or this rank's view
 };
 
@@ -104,7 +114,10 @@ std::vector<nlohmann::json> run_batch(const Campaign& campaign, const std::vecto
 /// nothing if the run has not finished.
 std::optional<nlohmann::json> read_run_result(const std::string& out_dir, const CaseSpec& spec);
 
-/// Scans out_dir and builds the manifest of `campaign` (status of every run) without running.
-nlohmann::json campaign_manifest(const Campaign& campaign, const std::string& out_dir);
+/// Scans out_dir and builds the manifest of `campaign` (status of every run) without running;
+/// with `outcome_of` (RunnerSettings) each finished run's outcome and the counts by outcome.
+nlohmann::json campaign_manifest(
+    const Campaign& campaign, const std::string& out_dir,
+    const std::function<std::string(const nlohmann::json&)>& outcome_of = {});
 
 }  // namespace reposetwin::experiments

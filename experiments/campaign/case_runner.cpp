@@ -120,6 +120,13 @@ bool case_made_no_pile(const json& r) {
   return pile.status == sim::PileStatus::kNoPile && !pile.not_measured;
 }
 
+std::string case_outcome(const json& j) {
+  const CaseResult r = case_result_from_json(j);
+  if (r.stop.is_physics()) return "physics_stop";
+  if (r.pile.status == sim::PileStatus::kNoPile) return "jam";
+  return "pile";
+}
+
 double case_angle_deg(const json& j, AngleMeasure measure) {
   const CaseResult r = case_result_from_json(j);
   if (r.stop.is_physics())

@@ -63,6 +63,11 @@ void check_pile_cases(const Campaign& campaign);
 /// True when the case made no pile (a clogged outlet: every particle lodged in the container).
 bool case_made_no_pile(const nlohmann::json& case_result);
 
+/// What a finished case gave, for a campaign's counts: "pile" when it formed a pile whose
+/// angles count, else the reason it did not: "jam" (the outlet clogged: no pile) or
+/// "physics_stop" (the engine stopped the run: overlap, NaN, escape).
+std::string case_outcome(const nlohmann::json& case_result);
+
 /// The angle `measure` of a finished case [deg]; 0 for "no pile". kImage falls back to atan(2H/D)
 /// from particle positions when the run was not photographed (--no-images); kImageFlank needs the
 /// photographs and throws without them. Throws if the run stopped on a physics failure (overlap,

@@ -162,19 +162,77 @@ void read_settings(TableReader& t, CalibrationSettings& s) {
   }
 }
 
+// calibration.method: "sequential" (calibration.hpp, the default) or "bracket".
+CalibrationMethod read_method(TableReader& t) {
+  const std::string m = t.string("method", "sequential");
+  if (m == "sequential") return CalibrationMethod::kSequential;
+  if (m == "bracket") return CalibrationMethod::kBracket;
+  throw bad(t.file(), "calibration.method", "\"" + m + "\"",
+            "must be \"sequential\" or \"bracket\"");
+}
+
+// The bracketing driver's settings: the common keys (range, seeds, budget, bootstrap) read as for
+// the sequential driver, then its own; the budget defaults to three points.
+void read_bracket_settings(TableReader& t, CampaignCalibration& cc) {
+  const std::string& file = t.file();
+  const std::string p = "calibration.";
+  if (t.has("confirm"))
+    throw bad(file, p + "confirm", value_text(*t.raw().get("confirm")),
+              "only with method = \"sequential\" (the bracketing driver does not confirm)");
+  if (t.has("tolerance_deg"))
+    throw bad(file, p + "tolerance_deg", value_text(*t.raw().get("tolerance_deg")),
+              "with method = \"bracket\" the tolerance is mu_r_tolerance (on mu_r)");
+  CalibrationSettings& s = cc.settings;
+  s.confirm_bracket = false;
+  if (!t.has("seeds_per_point")) s.seeds_per_point = 2;
+  read_settings(t, s);
+  if (!t.has("max_simulations")) s.max_simulations = 3 * s.seeds_per_point;  // three points
+  BracketSettings& b = cc.bracket;
+  b.mu_r_lo = s.mu_r_lo;
+  b.mu_r_hi = s.mu_r_hi;
+  b.seeds.clear();
+  for (int i = 0; i < s.seeds_per_point; ++i) b.seeds.push_back(s.first_seed + i);
+  b.max_runs = s.max_simulations;
+  b.bootstrap = s.bootstrap;
+  b.mu_r_start = optional_number(t, "mu_r_start");
+  if (auto v = optional_number(t, "slope_guess_deg")) b.slope_guess_deg = *v;
+  if (auto v = optional_number(t, "mu_r_tolerance")) b.mu_r_tolerance = *v;
+  if (auto v = optional_number(t, "max_jam_rate")) b.max_jam_rate = *v;
+  try {
+    validate_bracket_settings(b);
+  } catch (const std::invalid_argument& e) {
+    std::string key = "seeds_per_point";
+    for (const char* k : {"mu_r_start", "slope_guess_deg", "mu_r_tolerance", "max_jam_rate"})
+      if (std::string(e.what()).find(k) != std::string::npos) key = k;
+    if (std::string(e.what()).find("max_simulations") != std::string::npos) key = "max_simulations";
+    const toml::node* n = t.raw().get(key);
+    throw bad(file, p + key, n ? value_text(*n) : std::string("(default)"), e.what());
+  }
+}
+
 }  // namespace
 
 CampaignCalibration read_calibration_table(TableReader& t, const Campaign& c, SceneCache& scenes) {
   t.known_keys({"key", "target_deg", "target_sd_deg", "target_photos", "target_photo_camera",
                 "target_mm_per_px", "mu_r_range", "seeds_per_point", "first_seed", "tolerance_deg",
-                "max_simulations", "bootstrap_replicates", "confirm", "table1_sample", "angle"});
+                "max_simulations", "bootstrap_replicates", "confirm", "table1_sample", "angle",
+                "method", "mu_r_start", "slope_guess_deg", "mu_r_tolerance", "max_jam_rate"});
   CampaignCalibration cc;
   read_keys(t, cc);
+  cc.method = read_method(t);
   cc.table1_sample = read_table1_sample(t);
   if (t.has("angle"))
     cc.angle = parse_angle_measure(t.string("angle"), c.file + ": key 'calibration.angle'");
   read_target(t, cc);
-  read_settings(t, cc.settings);
+  if (cc.method == CalibrationMethod::kBracket) {
+    read_bracket_settings(t, cc);
+  } else {
+    for (const char* k : {"mu_r_start", "slope_guess_deg", "mu_r_tolerance", "max_jam_rate"})
+      if (t.has(k))
+        throw bad(t.file(), std::string("calibration.") + k, value_text(*t.raw().get(k)),
+                  "only with method = \"bracket\"");
+    read_settings(t, cc.settings);
+  }
   // The keys must apply to the base scene.
   toml::table copy = scenes.get(c.scene_path);
   for (const auto& k : cc.keys)

@@ -44,6 +44,14 @@
 //   table1_sample = 3                         # optional: the paper's Table 1 sample (reports)
 //   angle = "image"                           # optional: which simulated angle is matched
 //                                             # (image, image_flank, particles, slice; below)
+//   method = "bracket"                        # optional: "sequential" (default) or "bracket"
+//                                             # (bracket_calibration.hpp: the seeds
+//                                             # first_seed.. at every point, max_simulations
+//                                             # pours, default 3 x seeds_per_point), with:
+//   mu_r_start = 0.35                         # optional first point (default: mid-range)
+//   slope_guess_deg = 26.0                    # optional d(angle)/d(mu_r) guess (25)
+//   mu_r_tolerance = 0.02                     # optional stop tolerance on mu_r (0.02)
+//   max_jam_rate = 0.5                        # optional: points jamming more are unusable
 //   [[predict]]                               # optional, with [calibration]: other tests run at
 //   name = "sample4"                          # the calibrated mu_r (filesystem-safe, unique)
 //   scene = "s4.toml"                         # required: the other test's scene
@@ -73,6 +81,7 @@
 #include <string_view>
 #include <vector>
 
+#include "experiments/calibration/bracket_calibration.hpp"
 #include "experiments/calibration/calibration.hpp"
 #include "experiments/io/overrides.hpp"
 
@@ -111,12 +120,21 @@ inline bool angle_measure_needs_images(AngleMeasure m) {
   return m == AngleMeasure::kImage || m == AngleMeasure::kImageFlank;
 }
 
+/// How the calibrate command searches mu_r.
+enum class CalibrationMethod {
+  kSequential,  // calibration.hpp: range ends, safeguarded secant, confirmation seeds
+  kBracket,     // bracket_calibration.hpp: bracketing, common random numbers, few runs
+};
+
 /// The [calibration] table of a campaign file, for the calibrate command.
 struct CampaignCalibration {
   std::string key = "contacts.rock-rock.rolling_friction";  // dotted scene key that is varied
   std::vector<std::string> keys;     // every key set to mu_r (keys.front() == key); empty = {key}
   Target target;                     // measured angle to match
   CalibrationSettings settings;      // mu_r range, seeds per point, tolerance, budget
+  CalibrationMethod method = CalibrationMethod::kSequential;
+  BracketSettings bracket;           // method = "bracket": the same range, seeds and budget
+                                     // as `settings`, plus its own keys
   std::optional<int> table1_sample;  // the paper's Table 1 sample it calibrates on (reports)
   AngleMeasure angle = AngleMeasure::kImage;  // the simulated angle matched to the target
   nlohmann::json target_photos;  // the lab photos' measurement when the target came from

@@ -36,6 +36,7 @@ struct CaseRows {
   json overrides;
   std::vector<double> image_deg, flank_deg, particle_deg, slice_deg;
   std::vector<std::string> stops;
+  std::map<std::string, int> without_pile;  // runs that formed no pile, by reason
   std::vector<std::string> run_dirs;  // relative to the report's source folder
   json provenance;
 };
@@ -71,7 +72,7 @@ void add_result(FolderResults& f, const std::string& case_name, const json& over
   auto it = std::find_if(f.cases.begin(), f.cases.end(),
                          [&](const CaseRows& c) { return c.name == case_name; });
   if (it == f.cases.end()) {
-    f.cases.push_back({case_name, scene, overrides, {}, {}, {}, {}, {}, {}, {}});
+    f.cases.push_back({case_name, scene, overrides, {}, {}, {}, {}, {}, {}, {}, {}});
     it = f.cases.end() - 1;
   }
   CaseRows& c = *it;
@@ -79,10 +80,18 @@ void add_result(FolderResults& f, const std::string& case_name, const json& over
   c.stops.push_back(reason);
   c.run_dirs.push_back(run_dir);
   c.provenance = r.at("provenance");
-  // A run stopped by a physics failure (overlap, NaN, escape) has no valid pile: it is listed
-  // with its stop reason but its angles never enter a mean.
-  if (stop_from_json(r.at("stop")).is_physics()) return;
+  // A run stopped by a physics failure (overlap, NaN, escape) has no valid pile, and a clogged
+  // outlet (a jam) none at all: such runs are listed with their reason, and their angles never
+  // enter a mean or a count of results.
   const json& pile = r.at("pile");
+  if (stop_from_json(r.at("stop")).is_physics()) {
+    ++c.without_pile["physics_stop"];
+    return;
+  }
+  if (pile.value("status", std::string()) == "no pile") {
+    ++c.without_pile["jam"];
+    return;
+  }
   c.particle_deg.push_back(pile.value("theta_hd_deg", 0.0));
   c.slice_deg.push_back(pile.value("slice_angle_mean_deg", 0.0));
   if (r.contains("image")) {
@@ -155,8 +164,12 @@ json case_summary(const FolderResults& f) {
   json summary = {{"title", f.title}, {"cases", json::array()}};
   for (const CaseRows& c : f.cases) {
     const CaseStats s = case_stats(c);
+    int without = 0;
+    for (const auto& [reason, n] : c.without_pile) without += n;
     summary["cases"].push_back({{"case", c.name},
                                 {"runs", c.run_dirs.size()},
+                                {"piles", static_cast<int>(c.run_dirs.size()) - without},
+                                {"without_pile", c.without_pile},
                                 {"image_theta_mean_deg", s.image.mean},
                                 {"image_theta_sd_deg", s.image.sd},
                                 {"image_flank_mean_deg", s.flank.n ? json(s.flank.mean) : json()},
@@ -301,11 +314,18 @@ TableRow case_row(const CaseRows& c) {
   Cell overrides, files;
   overrides.code = c.overrides.dump();
   for (const auto& d : c.run_dirs) files.links.push_back({"../" + d + "/series.pvd", "pvd"});
-  return {{c.name, overrides, std::to_string(c.run_dirs.size()),
-           s.image.n ? mean_sd(s.image.mean, s.image.sd) : "-",
+  int without = 0;
+  std::string runs_text;
+  for (const auto& [reason, n] : c.without_pile) {
+    without += n;
+    runs_text += ", " + std::to_string(n) + " " + reason;
+  }
+  runs_text = std::to_string(static_cast<int>(c.run_dirs.size()) - without) + " of " +
+              std::to_string(c.run_dirs.size()) + runs_text;
+  return {{c.name, overrides, runs_text, s.image.n ? mean_sd(s.image.mean, s.image.sd) : "-",
            s.flank.n ? mean_sd(s.flank.mean, s.flank.sd) : "-",
-           mean_sd(s.particle.mean, s.particle.sd), fixed(s.slice.mean), stop_text, prov.str(),
-           files}};
+           s.particle.n ? mean_sd(s.particle.mean, s.particle.sd) : "-",
+           s.slice.n ? fixed(s.slice.mean) : "-", stop_text, prov.str(), files}};
 }
 
 // The cases table and each case's first render with its measurement overlay (copied into the
@@ -314,8 +334,8 @@ std::string cases_section(const FolderResults& f, const fs::path& out) {
   Table t;
   t.header = {"case",
               "inputs (overrides)",
-              "runs",
-              "image angle [deg] mean \u00b1 sd (runs stopped by a physics failure left out)",
+              "piles of runs (the others by reason)",
+              "image angle [deg] mean \u00b1 sd (runs without a pile left out)",
               "image flank angle [deg]",
               "particle atan(2H/D) [deg]",
               "slice (protractor) [deg]",

@@ -153,4 +153,18 @@ const char* const kLoopNotes =
 const char* const kLoopResiduals = R"(<h2>Residuals</h2>
 {{#plots}}{{> figure}}{{/plots}}{{#residuals}}{{> table}}{{/residuals}})";
 
+// index, version, built, planned, budget, within (bool); summary: table.
+const char* const kPaperIntro = R"(<p>Built {{built}} by {{version}} from the paper index <code>{{index}}</code>: every table and figure of the paper beside ours. The paper's stated values are points where its text gives numbers; shape-only figures are its described trend. Ours: mean &plusmn; seed sd over the runs that formed a pile. Planned cost {{planned}} CPU-hours{{#within}}, within{{/within}}{{^within}}, ABOVE{{/within}} the budget of {{budget}} CPU-hours (run plan: particles x steps at its stated rate, one thread).</p>
+{{#summary}}{{> table}}{{/summary}})";
+
+// anchor, heading, status, reductions, paper_text (or false), trend (or false), not_run (bool),
+// plot (PNG or false), ours: table or false, plan: table.
+const char* const kPaperItem = R"(<h2 id='{{anchor}}'>{{heading}}</h2>
+<p><b>Status:</b> {{status}}. <b>Reductions:</b> {{reductions}}</p>
+{{#paper_text}}<p><b>The paper:</b> {{paper_text}}</p>
+{{/paper_text}}{{#trend}}<p><b>The paper (shape only):</b> {{trend}}</p>
+{{/trend}}{{#not_run}}<p class='note'>Not yet run.</p>
+{{/not_run}}{{#plot}}<img src='{{plot}}' alt='{{heading}}'>
+{{/plot}}{{#ours}}{{> table}}{{/ours}}{{#plan}}{{> table}}{{/plan}})";
+
 }  // namespace reposetwin::experiments::report::templates

@@ -31,6 +31,9 @@ extern const char* const kRunHeadline;
 extern const char* const kRunPhotos;
 extern const char* const kRunTable;
 
+// Sections of the paper page (reproduce/paper_page.hpp).
+extern const char* const kPaperIntro;
+extern const char* const kPaperItem;
 // Sections of the loop's page.
 extern const char* const kLoopIntro;
 extern const char* const kLoopError;

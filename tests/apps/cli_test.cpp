@@ -89,3 +89,30 @@ TEST(Cli, SceneReferenceInDocsIsCurrent) {
 }
 
 }  // namespace
+
+namespace {
+
+// One command reproduces the paper: --list prints every item of the shipped index with its
+// planned runs, CPU-hours and status, and the total against the budget, running nothing.
+TEST(Cli, PaperListPrintsEveryItemWithItsCost) {
+  const fs::path d = fresh_dir("paper_list");
+  const Result r = run("paper '" + std::string(REPOSETWIN_SOURCE_DIR) +
+                       "/experiments/paper/index.toml' --list --out '" + (d / "out").string() +
+                       "'");
+  EXPECT_EQ(r.code, 0) << r.out;
+  for (const char* item : {"t3_s1_epsd", "t3_s4_cdt", "fig5_timestep", "fig6_cdt", "fig7",
+                           "fig8_s4", "fig10_s4", "fig11_s4", "fig14_s1", "fig18_s4"})
+    EXPECT_NE(r.out.find(item), std::string::npos) << item << "\n" << r.out;
+  EXPECT_NE(r.out.find("not started"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("within"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(d / "out" / "t3_s1_epsd"));
+  // A misspelt key of an index is named with its file, and nothing runs.
+  reposetwin::test_support::write_text(d / "index.toml", "title = \"x\"\nbudjet_cpu_hours = 1\n");
+  const Result bad = run("paper '" + (d / "index.toml").string() + "' --out '" +
+                         (d / "out").string() + "'");
+  EXPECT_EQ(bad.code, 2) << bad.out;
+  EXPECT_NE(bad.out.find("budjet_cpu_hours"), std::string::npos) << bad.out;
+  EXPECT_NE(bad.out.find("index.toml"), std::string::npos) << bad.out;
+}
+
+}  // namespace

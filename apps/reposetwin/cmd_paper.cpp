@@ -1,0 +1,106 @@
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "apps/reposetwin/commands.hpp"
+#include "experiments/campaign/case_runner.hpp"
+#include "experiments/reproduce/paper_index.hpp"
+#include "experiments/reproduce/paper_page.hpp"
+
+namespace reposetwin::cli {
+namespace {
+
+struct PaperArgs {
+  std::string index = "experiments/paper/index.toml";
+  std::string out = "runs/paper";
+  bool list = false;
+  bool page = false;
+  bool force = false;
+  std::vector<std::string> only;
+  int workers = 2;
+  std::string mode = "processes";
+  int views = 4;
+};
+
+void print_listing(const nlohmann::json& l) {
+  std::printf("%-22s %-26s %-11s %5s %8s %9s  %s\n", "item", "paper", "kind", "runs", "CPU-h",
+              "particles", "status");
+  for (const auto& i : l["items"]) {
+    long long pmin = -1, pmax = 0;
+    for (const auto& g : i["groups"]) {
+      const long long n = g["particles"].get<long long>();
+      pmin = pmin < 0 ? n : std::min(pmin, n);
+      pmax = std::max(pmax, n);
+    }
+    const std::string parts = pmin < 0       ? std::string("-")
+                              : pmin == pmax ? std::to_string(pmax)
+                                             : std::to_string(pmin) + "-" + std::to_string(pmax);
+    const std::string detail = i["status_detail"].get<std::string>();
+    std::printf("%-22s %-26s %-11s %5d %8.2f %9s  %s%s\n", i["name"].get<std::string>().c_str(),
+                i["paper"].get<std::string>().c_str(), i["kind"].get<std::string>().c_str(),
+                i["planned_runs"].get<int>(), i["planned_cpu_hours"].get<double>(), parts.c_str(),
+                i["status"].get<std::string>().c_str(),
+                detail.empty() ? "" : (" (" + detail + ")").c_str());
+  }
+  std::printf(
+      "total: %d runs, %.2f CPU-hours planned (budget %.1f, %s); rate %.2g "
+      "particle-steps/s per thread (pile/run_plan.hpp)\n",
+      l["planned_runs"].get<int>(), l["planned_cpu_hours"].get<double>(),
+      l["budget_cpu_hours"].get<double>(), l["within_budget"].get<bool>() ? "within" : "ABOVE",
+      l["items"].empty() ? 0.0 : l["items"][0]["rate_particle_steps_per_s"].get<double>());
+}
+
+}  // namespace
+
+void add_paper_command(CLI::App& app) {
+  auto a = std::make_shared<PaperArgs>();
+  auto* cmd = app.add_subcommand(
+      "paper",
+      "Reproduce the paper: run every item of the index (experiments/paper/index.toml) in "
+      "order, each into OUT/<item>/ with its provenance (resumable; spreads over MPI ranks)");
+  cmd->add_option("index", a->index, "Paper index file (TOML)")->capture_default_str();
+  cmd->add_option("--out,-o", a->out, "Results folder (one sub-folder per item)")
+      ->capture_default_str();
+  cmd->add_flag("--list,--dry-run", a->list,
+                "Print the items with their planned runs, CPU-hours and status; run nothing");
+  cmd->add_flag("--page", a->page,
+                "Build OUT/paper_page/index.html (the paper beside ours) from what exists; "
+                "run nothing");
+  cmd->add_flag("--force", a->force, "Rebuild the page over an earlier one");
+  cmd->add_option("--only", a->only, "Run only these items (by name)")->delimiter(',');
+  cmd->add_option("--workers", a->workers, "Runs side by side on this machine")
+      ->capture_default_str();
+  cmd->add_option("--mode", a->mode, "Local pool: processes or threads")
+      ->check(CLI::IsMember({"processes", "threads"}))
+      ->capture_default_str();
+  cmd->add_option("--views", a->views, "Side views per pile for the image angle")
+      ->capture_default_str();
+  cmd->callback([a]() {
+    const experiments::PaperIndex index = experiments::load_paper_index(a->index);
+    if (a->list) {
+      print_listing(experiments::paper_listing(index, a->out));
+      return;
+    }
+    if (a->page) {
+      const std::string page = experiments::build_paper_page(index, a->out, a->force);
+      std::cout << "paper page " << page << "\n";
+      return;
+    }
+    experiments::RunnerSettings rs;
+    rs.workers = a->workers;
+    rs.mode = a->mode == "threads" ? experiments::WorkerMode::kThreads
+                                   : experiments::WorkerMode::kProcesses;
+    rs.outcome_of = experiments::case_outcome;
+    experiments::CaseRunSettings cs;
+    cs.image.side_views = a->views;
+    experiments::PaperRunOptions opt;
+    opt.only = a->only;
+    const nlohmann::json l =
+        experiments::run_paper(index, a->out, experiments::pile_case_fn(cs), rs, opt);
+    print_listing(l);
+    if (l.value("failed_items_this_call", 0) > 0) set_exit_code(4);
+  });
+}
+
+}  // namespace reposetwin::cli

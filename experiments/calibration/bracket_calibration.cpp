@@ -1,0 +1,426 @@
+#include "experiments/calibration/bracket_calibration.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include "experiments/io/format.hpp"
+
+namespace reposetwin::experiments {
+namespace {
+
+std::string num(double v) { return significant(v, 6); }
+
+constexpr double kOvershoot = 1.25;  // a secant step is stretched by this to land past the target
+
+// The driver's state: every pour so far and the callback that adds to it.
+class PourLog {
+ public:
+  explicit PourLog(const PourBatchFn& pour) : pour_(pour) {}
+
+  int runs() const { return static_cast<int>(pours.size()); }
+
+  void run(const std::vector<double>& mus, const std::vector<std::uint64_t>& seeds) {
+    std::vector<std::pair<double, std::uint64_t>> batch;
+    for (double mu : mus)
+      for (auto seed : seeds) batch.emplace_back(mu, seed);
+    std::vector<Pour> got = pour_(batch);
+    if (got.size() != batch.size())
+      throw std::runtime_error("calibration: the pour callback returned " +
+                               std::to_string(got.size()) + " outcomes for " +
+                               std::to_string(batch.size()) + " pours");
+    for (std::size_t i = 0; i < batch.size(); ++i) {
+      Pour p = got[i];
+      p.mu_r = batch[i].first;
+      p.seed = batch[i].second;
+      if (p.outcome == PourOutcome::kPile &&
+          (!std::isfinite(p.angle_deg) || p.angle_deg < 0.0 || p.angle_deg > 90.0))
+        throw std::runtime_error("calibration: pour at mu_r = " + num(p.mu_r) + ", seed " +
+                                 std::to_string(p.seed) + " formed a pile with angle " +
+                                 num(p.angle_deg) + " outside [0, 90] deg");
+      pours.push_back(std::move(p));
+    }
+  }
+
+  std::vector<Pour> pours;
+
+ private:
+  const PourBatchFn& pour_;
+};
+
+std::vector<PourPoint> points_of(const std::vector<Pour>& pours) {
+  std::map<double, PourPoint> by_mu;
+  for (const Pour& p : pours) {
+    PourPoint& q = by_mu[p.mu_r];
+    q.mu_r = p.mu_r;
+    ++q.pours;
+    if (p.outcome == PourOutcome::kPile) ++q.piles;
+    if (p.outcome == PourOutcome::kJam) ++q.jams;
+    if (p.outcome == PourOutcome::kPhysicsStop) ++q.physics_stops;
+  }
+  std::vector<PourPoint> out;
+  for (const auto& [mu, q] : by_mu) out.push_back(q);
+  return out;
+}
+
+// A point's piles enter the fit only when its jam rate is within the usable range.
+bool usable(const PourPoint& q, const BracketSettings& s) {
+  return q.piles > 0 && q.jam_rate() <= s.max_jam_rate;
+}
+
+std::vector<Observation> usable_observations(const std::vector<Pour>& pours,
+                                             const std::vector<PourPoint>& points,
+                                             const BracketSettings& s,
+                                             std::optional<std::uint64_t> only_seed = {}) {
+  std::set<double> ok;
+  for (const PourPoint& q : points)
+    if (usable(q, s)) ok.insert(q.mu_r);
+  std::vector<Observation> obs;
+  for (const Pour& p : pours)
+    if (p.outcome == PourOutcome::kPile && ok.count(p.mu_r) && (!only_seed || p.seed == *only_seed))
+      obs.push_back({p.mu_r, p.seed, p.angle_deg});
+  return obs;
+}
+
+// The lowest mu_r above every usable point whose pours jam too often: the search stays below it.
+std::optional<double> jam_limit(const std::vector<PourPoint>& points, const BracketSettings& s) {
+  double top_usable = -1.0;
+  for (const PourPoint& q : points)
+    if (usable(q, s)) top_usable = std::max(top_usable, q.mu_r);
+  for (const PourPoint& q : points)
+    if (q.mu_r > top_usable && q.jam_rate() > s.max_jam_rate) return q.mu_r;
+  return std::nullopt;
+}
+
+// The crossing of `target` by the parabola through the three fitted points nearest to mu, inside
+// their span; nothing when it has none there.
+std::optional<double> parabola_root(const MonotoneFit& fit, double mu, double target) {
+  std::vector<FitPoint> pts = fit.points;
+  if (pts.size() < 3) return std::nullopt;
+  std::sort(pts.begin(), pts.end(), [&](const FitPoint& a, const FitPoint& b) {
+    return std::abs(a.mu_r - mu) < std::abs(b.mu_r - mu);
+  });
+  pts.resize(3);
+  std::sort(pts.begin(), pts.end(),
+            [](const FitPoint& a, const FitPoint& b) { return a.mu_r < b.mu_r; });
+  const double x0 = pts[0].mu_r, x1 = pts[1].mu_r, x2 = pts[2].mu_r;
+  const double y0 = pts[0].fitted_deg, y1 = pts[1].fitted_deg, y2 = pts[2].fitted_deg;
+  // Newton form: y = y0 + d1 (x - x0) + d2 (x - x0)(x - x1).
+  const double d01 = (y1 - y0) / (x1 - x0), d12 = (y2 - y1) / (x2 - x1);
+  const double d2 = (d12 - d01) / (x2 - x0);
+  const double a = d2, b = d01 - d2 * (x0 + x1), c = y0 - d01 * x0 + d2 * x0 * x1 - target;
+  std::vector<double> roots;
+  if (std::abs(a) < 1e-12 * std::max(1.0, std::abs(b))) {
+    if (b != 0.0) roots.push_back(-c / b);
+  } else {
+    const double disc = b * b - 4.0 * a * c;
+    if (disc < 0.0) return std::nullopt;
+    roots.push_back((-b - std::sqrt(disc)) / (2.0 * a));
+    roots.push_back((-b + std::sqrt(disc)) / (2.0 * a));
+  }
+  std::optional<double> best;
+  for (double r : roots)
+    if (r >= x0 && r <= x2 && (!best || std::abs(r - mu) < std::abs(*best - mu))) best = r;
+  return best;
+}
+
+// The slope of the fit's segment around mu [deg per unit mu_r] (0 if flat or a single point).
+double local_slope(const MonotoneFit& fit, double mu) {
+  const auto& pts = fit.points;
+  if (pts.size() < 2) return 0.0;
+  std::size_t ib = 1;
+  while (ib + 1 < pts.size() && pts[ib].mu_r < mu) ++ib;
+  return (pts[ib].fitted_deg - pts[ib - 1].fitted_deg) / (pts[ib].mu_r - pts[ib - 1].mu_r);
+}
+
+// The uncertainty terms of a bracketed fit (see the design note). A seed's own crossing: its
+// angle at the fitted mu_r (its own isotonic curve, or its nearest point carried along the
+// mean fit's slope when mu_r lies outside its points) moved to the target along that slope, so a
+// seed whose own points do not straddle the target still counts.
+void assess(BracketCalibration& c, const MonotoneFit& fit, double mu, const Target& target,
+            const BracketSettings& s) {
+  c.seed_roots.clear();
+  const double slope = local_slope(fit, mu);
+  std::set<std::uint64_t> seeds;
+  for (const Pour& p : c.pours) seeds.insert(p.seed);
+  if (slope > 0.0) {
+    for (auto seed : seeds) {
+      const auto obs = usable_observations(c.pours, c.points, s, seed);
+      if (obs.empty()) continue;
+      const MonotoneFit own = fit_monotone(obs);
+      const FitPoint& lo = own.points.front();
+      const FitPoint& hi = own.points.back();
+      double at = 0.0;
+      if (mu < lo.mu_r) {
+        at = lo.fitted_deg + slope * (mu - lo.mu_r);
+      } else if (mu > hi.mu_r) {
+        at = hi.fitted_deg + slope * (mu - hi.mu_r);
+      } else {
+        at = evaluate(own, mu);
+      }
+      c.seed_roots.push_back(mu - (at - target.angle_deg) / slope);
+    }
+  }
+  const SampleStats st = sample_stats(c.seed_roots);
+  c.mu_r_seed_se = st.n >= 2 ? st.sd / std::sqrt(static_cast<double>(st.n))
+                             : std::numeric_limits<double>::infinity();
+  const auto& pts = fit.points;
+  std::size_t ib = 0;
+  while (ib + 1 < pts.size() && pts[ib].mu_r < mu) ++ib;
+  const double width = pts[ib].mu_r - pts[ib > 0 ? ib - 1 : 0].mu_r;
+  if (auto q = parabola_root(fit, mu, target.angle_deg))
+    c.mu_r_interpolation = std::abs(*q - mu);
+  else
+    c.mu_r_interpolation = 0.5 * width;
+  c.mu_r_uncertainty = std::hypot(c.mu_r_seed_se, c.mu_r_interpolation);
+}
+
+// The next point once the target is bracketed: the fitted crossing, or, when that lies within
+// half the tolerance of a point already run (a new point there would teach nothing about the
+// curvature), a tolerance further into the bracket, so the interpolation error shrinks. Nothing
+// when the seed spread alone is above the tolerance (a new point cannot help: more seeds would).
+std::optional<double> step_in(const BracketCalibration& c, const MonotoneFit& fit, double mu,
+                              const BracketSettings& s) {
+  if (c.mu_r_seed_se > s.mu_r_tolerance) return std::nullopt;
+  const auto& pts = fit.points;
+  std::size_t ib = 0;
+  while (ib + 1 < pts.size() && pts[ib].mu_r < mu) ++ib;
+  const double lo = pts[ib > 0 ? ib - 1 : 0].mu_r, hi = pts[ib].mu_r;
+  double next = mu;
+  for (const PourPoint& q : c.points)
+    if (std::abs(q.mu_r - mu) < 0.5 * s.mu_r_tolerance)
+      next = q.mu_r + (q.mu_r - lo < hi - q.mu_r ? s.mu_r_tolerance : -s.mu_r_tolerance);
+  if (!(next > lo && next < hi)) return std::nullopt;  // the bracket is already that narrow
+  for (const PourPoint& q : c.points)
+    if (std::abs(q.mu_r - next) < 0.5 * s.mu_r_tolerance) return std::nullopt;
+  return next;
+}
+
+// The next point while the target is not bracketed: a secant step past the target from the
+// nearest end of the fit, kept inside the range and below the jam limit. Nothing: the target is
+// out of reach (`why` says how).
+std::optional<double> step_out(const MonotoneFit& fit, const Target& target,
+                               const std::vector<PourPoint>& points, const BracketSettings& s,
+                               std::string& why) {
+  const auto& pts = fit.points;
+  const bool up = target.angle_deg > pts.back().fitted_deg;
+  double slope = s.slope_guess_deg;
+  if (pts.size() >= 2) {
+    const FitPoint& a = up ? pts[pts.size() - 2] : pts[0];
+    const FitPoint& b = up ? pts.back() : pts[1];
+    const double sec = (b.fitted_deg - a.fitted_deg) / (b.mu_r - a.mu_r);
+    if (sec > 0.0) slope = sec;
+  }
+  const FitPoint& end = up ? pts.back() : pts.front();
+  double step = kOvershoot * (target.angle_deg - end.fitted_deg) / slope;
+  if (std::abs(step) < 2.0 * s.mu_r_tolerance) step = std::copysign(2.0 * s.mu_r_tolerance, step);
+  double next = end.mu_r + step;
+  if (up) {
+    const auto jam = jam_limit(points, s);
+    const double limit = jam ? std::min(*jam, s.mu_r_hi) : s.mu_r_hi;
+    if (jam && next >= *jam) {
+      next = 0.5 * (end.mu_r + *jam);
+      if (*jam - end.mu_r < s.mu_r_tolerance) {
+        why = "the pours jam at mu_r " + num(*jam) + " (jam rate above " + num(s.max_jam_rate) +
+              ") before the angle reaches the target; the highest usable point, mu_r " +
+              num(end.mu_r) + ", reaches " + num(end.fitted_deg) + " deg";
+        return std::nullopt;
+      }
+    }
+    next = std::min(next, limit);
+  } else {
+    next = std::max(next, s.mu_r_lo);
+  }
+  for (const PourPoint& q : points)
+    if (q.mu_r == next) {
+      why = "the range end mu_r " + num(next) + " reaches only " + num(end.fitted_deg) + " deg";
+      return std::nullopt;
+    }
+  return next;
+}
+
+// The next point while nothing usable exists yet (every pour so far jammed): halfway down.
+std::optional<double> step_below_jams(const std::vector<PourPoint>& points,
+                                      const BracketSettings& s, std::string& why) {
+  const double lowest = points.front().mu_r;
+  if (lowest - s.mu_r_lo < s.mu_r_tolerance) {
+    why = "every pour jammed, down to mu_r " + num(lowest);
+    return std::nullopt;
+  }
+  return 0.5 * (s.mu_r_lo + lowest);
+}
+
+void finish(BracketCalibration& c, const Target& target, const BracketSettings& s,
+            CalibrationStatus status, const std::string& note) {
+  const auto obs = usable_observations(c.pours, c.points, s);
+  if (!obs.empty()) {
+    c.result = calibrate_observations(obs, target, s.bootstrap);
+  } else {
+    c.result = CalibrationResult{};
+    c.result.target = target;
+  }
+  c.result.status = status;
+  if (!c.result.mu_r) c.result.message.clear();  // the note says why there is no mu_r
+  c.result.simulations = static_cast<int>(c.pours.size());
+  int jams = 0, stops = 0;
+  for (const PourPoint& q : c.points) {
+    jams += q.jams;
+    stops += q.physics_stops;
+  }
+  std::string m = c.result.message.empty() ? std::string() : c.result.message + "; ";
+  m += note.empty() ? std::string() : note + "; ";
+  m += std::to_string(c.pours.size()) + " pile runs (" + std::to_string(jams) + " jammed, " +
+       std::to_string(stops) + " stopped by the engine)";
+  if (c.bracketed)
+    m += "; mu_r uncertainty " + num(c.mu_r_uncertainty) + " (seed spread " + num(c.mu_r_seed_se) +
+         ", interpolation " + num(c.mu_r_interpolation) + ") against the tolerance " +
+         num(s.mu_r_tolerance);
+  c.result.message = m;
+}
+
+}  // namespace
+
+std::string to_string(PourOutcome outcome) {
+  switch (outcome) {
+    case PourOutcome::kPile:
+      return "pile";
+    case PourOutcome::kJam:
+      return "jam";
+    case PourOutcome::kPhysicsStop:
+      return "physics_stop";
+  }
+  return "unknown";
+}
+
+void validate_bracket_settings(const BracketSettings& s) {
+  if (!std::isfinite(s.mu_r_lo) || !std::isfinite(s.mu_r_hi) || s.mu_r_lo < 0.0 ||
+      s.mu_r_hi <= s.mu_r_lo)
+    throw std::invalid_argument("calibration: mu_r range [" + num(s.mu_r_lo) + ", " +
+                                num(s.mu_r_hi) + "] is invalid (need 0 <= lo < hi)");
+  if (s.mu_r_start && !(*s.mu_r_start >= s.mu_r_lo && *s.mu_r_start <= s.mu_r_hi))
+    throw std::invalid_argument("calibration: mu_r_start = " + num(*s.mu_r_start) +
+                                " is outside the mu_r range [" + num(s.mu_r_lo) + ", " +
+                                num(s.mu_r_hi) + "]");
+  if (!(s.slope_guess_deg > 0.0) || !std::isfinite(s.slope_guess_deg))
+    throw std::invalid_argument("calibration: slope_guess_deg = " + num(s.slope_guess_deg) +
+                                " must be > 0 (deg per unit mu_r)");
+  if (std::set<std::uint64_t>(s.seeds.begin(), s.seeds.end()).size() < 2 ||
+      s.seeds.size() != std::set<std::uint64_t>(s.seeds.begin(), s.seeds.end()).size())
+    throw std::invalid_argument(
+        "calibration: the bracketing driver needs at least two distinct "
+        "seeds (the seed spread is its stop rule); it has " +
+        std::to_string(s.seeds.size()));
+  if (!(s.mu_r_tolerance > 0.0) || !std::isfinite(s.mu_r_tolerance))
+    throw std::invalid_argument("calibration: mu_r_tolerance = " + num(s.mu_r_tolerance) +
+                                " must be > 0");
+  if (s.max_runs < 2 * static_cast<int>(s.seeds.size()))
+    throw std::invalid_argument("calibration: max_simulations = " + std::to_string(s.max_runs) +
+                                " is below the " + std::to_string(2 * s.seeds.size()) +
+                                " pours of two points");
+  if (!(s.max_jam_rate >= 0.0 && s.max_jam_rate < 1.0))
+    throw std::invalid_argument("calibration: max_jam_rate = " + num(s.max_jam_rate) +
+                                " must lie in [0, 1)");
+}
+
+BracketCalibration calibrate_bracket(const PourBatchFn& pour, const Target& target,
+                                     const BracketSettings& s) {
+  validate_target(target);
+  validate_bracket_settings(s);
+  if (!pour) throw std::invalid_argument("calibration: no pour callback");
+  BracketCalibration c;
+  PourLog log(pour);
+  const int k = static_cast<int>(s.seeds.size());
+  log.run({s.mu_r_start.value_or(0.5 * (s.mu_r_lo + s.mu_r_hi))}, s.seeds);
+  for (;;) {
+    c.pours = log.pours;
+    c.points = points_of(c.pours);
+    const auto obs = usable_observations(c.pours, c.points, s);
+    std::string why;
+    std::optional<double> next;
+    if (obs.empty()) {
+      next = step_below_jams(c.points, s, why);
+    } else {
+      const MonotoneFit fit = fit_monotone(obs);
+      const auto mu = invert(fit, target.angle_deg);
+      c.bracketed = mu.has_value();
+      if (!mu) {
+        next = step_out(fit, target, c.points, s, why);
+      } else {
+        assess(c, fit, *mu, target, s);
+        if (c.mu_r_uncertainty <= s.mu_r_tolerance) {
+          finish(c, target, s, CalibrationStatus::kCalibrated, "");
+          return c;
+        }
+        next = step_in(c, fit, *mu, s);
+        if (!next)
+          why = c.mu_r_seed_se > s.mu_r_tolerance
+                    ? "the seed spread alone is above the tolerance: more seeds are needed"
+                    : "the bracket is narrower than the tolerance";
+      }
+    }
+    if (!next && !c.bracketed) {
+      const bool low = !obs.empty() && target.angle_deg < fit_monotone(obs).points[0].fitted_deg;
+      finish(c, target, s,
+             low ? CalibrationStatus::kCannotReachLow : CalibrationStatus::kCannotReachHigh,
+             "cannot reach: " + why);
+      return c;
+    }
+    if (!next || log.runs() + k > s.max_runs) {
+      finish(c, target, s, CalibrationStatus::kBudgetSpent,
+             "budget of " + std::to_string(s.max_runs) +
+                 " pile runs spent before the mu_r "
+                 "tolerance of " +
+                 num(s.mu_r_tolerance) + " was met" +
+                 (why.empty() ? std::string() : " (" + why + ")"));
+      return c;
+    }
+    log.run({*next}, s.seeds);
+  }
+}
+
+nlohmann::json to_json(const BracketCalibration& c, const BracketSettings& s) {
+  nlohmann::json j = to_json(c.result);
+  nlohmann::json pours = nlohmann::json::array(), points = nlohmann::json::array();
+  for (const Pour& p : c.pours) {
+    nlohmann::json e = {{"mu_r", p.mu_r}, {"seed", p.seed}, {"outcome", to_string(p.outcome)}};
+    e["angle_deg"] = p.outcome == PourOutcome::kPile ? nlohmann::json(p.angle_deg) : nullptr;
+    if (!p.detail.empty()) e["detail"] = p.detail;
+    pours.push_back(e);
+  }
+  for (const PourPoint& q : c.points)
+    points.push_back({{"mu_r", q.mu_r},
+                      {"pours", q.pours},
+                      {"piles", q.piles},
+                      {"jams", q.jams},
+                      {"physics_stops", q.physics_stops},
+                      {"jam_rate", q.jam_rate()},
+                      {"in_fit", q.piles > 0 && q.jam_rate() <= s.max_jam_rate}});
+  const auto finite_or_null = [](double x) {
+    return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json();
+  };
+  j["method"] = "bracket";
+  j["method_text"] =
+      "bracketing with a monotone fit and common random numbers (the same seeds at every mu_r); "
+      "stops when the target is bracketed and the mu_r uncertainty (seed spread and "
+      "interpolation, in quadrature) is below the tolerance; jammed pours counted as a jam rate";
+  j["pile_runs"] = c.pours.size();
+  j["pours"] = pours;
+  j["jam_rate_per_mu_r"] = points;
+  j["bracketed"] = c.bracketed;
+  j["seeds"] = s.seeds;
+  j["seed_roots"] = c.seed_roots;
+  j["mu_r_seed_se"] = finite_or_null(c.mu_r_seed_se);
+  j["mu_r_interpolation_error"] = c.mu_r_interpolation;
+  j["mu_r_uncertainty"] = finite_or_null(c.mu_r_uncertainty);
+  j["mu_r_tolerance"] = s.mu_r_tolerance;
+  j["max_runs"] = s.max_runs;
+  j["max_jam_rate"] = s.max_jam_rate;
+  j["slope_guess_deg"] = s.slope_guess_deg;
+  j["mu_r_start"] = s.mu_r_start.value_or(0.5 * (s.mu_r_lo + s.mu_r_hi));
+  return j;
+}
+
+}  // namespace reposetwin::experiments

@@ -1,0 +1,334 @@
+#include "experiments/reproduce/paper_page.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include "experiments/calibration/calibration.hpp"
+#include "experiments/campaign/case_runner.hpp"
+#include "experiments/io/input_error.hpp"
+#include "experiments/io/provenance.hpp"
+#include "experiments/report/format.hpp"
+#include "experiments/report/gnuplot.hpp"
+#include "experiments/report/html.hpp"
+#include "experiments/report/templates.hpp"
+
+namespace reposetwin::experiments {
+namespace fs = std::filesystem;
+using nlohmann::json;
+using namespace report;
+
+namespace {
+
+std::optional<json> read_json_file(const fs::path& p) {
+  std::error_code ec;
+  if (!fs::is_regular_file(p, ec)) return std::nullopt;
+  try {
+    return json::parse(read_file(p.string()));
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+// One of our points: a case's angles over the runs that formed a pile.
+struct OurPoint {
+  std::string label;
+  double x = 0.0;
+  std::vector<double> angles;
+  std::map<std::string, int> without_pile;  // the other runs, by reason
+};
+
+// Our points of a campaign item: every finished run under DIR/cases, grouped by case, x from the
+// item's x_key (the case's override) or the case's position.
+std::vector<OurPoint> campaign_points(const PaperItem& item, const fs::path& dir) {
+  std::vector<OurPoint> pts;
+  std::error_code ec;
+  if (!fs::is_directory(dir / "cases", ec)) return pts;
+  std::vector<fs::path> files;
+  for (const auto& e : fs::recursive_directory_iterator(dir / "cases", ec))
+    if (e.path().filename() == "result.json") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  const AngleMeasure measure = parse_angle_measure(item.angle, item.name);
+  for (const fs::path& f : files) {
+    auto meta = read_json_file(f);
+    if (!meta || !meta->contains("result") || !meta->contains("spec")) continue;
+    const std::string name = (*meta)["spec"].value("case", std::string("?"));
+    auto it =
+        std::find_if(pts.begin(), pts.end(), [&](const OurPoint& p) { return p.label == name; });
+    if (it == pts.end()) {
+      OurPoint p;
+      p.label = name;
+      p.x = static_cast<double>(pts.size());
+      const json ov = (*meta)["spec"].value("overrides", json::object());
+      if (!item.x_key.empty() && ov.contains(item.x_key) && ov[item.x_key].is_number())
+        p.x = ov[item.x_key].get<double>() * item.x_scale;
+      pts.push_back(p);
+      it = pts.end() - 1;
+    }
+    const json& res = (*meta)["result"];
+    const std::string outcome = case_outcome(res);
+    if (outcome != "pile") {
+      ++it->without_pile[outcome];
+      continue;
+    }
+    try {
+      it->angles.push_back(case_angle_deg(res, measure));
+    } catch (const std::exception&) {
+      ++it->without_pile["not measured (" + item.angle + ")"];
+    }
+  }
+  std::sort(pts.begin(), pts.end(), [](const OurPoint& a, const OurPoint& b) { return a.x < b.x; });
+  return pts;
+}
+
+std::string reasons_text(const std::map<std::string, int>& m) {
+  std::string t;
+  for (const auto& [r, n] : m) t += (t.empty() ? "" : ", ") + std::to_string(n) + " " + r;
+  return t.empty() ? "-" : t;
+}
+
+// The plot of an item: ours with error bars, the paper's points beside them.
+bool item_plot(const PaperItem& item, const std::vector<std::array<double, 3>>& ours,
+               const std::string& our_title, const std::string& x_label, const std::string& y_label,
+               const fs::path& page_dir) {
+  if (ours.empty() && !item.paper_points) return false;
+  std::ostringstream o, p;
+  for (const auto& q : ours) o << q[0] << " " << q[1] << " " << q[2] << "\n";
+  if (item.paper_points)
+    for (std::size_t i = 0; i < item.paper_points->x.size(); ++i)
+      p << item.paper_points->x[i] << " " << item.paper_points->y[i] << "\n";
+  const fs::path od = page_dir / (item.name + "_ours.dat"),
+                 pd = page_dir / (item.name + "_paper.dat");
+  write_file_atomic(od.string(), o.str());
+  write_file_atomic(pd.string(), p.str());
+  std::string plot = "plot ";
+  if (!ours.empty())
+    plot += "'" + od.filename().string() + "' using 1:2:3 with yerrorbars pt 7 title '" +
+            our_title + "'";
+  if (item.paper_points)
+    plot += std::string(ours.empty() ? "" : ", ") + "'" + pd.filename().string() +
+            "' using 1:2 with points pt 5 ps 1.5 title 'paper'";
+  const fs::path png = page_dir / (item.name + ".png");
+  const std::string script =
+      "cd '" + page_dir.string() + "'\n" + png_terminal(png, 720, 420, false) + "set xlabel '" +
+      x_label + "'\nset ylabel '" + y_label +
+      "'\nset key top left\nset offsets graph 0.05, graph 0.05, 1, 1\n" + plot + "\n";
+  return run_gnuplot(page_dir / (item.name + ".gp"), script, png);
+}
+
+struct ItemSection {
+  std::string html;
+  std::string ours_text;  // one line for the summary table
+};
+
+Table plan_table(const ItemPlan& plan) {
+  Table t;
+  t.numeric = true;
+  t.header = {"runs of",      "runs", "particles", "d [mm]", "fines not simulated",
+              "E (softened)", "dt",   "CPU-h"};
+  for (const PlanGroup& g : plan.groups) {
+    Cell label(g.label);
+    label.left = true;
+    std::ostringstream e, dt;
+    e << (g.softened_e_pa > 0 ? fixed(g.softened_e_pa / 1e6, 3) + " MPa" : "real E");
+    dt << sig3(g.plan.time_step_s) << " s (" << fixed(g.rayleigh_fraction, 2) << " T_R)";
+    t.rows.push_back({{label, std::to_string(g.runs),
+                       std::to_string(g.plan.particles) + (g.clumps ? " (clumps)" : ""),
+                       fixed(g.plan.d_min_mm, 2) + "-" + fixed(g.plan.d_max_mm, 2),
+                       fixed(100.0 * g.plan.fines_fraction, 1) + "%", e.str(), dt.str(),
+                       fixed(g.runs * g.plan.wall_s / 3600.0, 2)}});
+  }
+  return t;
+}
+
+// Our part of a campaign item: the table of points and the plot.
+void campaign_part(const PaperItem& item, const fs::path& dir, const fs::path& page_dir,
+                   mustache::data& d, ItemSection& s) {
+  const std::vector<OurPoint> pts = campaign_points(item, dir);
+  if (pts.empty()) return;
+  Table t;
+  t.numeric = true;
+  t.header = {"case", item.x_label.empty() ? "x" : item.x_label,
+              "ours: " + item.angle + " angle [deg], mean \u00b1 seed sd", "piles",
+              "runs without a pile"};
+  std::vector<std::array<double, 3>> plotted;
+  for (const OurPoint& p : pts) {
+    const SampleStats st = sample_stats(p.angles);
+    Cell c(p.label);
+    c.left = true;
+    t.rows.push_back({{c, fixed(p.x, 3), st.n ? mean_sd(st.mean, st.sd) : "-", std::to_string(st.n),
+                       reasons_text(p.without_pile)}});
+    if (st.n) plotted.push_back({p.x, st.mean, st.sd});
+    s.ours_text += (s.ours_text.empty() ? "" : "; ") + p.label + ": " +
+                   (st.n ? mean_sd(st.mean, st.sd) : "no pile");
+  }
+  d.set("ours", to_data(t));
+  if (item_plot(item, plotted, "ours (" + item.angle + ")",
+                item.x_label.empty() ? "case" : item.x_label,
+                item.paper_points ? item.paper_points->y_label : "angle of repose [deg]", page_dir))
+    d.set("plot", item.name + ".png");
+}
+
+// Our part of a calibration item: mu_r, runs, jam rates, predictions.
+void calibration_part(const PaperItem& item, const fs::path& dir, const fs::path& page_dir,
+                      mustache::data& d, ItemSection& s) {
+  auto cal = read_json_file(dir / "calibration.json");
+  if (!cal) return;
+  Table t;
+  t.numeric = true;
+  t.header = {"what", "ours", "detail"};
+  const bool reached = cal->value("mu_r", json()).is_number() && cal->contains("mu_r_interval");
+  std::string mu = "cannot reach";
+  if (reached)
+    mu = fixed((*cal)["mu_r"].get<double>(), 3) + " [" +
+         fixed_or_dash((*cal)["mu_r_interval"][0], 3) + ", " +
+         fixed_or_dash((*cal)["mu_r_interval"][1], 3) + "]";
+  t.rows.push_back(
+      {{Cell("calibrated mu_r (95% interval)"), mu,
+        cal->value("status", std::string()) + ", " + std::to_string(cal->value("simulations", 0)) +
+            " pile runs (" + cal->value("method", std::string("sequential")) + ")"}});
+  if (cal->contains("jam_rate_per_mu_r"))
+    for (json& q : (*cal)["jam_rate_per_mu_r"])
+      t.rows.push_back({{Cell("pours at mu_r " + fixed_or_dash(q["mu_r"], 3)),
+                         std::to_string(q.value("piles", 0)) + " piles of " +
+                             std::to_string(q.value("pours", 0)),
+                         "jam rate " + fixed_or_dash(q["jam_rate"], 2)}});
+  if (auto pred = read_json_file(dir / "predictions.json"))
+    for (json& q : (*pred)["predictions"])
+      t.rows.push_back(
+          {{Cell("predicted: " + q.value("name", std::string())),
+            q["mean_deg"].is_number()
+                ? mean_sd(q["mean_deg"].get<double>(),
+                          q["seed_sd_deg"].is_number() ? q["seed_sd_deg"].get<double>() : 0.0) +
+                      " deg (" + std::to_string(q.value("n", 0)) + " piles)"
+                : "no pile",
+            "measured " + fixed_or_dash(q["measured_deg"]) + ", error " +
+                fixed_or_dash(q["error_deg"])}});
+  d.set("ours", to_data(t));
+  s.ours_text = "mu_r " + mu + ", " + std::to_string(cal->value("simulations", 0)) + " pile runs";
+  std::vector<std::array<double, 3>> obs;
+  for (const json& o : cal->value("observations", json::array()))
+    obs.push_back({o.value("mu_r", 0.0), o.value("angle_deg", 0.0), 0.0});
+  if (item_plot(item, obs, "our pile runs (" + item.angle + ")", "mu_r", "angle of repose [deg]",
+                page_dir))
+    d.set("plot", item.name + ".png");
+}
+
+// A derived item: its sources' calibrated mu_r against their d_max.
+void derived_part(const PaperItem& item, const PaperIndex& index, const fs::path& out,
+                  const fs::path& page_dir, mustache::data& d, ItemSection& s) {
+  Table t;
+  t.numeric = true;
+  t.header = {"calibration", "d_max [mm]", "mu_r", "95% interval", "model"};
+  std::vector<std::array<double, 3>> pts;
+  for (const std::string& src : item.from) {
+    const auto it = std::find_if(index.items.begin(), index.items.end(),
+                                 [&](const PaperItem& p) { return p.name == src; });
+    auto cal = read_json_file(out / src / "calibration.json");
+    if (it == index.items.end() || !cal || !cal->value("mu_r", json()).is_number()) continue;
+    const ItemPlan plan = plan_item(*it);
+    const double dmax = plan.groups.empty() ? 0.0 : plan.groups.front().plan.d_max_mm;
+    const double mu = (*cal)["mu_r"].get<double>();
+    const json iv = cal->value("mu_r_interval", json::array({mu, mu}));
+    const double lo = iv[0].get<double>(), hi = iv[1].get<double>();
+    Cell c(src);
+    c.left = true;
+    t.rows.push_back(
+        {{c, fixed(dmax, 2), fixed(mu, 3), "[" + fixed(lo, 3) + ", " + fixed(hi, 3) + "]",
+          cal->value("rolling_model", json::object()).value("keyword", std::string("?"))}});
+    pts.push_back({dmax, mu, 0.5 * (hi - lo)});
+    s.ours_text += (s.ours_text.empty() ? "" : "; ") + src + " " + fixed(mu, 3);
+  }
+  if (t.rows.empty()) return;
+  d.set("ours", to_data(t));
+  if (item_plot(item, pts, "ours (calibrated mu_r, 95% half-width)", "d_max [mm]", "mu_r",
+                page_dir))
+    d.set("plot", item.name + ".png");
+}
+
+std::string paper_text(const PaperItem& item) {
+  if (!item.paper_points) return "";
+  std::ostringstream o;
+  const PaperPoints& p = *item.paper_points;
+  for (std::size_t i = 0; i < p.x.size(); ++i)
+    o << (i ? "; " : "") << p.x_label << " " << as_printed(p.x[i]) << ": " << as_printed(p.y[i]);
+  o << " (" << p.source << ")";
+  return o.str();
+}
+
+ItemSection item_section(const PaperItem& item, const PaperIndex& index, const fs::path& out,
+                         const fs::path& page_dir, const ItemPlan& plan, const ItemStatus& st) {
+  ItemSection s;
+  mustache::data d;
+  d.set("anchor", item.name);
+  d.set("heading", item.paper + " (" + item.name + ")");
+  d.set("status", st.state + (st.detail.empty() ? "" : ": " + st.detail));
+  d.set("reductions", item.reductions);
+  d.set("paper_text", text_or_false(paper_text(item)));
+  d.set("trend", text_or_false(item.trend));
+  d.set("plot", false);
+  d.set("ours", false);
+  const fs::path dir = out / item.name;
+  if (item.kind == PaperItemKind::kCampaign) campaign_part(item, dir, page_dir, d, s);
+  if (item.kind == PaperItemKind::kCalibration) calibration_part(item, dir, page_dir, d, s);
+  if (item.kind == PaperItemKind::kDerived) derived_part(item, index, out, page_dir, d, s);
+  d.set("not_run", s.ours_text.empty());
+  if (s.ours_text.empty()) s.ours_text = "not yet run";
+  if (!plan.groups.empty()) {
+    d.set("plan", to_data(plan_table(plan)));
+  } else {
+    d.set("plan", false);
+  }
+  s.html = render(templates::kPaperItem, d);
+  return s;
+}
+
+}  // namespace
+
+std::string build_paper_page(const PaperIndex& index, const std::string& out_dir, bool force) {
+  const fs::path out = fs::absolute(out_dir).lexically_normal();
+  const fs::path page_dir = out / "paper_page";
+  const fs::path page = page_dir / "index.html";
+  std::error_code ec;
+  if (fs::exists(page, ec) && !force)
+    throw InputError(page.string() + ": a paper page is already there (rebuild it with --force)");
+  fs::create_directories(page_dir);
+  Table summary;
+  summary.header = {"paper", "item", "the paper", "ours", "reductions", "runs", "CPU-h", "status"};
+  std::vector<std::string> sections;
+  double planned = 0.0;
+  for (const PaperItem& item : index.items) {
+    const ItemPlan plan = plan_item(item);
+    const ItemStatus st = item_status(item, (out / item.name).string());
+    const ItemSection s = item_section(item, index, out, page_dir, plan, st);
+    sections.push_back(s.html);
+    planned += plan.cpu_hours;
+    Cell name;
+    name.links.push_back({"#" + item.name, item.name});
+    const std::string paper = item.paper_points ? paper_text(item) : item.trend;
+    summary.rows.push_back(
+        {{Cell(item.paper), name, paper.empty() ? "-" : paper, s.ours_text, item.reductions,
+          std::to_string(plan.runs), fixed(plan.cpu_hours, 2), st.state}});
+  }
+  mustache::data intro;
+  intro.set("built", utc_now());
+  intro.set("version", code_version());
+  intro.set("index", index.file);
+  intro.set("planned", fixed(planned, 1));
+  intro.set("budget", fixed(index.budget_cpu_hours, 1));
+  intro.set("within", planned <= index.budget_cpu_hours);
+  intro.set("summary", to_data(summary));
+  Page p;
+  p.title = index.title.empty() ? "The paper beside ours" : index.title;
+  p.heading = p.title;
+  p.sections.push_back(render(templates::kPaperIntro, intro));
+  for (auto& s : sections) p.sections.push_back(std::move(s));
+  write_file_atomic(page.string(), render_page(p));
+  return page.string();
+}
+
+}  // namespace reposetwin::experiments
