@@ -139,7 +139,9 @@ TEST(PaperPage, ShowsThePaperBesideOursOnAFakeTree) {
     EXPECT_TRUE(fs::exists(fs::path(page).parent_path() / src)) << src;
     ++images;
   }
-  if (std::system("gnuplot --version > /dev/null 2>&1") == 0) EXPECT_GE(images, 2);
+  if (std::system("gnuplot --version > /dev/null 2>&1") == 0) {
+    EXPECT_GE(images, 2);
+  }
   // Every anchor link points at a section of the page.
   EXPECT_NE(html.find("href='#mass'"), std::string::npos);
   // An earlier page is kept unless forced.
