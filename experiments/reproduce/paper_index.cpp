@@ -64,7 +64,7 @@ void check_item_file(const PaperItem& item, TableReader& t, const std::string& w
 PaperItem read_item(TableReader& t, const fs::path& base) {
   const std::string& file = t.file();
   t.known_keys({"name", "paper", "kind", "file", "from", "calibrated_by", "reductions", "x_key",
-                "x_label", "x_scale", "trend", "paper_points", "angle"});
+                "x_label", "x_scale", "trend", "paper_points", "angle", "if_not_calibrated"});
   PaperItem item;
   item.name = t.string("name");
   if (!is_safe_name(item.name))
@@ -116,6 +116,14 @@ PaperItem read_item(TableReader& t, const fs::path& base) {
   if (!item.calibrated_by.empty() && item.kind != PaperItemKind::kCalibration)
     throw bad(file, t.where("calibrated_by"), in_quotes(item.calibrated_by),
               "only a calibration item reuses another's calibration");
+  const std::string if_not = t.string("if_not_calibrated", "skip");
+  if (if_not != "skip" && if_not != "closest_point")
+    throw bad(file, t.where("if_not_calibrated"), in_quotes(if_not),
+              "must be \"skip\" or \"closest_point\"");
+  if (t.has("if_not_calibrated") && item.calibrated_by.empty())
+    throw bad(file, t.where("if_not_calibrated"), in_quotes(if_not),
+              "only an item with calibrated_by reuses another's calibration");
+  item.closest_if_not_calibrated = if_not == "closest_point";
   item.angle = t.string("angle", "image");
   parse_angle_measure(item.angle, file + ": key '" + t.where("angle") + "'");
   t.finish();

@@ -60,6 +60,9 @@ struct PaperItem {
   std::vector<std::string> from;  // derived items: the calibration items it is drawn from
   std::string calibrated_by;      // calibration items: reuse this earlier item's calibration and
                                   // run only the [[predict]] tests at its mu_r (same [calibration])
+  bool closest_if_not_calibrated = false;  // with calibrated_by: when that calibration found no
+                                           // mu_r, predict at its usable point closest to the
+                                           // target (marked not calibrated) instead of skipping
   std::string reductions;         // the declared reductions and why, in words
   std::string x_key;              // campaign items: the override key whose value is the plot's x
   std::string x_label;            // its label on the page (default: x_key)

@@ -187,10 +187,20 @@ void calibration_part(const PaperItem& item, const fs::path& dir, const fs::path
     mu = fixed((*cal)["mu_r"].get<double>(), 3) + " [" +
          fixed_or_dash((*cal)["mu_r_interval"][0], 3) + ", " +
          fixed_or_dash((*cal)["mu_r_interval"][1], 3) + "]";
-  t.rows.push_back(
-      {{Cell("calibrated mu_r (95% interval)"), mu,
-        cal->value("status", std::string()) + ", " + std::to_string(cal->value("simulations", 0)) +
-            " pile runs (" + cal->value("method", std::string("sequential")) + ")"}});
+  if (cal->contains("not_calibrated")) {
+    // Predictions at the closest usable point of a calibration that found no mu_r.
+    const json& nc = (*cal)["not_calibrated"];
+    mu = fixed((*cal)["mu_r"].get<double>(), 3) + " (not calibrated)";
+    t.rows.push_back({{Cell("mu_r used"), mu,
+                       nc.value("mu_r_basis", std::string()) + "; the calibration: " +
+                           nc.value("message", std::string())}});
+  } else {
+    t.rows.push_back(
+        {{Cell("calibrated mu_r (95% interval)"), mu,
+          cal->value("status", std::string()) + ", " +
+              std::to_string(cal->value("simulations", 0)) + " pile runs (" +
+              cal->value("method", std::string("sequential")) + ")"}});
+  }
   if (cal->contains("jam_rate_per_mu_r"))
     for (json& q : (*cal)["jam_rate_per_mu_r"])
       t.rows.push_back({{Cell("pours at mu_r " + fixed_or_dash(q["mu_r"], 3)),

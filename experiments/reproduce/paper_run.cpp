@@ -1,10 +1,13 @@
 // Running the paper's index item by item (paper_index.hpp says why it is built this way).
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <set>
 
 #include "experiments/calibration/calibrate_campaign.hpp"
+#include "experiments/io/format.hpp"
 #include "experiments/io/hash.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
@@ -52,6 +55,34 @@ void write_provenance(const fs::path& dir, nlohmann::json& p) {
   write_json_atomic((dir / kProvenanceFile).string(), p);
 }
 
+// When a reused calibration found no mu_r (its target out of reach, or its budget spent), the
+// model's best answer is still the usable point whose fitted angle came closest to the target;
+// an item declaring `if_not_calibrated = "closest_point"` predicts there, and the record says
+// it is not a calibrated value. Nothing when the calibration has no usable point at all.
+std::optional<nlohmann::json> closest_point(nlohmann::json cal, const std::string& from) {
+  const double target = cal.value("target", nlohmann::json::object()).value("angle_deg", NAN);
+  if (!std::isfinite(target) || !cal.contains("fit")) return std::nullopt;
+  const nlohmann::json points = cal["fit"].value("points", nlohmann::json::array());
+  const nlohmann::json* best = nullptr;
+  for (const auto& q : points)
+    if (q.value("mu_r", nlohmann::json()).is_number() &&
+        (!best || std::abs(q.value("fitted_deg", NAN) - target) <
+                      std::abs(best->value("fitted_deg", NAN) - target)))
+      best = &q;
+  if (!best) return std::nullopt;
+  const double mu = (*best)["mu_r"].get<double>();
+  cal["not_calibrated"] = {
+      {"status", cal.value("status", std::string())},
+      {"message", cal.value("message", std::string())},
+      {"mu_r_basis", "the usable point of " + from + " closest to the target " +
+                         shortest_text(target) + " deg (fitted " +
+                         shortest_text((*best)["fitted_deg"].get<double>()) +
+                         " deg); not a calibrated value"}};
+  cal["mu_r"] = mu;
+  cal["mu_r_interval"] = {mu, mu};
+  return cal;
+}
+
 // Runs one item into `dir`; returns its outcome in a word for the provenance record.
 std::string run_item(const PaperItem& item, const fs::path& dir, const CaseFn& case_fn,
                      const RunnerSettings& runner) {
@@ -64,7 +95,12 @@ std::string run_item(const PaperItem& item, const fs::path& dir, const CaseFn& c
       return "failed: " + item.calibrated_by + " has no finished calibration (" + src.string() +
              ")";
     nlohmann::json cal = nlohmann::json::parse(read_file(src.string()));
-    if (!cal.contains("mu_r") || !cal["mu_r"].is_number()) return "cannot reach";
+    if (!cal.contains("mu_r") || !cal["mu_r"].is_number()) {
+      const auto closest =
+          item.closest_if_not_calibrated ? closest_point(cal, item.calibrated_by) : std::nullopt;
+      if (!closest) return "cannot reach";
+      cal = *closest;
+    }
     if (!fs::is_regular_file(dir / "calibration.json", ec)) {
       cal["copied_from"] = src.string();
       if (!runner.rank || runner.rank->rank == 0)

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -216,6 +217,77 @@ TEST(PaperIndex, ATinyIndexRunsEndToEndAndResumes) {
   EXPECT_EQ(again.load(), 0);
   const json prov = json::parse(read_file((out / "sweep" / "provenance.json").string()));
   EXPECT_EQ(prov["attempts"].size(), 1u);
+}
+
+// An item reusing a calibration that found no mu_r predicts, when it declares
+// if_not_calibrated = "closest_point", at the usable point whose fitted angle is closest to the
+// target, and its record says that mu_r is not calibrated; without the key it is skipped.
+TEST(PaperIndex, AnUncalibratedSourceIsPredictedAtItsClosestPointOnlyWhenDeclared) {
+  const Scratch d("closest");
+  const std::string cal_table =
+      "[calibration]\nkey = \"contacts.rock-rock.rolling_friction\"\ntarget_deg = 20.0\n"
+      "mu_r_range = [0.1, 0.5]\nmethod = \"bracket\"\nmax_simulations = 4\n"
+      "angle = \"particles\"\nbootstrap_replicates = 200\n";
+  write_file_atomic((d.path / "pred.toml").string(),
+                    "name = \"tiny_cal\"\nscene = \"tiny.toml\"\n" + cal_table +
+                        "[[predict]]\nname = \"check\"\nscene = \"tiny.toml\"\n"
+                        "measured_deg = 21.0\nseeds = 1\ninterval_ends = false\n");
+  const std::string index = std::string(kTinyIndex) +
+                            "[[item]]\nname = \"pred\"\npaper = \"Fig. 8\"\n"
+                            "kind = \"calibration\"\nfile = \"pred.toml\"\n"
+                            "calibrated_by = \"cal\"\nreductions = \"the tiny scene\"\n";
+  RunnerSettings rs;
+  rs.mode = WorkerMode::kThreads;
+  rs.workers = 1;
+  rs.progress = false;
+  rs.rank.reset();
+  rs.outcome_of = case_outcome;
+  const fs::path out = d.path / "out";
+  const PaperIndex plain = load_paper_index(d.write(index).string());
+  // The source: the tiny calibration cannot reach 20 deg (its lowest mu_r piles steeper).
+  PaperRunOptions only;
+  only.only = {"cal"};
+  std::atomic<int> source_runs{0};
+  run_paper(plain, out.string(), counting(source_runs), rs, only);
+  const json source = json::parse(read_file((out / "cal" / "calibration.json").string()));
+  ASSERT_FALSE(source["mu_r"].is_number()) << source.dump(1);
+  ASSERT_GE(source["fit"]["points"].size(), 1u);
+  double closest = 0.0, gap = 1e9;
+  for (const json& q : source["fit"]["points"])
+    if (std::abs(q["fitted_deg"].get<double>() - 20.0) < gap) {
+      gap = std::abs(q["fitted_deg"].get<double>() - 20.0);
+      closest = q["mu_r"].get<double>();
+    }
+
+  only.only = {"pred"};
+  std::atomic<int> skipped{0};
+  run_paper(plain, out.string(), counting(skipped), rs, only);
+  EXPECT_EQ(skipped.load(), 0);
+  EXPECT_FALSE(fs::exists(out / "pred" / "calibration.json"));
+
+  std::atomic<int> runs{0};
+  const PaperIndex declared =
+      load_paper_index(d.write(index + "if_not_calibrated = \"closest_point\"\n").string());
+  ASSERT_TRUE(declared.items.back().closest_if_not_calibrated);
+  run_paper(declared, out.string(), counting(runs), rs, only);
+  ASSERT_EQ(runs.load(), 1) << read_file((out / "pred" / "provenance.json").string());
+  const json cal = json::parse(read_file((out / "pred" / "calibration.json").string()));
+  EXPECT_DOUBLE_EQ(cal["mu_r"].get<double>(), closest);
+  ASSERT_TRUE(cal.contains("not_calibrated"));
+  EXPECT_EQ(cal["not_calibrated"]["status"], source["status"]);
+  EXPECT_NE(cal["not_calibrated"]["mu_r_basis"].get<std::string>().find("not a calibrated"),
+            std::string::npos);
+  const json pred = json::parse(read_file((out / "pred" / "predictions.json").string()));
+  EXPECT_EQ(pred["predictions"][0]["name"], "check");
+  EXPECT_DOUBLE_EQ(pred["predictions"][0]["mu_r"].get<double>(), closest);
+
+  // The key belongs to items that reuse a calibration, and takes two words.
+  EXPECT_NE(index_error(d, index + "if_not_calibrated = \"nearest\"\n").find("nearest"),
+            std::string::npos);
+  const std::string on_sweep = std::string(kTinyIndex).replace(
+      std::string(kTinyIndex).find("file = \"sweep.toml\""), 19,
+      "file = \"sweep.toml\"\nif_not_calibrated = \"skip\"");
+  EXPECT_NE(index_error(d, on_sweep).find("calibrated_by"), std::string::npos);
 }
 
 }  // namespace
