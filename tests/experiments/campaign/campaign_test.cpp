@@ -1,3 +1,4 @@
+#include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/campaign.hpp"
 
 #include <fcntl.h>
