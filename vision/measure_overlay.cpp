@@ -98,8 +98,7 @@ cv::Mat draw_side_overlay(const cv::Mat& image, const SideMeasurement& m) {
                 " deg",
             "crest (flat top) = " + fixed(1000.0 * m.crest_width_m, 1) + " +- " +
                 fixed(1000.0 * m.sigma_crest_width_m, 1) + " mm" +
-                (m.pose ? "   camera pitch from the photo: " + fixed(m.pose->pitch_deg, 1) +
-                              " deg"
+                (m.pose ? "   camera pitch from the photo: " + fixed(m.pose->pitch_deg, 1) + " deg"
                         : std::string()),
             "flanks: left " + fixed(m.flank_left_deg, 2) + " +- " +
                 fixed(m.sigma_flank_left_deg, 2) + ", right " + fixed(m.flank_right_deg, 2) +

@@ -83,12 +83,12 @@ void refuse_scattered_grains(const cv::Mat& stats, int n_labels, int best, const
     if (i != best) ++similar;
   }
   if (similar < 2) return;
-  throw std::runtime_error(
-      where + ": no heap: the largest dark blob on the plate (" + str(best_area) + " px, " +
-      str(stats.at<int>(best, cv::CC_STAT_HEIGHT)) + " px tall, " +
-      str(stats.at<int>(best, cv::CC_STAT_WIDTH)) + " px wide) is one of " + str(similar + 1) +
-      " blobs of similar size spread over " + str(u1 - u0 + 1) +
-      " px of the plate: grains lying flat, apart, not a pile with an angle");
+  throw std::runtime_error(where + ": no heap: the largest dark blob on the plate (" +
+                           str(best_area) + " px, " + str(stats.at<int>(best, cv::CC_STAT_HEIGHT)) +
+                           " px tall, " + str(stats.at<int>(best, cv::CC_STAT_WIDTH)) +
+                           " px wide) is one of " + str(similar + 1) +
+                           " blobs of similar size spread over " + str(u1 - u0 + 1) +
+                           " px of the plate: grains lying flat, apart, not a pile with an angle");
 }
 
 // The pile's blob: the dark class above the plate line, the largest component resting on it,
@@ -362,8 +362,7 @@ void set_geometry(SideProfile& out, const InterceptFit& tl, const InterceptFit& 
   const PlateLine& plate = out.plate;
   out.toe_left = cv::Point2d(tl.alpha, plate.v_at(tl.alpha));
   out.toe_right = cv::Point2d(tr.alpha, plate.v_at(tr.alpha));
-  out.diameter_px =
-      std::hypot(out.toe_right.x - out.toe_left.x, out.toe_right.y - out.toe_left.y);
+  out.diameter_px = std::hypot(out.toe_right.x - out.toe_left.x, out.toe_right.y - out.toe_left.y);
   if (!(out.diameter_px > 2.0))
     throw std::runtime_error(where + ": toe points coincide (D = " + str(out.diameter_px) + " px)");
   out.sigma_height_px = std::hypot(0.5 / std::sqrt(3.0), plate.sigma_px);
@@ -457,12 +456,12 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
                              " px above the plate line)");
   // Flank lines over the middle band of the height, then the toes below them.
   const double height = out.height_px;
-  out.left = fit_flank(in_band(out.left_edge, plate, s.flank_band_low * height,
-                               s.flank_band_high * height),
-                       plate, where + ": left flank");
-  out.right = fit_flank(in_band(out.right_edge, plate, s.flank_band_low * height,
-                                s.flank_band_high * height),
-                        plate, where + ": right flank");
+  out.left = fit_flank(
+      in_band(out.left_edge, plate, s.flank_band_low * height, s.flank_band_high * height), plate,
+      where + ": left flank");
+  out.right = fit_flank(
+      in_band(out.right_edge, plate, s.flank_band_low * height, s.flank_band_high * height), plate,
+      where + ": right flank");
   const double toe_lo = std::max(s.toe_band_low * height, s.toe_min_gap_px);
   const double toe_hi = std::max(s.toe_band_high * height, toe_lo + 3.0);
   const InterceptFit tl = toe_of(out.left_edge, out.left, plate, toe_lo, toe_hi, where + ": left");
