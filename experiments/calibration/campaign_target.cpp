@@ -11,10 +11,10 @@ void measure_target_photos(CampaignCalibration& cc, const std::string& file) {
   if (!cc.target_photo_files) return;
   const TargetPhotoFiles& f = *cc.target_photo_files;
   const std::string prefix = "calibration.";
-  const LabPhotoMeasurement m = measure_lab_photos(
-      f.photos, LabPhotoScale{f.camera_json, f.mm_per_px},
-      {f.photos_at, f.camera_at, f.mm_per_px_at, prefix + "target_photo_camera",
-       prefix + "target_mm_per_px"});
+  const LabPhotoMeasurement m =
+      measure_lab_photos(f.photos, LabPhotoScale{f.camera_json, f.mm_per_px},
+                         {f.photos_at, f.camera_at, f.mm_per_px_at, prefix + "target_photo_camera",
+                          prefix + "target_mm_per_px"});
   const bool flank = cc.angle == AngleMeasure::kImageFlank || cc.angle == AngleMeasure::kSlice;
   const vision::Spread& s = flank ? m.summary.flank_deg : m.summary.theta_deg;
   cc.target_photos = m.record;
