@@ -1,3 +1,4 @@
+#include "experiments/calibration/calibration.hpp"
 #include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/campaign.hpp"
 
