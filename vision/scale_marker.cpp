@@ -40,13 +40,10 @@ double median(std::vector<double> v) {
   return v[mid];
 }
 
-}  // namespace
-
-std::optional<ScaleBar> find_scale_bar_flat(const cv::Mat& flat, const MarkerSettings& s) {
-  CV_Assert(flat.type() == CV_32F);
+// Black bands: filled, rectangle-like dark blobs, wider than tall (about 2:1 by convention).
+std::vector<Blob> band_candidates(const cv::Mat& flat, const MarkerSettings& s) {
   const double t = otsu_threshold(flat, 0.0, 1.5);
   const cv::Mat dark = flat < t;
-  // Black bands: filled, rectangle-like dark blobs, wider than tall (about 2:1 by convention).
   std::vector<Blob> cand;
   for (const Blob& b : blobs(dark, 4)) {
     if (b.box.height < s.min_feature_px || b.box.width < s.min_feature_px) continue;
@@ -58,9 +55,14 @@ std::optional<ScaleBar> find_scale_bar_flat(const cv::Mat& flat, const MarkerSet
     const double aspect = static_cast<double>(b.box.width) / b.box.height;
     if (fill >= 0.8 && aspect >= 0.8 && aspect <= 4.0) cand.push_back(b);
   }
-  // Stacks: same column, same size, regular vertical pitch.
+  return cand;
+}
+
+// The largest stack of candidates: same column, same size, regular vertical pitch (one black
+// band per pitch, a white band of the same height between). `best_pitch` receives its pitch.
+std::vector<Blob> band_stack(const std::vector<Blob>& cand, const MarkerSettings& s,
+                             double& best_pitch) {
   std::vector<Blob> best_group;
-  double best_pitch = 0.0;
   for (size_t i = 0; i < cand.size(); ++i) {
     std::vector<Blob> group;
     for (const Blob& b : cand) {
@@ -95,6 +97,15 @@ std::optional<ScaleBar> find_scale_bar_flat(const cv::Mat& flat, const MarkerSet
       best_pitch = pitch;
     }
   }
+  return best_group;
+}
+
+}  // namespace
+
+std::optional<ScaleBar> find_scale_bar_flat(const cv::Mat& flat, const MarkerSettings& s) {
+  CV_Assert(flat.type() == CV_32F);
+  double best_pitch = 0.0;
+  const std::vector<Blob> best_group = band_stack(band_candidates(flat, s), s, best_pitch);
   if (static_cast<int>(best_group.size()) < s.min_black_bands) return std::nullopt;
 
   // Column profile through the middle half of the bar.

@@ -64,12 +64,16 @@ bool fit_circle(const std::vector<cv::Point2d>& pts, cv::Point2d& center, double
 
 namespace {
 
-// Segments and measures the footprint on one feature image `gray` (ROI coordinates, CV_32F, grey
-// levels 0..255): the region around `seed` whose level is closer to the seed's than to the
-// dominant levels on either side. Throws std::runtime_error when no footprint stands out.
-TopProfile measure_on_levels(const cv::Mat& gray, const cv::Point2d& seed, const TopSettings& s,
-                             const cv::Rect& roi, const std::string& where) {
-  // Pile level at the seed, and the dominant levels below and above it.
+// The pile's grey level at the seed and the thresholds half way to the dominant levels below
+// and above it.
+struct SeedLevels {
+  double pile = 0.0;    // median level around the seed
+  double low = -1.0;    // a footprint pixel is above this ...
+  double high = 256.0;  // ... and below this
+};
+
+SeedLevels seed_levels(const cv::Mat& gray, const cv::Point2d& seed, const TopSettings& s,
+                       const cv::Rect& roi, const std::string& where) {
   const int half = std::max(3, std::min(roi.width, roi.height) / 100);
   const cv::Rect win = cv::Rect(static_cast<int>(seed.x) - half, static_cast<int>(seed.y) - half,
                                 2 * half + 1, 2 * half + 1) &
@@ -95,9 +99,19 @@ TopProfile measure_on_levels(const cv::Mat& gray, const cv::Point2d& seed, const
   if (lo_peak < 0 && hi_peak < 0)
     throw std::runtime_error(where + ": no footprint found (the pile level " + str(p) +
                              " at the seed does not stand out from its surroundings)");
-  const double t_lo = lo_peak >= 0 ? 0.5 * (p + lo_peak) : -1.0;
-  const double t_hi = hi_peak >= 0 ? 0.5 * (p + hi_peak) : 256.0;
-  cv::Mat mask = (gray > t_lo) & (gray < t_hi);
+  SeedLevels l;
+  l.pile = p;
+  l.low = lo_peak >= 0 ? 0.5 * (p + lo_peak) : -1.0;
+  l.high = hi_peak >= 0 ? 0.5 * (p + hi_peak) : 256.0;
+  return l;
+}
+
+// The footprint: the region around the seed within the levels, holes filled (CV_8U), refused
+// when it touches the border or is a fragment of it. `box` receives its bounding box.
+cv::Mat footprint_blob(const cv::Mat& gray, const cv::Point2d& seed, const SeedLevels& l,
+                       const TopSettings& s, const cv::Rect& roi, const std::string& where,
+                       cv::Rect& box) {
+  cv::Mat mask = (gray > l.low) & (gray < l.high);
   if (s.morph_radius_px > 0) {
     const int k = 2 * s.morph_radius_px + 1;
     const cv::Mat se = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k));
@@ -115,7 +129,7 @@ TopProfile measure_on_levels(const cv::Mat& gray, const cv::Point2d& seed, const
   cv::findContours(blob, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
   blob.setTo(0);
   cv::drawContours(blob, contours, -1, cv::Scalar(255), cv::FILLED);
-  const cv::Rect box = cv::boundingRect(blob);
+  box = cv::boundingRect(blob);
   if (box.x == 0 || box.y == 0 || box.x + box.width >= roi.width ||
       box.y + box.height >= roi.height)
     throw std::runtime_error(where + ": the footprint touches the border of the " +
@@ -126,22 +140,21 @@ TopProfile measure_on_levels(const cv::Mat& gray, const cv::Point2d& seed, const
   // footprint, and stands among many like it. The footprint holds most of the pile-like pixels
   // around it (strays are few), so a region holding less than half of those in a box three
   // times its size is a fragment, and the next cue is tried.
-  {
-    const cv::Rect around =
-        cv::Rect(box.x - box.width, box.y - box.height, 3 * box.width, 3 * box.height) &
-        cv::Rect(0, 0, roi.width, roi.height);
-    const double inside = cv::countNonZero(mask(around) & blob(around));
-    const double all = cv::countNonZero(mask(around));
-    if (inside < 0.5 * all)
-      throw std::runtime_error(where + ": the region at the seed is a fragment (" +
-                               str(std::round(100.0 * inside / all)) +
-                               "% of the pile-like pixels around it), not the footprint");
-  }
-  const cv::Moments mo = cv::moments(blob, true);
-  if (mo.m00 < 50.0)
-    throw std::runtime_error(where + ": no footprint found (blob of " + str(mo.m00) + " px)");
-  const cv::Point2d c0(mo.m10 / mo.m00, mo.m01 / mo.m00);
-  // Outside level: median of a ring just outside the blob (worked on the blob's padded box).
+  const cv::Rect around =
+      cv::Rect(box.x - box.width, box.y - box.height, 3 * box.width, 3 * box.height) &
+      cv::Rect(0, 0, roi.width, roi.height);
+  const double inside = cv::countNonZero(mask(around) & blob(around));
+  const double all = cv::countNonZero(mask(around));
+  if (inside < 0.5 * all)
+    throw std::runtime_error(where + ": the region at the seed is a fragment (" +
+                             str(std::round(100.0 * inside / all)) +
+                             "% of the pile-like pixels around it), not the footprint");
+  return blob;
+}
+
+// Outside level: median of a ring just outside the blob (worked on the blob's padded box).
+double outside_level(const cv::Mat& gray, const cv::Mat& blob, const cv::Rect& box,
+                     const TopSettings& s, const cv::Rect& roi, const std::string& where) {
   const int pad = 2 * s.edge_window_px + 10;
   const cv::Rect padded =
       cv::Rect(box.x - pad, box.y - pad, box.width + 2 * pad, box.height + 2 * pad) &
@@ -160,12 +173,14 @@ TopProfile measure_on_levels(const cv::Mat& gray, const cv::Point2d& seed, const
   if (outside.empty()) throw std::runtime_error(where + ": no footprint surroundings found");
   std::nth_element(outside.begin(), outside.begin() + static_cast<long>(outside.size() / 2),
                    outside.end());
-  const double back = outside[outside.size() / 2];
-  if (std::abs(p - back) < s.min_contrast)
-    throw std::runtime_error(where + ": no footprint found (pile level " + str(p) +
-                             " vs surroundings " + str(back) + ")");
+  return outside[outside.size() / 2];
+}
 
-  // Sub-pixel outline along rays from the blob centroid.
+// Sub-pixel outline along rays from the blob centroid c0, between the pile level p and the
+// surroundings' level back (local levels where the ray's own contrast suffices).
+std::vector<cv::Point2d> ray_outline(const cv::Mat& gray, const cv::Mat& blob,
+                                     const cv::Point2d& c0, double p, double back,
+                                     const TopSettings& s, const cv::Rect& roi) {
   const int w = s.edge_window_px;
   std::vector<cv::Point2d> outline;
   outline.reserve(s.rays);
@@ -207,10 +222,12 @@ TopProfile measure_on_levels(const cv::Mat& gray, const cv::Point2d& seed, const
     const double e = rho0 - w - 0.5 + sum;
     if (e > rho0 - w - 0.5 && e < rho0 + w + 0.5) outline.push_back(c0 + e * d);
   }
-  if (outline.size() < 16)
-    throw std::runtime_error(where + ": footprint outline not found (" + str(outline.size()) +
-                             " rays)");
+  return outline;
+}
 
+// The footprint's sizes from its outline: fitted circle, area, fitted ellipse.
+TopProfile outline_shape(std::vector<cv::Point2d> outline, double pile_level,
+                         const std::string& where) {
   TopProfile out;
   double radius = 0.0, rms = 0.0;
   if (!fit_circle(outline, out.center, radius, rms))
@@ -233,9 +250,33 @@ TopProfile measure_on_levels(const cv::Mat& gray, const cv::Point2d& seed, const
   out.ellipse_minor_px = std::min(el.size.width, el.size.height);
   out.ellipse_angle_deg = el.angle;
   out.ellipticity = 1.0 - out.ellipse_minor_px / out.ellipse_major_px;
-  out.pile_level = p;
+  out.pile_level = pile_level;
   out.outline = std::move(outline);
   return out;
+}
+
+// Segments and measures the footprint on one feature image `gray` (ROI coordinates, CV_32F, grey
+// levels 0..255): the region around `seed` whose level is closer to the seed's than to the
+// dominant levels on either side. Throws std::runtime_error when no footprint stands out.
+TopProfile measure_on_levels(const cv::Mat& gray, const cv::Point2d& seed, const TopSettings& s,
+                             const cv::Rect& roi, const std::string& where) {
+  const SeedLevels levels = seed_levels(gray, seed, s, roi, where);
+  const double p = levels.pile;
+  cv::Rect box;
+  const cv::Mat blob = footprint_blob(gray, seed, levels, s, roi, where, box);
+  const cv::Moments mo = cv::moments(blob, true);
+  if (mo.m00 < 50.0)
+    throw std::runtime_error(where + ": no footprint found (blob of " + str(mo.m00) + " px)");
+  const cv::Point2d c0(mo.m10 / mo.m00, mo.m01 / mo.m00);
+  const double back = outside_level(gray, blob, box, s, roi, where);
+  if (std::abs(p - back) < s.min_contrast)
+    throw std::runtime_error(where + ": no footprint found (pile level " + str(p) +
+                             " vs surroundings " + str(back) + ")");
+  std::vector<cv::Point2d> outline = ray_outline(gray, blob, c0, p, back, s, roi);
+  if (outline.size() < 16)
+    throw std::runtime_error(where + ": footprint outline not found (" + str(outline.size()) +
+                             " rays)");
+  return outline_shape(std::move(outline), p, where);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include "apps/reposetwin/commands.hpp"
 #include "experiments/calibration/calibration.hpp"
 #include "experiments/calibration/calibrate_campaign.hpp"
+#include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/campaign.hpp"
 #include "experiments/campaign/case_runner.hpp"
 #include "experiments/io/provenance.hpp"

@@ -9,6 +9,7 @@
 #include "apps/reposetwin/commands.hpp"
 #include "experiments/loop/loop.hpp"
 #include "experiments/loop/loop_synth.hpp"
+#include "experiments/report/loop_report.hpp"
 #include "experiments/io/input_error.hpp"
 
 namespace reposetwin::cli {
@@ -132,6 +133,7 @@ void add_loop_command(CLI::App& app) {
     s.angle = experiments::parse_angle_measure(args->angle, "--angle");
     s.at_bound = experiments::parse_grid_bound(args->at_bound, "--at-bound");
     s.progress = !args->quiet;
+    s.page = experiments::write_loop_html;
     const experiments::LabData data = experiments::read_lab_csv(args->data);
     const nlohmann::json loop = experiments::run_loop(data, args->out, s);
     std::cout << loop["summary"].dump(2) << "\n";

@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "experiments/calibration/calibration.hpp"
+#include "experiments/io/calibration_settings.hpp"
 
 namespace reposetwin::experiments {
 
@@ -78,20 +79,6 @@ struct PourPoint {
 using PourBatchFn =
     std::function<std::vector<Pour>(const std::vector<std::pair<double, std::uint64_t>>&)>;
 
-/// Settings of the bracketing driver (see the design note).
-struct BracketSettings {
-  double mu_r_lo = 0.0;                       // low end of the mu_r range [-], >= 0
-  double mu_r_hi = 0.5;                       // high end of the mu_r range [-], > mu_r_lo
-  std::optional<double> mu_r_start;           // first point [-]; nothing = middle of the range
-  double slope_guess_deg = 25.0;              // expected d(angle)/d(mu_r) [deg per unit mu_r], > 0
-  std::vector<std::uint64_t> seeds = {1, 2};  // the seeds run at every point, >= 2 distinct
-  double mu_r_tolerance = 0.02;               // stop when the uncertainty of mu_r is below [-], > 0
-  int max_runs = 6;                           // budget of pours, jams included, >= 2 x seeds
-  double max_jam_rate = 0.5;                  // a point with a higher jam rate is beyond the usable
-                                              // range [-], in [0, 1)
-  BootstrapSettings bootstrap;                // the 95% interval of the final fit
-};
-
 /// Outcome of a bracketing calibration.
 struct BracketCalibration {
   CalibrationResult result;         // fit, mu_r and its 95% interval over the pile runs, status
@@ -103,9 +90,6 @@ struct BracketCalibration {
   double mu_r_uncertainty = 0.0;    // the two in quadrature, compared with the tolerance [-]
   bool bracketed = false;           // the fitted curve crosses the target
 };
-
-/// Checks bracket settings; std::invalid_argument naming the field and value.
-void validate_bracket_settings(const BracketSettings& s);
 
 /// Calibrates mu_r by bracketing with common random numbers (see the design note). Throws
 /// std::invalid_argument for invalid settings or target, std::runtime_error if a pour that

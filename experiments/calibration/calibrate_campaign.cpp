@@ -9,6 +9,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "experiments/calibration/bracket_calibration.hpp"
+#include "experiments/calibration/calibration.hpp"
 #include "experiments/campaign/case_runner.hpp"
 #include "experiments/io/provenance.hpp"
 #include "sim/contact.hpp"

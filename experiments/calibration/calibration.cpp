@@ -163,15 +163,6 @@ void validate_observations(const std::vector<Observation>& observations) {
   }
 }
 
-void validate_target(const Target& target) {
-  if (!std::isfinite(target.angle_deg) || target.angle_deg <= 0.0 || target.angle_deg >= 90.0)
-    throw std::invalid_argument("calibration: target angle_deg = " + num(target.angle_deg) +
-                                " is outside (0, 90) degrees");
-  if (!std::isfinite(target.sd_deg) || target.sd_deg < 0.0)
-    throw std::invalid_argument("calibration: target sd_deg = " + num(target.sd_deg) +
-                                " must be a finite value >= 0");
-}
-
 MonotoneFit fit_monotone(const std::vector<Observation>& observations) {
   validate_observations(observations);
   std::vector<Observation> sorted = observations;

@@ -52,6 +52,8 @@
 #include <utility>
 #include <vector>
 
+#include "experiments/io/calibration_settings.hpp"
+
 namespace reposetwin::experiments {
 
 /// One simulated run: the angle measured at a given mu_r with a given seed.
@@ -59,12 +61,6 @@ struct Observation {
   double mu_r = 0.0;       // rolling resistance coefficient [-]
   std::uint64_t seed = 0;  // run seed
   double angle_deg = 0.0;  // measured angle of repose [deg], in [0, 90]
-};
-
-/// The measured angle to match, with its own 1-sigma uncertainty (0 when unknown).
-struct Target {
-  double angle_deg = 0.0;  // [deg], must lie in (0, 90)
-  double sd_deg = 0.0;     // 1-sigma uncertainty of the measured angle [deg], >= 0
 };
 
 /// Count, mean and sample standard deviation (n - 1; 0 for fewer than two values) of angles.
@@ -89,12 +85,6 @@ struct MonotoneFit {
   std::vector<FitPoint> points;  // sorted by mu_r, one per distinct mu_r
   double noise_sd_deg = 0.0;     // pooled within-point standard deviation [deg]
   int noise_dof = 0;             // its degrees of freedom, sum(n_i - 1); 0 = noise not estimated
-};
-
-/// Settings of the bootstrap that gives the uncertainty intervals.
-struct BootstrapSettings {
-  int replicates = 2000;           // number of bootstrap replicates
-  std::uint64_t rng_seed = 12345;  // seed of the bootstrap's random stream
 };
 
 /// Outcome of a calibration.
@@ -140,18 +130,6 @@ struct Prediction {
   double seed_sd_deg = 0.0;  // run-to-run spread of a single run (pooled seed sd) [deg]
 };
 
-/// Settings of the sequential calibration driver.
-struct CalibrationSettings {
-  double mu_r_lo = 0.0;          // low end of the mu_r range [-], >= 0
-  double mu_r_hi = 0.5;          // high end of the mu_r range [-], > mu_r_lo
-  int seeds_per_point = 3;       // runs per mu_r point (seeds first_seed, first_seed + 1, ...)
-  std::uint64_t first_seed = 1;  // first run seed at every point
-  double tolerance_deg = 0.5;    // angle tolerance of the calibration [deg], > 0 (95% level)
-  int max_simulations = 40;      // budget of simulate() calls, confirmation included
-  bool confirm_bracket = true;   // finish with fresh seeds at the bracket points (see above)
-  BootstrapSettings bootstrap;
-};
-
 /// Runs one simulation at (mu_r, seed) and returns the measured angle [deg].
 using SimulateFn = std::function<double(double mu_r, std::uint64_t seed)>;
 /// Runs a batch of simulations (mu_r, seed) and returns their angles [deg] in order; lets the
@@ -162,9 +140,6 @@ using SimulateBatchFn =
 /// Checks observations: non-empty, finite, mu_r >= 0 and angles in [0, 90]. Throws
 /// std::invalid_argument naming the offending field and value.
 void validate_observations(const std::vector<Observation>& observations);
-
-/// Checks a target: angle in (0, 90) and sd >= 0. Throws std::invalid_argument otherwise.
-void validate_target(const Target& target);
 
 /// Fits a non-decreasing piecewise-linear curve of angle against mu_r (see the design note).
 MonotoneFit fit_monotone(const std::vector<Observation>& observations);

@@ -1,3 +1,4 @@
+#include "experiments/calibration/campaign_target.hpp"
 #include "experiments/calibration/timestep_study.hpp"
 
 #include <algorithm>

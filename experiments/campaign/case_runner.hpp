@@ -56,8 +56,8 @@ CaseFn pile_case_fn(const CaseRunSettings& settings);
 /// Reads every case's scene as its pile run will (overrides applied, strict parser), so that an
 /// override the scene parser refuses (an elongation below 1, a mass fraction that no longer sums
 /// to 1) is an InputError naming the campaign file, the case and the scene's key and value before
-/// any case runs. load_campaign() checks only that each override applies to its scene file, since
-/// a campaign is not always over pile scenes.
+/// any case runs. read_campaign_file() checks only that each override applies to its scene file,
+/// since a campaign is not always over pile scenes.
 void check_pile_cases(const Campaign& campaign);
 
 /// True when the case made no pile (a clogged outlet: every particle lodged in the container).

@@ -5,7 +5,6 @@
 #include "experiments/io/campaign_file_detail.hpp"
 #include "experiments/io/overrides.hpp"
 #include "experiments/io/toml_edit.hpp"
-#include "experiments/photos/lab_photos.hpp"
 
 namespace reposetwin::experiments::campaign_file {
 namespace fs = std::filesystem;
@@ -33,52 +32,42 @@ void read_keys(TableReader& t, CampaignCalibration& cc) {
   for (const auto& k : cc.keys) split_dotted_key(k, file + ": key 'calibration.key'");
 }
 
-// The calibration target measured on the lab's side photos (calibration.target_photos, a path or
-// a list, relative to the campaign file) with vision/, as the renders are measured: the mean
-// atan(2H/D) when the simulated angle is an atan(2H/D) (image, particles), the mean flank angle
-// when it is a protractor-like angle (image_flank, slice), so both sides are read alike. The
-// target's sd is the measurement's uncertainty of the mean (spread over the photos and their own
-// errors); target_sd_deg, when given, replaces it. `record` receives the measurement.
-Target target_from_photos(TableReader& t, AngleMeasure angle, nlohmann::json* record) {
+// The lab's side photos named as the calibration target (calibration.target_photos, a path or a
+// list, relative to the campaign file) and their scale, recorded as given: calibration/
+// (campaign_target.hpp) measures them while the campaign is loaded, so the file edge needs no
+// vision. Every text that names a key in a message is recorded with them.
+TargetPhotoFiles read_target_photos(TableReader& t) {
   const std::string& file = t.file();
   const std::string prefix = "calibration.";
   t.mark_used("target_photos");
   const toml::node* n = t.raw().get("target_photos");
-  std::vector<std::string> photos;
+  TargetPhotoFiles f;
   auto add = [&](const toml::node& e) {
     if (!e.is_string() || e.as_string()->get().empty())
       throw bad(file, prefix + "target_photos", value_text(*n),
                 "must be a path or a list of paths (the lab's side photos)");
     fs::path path(e.as_string()->get());
     if (path.is_relative()) path = fs::path(file).parent_path() / path;
-    photos.push_back(fs::absolute(path).lexically_normal().string());
+    f.photos.push_back(fs::absolute(path).lexically_normal().string());
   };
   if (const toml::array* a = n->as_array()) {
     for (const auto& e : *a) add(e);
   } else {
     add(*n);
   }
-  if (photos.empty()) throw bad(file, prefix + "target_photos", "[]", "needs at least one photo");
-  LabPhotoScale scale;
+  if (f.photos.empty()) throw bad(file, prefix + "target_photos", "[]", "needs at least one photo");
   const std::string camera = t.string("target_photo_camera", "");
   if (!camera.empty()) {
     fs::path path(camera);
     if (path.is_relative()) path = fs::path(file).parent_path() / path;
-    scale.camera_json = path.lexically_normal().string();
+    f.camera_json = path.lexically_normal().string();
   }
-  scale.mm_per_px = optional_number(t, "target_mm_per_px");
+  f.mm_per_px = optional_number(t, "target_mm_per_px");
   const std::string at = file + ": key '" + prefix;
-  const LabPhotoMeasurement m = measure_lab_photos(
-      photos, scale,
-      {at + "target_photos'", at + "target_photo_camera'", at + "target_mm_per_px'",
-       prefix + "target_photo_camera", prefix + "target_mm_per_px"});
-  const bool flank = angle == AngleMeasure::kImageFlank || angle == AngleMeasure::kSlice;
-  const vision::Spread& s = flank ? m.summary.flank_deg : m.summary.theta_deg;
-  *record = m.record;
-  (*record)["photos"] = photos;
-  (*record)["target_from"] = flank ? "flank_deg (mean flank angle over the photos)"
-                                   : "theta_deg (atan(2H/D), mean over the photos)";
-  return Target{s.mean, s.sigma_mean};
+  f.photos_at = at + "target_photos'";
+  f.camera_at = at + "target_photo_camera'";
+  f.mm_per_px_at = at + "target_mm_per_px'";
+  return f;
 }
 
 // The measured angle: target_deg typed in, or target_photos measured; target_sd_deg optional.
@@ -97,18 +86,18 @@ void read_target(TableReader& t, CampaignCalibration& cc) {
   for (const char* k : {"target_photo_camera", "target_mm_per_px"})
     if (!photos && t.has(k))
       throw bad(file, p + k, value_text(*t.raw().get(k)), "only with target_photos");
-  if (photos) {
-    cc.target = target_from_photos(t, cc.angle, &cc.target_photos);
-  } else {
-    cc.target.angle_deg = *target;
+  const auto sd = optional_number(t, "target_sd_deg");
+  if (photos) {  // measured, and then checked, by calibration/ (campaign_target.hpp)
+    cc.target_photo_files = read_target_photos(t);
+    cc.target_photo_files->sd_deg = sd;
+    return;
   }
-  if (auto sd = optional_number(t, "target_sd_deg")) cc.target.sd_deg = *sd;
+  cc.target.angle_deg = *target;
+  if (sd) cc.target.sd_deg = *sd;
   try {
     validate_target(cc.target);
   } catch (const std::invalid_argument& e) {
-    const std::string shown = photos ? "measured " + std::to_string(cc.target.angle_deg) + " deg"
-                                     : value_text(*t.raw().get("target_deg"));
-    throw bad(file, p + (photos ? "target_photos" : "target_deg"), shown, e.what());
+    throw bad(file, p + "target_deg", value_text(*t.raw().get("target_deg")), e.what());
   }
 }
 

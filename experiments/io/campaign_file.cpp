@@ -419,7 +419,7 @@ std::string shortest_text(double x) {
   return std::string(buf, r.ptr);
 }
 
-Campaign load_campaign(const std::string& path) {
+Campaign read_campaign_file(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw std::runtime_error(path + ": campaign file not found");
   return parse_campaign(read_file(path), path);

@@ -81,8 +81,7 @@
 #include <string_view>
 #include <vector>
 
-#include "experiments/calibration/bracket_calibration.hpp"
-#include "experiments/calibration/calibration.hpp"
+#include "experiments/io/calibration_settings.hpp"
 #include "experiments/io/overrides.hpp"
 
 namespace reposetwin::experiments {
@@ -126,6 +125,20 @@ enum class CalibrationMethod {
   kBracket,     // bracket_calibration.hpp: bracketing, common random numbers, few runs
 };
 
+/// calibration.target_photos as the file gives them: the lab's side photos and their scale, with
+/// the text that names each key in a message. Recorded here, measured by calibration/
+/// (campaign_target.hpp, measure_target_photos) when the campaign is loaded.
+struct TargetPhotoFiles {
+  std::vector<std::string> photos;  // absolute paths, in file order
+  std::string camera_json;          // target_photo_camera: a camera sidecar for every photo, or
+                                    // empty (relative to the campaign file's folder when given so)
+  std::optional<double> mm_per_px;  // target_mm_per_px [mm/px] as written (checked when measured)
+  std::optional<double> sd_deg;     // target_sd_deg [deg]: replaces the measurement's when given
+  std::string photos_at;     // "FILE: key 'calibration.target_photos'"
+  std::string camera_at;     // "FILE: key 'calibration.target_photo_camera'"
+  std::string mm_per_px_at;  // "FILE: key 'calibration.target_mm_per_px'"
+};
+
 /// The [calibration] table of a campaign file, for the calibrate command.
 struct CampaignCalibration {
   std::string key = "contacts.rock-rock.rolling_friction";  // dotted scene key that is varied
@@ -137,8 +150,10 @@ struct CampaignCalibration {
                                      // as `settings`, plus its own keys
   std::optional<int> table1_sample;  // the paper's Table 1 sample it calibrates on (reports)
   AngleMeasure angle = AngleMeasure::kImage;  // the simulated angle matched to the target
-  nlohmann::json target_photos;  // the lab photos' measurement when the target came from
-                                 // target_photos (null: target_deg typed in)
+  std::optional<TargetPhotoFiles> target_photo_files;  // the target is measured on these photos
+                                                      // (absent: target_deg typed in)
+  nlohmann::json target_photos;  // their measurement, set with `target` by measure_target_photos
+                                 // (null: target_deg typed in, or not measured yet)
 };
 
 /// One [[predict]] entry: another test, run at the calibrated mu_r with its own seeds.
@@ -171,7 +186,9 @@ struct Campaign {
 /// Reads a campaign file. Throws InputError (or std::runtime_error for unreadable files) whose
 /// message names the file, the key and the value: unknown keys, wrong types, missing or
 /// unreadable scenes, duplicate or unsafe case names, overrides that do not apply to the scene.
-Campaign load_campaign(const std::string& path);
+/// Target photos are recorded, not measured: the commands load a campaign through
+/// load_campaign() (calibration/campaign_target.hpp), which measures them too.
+Campaign read_campaign_file(const std::string& path);
 
 /// Parses campaign text; `path` names it in messages and anchors relative scene paths.
 Campaign parse_campaign(std::string_view text, const std::string& path);

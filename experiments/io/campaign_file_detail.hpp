@@ -43,7 +43,7 @@ class SceneCache {
 };
 
 /// Stage 4 of parse_campaign: the [calibration] table, with its keys checked against the base
-/// scene and, for target_photos, the lab photos measured.
+/// scene and, for target_photos, the lab photos recorded (not yet measured).
 CampaignCalibration read_calibration_table(TableReader& t, const Campaign& c, SceneCache& scenes);
 
 }  // namespace reposetwin::experiments::campaign_file

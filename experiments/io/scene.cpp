@@ -6,6 +6,7 @@
 #include <limits>
 #include <numbers>
 #include <sstream>
+#include <utility>
 
 #include "experiments/io/format.hpp"
 #include "experiments/io/provenance.hpp"
@@ -122,6 +123,238 @@ double container_volume(const ContainerConfig& c) {
   return std::numbers::pi / 3.0 * c.height * (r0 * r0 + r0 * r1 + r1 * r1);
 }
 
+// [scene]: name, description, seed.
+void read_scene_head(TableReader t, SceneConfig& s) {
+  s.name = t.string("name");
+  s.description = t.string("description", "");
+  const std::int64_t seed = t.integer("seed", 1);
+  if (seed < 0) t.fail("seed", "= " + std::to_string(seed) + " must not be negative");
+  s.seed = static_cast<std::uint64_t>(seed);
+  t.finish();
+}
+
+// [materials]: at least one.
+void read_materials(TableReader t, SceneConfig& s) {
+  for (const std::string& name : t.keys())
+    s.materials.push_back(read_material(*t.table(name), name));
+  if (s.materials.empty()) t.fail("", "must define at least one material");
+  t.finish();
+}
+
+// [sample]: mass, material, the PSD (a sieve file or an inline table), size cut-offs and grain
+// shapes; a sample of too few grains of the largest size is refused.
+void read_sample(TableReader t, SceneConfig& s, const toml::table& doc,
+                 const std::filesystem::path& dir, const std::string& file) {
+  s.mass = t.number("mass_kg");
+  if (!(s.mass > 0)) t.fail("mass_kg", "= " + num(s.mass) + " must be positive");
+  s.sample_material = t.string("material", s.sample_material);
+  material_index(s, s.sample_material, t.where("material"));
+  const bool has_file = t.has("psd_file"), has_inline = t.has("psd");
+  if (has_file == has_inline)
+    t.fail("psd_file", "or an inline [sample.psd] table is required (exactly one of them)");
+  try {
+    if (has_file) {
+      const std::filesystem::path p = dir / t.string("psd_file");
+      if (!std::filesystem::exists(p))
+        t.fail("psd_file", "= \"" + p.string() + "\" does not exist");
+      s.psd = read_psd_file(p.string());
+    } else {
+      t.mark_used("psd");
+      const toml::table* psd = doc["sample"]["psd"].as_table();
+      if (!psd) t.fail("psd", "must be a table");
+      s.psd = parse_psd_table(*psd, file, t.where("psd"));
+    }
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::invalid_argument& e) {  // the PSD reader names the file and key
+    throw InputError(e.what());
+  }
+  for (const char* key : {"d_min_mm", "d_max_mm"}) {
+    if (!t.has(key)) continue;
+    const double d = t.number(key);
+    if (!(d > 0 && std::isfinite(d))) t.fail(key, "= " + num(d) + " must be a positive size");
+    (std::string(key) == "d_min_mm" ? s.psd.spec.d_min : s.psd.spec.d_max) = 1e-3 * d;
+  }
+  s.shapes = read_grain_shapes(t);
+  t.finish();
+  sim::ResolvedPsd resolved;
+  try {
+    resolved = sim::resolve_psd(s.psd.spec);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(file + ": sample.psd: " + e.what());
+  }
+  // A sample of a few grains is no pile, and the sampler could only round it up to one grain
+  // many times its mass.
+  const double density = s.materials[material_index(s, s.sample_material, "")].density;
+  const double grain = density * std::numbers::pi / 6.0 * std::pow(resolved.d_max, 3);
+  if (s.mass < kMinGrains * grain)
+    t.fail("mass_kg", "= " + num(s.mass) + " kg is " + num(s.mass / grain) +
+                          " grains of the largest size (" + num(1e3 * resolved.d_max) + " mm, " +
+                          num(grain) + " kg each); a pile needs at least " + num(kMinGrains));
+}
+
+// [contacts]: one table per pair of declared materials, "a-b" (both orders set).
+void read_contacts(TableReader t, SceneConfig& s) {
+  for (const std::string& key : t.keys()) {
+    const auto dash = key.find('-');
+    if (dash == std::string::npos) t.fail(key, "must name two materials as \"a-b\"");
+    const std::string a = key.substr(0, dash), b = key.substr(dash + 1);
+    material_index(s, a, t.where(key));
+    material_index(s, b, t.where(key));
+    const sim::PairParams p = read_contact(*t.table(key));
+    s.contacts[{a, b}] = p;
+    s.contacts[{b, a}] = p;
+  }
+  t.finish();
+}
+
+// [container]: a funnel or a cylinder the sample passes and fits in.
+void read_container(TableReader t, SceneConfig& s, const std::string& file) {
+  ContainerConfig& c = s.container;
+  c.kind = t.string("kind", c.kind);
+  if (c.kind != "funnel" && c.kind != "cylinder")
+    t.fail("kind", "= \"" + c.kind + "\" must be \"funnel\" or \"cylinder\"");
+  c.material = t.string("material", c.material);
+  material_index(s, c.material, t.where("material"));
+  c.bottom_diameter = t.number("bottom_diameter_m", c.bottom_diameter);
+  c.top_diameter = c.kind == "cylinder" ? c.bottom_diameter : c.top_diameter;
+  if (c.kind == "funnel") c.top_diameter = t.number("top_diameter_m", c.top_diameter);
+  c.height = t.number("height_m", c.height);
+  c.gap = t.number("gap_m", c.gap);
+  if (!(c.bottom_diameter > 0))
+    t.fail("bottom_diameter_m", "= " + num(c.bottom_diameter) + " must be positive");
+  if (!(c.top_diameter >= c.bottom_diameter))
+    t.fail("top_diameter_m", "= " + num(c.top_diameter) + " must not be below the outlet");
+  if (!(c.height > 0)) t.fail("height_m", "= " + num(c.height) + " must be positive");
+  if (!(c.gap >= 0)) t.fail("gap_m", "= " + num(c.gap) + " must not be negative");
+  t.finish();
+  const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
+  if (psd.d_max >= c.bottom_diameter) {
+    throw InputError(file + ": sample d_max = " + num(psd.d_max * 1e3) +
+                     " mm does not pass the outlet container.bottom_diameter_m = " +
+                     num(c.bottom_diameter) + " m");
+  }
+  check_shapes_pass_outlet(s.shapes, psd.d_max, c.bottom_diameter, file);
+  const double density = s.materials[material_index(s, s.sample_material, "sample")].density;
+  const double bulk = s.mass / (density * 0.6);  // loose bulk volume (solid fraction 0.6)
+  if (bulk > container_volume(c)) {
+    throw InputError(file + ": sample.mass_kg = " + num(s.mass) + " needs about " +
+                     num(bulk * 1e6) + " cm^3 of bulk volume, more than the container's " +
+                     num(container_volume(c) * 1e6) + " cm^3");
+  }
+}
+
+// [plate]: its material.
+void read_plate(TableReader t, SceneConfig& s) {
+  s.plate_material = t.string("material", s.plate_material);
+  material_index(s, s.plate_material, t.where("material"));
+  t.finish();
+}
+
+// Every contact the test uses is declared.
+void check_test_contacts(const SceneConfig& s, const std::string& file) {
+  for (const auto& [a, b] : {std::pair{s.sample_material, s.sample_material},
+                             std::pair{s.sample_material, s.container.material},
+                             std::pair{s.sample_material, s.plate_material}}) {
+    if (!s.contacts.count({a, b})) {
+      throw InputError(file + ": contacts." + a + "-" + b +
+                       " is missing: every contact the test uses must be declared");
+    }
+  }
+}
+
+// [procedure]: the fill, lift and settle law.
+void read_procedure(TableReader t, ProcedureConfig& p) {
+  p.lift_speed = t.number("lift_speed_m_s", p.lift_speed);
+  p.settle_speed = t.number("settle_speed_m_s", p.settle_speed);
+  p.fill_settle_max = t.number("fill_settle_max_s", p.fill_settle_max);
+  p.final_settle_max = t.number("final_settle_max_s", p.final_settle_max);
+  p.max_time = t.number("max_time_s", p.max_time);
+  p.clog_window = t.number("clog_window_s", p.clog_window);
+  p.max_retained_fraction = t.number("max_retained_fraction", p.max_retained_fraction);
+  p.lattice_gap = t.number("lattice_gap", p.lattice_gap);
+  p.fill_max_speed = t.number("fill_max_speed_m_s", p.fill_max_speed);
+  if (!(p.fill_max_speed > 0))
+    t.fail("fill_max_speed_m_s", "= " + num(p.fill_max_speed) + " must be positive");
+  if (!(p.lift_speed > 0 && p.lift_speed <= kMaxLiftSpeed))
+    t.fail("lift_speed_m_s", "= " + num(p.lift_speed) + " m/s must be in (0, " +
+                                 num(kMaxLiftSpeed) + "] (the lab lifts at 0.01)");
+  if (!(p.settle_speed > 0))
+    t.fail("settle_speed_m_s", "= " + num(p.settle_speed) + " must be positive");
+  if (!(p.max_time > 0)) t.fail("max_time_s", "= " + num(p.max_time) + " must be positive");
+  if (!(p.clog_window > 0))
+    t.fail("clog_window_s", "= " + num(p.clog_window) + " must be positive");
+  if (!(p.max_retained_fraction >= 0 && p.max_retained_fraction < 1))
+    t.fail("max_retained_fraction", "= " + num(p.max_retained_fraction) + " must be in [0, 1)");
+  if (!(p.lattice_gap >= 0))
+    t.fail("lattice_gap", "= " + num(p.lattice_gap) + " must not be negative");
+  t.finish();
+}
+
+// [numerics]: the engine's settings, each within what keeps the integration stable.
+void read_numerics(TableReader t, sim::Settings& n) {
+  n.rayleigh_fraction = t.number("rayleigh_fraction", n.rayleigh_fraction);
+  n.time_step = t.number("time_step_s", n.time_step);
+  n.softened_youngs_modulus = t.number("softened_youngs_modulus_pa", n.softened_youngs_modulus);
+  n.skin = t.number("skin_m", n.skin);
+  n.threads = static_cast<int>(t.integer("threads", n.threads));
+  n.gravity.z() = -t.number("gravity_m_s2", -n.gravity.z());
+  n.max_overlap_ratio = t.number("max_overlap_ratio", n.max_overlap_ratio);
+  n.initial_overlap_tolerance = t.number("initial_overlap_tolerance", n.initial_overlap_tolerance);
+  n.escape_distance = t.number("escape_distance_m", n.escape_distance);
+  if (n.time_step < 0) t.fail("time_step_s", "= " + num(n.time_step) + " must not be negative");
+  // The stability guard (max_rayleigh_fraction) is the engine's, not a scene key.
+  if (!(n.rayleigh_fraction > 0 && n.rayleigh_fraction <= n.max_rayleigh_fraction))
+    t.fail("rayleigh_fraction", "= " + num(n.rayleigh_fraction) + " must be in (0, " +
+                                    num(n.max_rayleigh_fraction) +
+                                    "]: above it the explicit integration is unstable");
+  const double g = -n.gravity.z();
+  if (!(std::isfinite(g) && std::abs(g) <= kMaxGravity))
+    t.fail("gravity_m_s2", "= " + num(g) + " must be finite and at most " + num(kMaxGravity) +
+                               " m/s^2 in size (the lab's is 9.81)");
+  if (!(n.initial_overlap_tolerance >= 0 && std::isfinite(n.initial_overlap_tolerance)))
+    t.fail("initial_overlap_tolerance",
+           "= " + num(n.initial_overlap_tolerance) + " must not be negative");
+  if (!(n.max_overlap_ratio > 0 && n.max_overlap_ratio <= 1))
+    t.fail("max_overlap_ratio", "= " + num(n.max_overlap_ratio) + " must be in (0, 1]");
+  if (!(n.escape_distance > 0 && std::isfinite(n.escape_distance)))
+    t.fail("escape_distance_m", "= " + num(n.escape_distance) + " must be positive");
+  if (!(n.skin >= 0 && std::isfinite(n.skin)))
+    t.fail("skin_m", "= " + num(n.skin) + " must not be negative");
+  if (n.softened_youngs_modulus < 0)
+    t.fail("softened_youngs_modulus_pa",
+           "= " + num(n.softened_youngs_modulus) + " must not be negative");
+  if (n.threads < 0) t.fail("threads", "= " + std::to_string(n.threads) + " must not be negative");
+  t.finish();
+}
+
+// [output]: frames, checkpoints, progress.
+void read_output(TableReader t, OutputConfig& o) {
+  o.frame_interval = t.number("frame_interval_s", o.frame_interval);
+  o.checkpoint_interval = t.number("checkpoint_interval_s", o.checkpoint_interval);
+  o.progress_interval = t.number("progress_interval_s", o.progress_interval);
+  o.contact_forces = t.boolean("contact_forces", o.contact_forces);
+  if (o.frame_interval < 0)
+    t.fail("frame_interval_s", "= " + num(o.frame_interval) + " must not be negative");
+  if (!(o.checkpoint_interval > 0))
+    t.fail("checkpoint_interval_s", "= " + num(o.checkpoint_interval) + " must be positive");
+  t.finish();
+}
+
+// [measure]: the particle measurement of the pile.
+void read_measure(TableReader t, sim::PileGeometrySettings& m) {
+  m.slice_azimuths = static_cast<int>(t.integer("slice_azimuths", m.slice_azimuths));
+  m.flank_low = t.number("flank_low", m.flank_low);
+  m.flank_high = t.number("flank_high", m.flank_high);
+  m.sectors = static_cast<int>(t.integer("sectors", m.sectors));
+  if (m.sectors < 4) t.fail("sectors", "= " + std::to_string(m.sectors) + " must be at least 4");
+  if (m.slice_azimuths < 8)
+    t.fail("slice_azimuths", "= " + std::to_string(m.slice_azimuths) + " must be at least 8");
+  if (!(m.flank_low >= 0 && m.flank_low < m.flank_high && m.flank_high <= 1))
+    t.fail("flank_low", "/ flank_high must satisfy 0 <= low < high <= 1");
+  t.finish();
+}
+
 }  // namespace
 
 SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
@@ -135,226 +368,19 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
   // [sample] it leaves behind.
   root.known_keys({"scene", "materials", "sample", "contacts", "container", "plate", "procedure",
                    "numerics", "output", "measure"});
-  {
-    TableReader t = *root.table("scene");
-    s.name = t.string("name");
-    s.description = t.string("description", "");
-    const std::int64_t seed = t.integer("seed", 1);
-    if (seed < 0) t.fail("seed", "= " + std::to_string(seed) + " must not be negative");
-    s.seed = static_cast<std::uint64_t>(seed);
-    t.finish();
-  }
-  {
-    TableReader t = *root.table("materials");
-    for (const std::string& name : t.keys())
-      s.materials.push_back(read_material(*t.table(name), name));
-    if (s.materials.empty()) t.fail("", "must define at least one material");
-    t.finish();
-  }
-  {
-    TableReader t = *root.table("sample");
-    s.mass = t.number("mass_kg");
-    if (!(s.mass > 0)) t.fail("mass_kg", "= " + num(s.mass) + " must be positive");
-    s.sample_material = t.string("material", s.sample_material);
-    material_index(s, s.sample_material, t.where("material"));
-    const bool has_file = t.has("psd_file"), has_inline = t.has("psd");
-    if (has_file == has_inline)
-      t.fail("psd_file", "or an inline [sample.psd] table is required (exactly one of them)");
-    try {
-      if (has_file) {
-        const std::filesystem::path p = dir / t.string("psd_file");
-        if (!std::filesystem::exists(p))
-          t.fail("psd_file", "= \"" + p.string() + "\" does not exist");
-        s.psd = read_psd_file(p.string());
-      } else {
-        t.mark_used("psd");
-        const toml::table* psd = doc["sample"]["psd"].as_table();
-        if (!psd) t.fail("psd", "must be a table");
-        s.psd = parse_psd_table(*psd, file, t.where("psd"));
-      }
-    } catch (const InputError&) {
-      throw;
-    } catch (const std::invalid_argument& e) {  // the PSD reader names the file and key
-      throw InputError(e.what());
-    }
-    for (const char* key : {"d_min_mm", "d_max_mm"}) {
-      if (!t.has(key)) continue;
-      const double d = t.number(key);
-      if (!(d > 0 && std::isfinite(d))) t.fail(key, "= " + num(d) + " must be a positive size");
-      (std::string(key) == "d_min_mm" ? s.psd.spec.d_min : s.psd.spec.d_max) = 1e-3 * d;
-    }
-    s.shapes = read_grain_shapes(t);
-    t.finish();
-    sim::ResolvedPsd resolved;
-    try {
-      resolved = sim::resolve_psd(s.psd.spec);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(file + ": sample.psd: " + e.what());
-    }
-    // A sample of a few grains is no pile, and the sampler could only round it up to one grain
-    // many times its mass.
-    const double density = s.materials[material_index(s, s.sample_material, "")].density;
-    const double grain = density * std::numbers::pi / 6.0 * std::pow(resolved.d_max, 3);
-    if (s.mass < kMinGrains * grain)
-      t.fail("mass_kg", "= " + num(s.mass) + " kg is " + num(s.mass / grain) +
-                            " grains of the largest size (" + num(1e3 * resolved.d_max) + " mm, " +
-                            num(grain) + " kg each); a pile needs at least " + num(kMinGrains));
-  }
-  {
-    TableReader t = *root.table("contacts");
-    for (const std::string& key : t.keys()) {
-      const auto dash = key.find('-');
-      if (dash == std::string::npos) t.fail(key, "must name two materials as \"a-b\"");
-      const std::string a = key.substr(0, dash), b = key.substr(dash + 1);
-      material_index(s, a, t.where(key));
-      material_index(s, b, t.where(key));
-      const sim::PairParams p = read_contact(*t.table(key));
-      s.contacts[{a, b}] = p;
-      s.contacts[{b, a}] = p;
-    }
-    t.finish();
-  }
-  {
-    TableReader t = *root.table("container");
-    ContainerConfig& c = s.container;
-    c.kind = t.string("kind", c.kind);
-    if (c.kind != "funnel" && c.kind != "cylinder")
-      t.fail("kind", "= \"" + c.kind + "\" must be \"funnel\" or \"cylinder\"");
-    c.material = t.string("material", c.material);
-    material_index(s, c.material, t.where("material"));
-    c.bottom_diameter = t.number("bottom_diameter_m", c.bottom_diameter);
-    c.top_diameter = c.kind == "cylinder" ? c.bottom_diameter : c.top_diameter;
-    if (c.kind == "funnel") c.top_diameter = t.number("top_diameter_m", c.top_diameter);
-    c.height = t.number("height_m", c.height);
-    c.gap = t.number("gap_m", c.gap);
-    if (!(c.bottom_diameter > 0))
-      t.fail("bottom_diameter_m", "= " + num(c.bottom_diameter) + " must be positive");
-    if (!(c.top_diameter >= c.bottom_diameter))
-      t.fail("top_diameter_m", "= " + num(c.top_diameter) + " must not be below the outlet");
-    if (!(c.height > 0)) t.fail("height_m", "= " + num(c.height) + " must be positive");
-    if (!(c.gap >= 0)) t.fail("gap_m", "= " + num(c.gap) + " must not be negative");
-    t.finish();
-    const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
-    if (psd.d_max >= c.bottom_diameter) {
-      throw InputError(file + ": sample d_max = " + num(psd.d_max * 1e3) +
-                       " mm does not pass the outlet container.bottom_diameter_m = " +
-                       num(c.bottom_diameter) + " m");
-    }
-    check_shapes_pass_outlet(s.shapes, psd.d_max, c.bottom_diameter, file);
-    const double density = s.materials[material_index(s, s.sample_material, "sample")].density;
-    const double bulk = s.mass / (density * 0.6);  // loose bulk volume (solid fraction 0.6)
-    if (bulk > container_volume(c)) {
-      throw InputError(file + ": sample.mass_kg = " + num(s.mass) + " needs about " +
-                       num(bulk * 1e6) + " cm^3 of bulk volume, more than the container's " +
-                       num(container_volume(c) * 1e6) + " cm^3");
-    }
-  }
-  {
-    TableReader t = *root.table("plate");
-    s.plate_material = t.string("material", s.plate_material);
-    material_index(s, s.plate_material, t.where("material"));
-    t.finish();
-  }
-  for (const auto& [a, b] : {std::pair{s.sample_material, s.sample_material},
-                             std::pair{s.sample_material, s.container.material},
-                             std::pair{s.sample_material, s.plate_material}}) {
-    if (!s.contacts.count({a, b})) {
-      throw InputError(file + ": contacts." + a + "-" + b +
-                       " is missing: every contact the test uses must be declared");
-    }
-  }
-  if (auto t = root.table("procedure", true)) {
-    ProcedureConfig& p = s.procedure;
-    p.lift_speed = t->number("lift_speed_m_s", p.lift_speed);
-    p.settle_speed = t->number("settle_speed_m_s", p.settle_speed);
-    p.fill_settle_max = t->number("fill_settle_max_s", p.fill_settle_max);
-    p.final_settle_max = t->number("final_settle_max_s", p.final_settle_max);
-    p.max_time = t->number("max_time_s", p.max_time);
-    p.clog_window = t->number("clog_window_s", p.clog_window);
-    p.max_retained_fraction = t->number("max_retained_fraction", p.max_retained_fraction);
-    p.lattice_gap = t->number("lattice_gap", p.lattice_gap);
-    p.fill_max_speed = t->number("fill_max_speed_m_s", p.fill_max_speed);
-    if (!(p.fill_max_speed > 0))
-      t->fail("fill_max_speed_m_s", "= " + num(p.fill_max_speed) + " must be positive");
-    if (!(p.lift_speed > 0 && p.lift_speed <= kMaxLiftSpeed))
-      t->fail("lift_speed_m_s", "= " + num(p.lift_speed) + " m/s must be in (0, " +
-                                    num(kMaxLiftSpeed) + "] (the lab lifts at 0.01)");
-    if (!(p.settle_speed > 0))
-      t->fail("settle_speed_m_s", "= " + num(p.settle_speed) + " must be positive");
-    if (!(p.max_time > 0)) t->fail("max_time_s", "= " + num(p.max_time) + " must be positive");
-    if (!(p.clog_window > 0))
-      t->fail("clog_window_s", "= " + num(p.clog_window) + " must be positive");
-    if (!(p.max_retained_fraction >= 0 && p.max_retained_fraction < 1))
-      t->fail("max_retained_fraction", "= " + num(p.max_retained_fraction) + " must be in [0, 1)");
-    if (!(p.lattice_gap >= 0))
-      t->fail("lattice_gap", "= " + num(p.lattice_gap) + " must not be negative");
-    t->finish();
-  }
+  read_scene_head(*root.table("scene"), s);
+  read_materials(*root.table("materials"), s);
+  read_sample(*root.table("sample"), s, doc, dir, file);
+  read_contacts(*root.table("contacts"), s);
+  read_container(*root.table("container"), s, file);
+  read_plate(*root.table("plate"), s);
+  check_test_contacts(s, file);
+  if (auto t = root.table("procedure", true)) read_procedure(std::move(*t), s.procedure);
   // Escape limit scaled to the test: the fill lattice may stand well above a tall column.
   s.settings.escape_distance = std::max(1.0, 10.0 * s.container.height);
-  if (auto t = root.table("numerics", true)) {
-    sim::Settings& n = s.settings;
-    n.rayleigh_fraction = t->number("rayleigh_fraction", n.rayleigh_fraction);
-    n.time_step = t->number("time_step_s", n.time_step);
-    n.softened_youngs_modulus = t->number("softened_youngs_modulus_pa", n.softened_youngs_modulus);
-    n.skin = t->number("skin_m", n.skin);
-    n.threads = static_cast<int>(t->integer("threads", n.threads));
-    n.gravity.z() = -t->number("gravity_m_s2", -n.gravity.z());
-    n.max_overlap_ratio = t->number("max_overlap_ratio", n.max_overlap_ratio);
-    n.initial_overlap_tolerance =
-        t->number("initial_overlap_tolerance", n.initial_overlap_tolerance);
-    n.escape_distance = t->number("escape_distance_m", n.escape_distance);
-    if (n.time_step < 0) t->fail("time_step_s", "= " + num(n.time_step) + " must not be negative");
-    // The stability guard (max_rayleigh_fraction) is the engine's, not a scene key.
-    if (!(n.rayleigh_fraction > 0 && n.rayleigh_fraction <= n.max_rayleigh_fraction))
-      t->fail("rayleigh_fraction", "= " + num(n.rayleigh_fraction) + " must be in (0, " +
-                                       num(n.max_rayleigh_fraction) +
-                                       "]: above it the explicit integration is unstable");
-    const double g = -n.gravity.z();
-    if (!(std::isfinite(g) && std::abs(g) <= kMaxGravity))
-      t->fail("gravity_m_s2", "= " + num(g) + " must be finite and at most " + num(kMaxGravity) +
-                                  " m/s^2 in size (the lab's is 9.81)");
-    if (!(n.initial_overlap_tolerance >= 0 && std::isfinite(n.initial_overlap_tolerance)))
-      t->fail("initial_overlap_tolerance",
-              "= " + num(n.initial_overlap_tolerance) + " must not be negative");
-    if (!(n.max_overlap_ratio > 0 && n.max_overlap_ratio <= 1))
-      t->fail("max_overlap_ratio", "= " + num(n.max_overlap_ratio) + " must be in (0, 1]");
-    if (!(n.escape_distance > 0 && std::isfinite(n.escape_distance)))
-      t->fail("escape_distance_m", "= " + num(n.escape_distance) + " must be positive");
-    if (!(n.skin >= 0 && std::isfinite(n.skin)))
-      t->fail("skin_m", "= " + num(n.skin) + " must not be negative");
-    if (n.softened_youngs_modulus < 0)
-      t->fail("softened_youngs_modulus_pa",
-              "= " + num(n.softened_youngs_modulus) + " must not be negative");
-    if (n.threads < 0)
-      t->fail("threads", "= " + std::to_string(n.threads) + " must not be negative");
-    t->finish();
-  }
-  if (auto t = root.table("output", true)) {
-    OutputConfig& o = s.output;
-    o.frame_interval = t->number("frame_interval_s", o.frame_interval);
-    o.checkpoint_interval = t->number("checkpoint_interval_s", o.checkpoint_interval);
-    o.progress_interval = t->number("progress_interval_s", o.progress_interval);
-    o.contact_forces = t->boolean("contact_forces", o.contact_forces);
-    if (o.frame_interval < 0)
-      t->fail("frame_interval_s", "= " + num(o.frame_interval) + " must not be negative");
-    if (!(o.checkpoint_interval > 0))
-      t->fail("checkpoint_interval_s", "= " + num(o.checkpoint_interval) + " must be positive");
-    t->finish();
-  }
-  if (auto t = root.table("measure", true)) {
-    sim::PileGeometrySettings& m = s.pile;
-    m.slice_azimuths = static_cast<int>(t->integer("slice_azimuths", m.slice_azimuths));
-    m.flank_low = t->number("flank_low", m.flank_low);
-    m.flank_high = t->number("flank_high", m.flank_high);
-    m.sectors = static_cast<int>(t->integer("sectors", m.sectors));
-    if (m.sectors < 4) t->fail("sectors", "= " + std::to_string(m.sectors) + " must be at least 4");
-    if (m.slice_azimuths < 8)
-      t->fail("slice_azimuths", "= " + std::to_string(m.slice_azimuths) + " must be at least 8");
-    if (!(m.flank_low >= 0 && m.flank_low < m.flank_high && m.flank_high <= 1))
-      t->fail("flank_low", "/ flank_high must satisfy 0 <= low < high <= 1");
-    t->finish();
-  }
+  if (auto t = root.table("numerics", true)) read_numerics(std::move(*t), s.settings);
+  if (auto t = root.table("output", true)) read_output(std::move(*t), s.output);
+  if (auto t = root.table("measure", true)) read_measure(std::move(*t), s.pile);
   root.finish();
   {  // Validate the numerics now (time step against the stability limit, pair parameters).
     const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
@@ -381,8 +407,7 @@ int material_index(const SceneConfig& scene, const std::string& name, const std:
                    "\" is not a material in [materials]");
 }
 
-std::pair<double, double> grain_radius_range(const SceneConfig& scene, double d_min,
-                                             double d_max) {
+std::pair<double, double> grain_radius_range(const SceneConfig& scene, double d_min, double d_max) {
   if (scene.shapes.empty()) return {0.5 * d_min, 0.5 * d_max};
   double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
   for (const GrainShape& g : scene.shapes) {

@@ -75,6 +75,8 @@ std::vector<SimOutcome> Loop::pour(const std::vector<SimRequest>& req) {
 }
 
 void Loop::check_settings() {
+  if (s_.html && !s_.page)
+    throw std::invalid_argument("loop: html is set but no page writer is given (LoopSettings::page)");
   const fs::path loop_json = fs::path(out_) / "loop.json";
   if (fs::exists(loop_json) && !s_.force)
     throw InputError(loop_json.string() +
@@ -336,7 +338,7 @@ LoopProvenance Loop::provenance(const Surface& base) const {
 json Loop::write(const LoopRecord& rec) const {
   const json loop = to_json(rec);
   fs::create_directories(out_);
-  if (s_.html) write_loop_html(loop, out_);
+  if (s_.html) s_.page(loop, out_);
   write_json_atomic((fs::path(out_) / "loop.json").string(), loop);
   return loop;
 }

@@ -57,6 +57,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -99,7 +100,11 @@ struct LoopSettings {
   int workers = 2;                         // concurrent simulations
   bool progress = true;                    // progress lines on stderr
   bool force = false;                      // overwrite a finished loop.json
-  bool html = true;                        // write index.html with gnuplot plots
+  bool html = true;                        // write index.html with gnuplot plots, by `page`
+  /// Writes OUT/index.html and its plots from loop.json: report/loop_report.hpp's
+  /// write_loop_html, given by the command (the loop sits below report/ and never calls it).
+  /// Required when `html` is set.
+  std::function<void(const nlohmann::json& loop, const std::string& out_dir)> page;
   std::string cache_dir;                   // simulation cache; default OUT/cache
 };
 
@@ -127,9 +132,5 @@ double twin_angle(const SimOutcome& o, AngleMeasure measure);
 /// mu_r on the grid's bound) is not an error: loop.json states what could not be traced.
 nlohmann::json run_loop(const LabData& data, const std::string& out_dir,
                         const LoopSettings& settings = {});
-
-/// Writes OUT/index.html and its plots (gnuplot) from a loop.json. Throws std::runtime_error when
-/// a file cannot be written.
-void write_loop_html(const nlohmann::json& loop, const std::string& out_dir);
 
 }  // namespace reposetwin::experiments

@@ -1,6 +1,8 @@
-// write_loop_html (loop.hpp): the loop's page, with the report's page skeleton, tables and
+// write_loop_html (loop_report.hpp): the loop's page, with the report's page skeleton, tables and
 // plotting. Tables from loop.json and gnuplot plots of the residuals against each condition,
 // before and after the chosen effects. Reads loop.json only (never simulates).
+#include "experiments/report/loop_report.hpp"
+
 #include <filesystem>
 #include <set>
 #include <sstream>

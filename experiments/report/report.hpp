@@ -7,7 +7,7 @@
 // because atan(2H/D) from an image, atan(2H/D) from particle positions and the flank angle differ
 // on the same heap. Plots are made by gnuplot (pngcairo) from data files written beside them
 // (gnuplot.hpp). The page layout lives in mustache templates (templates.cpp) filled from typed
-// page data (html.hpp); the loop's page (write_loop_html, loop/loop.hpp) uses the same skeleton,
+// page data (html.hpp); the loop's page (write_loop_html, loop_report.hpp) uses the same skeleton,
 // table, plotting and number formats (format.hpp).
 //
 // Paper comparison. Over one or several calibration folders (calibration.json, and

@@ -1,3 +1,4 @@
+#include "experiments/calibration/campaign_target.hpp"
 #include "experiments/reproduce/paper_index.hpp"
 
 #include <algorithm>

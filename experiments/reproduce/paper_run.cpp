@@ -7,6 +7,7 @@
 #include <set>
 
 #include "experiments/calibration/calibrate_campaign.hpp"
+#include "experiments/calibration/campaign_target.hpp"
 #include "experiments/io/format.hpp"
 #include "experiments/io/hash.hpp"
 #include "experiments/io/input_error.hpp"

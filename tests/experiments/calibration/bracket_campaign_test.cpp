@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "experiments/calibration/calibrate_campaign.hpp"
+#include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/case_runner.hpp"
 #include "experiments/io/provenance.hpp"
 

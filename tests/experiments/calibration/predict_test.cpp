@@ -20,6 +20,7 @@
 
 #include "../../vision/synthetic.hpp"
 #include "experiments/calibration/calibrate_campaign.hpp"
+#include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/campaign.hpp"
 #include "experiments/campaign/case_runner.hpp"
 #include "experiments/io/provenance.hpp"

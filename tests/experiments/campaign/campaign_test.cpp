@@ -1,3 +1,5 @@
+#include "experiments/calibration/calibration.hpp"
+#include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/campaign.hpp"
 
 #include <fcntl.h>

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/case_runner.hpp"
 #include "experiments/pile/pile_run.hpp"
 #include "experiments/io/provenance.hpp"

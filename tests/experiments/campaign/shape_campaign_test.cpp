@@ -9,6 +9,7 @@
 #include <string>
 
 #include "../../support/tiny_scene.hpp"
+#include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/case_runner.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"

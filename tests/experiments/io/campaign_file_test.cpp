@@ -8,6 +8,7 @@
 
 #include "../../vision/synthetic.hpp"
 #include "../campaign/campaign_fixtures.hpp"
+#include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/campaign.hpp"
 
 namespace reposetwin::experiments {

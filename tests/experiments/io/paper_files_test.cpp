@@ -4,6 +4,7 @@
 
 #include <filesystem>
 
+#include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/campaign.hpp"
 #include "experiments/io/scene.hpp"
 

@@ -6,6 +6,7 @@
 
 #include "experiments/io/provenance.hpp"
 #include "experiments/loop/loop.hpp"
+#include "experiments/report/loop_report.hpp"
 
 namespace reposetwin::experiments {
 namespace {

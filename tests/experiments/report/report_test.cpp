@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/campaign.hpp"
 #include "experiments/campaign/case_runner.hpp"
 #include "experiments/io/provenance.hpp"

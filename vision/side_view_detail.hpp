@@ -1,0 +1,59 @@
+// Pieces shared by the side view's files (side_view.cpp: segmentation and the silhouette,
+// side_plate.cpp: the plate line and the plate's top face, side_flank.cpp: the flank and toe
+// fits); not for use outside them. side_view.hpp's design note describes the method.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "vision/side_view.hpp"
+
+namespace reposetwin::vision::side_detail {
+
+inline constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+// Standard deviation of a uniform error over one pixel [px].
+inline const double kQuantisationPx = 1.0 / std::sqrt(12.0);
+
+inline std::string str(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+inline double median(std::vector<double> v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(mid), v.end());
+  return v[mid];
+}
+
+// The toe on one side: the column alpha where the silhouette's low band meets the plate
+// (h = 0), with its standard error. beta = dx/dh is the fixed slope used to carry the band down.
+struct InterceptFit {
+  double alpha = 0.0, beta = 0.0, sigma_alpha = 0.0;
+  int n = 0;
+};
+
+/// The toe from the low band's silhouette points (heights h above the plate line, columns x),
+/// carried to the plate along the flank (side_flank.cpp says how and why).
+InterceptFit toe_intercept(const std::vector<double>& h, const std::vector<double>& x,
+                           const FlankFit& flank, const PlateLine& plate);
+
+/// The pile seen standing on the plate's top face, below its far edge.
+struct TopFace {
+  PlateLine toe_line;
+  cv::Mat pile;  // the blob grown into the band (CV_8U, image size)
+};
+
+/// The pile on the plate's top face (side_plate.cpp says how), or std::nullopt.
+std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob,
+                                        const PlateLine& edge, int morph_radius_px);
+
+}  // namespace reposetwin::vision::side_detail
