@@ -166,9 +166,9 @@ bool calibration_plot(const json& cal, const json& predictions, const fs::path& 
              ", graph 0.05 offset 0.5,0 tc rgb '#d62728'\n";
   }
   return run_gnuplot(out / (stem + ".gp"),
-                     png_terminal(out / (stem + ".png"), 760, 500, false) +
+                     png_terminal(out / (stem + ".png"), 760, 560, false) +
                          "set xlabel 'mu_r (rolling friction)'\nset ylabel 'angle of repose "
-                         "[deg]'\nset key top left box opaque\nset grid\nset offsets graph 0.03, graph "
+                         "[deg]'\nset key below maxrows 3\nset grid\nset offsets graph 0.03, graph "
                          "0.03, 1, 1\n" +
                          marks + plot + "\n",
                      out / (stem + ".png"));

@@ -185,7 +185,7 @@ std::string notes_section(const json& loop) {
     for (const json& c : loop["design"]["can"]) can.push_back(mustache::data(left(c).text));
     for (const json& c : loop["design"]["cannot"]) cannot.push_back(mustache::data(left(c).text));
   }
-  d.set("can", can);
+  d.set("can", listed(can));
   d.set("cannot", listed(cannot));
   d.set("grid", loop.contains("grid") ? mustache::data(left(loop["grid"]["statement"]).text)
                                       : mustache::data(false));

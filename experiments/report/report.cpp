@@ -445,6 +445,37 @@ std::string folder_name(const fs::path& dir) {
   return p.filename().string();
 }
 
+// A calibration folder without its run records: the folder's own lists of its runs, linked,
+// and the renders an earlier build copied into the report, by case name.
+std::string no_cases_section(const FolderResults& f, const fs::path& out) {
+  mustache::data links(mustache::data::type::list);
+  for (const char* file : {"runs.csv", "README.md"})
+    if (fs::is_regular_file(f.dir / file)) {
+      mustache::data l;
+      l.set("href", std::string("../") + file);
+      l.set("label", std::string(file));
+      links.push_back(l);
+    }
+  std::vector<fs::path> kept;
+  for (const auto& e : fs::directory_iterator(out)) {
+    const std::string n = e.path().filename().string();
+    if (n.size() > 9 && n.compare(n.size() - 9, 9, "_side.png") == 0) kept.push_back(e.path());
+  }
+  std::sort(kept.begin(), kept.end());
+  std::vector<Figure> renders;
+  for (const fs::path& p : kept) {
+    const std::string name = p.filename().string();
+    renders.push_back({name, "case " + name.substr(0, name.size() - 9) + " (azimuth 0)", 480});
+  }
+  mustache::data listed;
+  listed.set("links", links);
+  mustache::data d;
+  d.set("listed", links.is_empty_list() ? mustache::data(false) : listed);
+  d.set("kept", !renders.empty());
+  d.set("renders", to_data(renders));
+  return render(templates::kNoCases, d);
+}
+
 std::string built_section(const std::string& dir, std::size_t folders) {
   mustache::data d;
   d.set("built", utc_now());
@@ -472,11 +503,20 @@ std::vector<std::string> result_subfolders(const fs::path& dir) {
   return subs;
 }
 
+// A loop folder: loop.json and no run, campaign or calibration results.
+bool is_loop_dir(const fs::path& d) {
+  return !holds_results(d) && fs::is_regular_file(d / "loop.json");
+}
+
 }  // namespace
+
+std::string report_page(const std::string& dir) {
+  return ((is_loop_dir(dir) ? fs::path(dir) : fs::path(dir) / "report") / "index.html").string();
+}
 
 json build_report(const std::string& dir, const ReportSettings& settings) {
   // A loop folder's page is rebuilt from its loop.json, in the place the loop wrote it.
-  if (!holds_results(dir) && fs::is_regular_file(fs::path(dir) / "loop.json")) {
+  if (is_loop_dir(dir)) {
     const json loop = read_json(fs::path(dir) / "loop.json");
     write_loop_html(loop, dir);
     return {{"title", "loop"}, {"page", (fs::path(dir) / "index.html").string()}};
@@ -500,6 +540,8 @@ built_section(folder_name(f.dir), 1)};
     plotted.set("plotted", angles_plot(f, out));
     sections.push_back(render(templates::kAngles, plotted));
     sections.push_back(cases_section(f, out));
+  } else if (is_calibration_dir(f.dir)) {
+    sections.push_back(no_cases_section(f, out));
   }
   if (!f.calibration.is_null()) {
     sections.push_back(calibration_section(f.calibration, f.predictions ? *f.predictions : json(),

@@ -78,6 +78,12 @@ const char* const kAngles = R"({{#plotted}}<h2>Angles per case</h2><img src='ang
 {{/plotted}}{{^plotted}}<p>(gnuplot not available: no plot)</p>
 {{/plotted}})";
 
+// listed: {links: [{href, label}]} (the folder's own files that list its runs) or false;
+// kept: whether renders follow; renders: figures.
+const char* const kNoCases = R"(<h2>Cases</h2>
+<p>This folder keeps no run records (<code>cases/</code>), so the report cannot list its cases{{#listed}}; its runs are in {{#links}}<a href='{{href}}'>{{label}}</a> {{/links}}{{/listed}}.{{#kept}} The renders below were copied into this report by an earlier build, when the runs were here.{{/kept}}</p>
+{{#renders}}{{> figure}}{{/renders}})";
+
 // cases: table; renders: figures; no_renders: why there are none, or false.
 const char* const kCases = R"(<h2>Cases</h2>
 {{#cases}}{{> table}}{{/cases}}<h2>Renders with measurement overlays</h2>
@@ -146,11 +152,11 @@ const char* const kLoopIterations =
 {{#stopped}}<p>Stopped: {{stopped}}.</p>
 {{/stopped}}{{/iterations}})";
 
-// design: {can: [..], cannot: [..]}; grid, not_traced: text or false; jams: [{id, n}] or false;
+// can, cannot: {list: [..]} or false; grid, not_traced: text or false; jams: [{id, n}] or false;
 // unavailable: [{name, why}] or false.
 const char* const kLoopNotes =
-    R"(<p>What this design can decide:</p>
-<ul>{{#can}}<li>{{.}}</li>{{/can}}</ul>{{#cannot}}<p>What it cannot:</p>
+    R"({{#can}}<p>What this design can decide:</p>
+<ul>{{#list}}<li>{{.}}</li>{{/list}}</ul>{{/can}}{{#cannot}}<p>What it cannot:</p>
 <ul>{{#list}}<li>{{.}}</li>{{/list}}</ul>{{/cannot}}{{#grid}}<p>mu_r grid: {{grid}}.</p>
 {{/grid}}{{#not_traced}}<p><strong>Nothing was traced</strong>: {{not_traced}}.</p>
 {{/not_traced}}{{#jams}}<p>Baseline pours that formed no pile and were repeated with new seeds (the lab reports none):</p>
