@@ -41,7 +41,7 @@ void add_report_command(CLI::App& app) {
     // A report is a result: an earlier one stays unless asked (checked before anything is read).
     // Over several folders, each folder's own report is rebuilt too.
     std::vector<fs::path> pages;
-    for (const auto& d : a->dirs) pages.push_back(fs::path(d) / "report" / "index.html");
+    for (const auto& d : a->dirs) pages.push_back(experiments::report_page(d));
     if (!out.empty()) pages.push_back(fs::path(out) / "report" / "index.html");
     for (const fs::path& p : pages)
       if (fs::exists(p) && !a->force)
@@ -49,7 +49,7 @@ void add_report_command(CLI::App& app) {
                                       ": a report is already there; pass --force to rebuild it");
     if (a->dirs.size() == 1 && out.empty()) {
       const nlohmann::json s = experiments::build_report(a->dirs[0], a->settings);
-      std::cout << s.dump(2) << "\n" << a->dirs[0] << "/report/index.html\n";
+      std::cout << s.dump(2) << "\n" << experiments::report_page(a->dirs[0]) << "\n";
       return;
     }
     if (out.empty()) {  // the folders' common parent

@@ -1,6 +1,8 @@
 #include "experiments/report/format.hpp"
 
 #include <cstdio>
+#include <filesystem>
+#include <set>
 
 namespace reposetwin::experiments::report {
 
@@ -32,6 +34,42 @@ std::string as_printed(const nlohmann::json& v) {
 
 std::string mean_sd(double mean, double sd, int digits) {
   return fixed(mean, digits) + " \u00b1 " + fixed(sd, digits);
+}
+
+std::string path_for_page(const std::string& path) {
+  namespace fs = std::filesystem;
+  const fs::path p(path);
+  if (p.is_relative()) return path;
+  const fs::path rel = p.lexically_normal().lexically_relative(fs::current_path());
+  if (!rel.empty() && *rel.begin() != "..") return rel.string();
+  return p.filename().string();
+}
+
+std::string short_key(const std::string& key) {
+  const std::string last = key.substr(key.rfind('.') + 1);
+  return last == "rolling_friction" ? "mu_r" : last;
+}
+
+std::string case_label(const std::string& name, const nlohmann::json& overrides) {
+  std::string label;
+  std::set<std::string> said;  // "name value" already in the label
+  std::string first_key;
+  for (const auto& [key, value] : overrides.items()) {
+    if (!value.is_number()) continue;
+    const std::string part = short_key(key) + " " + sig3(value);
+    if (!said.insert(part).second) continue;
+    if (first_key.empty()) first_key = key.substr(key.rfind('.') + 1);
+    label += (label.empty() ? "" : ", ") + part;
+  }
+  if (label.empty()) return name;
+  // Campaign cases of a calibration are named predict_<prediction>_<key>_<value>.
+  const std::string predict = "predict_";
+  if (name.rfind(predict, 0) == 0) {
+    const std::size_t end = name.find("_" + first_key + "_", predict.size());
+    if (end != std::string::npos)
+      label = name.substr(predict.size(), end - predict.size()) + ": " + label;
+  }
+  return label;
 }
 
 }  // namespace reposetwin::experiments::report

@@ -28,4 +28,19 @@ std::string as_printed(const nlohmann::json& v);
 /// "mean ± sd" with fixed() decimals.
 std::string mean_sd(double mean, double sd, int digits = 2);
 
+/// A file path as a page shows it: a relative path as given, an absolute one relative to the
+/// working folder when it lies below it, else its file name (a reader's machine has not the
+/// builder's folders; the record keeps the full path).
+std::string path_for_page(const std::string& path);
+
+/// A short name of a scene key for labels: "mu_r" for a rolling friction, else the key's last
+/// dotted part (contacts.rock-rock.rolling_friction -> mu_r, sample.d_min_mm -> d_min_mm).
+std::string short_key(const std::string& key);
+
+/// A case as a person reads it on an axis or in a table: its overrides as "name value" with three
+/// significant digits ("mu_r 0.399"; keys with one short name and one value said once), prefixed
+/// by a prediction's name ("sample4: mu_r 0.365" for predict_sample4_rolling_friction_0.365...).
+/// A case without numeric overrides keeps its name.
+std::string case_label(const std::string& name, const nlohmann::json& overrides);
+
 }  // namespace reposetwin::experiments::report

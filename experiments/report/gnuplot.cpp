@@ -11,13 +11,16 @@ bool run_gnuplot(const std::filesystem::path& script_path, const std::string& sc
   write_file_atomic(script_path.string(), script);
   std::error_code ec;
   std::filesystem::remove(png, ec);  // a stale PNG must not pass for a new plot
-  const std::string cmd = "gnuplot '" + script_path.string() + "' > /dev/null 2>&1";
+  // Run in the script's folder: the script names its data and PNG by file name only, so the
+  // folder can be moved or committed and the script still runs there.
+  const std::string cmd = "cd '" + script_path.parent_path().string() + "' && gnuplot '" +
+                          script_path.filename().string() + "' > /dev/null 2>&1";
   return std::system(cmd.c_str()) == 0 && std::filesystem::exists(png);
 }
 
 std::string png_terminal(const std::filesystem::path& png, int width, int height, bool enhanced) {
   return "set terminal pngcairo size " + std::to_string(width) + "," + std::to_string(height) +
-         (enhanced ? "" : " noenhanced") + "\nset output '" + png.string() + "'\n";
+         (enhanced ? "" : " noenhanced") + "\nset output '" + png.filename().string() + "'\n";
 }
 
 }  // namespace reposetwin::experiments::report

@@ -15,7 +15,8 @@ namespace reposetwin::experiments::report {
 bool run_gnuplot(const std::filesystem::path& script_path, const std::string& script,
                  const std::filesystem::path& png);
 
-/// The first lines of a script drawing a `width` x `height` PNG to `png`; `enhanced` false
+/// The first lines of a script drawing a `width` x `height` PNG to `png` (by its file name: the
+/// script runs in the PNG's folder); `enhanced` false
 /// prints labels as written (underscores in case names stay underscores).
 std::string png_terminal(const std::filesystem::path& png, int width, int height,
                          bool enhanced = true);

@@ -62,7 +62,7 @@ std::vector<Figure> residual_plots(const json& loop, const fs::path& dir) {
         png_terminal(png, 640, 420) + "set xlabel '" + c +
         "' noenhanced\nset ylabel 'measured - predicted angle [deg]'\n"
         "set key outside top center horizontal\nset grid\nset offsets graph 0.05, graph 0.05, "
-        "graph 0.05, graph 0.05\nset xzeroaxis lt -1\nplot '" + data.string() +
+        "graph 0.05, graph 0.05\nset xzeroaxis lt -1\nplot '" + data.filename().string() +
         "' u ($1):2:4 w yerrorbars pt 7 lc rgb '#c0392b' t 'before', "
         "'' u ($1):3:4 w yerrorbars pt 5 lc rgb '#2471a3' t 'after'\n";
     if (run_gnuplot(dir / ("residual_" + safe + ".gp"), script, png))
@@ -74,7 +74,7 @@ std::vector<Figure> residual_plots(const json& loop, const fs::path& dir) {
 
 std::string intro_section(const json& loop) {
   mustache::data d;
-  d.set("data", loop["provenance"]["data"].get<std::string>());
+  d.set("data", path_for_page(loop["provenance"]["data"].get<std::string>()));
   d.set("code", loop["provenance"]["code_version"].get<std::string>());
   d.set("finished", loop["provenance"]["finished"].get<std::string>());
   return render(templates::kLoopIntro, d);
@@ -187,7 +187,7 @@ std::string notes_section(const json& loop) {
     for (const json& c : loop["design"]["can"]) can.push_back(mustache::data(left(c).text));
     for (const json& c : loop["design"]["cannot"]) cannot.push_back(mustache::data(left(c).text));
   }
-  d.set("can", can);
+  d.set("can", listed(can));
   d.set("cannot", listed(cannot));
   d.set("grid", loop.contains("grid") ? mustache::data(left(loop["grid"]["statement"]).text)
                                       : mustache::data(false));

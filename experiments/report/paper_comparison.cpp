@@ -297,7 +297,11 @@ std::string caption_html(const json& conventions, const PaperTables& paper) {
     d.set("notes", false);
   } else {
     report::mustache::data notes;
-    notes.set("file", paper.t3_file);
+    // The file as the repository names it, not the path on the machine that built the page.
+    const fs::path t3(paper.t3_file);
+    notes.set("file", (t3.parent_path().parent_path().filename() / t3.parent_path().filename() /
+                       t3.filename())
+                          .string());
     notes.set("text", paper.t3_notes);
     d.set("notes", notes);
   }
@@ -405,7 +409,10 @@ TableRow comparison_row(const json& r) {
   Cell paper_mu(as_printed(r["paper_mu_r"]));
   paper_mu.small = r.value("paper_how", std::string());
   Cell source;
-  source.code = r.value("source", std::string());
+  source.code = fs::path(r.value("source", std::string())).lexically_normal().filename().string();
+  if (source.code.empty())  // a folder given with a trailing slash
+    source.code =
+        fs::path(r.value("source", std::string())).lexically_normal().parent_path().filename().string();
   return {{int_or_dash(r["sample"]), as_printed(r["paper_d_max_mm"]),
            as_printed(r["paper_mass_g"]), measured, paper_mu, as_printed(r["paper_angle_deg"]),
            kind, our_mu_r(r), our_angle(r), fixed_or_dash(r["abs_error_deg"]),
@@ -466,7 +473,7 @@ std::string comparison_plot(const json& cmp, const fs::path& out) {
   auto series = [&](const std::string& name, const std::string& data, const std::string& how) {
     if (data.empty()) return;
     write_file_atomic((out / name).string(), data);
-    plot += (plot.empty() ? "plot '" : ", '") + (out / name).string() + "' " + how;
+    plot += (plot.empty() ? "plot '" : ", '") + name + "' " + how;
   };
   series("comparison_calibration.dat", cal.str(),
          "using 1:2:3 with yerrorbars pt 7 lc rgb '#1f77b4' title 'ours: calibrated (mean +- seed "

@@ -8,13 +8,16 @@
 #include <limits>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <sstream>
 
 #include "experiments/calibration/calibration.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
+#include "experiments/loop/loop.hpp"
 #include "experiments/pile/pile_record.hpp"
+#include "experiments/report/calibration_section.hpp"
 #include "experiments/report/format.hpp"
 #include "experiments/report/gnuplot.hpp"
 #include "experiments/report/html.hpp"
@@ -184,50 +187,46 @@ json case_summary(const FolderResults& f) {
 
 // Angles per case: image and particle atan(2H/D) and the image flank angle, mean ± sd.
 bool angles_plot(const FolderResults& f, const fs::path& out) {
-  std::ostringstream data;  // index image_mean image_sd particle_mean particle_sd name flank sd
+  // index image_mean image_sd particle_mean particle_sd label flank sd; a case is labelled by
+  // its inputs (mu_r 0.399), not by its folder name.
+  std::ostringstream data;
   int k = 0;
   for (const CaseRows& c : f.cases) {
     const CaseStats s = case_stats(c);
     data << k++ << " " << s.image.mean << " " << s.image.sd << " " << s.particle.mean << " "
-         << s.particle.sd << " \"" << c.name << "\" " << (s.flank.n ? s.flank.mean : NAN) << " "
-         << (s.flank.n ? s.flank.sd : NAN) << "\n";
+         << s.particle.sd << " \"" << case_label(c.name, c.overrides) << "\" "
+         << (s.flank.n ? s.flank.mean : NAN) << " " << (s.flank.n ? s.flank.sd : NAN) << "\n";
   }
   write_file_atomic((out / "angles.dat").string(), data.str());
   return run_gnuplot(out / "angles.gp",
-                     png_terminal(out / "angles.png", 900, 500, false) +
-                         "set ylabel 'angle of repose [deg]'\nset xtics rotate by -30\n"
-                         "set key top left\nset offsets 0.5,0.5,2,2\nplot '" +
-                         (out / "angles.dat").string() +
-                         "' using 1:2:3:xtic(6) with yerrorbars pt 7 title 'image atan(2H/D) "
+                     png_terminal(out / "angles.png", 900, 520, false) +
+                         "set ylabel 'angle of repose [deg]'\nset xtics rotate by 30 right\n"
+                         "set key outside top center horizontal\nset grid ytics\n"
+                         "set offsets 0.5,0.5,2,2\nplot 'angles.dat'"
+                         " using 1:2:3:xtic(6) with yerrorbars pt 7 title 'image atan(2H/D) "
                          "(vision on renders)', '' using ($1+0.1):4:5 with yerrorbars pt 5 "
                          "title 'particles atan(2H/D)', '' using ($1+0.2):7:8 with yerrorbars "
                          "pt 9 title 'image flank angle (vision on renders)'\n",
                      out / "angles.png");
 }
 
-// The calibration's runs (one point per seed) against the target angle.
-bool calibration_plot(const json& calibration, const fs::path& out) {
-  if (!calibration.contains("observations")) return false;
-  std::ostringstream obs;
-  for (const json& o : calibration["observations"])
-    obs << o.value("mu_r", 0.0) << " " << o.value("angle_deg", 0.0) << "\n";
-  write_file_atomic((out / "calibration.dat").string(), obs.str());
-  const std::string target =
-      calibration.contains("target") ? fixed(calibration["target"].value("angle_deg", 0.0)) : "0";
-  return run_gnuplot(out / "calibration.gp",
-                     png_terminal(out / "calibration.png", 700, 500) +
-                         "set xlabel 'mu_r'\nset ylabel 'angle [deg]'\nset key top left\n"
-                         "plot '" + (out / "calibration.dat").string() +
-                         "' using 1:2 with points pt 7 title 'runs (one per seed)', " + target +
-                         " with lines dt 2 title 'target'\n",
-                     out / "calibration.png");
-}
-
 // A render shown beside the lab photo, with its caption; empty path when there is none.
 struct RenderBeside {
   fs::path overlay;
   std::string caption;
+  double mm_per_px = 0.0;  // the render's scale at the pile axis [mm/px]; 0 = not known
 };
+
+// The scale vision measured on a run's side view at azimuth 0 (images/measurement.json), 0 when
+// the file or the view is missing.
+double render_mm_per_px(const fs::path& overlay) {
+  const fs::path m = overlay.parent_path() / "measurement.json";
+  if (!fs::is_regular_file(m)) return 0.0;
+  for (const json& v : read_json(m).value("side_views", json::array()))
+    if (v.value("image", std::string()) == "side_az000.png" && v.contains("scale"))
+      return v["scale"].value("mm_per_px", 0.0);
+  return 0.0;
+}
 
 fs::path overlay_of(const FolderResults& f, const CaseRows& c) {
   for (const auto& d : c.run_dirs) {
@@ -257,21 +256,39 @@ RenderBeside render_beside_lab(const FolderResults& f) {
       const bool check_run = c.name.rfind("predict_", 0) == 0;  // a run at mu_r itself, preferred
       if (d < best || (d == best && check_run)) {
         best = d;
-        b = {p, "simulated: " + c.name + " (" + key + " = " + fixed(value, 4) +
-                    ", calibrated mu_r " + fixed(mu, 4) + "), azimuth 0"};
+        b = {p,
+             "simulated: " + case_label(c.name, c.overrides) + " (calibrated mu_r " +
+                 fixed(mu, 3) + "; case " + c.name + "), azimuth 0",
+             render_mm_per_px(p)};
       }
     }
   }
   for (std::size_t i = 0; b.overlay.empty() && i < f.cases.size(); ++i) {
     b.overlay = overlay_of(f, f.cases[i]);
-    if (!b.overlay.empty())
-      b.caption = "simulated: " + f.cases[i].name + " (first run with a render), azimuth 0";
+    if (!b.overlay.empty()) {
+      b.caption = "simulated: " + case_label(f.cases[i].name, f.cases[i].overrides) +
+                  " (case " + f.cases[i].name + ", the first with a render), azimuth 0";
+      b.mm_per_px = render_mm_per_px(b.overlay);
+    }
   }
   return b;
 }
 
-// The lab photo measured by the same code as the renders, shown beside a render overlay; ""
-// when no lab photo is given.
+// The width of the wider image of the pair on the page [px].
+constexpr double kBesideWidthPx = 560.0;
+
+// `img` resized by `f` (area averaging when it shrinks).
+cv::Mat resized(const cv::Mat& img, double f) {
+  cv::Mat out;
+  cv::resize(img, out, cv::Size(), f, f, f < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
+  return out;
+}
+
+// The lab photo measured by the same code as the renders, shown beside a render overlay at one
+// scale: both resampled to the same mm per px (each image's own scale at the pile axis, the lab's
+// from its scale bar or --lab-mm-per-px, the render's from its camera), the coarser of the two or
+// coarser still so the wider one is kBesideWidthPx on the page. A pile of one size is then one
+// size in both. "" when no lab photo is given.
 std::string lab_photo_section(const ReportSettings& settings, const fs::path& out,
                               const RenderBeside& beside, json& summary) {
   if (settings.lab_photo.empty()) return "";
@@ -280,40 +297,97 @@ std::string lab_photo_section(const ReportSettings& settings, const fs::path& ou
   vision::ScaleSpec scale;
   if (settings.lab_mm_per_px > 0) scale.mm_per_px = settings.lab_mm_per_px;
   const vision::SideMeasurement m = vision::measure_side(photo, scale, {}, settings.lab_photo);
-  cv::imwrite((out / "lab_photo.measured.png").string(), vision::draw_side_overlay(photo, m));
+  const cv::Mat lab = vision::draw_side_overlay(photo, m);
   summary["lab_photo"] = vision::to_json(m);
+  const cv::Mat twin = beside.overlay.empty() || !fs::exists(beside.overlay)
+                             ? cv::Mat()
+                             : cv::imread(beside.overlay.string(), cv::IMREAD_COLOR);
+  const bool has_render = !twin.empty();
+  const bool same_scale = has_render && beside.mm_per_px > 0 && m.mm_per_px > 0;
+  double common = m.mm_per_px;  // [mm/px]
+  if (same_scale)
+    common = std::max({m.mm_per_px, beside.mm_per_px, lab.cols * m.mm_per_px / kBesideWidthPx,
+                       twin.cols * beside.mm_per_px / kBesideWidthPx});
+  else
+    common = std::max(m.mm_per_px, lab.cols * m.mm_per_px / kBesideWidthPx);
+  cv::imwrite((out / "lab_photo.measured.png").string(), resized(lab, m.mm_per_px / common));
   std::vector<Figure> photos = {
       {"lab_photo.measured.png",
        "lab photo " + fs::path(settings.lab_photo).filename().string() +
            ": theta = atan(2H/D) = " + mean_sd(m.theta_deg, m.sigma_theta_deg) +
-           " deg (vision, as the renders)",
-       480}};
-  const bool has_render = !beside.overlay.empty() && fs::exists(beside.overlay);
+           " deg (vision, as the renders); its scale " + fixed(m.mm_per_px, 3) + " mm/px (" +
+           vision::to_string(m.scale_source) + ")",
+       0}};
+  std::string scale_text;
   if (has_render) {
-    fs::copy_file(beside.overlay, out / "render_beside_lab.png",
-                  fs::copy_options::overwrite_existing);
-    photos.push_back({"render_beside_lab.png", beside.caption, 480});
+    // A render of unknown scale is shown at the lab photo's width on the page, and said so.
+    const double lab_width_px = lab.cols * m.mm_per_px / common;
+    cv::imwrite((out / "render_beside_lab.png").string(),
+                resized(twin, same_scale ? beside.mm_per_px / common : lab_width_px / twin.cols));
+    photos.push_back({"render_beside_lab.png",
+                      beside.caption + (same_scale ? "; its scale " +
+                                                         fixed(beside.mm_per_px, 3) + " mm/px"
+                                                   : std::string()),
+                      0});
     summary["lab_photo_render"] = beside.caption;
+    scale_text = same_scale ? "Both images at " + fixed(common, 3) +
+                                  " mm per px at the pile axis, each with vision's measurement "
+                                  "drawn on it: a pile of one size is one size in both."
+                            : "The render's scale is not known (no images/measurement.json "
+                              "beside it): the two are shown at one width, not at one scale.";
   }
+  summary["lab_photo_common_mm_per_px"] = same_scale ? json(common) : json();
   mustache::data d;
   d.set("photos", to_data(photos));
   d.set("render", has_render);
+  d.set("scale", text_or_false(scale_text));
   return render(templates::kLabPhoto, d);
 }
 
-TableRow case_row(const CaseRows& c) {
+// A case's overrides, one "key = value" per line (spaces let the table wrap them).
+std::string overrides_text(const json& overrides) {
+  std::string t;
+  for (const auto& [key, value] : overrides.items())
+    t += (t.empty() ? "" : "; ") + key + " = " + (value.is_number() ? as_printed(value) : value.dump());
+  return t.empty() ? "none" : t;
+}
+
+// Links to a case's run records: each seed's result.json, and its ParaView series when the run
+// folder is still there (committed results keep the records, not the runs).
+std::vector<Link> run_links(const FolderResults& f, const CaseRows& c) {
+  std::vector<Link> links;
+  for (const std::string& d : c.run_dirs) {
+    const fs::path run(d);
+    const bool campaign = run.filename() == "run";
+    const fs::path record = campaign ? run.parent_path() / "result.json" : run / "result.json";
+    const std::string seed = campaign ? run.parent_path().filename().string() : "run";
+    if (fs::exists(f.dir / record))
+      links.push_back({("../" / record).lexically_normal().string(), seed});
+    if (fs::exists(f.dir / run / "series.pvd"))
+      links.push_back({("../" / run / "series.pvd").lexically_normal().string(), "pvd"});
+  }
+  return links;
+}
+
+TableRow case_row(const FolderResults& f, const CaseRows& c) {
   const CaseStats s = case_stats(c);
   std::map<std::string, int> stops;
   for (const auto& r : c.stops) ++stops[r];
   std::string stop_text;
   for (const auto& [r, n] : stops) stop_text += r + " x" + std::to_string(n) + " ";
-  std::ostringstream prov;
-  prov << "dt " << c.provenance.value("time_step_s", 0.0) << " s, E "
-       << c.provenance.value("softened_youngs_modulus_pa", json(0.0)).dump() << " Pa, "
-       << c.provenance.value("code_version", std::string("?"));
-  Cell overrides, files;
-  overrides.code = c.overrides.dump();
-  for (const auto& d : c.run_dirs) files.links.push_back({"../" + d + "/series.pvd", "pvd"});
+  Cell prov;
+  prov.small = "dt " + sig3(c.provenance.value("time_step_s", json())) + " s, E " +
+               sig3(c.provenance.value("softened_youngs_modulus_pa", json())) + " Pa, " +
+               c.provenance.value("code_version", std::string("?"));
+  Cell name;
+  name.bold = case_label(c.name, c.overrides);
+  name.note = c.name;
+  name.left = true;
+  Cell overrides;
+  overrides.small = overrides_text(c.overrides);
+  overrides.left = true;
+  Cell files;
+  files.links = run_links(f, c);
   int without = 0;
   std::string runs_text;
   for (const auto& [reason, n] : c.without_pile) {
@@ -322,14 +396,15 @@ TableRow case_row(const CaseRows& c) {
   }
   runs_text = std::to_string(static_cast<int>(c.run_dirs.size()) - without) + " of " +
               std::to_string(c.run_dirs.size()) + runs_text;
-  return {{c.name, overrides, runs_text, s.image.n ? mean_sd(s.image.mean, s.image.sd) : "-",
+  return {{name, overrides, runs_text, s.image.n ? mean_sd(s.image.mean, s.image.sd) : "-",
            s.flank.n ? mean_sd(s.flank.mean, s.flank.sd) : "-",
            s.particle.n ? mean_sd(s.particle.mean, s.particle.sd) : "-",
-           s.slice.n ? fixed(s.slice.mean) : "-", stop_text, prov.str(), files}};
+           s.slice.n ? fixed(s.slice.mean) : "-", stop_text, prov, files}};
 }
 
-// The cases table and each case's first render with its measurement overlay (copied into the
-// report folder, so the page travels with it).
+// The cases table and each case's first render with its measurement overlay, copied into the
+// report folder so the page travels with it. A copy made when the run folder was still there is
+// kept when a later build finds the run folder gone (committed results keep the report's copy).
 std::string cases_section(const FolderResults& f, const fs::path& out) {
   Table t;
   t.header = {"case",
@@ -341,20 +416,64 @@ std::string cases_section(const FolderResults& f, const fs::path& out) {
               "slice (protractor) [deg]",
               "stop reasons",
               "provenance",
-              "files"};
+              "run records"};
   std::vector<Figure> renders;
   for (const CaseRows& c : f.cases) {
-    t.rows.push_back(case_row(c));
+    t.rows.push_back(case_row(f, c));
     const fs::path overlay = f.dir / c.run_dirs.front() / "images" / "side_az000.measured.png";
-    if (!fs::exists(overlay)) continue;
     const std::string local = c.name + "_side.png";
-    fs::copy_file(overlay, out / local, fs::copy_options::overwrite_existing);
-    renders.push_back({local, c.name + " (first run, azimuth 0)", 480});
+    if (fs::exists(overlay))
+      fs::copy_file(overlay, out / local, fs::copy_options::overwrite_existing);
+    if (!fs::exists(out / local)) continue;
+    renders.push_back({local, case_label(c.name, c.overrides) + " (first run, azimuth 0)", 480});
   }
   mustache::data d;
   d.set("cases", to_data(t));
   d.set("renders", to_data(renders));
+  d.set("no_renders", text_or_false(renders.empty() ? "No renders: the runs of this folder were "
+                                                      "made without images, or their folders "
+                                                      "are not here."
+                                                    : std::string()));
   return render(templates::kCases, d);
+}
+
+// A folder's own name ("results/x/" and "results/x" both give "x"): the page names the folder it
+// was built from without the path on the machine that built it.
+std::string folder_name(const fs::path& dir) {
+  fs::path p = fs::absolute(dir).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path();
+  return p.filename().string();
+}
+
+// A calibration folder without its run records: the folder's own lists of its runs, linked,
+// and the renders an earlier build copied into the report, by case name.
+std::string no_cases_section(const FolderResults& f, const fs::path& out) {
+  mustache::data links(mustache::data::type::list);
+  for (const char* file : {"runs.csv", "README.md"})
+    if (fs::is_regular_file(f.dir / file)) {
+      mustache::data l;
+      l.set("href", std::string("../") + file);
+      l.set("label", std::string(file));
+      links.push_back(l);
+    }
+  std::vector<fs::path> kept;
+  for (const auto& e : fs::directory_iterator(out)) {
+    const std::string n = e.path().filename().string();
+    if (n.size() > 9 && n.compare(n.size() - 9, 9, "_side.png") == 0) kept.push_back(e.path());
+  }
+  std::sort(kept.begin(), kept.end());
+  std::vector<Figure> renders;
+  for (const fs::path& p : kept) {
+    const std::string name = p.filename().string();
+    renders.push_back({name, "case " + name.substr(0, name.size() - 9) + " (azimuth 0)", 480});
+  }
+  mustache::data listed;
+  listed.set("links", links);
+  mustache::data d;
+  d.set("listed", links.is_empty_list() ? mustache::data(false) : listed);
+  d.set("kept", !renders.empty());
+  d.set("renders", to_data(renders));
+  return render(templates::kNoCases, d);
 }
 
 std::string built_section(const std::string& dir, std::size_t folders) {
@@ -364,13 +483,6 @@ std::string built_section(const std::string& dir, std::size_t folders) {
   d.set("dir", text_or_false(dir));
   d.set("folders", std::to_string(folders));
   return render(templates::kBuilt, d);
-}
-
-std::string json_section(const char* tmpl, const json& j, const std::string& plot = "") {
-  mustache::data d;
-  d.set("json", j.dump(2));
-  d.set("plot", text_or_false(plot));
-  return render(tmpl, d);
 }
 
 void write_page(const fs::path& out, const std::string& title, std::vector<std::string> sections,
@@ -391,16 +503,32 @@ std::vector<std::string> result_subfolders(const fs::path& dir) {
   return subs;
 }
 
+// A loop folder: loop.json and no run, campaign or calibration results.
+bool is_loop_dir(const fs::path& d) {
+  return !holds_results(d) && fs::is_regular_file(d / "loop.json");
+}
+
 }  // namespace
 
+std::string report_page(const std::string& dir) {
+  return ((is_loop_dir(dir) ? fs::path(dir) : fs::path(dir) / "report") / "index.html").string();
+}
+
 json build_report(const std::string& dir, const ReportSettings& settings) {
+  // A loop folder's page is rebuilt from its loop.json, in the place the loop wrote it.
+  if (is_loop_dir(dir)) {
+    const json loop = read_json(fs::path(dir) / "loop.json");
+    write_loop_html(loop, dir);
+    return {{"title", "loop"}, {"page", (fs::path(dir) / "index.html").string()}};
+  }
   if (const auto subs = result_subfolders(dir); !subs.empty())
     return build_report(subs, dir, settings);
   const FolderResults f = read_folder_results(dir, settings.title);
   const fs::path out = f.dir / "report";
   fs::create_directories(out);
   json summary = case_summary(f);
-  std::vector<std::string> sections = {built_section(fs::absolute(f.dir).string(), 1)};
+  std::vector<std::string> sections = {
+built_section(folder_name(f.dir), 1)};
   sections.push_back(lab_photo_section(settings, out, render_beside_lab(f), summary));
   if (is_calibration_dir(f.dir)) {
     const json cmp = paper_comparison({dir}, settings.paper_dir);
@@ -412,15 +540,16 @@ json build_report(const std::string& dir, const ReportSettings& settings) {
     plotted.set("plotted", angles_plot(f, out));
     sections.push_back(render(templates::kAngles, plotted));
     sections.push_back(cases_section(f, out));
+  } else if (is_calibration_dir(f.dir)) {
+    sections.push_back(no_cases_section(f, out));
   }
   if (!f.calibration.is_null()) {
-    const bool plot = calibration_plot(f.calibration, out);
-    sections.push_back(json_section(templates::kCalibration, f.calibration,
-                                    plot ? "calibration.png" : ""));
+    sections.push_back(calibration_section(f.calibration, f.predictions ? *f.predictions : json(),
+                                           out, "../calibration.json"));
     summary["calibration"] = f.calibration;
   }
   if (f.predictions) {
-    sections.push_back(json_section(templates::kPredictions, *f.predictions));
+    sections.push_back(predictions_section(*f.predictions, "../predictions.json"));
     summary["predictions"] = *f.predictions;
   }
   write_page(out, f.title, std::move(sections), summary);
@@ -450,7 +579,7 @@ json build_report(const std::vector<std::string>& dirs, const std::string& out_d
     const fs::path page = fs::absolute(fs::path(d) / "report" / "index.html");
     mustache::data link;
     link.set("href", fs::relative(page, fs::absolute(out)).string());
-    link.set("dir", d);
+    link.set("dir", fs::relative(fs::absolute(d), fs::absolute(out)).lexically_normal().string());
     link.set("title", s.value("title", std::string()));
     folders.push_back(link);
     summary["folders"].push_back({{"dir", d}, {"title", s.value("title", std::string())}});

@@ -42,6 +42,10 @@ struct ReportSettings {
 /// the folder holds no run, campaign or calibration results.
 nlohmann::json build_report(const std::string& dir, const ReportSettings& settings = {});
 
+/// Where build_report(dir) writes its page: DIR/index.html for a loop folder (loop.json and no
+/// other results; the page the loop itself writes), DIR/report/index.html otherwise.
+std::string report_page(const std::string& dir);
+
 /// Builds OUT_DIR/report/index.html over several run, campaign or calibration folders: the paper
 /// comparison over the calibration folders among them, with a link to each folder's own report
 /// (built too). Throws InputError if a folder holds no results.

@@ -140,11 +140,12 @@ std::string inputs_section(const PileRun& run, const SceneConfig& scene,
   }
   return table_section(
       "Inputs",
-      {row("scene", scene.name + " (" + scene.file + ")"), row("description", scene.description),
+      {row("scene", scene.name + " (" + path_for_page(scene.file) + ")"),
+       row("description", scene.description),
        row("overrides (--set)", sets.empty() ? "none" : sets),
        row("sample", fixed(scene.mass * 1e3, 1) + " g of " + scene.sample_material + ", seed " +
                          std::to_string(scene.seed)),
-       row("sieve table", psd.name + " (" + psd.source + ")"),
+       row("sieve table", psd.name + " (" + path_for_page(psd.source) + ")"),
        row("simulated sizes", fixed(psd.d_min_drawn_mm, 2) + "-" + fixed(psd.d_max_drawn_mm, 2) +
                                   " mm; " + fixed(100 * psd.fines_fraction_not_simulated, 1) +
                                   "% of the mass finer than d_min = " + fixed(psd.d_min_mm, 2) +

@@ -7,8 +7,12 @@ const char* const kPage = R"(<!doctype html>
 <html><head><meta charset='utf-8'><title>{{title}}</title>
 <style>
 body{font-family:sans-serif;max-width:1200px;margin:auto}
-table{border-collapse:collapse;margin:6px 0}
+table{border-collapse:collapse;margin:6px 0;max-width:100%}
 td,th{border:1px solid #aaa;padding:3px 6px;font-size:13px}
+td code,td small,figcaption{overflow-wrap:anywhere}
+img{max-width:100%}
+.beside{display:flex;gap:8px;align-items:flex-start}
+.beside figure{margin:0}
 th{background:#eee}
 table.num td{text-align:right}
 table.num td.l{text-align:left}
@@ -37,14 +41,17 @@ const char* const kFigure =
     R"(<figure><img src='{{src}}'{{#width}} width='{{width}}'{{/width}}><figcaption>{{caption}}</figcaption></figure>
 )";
 
-// built, version; dir (a folder) or folders (how many).
+// built, version; dir (the folder's name: the report sits in its report/) or folders (how many).
 const char* const kBuilt =
-    R"(<p>Built {{built}} by {{version}} from {{#dir}}<code>{{dir}}</code>{{/dir}}{{^dir}}{{folders}} folder(s){{/dir}}.</p>
+    R"(<p>Built {{built}} by {{version}} from {{#dir}}the folder <code>{{dir}}</code> (the one above this report){{/dir}}{{^dir}}{{folders}} folder(s){{/dir}}.</p>
 )";
 
-// photos: figures (the lab photo, then the render beside it); render: whether there is one.
+// photos: figures (the lab photo, then the render beside it); render: whether there is one;
+// scale: the common scale in words, or false.
 const char* const kLabPhoto = R"(<h2>Lab photo beside the simulated render</h2>
-{{#photos}}{{> figure}}{{/photos}}{{^render}}<p>(no simulated render with a measurement overlay in this folder)</p>
+{{#scale}}<p>{{scale}}</p>
+{{/scale}}<div class='beside'>{{#photos}}{{> figure}}{{/photos}}</div>
+{{^render}}<p>(no simulated render with a measurement overlay in this folder)</p>
 {{/render}})";
 
 // plot: PNG name or false; comparison: table.
@@ -71,19 +78,28 @@ const char* const kAngles = R"({{#plotted}}<h2>Angles per case</h2><img src='ang
 {{/plotted}}{{^plotted}}<p>(gnuplot not available: no plot)</p>
 {{/plotted}})";
 
-// cases: table; renders: figures.
-const char* const kCases = R"(<h2>Cases</h2>
-{{#cases}}{{> table}}{{/cases}}<h2>Renders with measurement overlays</h2>
+// listed: {links: [{href, label}]} (the folder's own files that list its runs) or false;
+// kept: whether renders follow; renders: figures.
+const char* const kNoCases = R"(<h2>Cases</h2>
+<p>This folder keeps no run records (<code>cases/</code>), so the report cannot list its cases{{#listed}}; its runs are in {{#links}}<a href='{{href}}'>{{label}}</a> {{/links}}{{/listed}}.{{#kept}} The renders below were copied into this report by an earlier build, when the runs were here.{{/kept}}</p>
 {{#renders}}{{> figure}}{{/renders}})";
 
-// plot: PNG name or false; json: calibration.json as text.
-const char* const kCalibration = R"(<h2>Calibration</h2>{{#plot}}<img src='{{plot}}'>{{/plot}}
-<pre>{{json}}</pre>
+// cases: table; renders: figures; no_renders: why there are none, or false.
+const char* const kCases = R"(<h2>Cases</h2>
+{{#cases}}{{> table}}{{/cases}}<h2>Renders with measurement overlays</h2>
+{{#renders}}{{> figure}}{{/renders}}{{#no_renders}}<p>{{no_renders}}</p>
+{{/no_renders}})";
+
+// plot: PNG name or false; summary: table; fit: table or false; link: calibration.json.
+const char* const kCalibration = R"(<h2>Calibration</h2>
+{{#plot}}<img src='{{plot}}' alt='angle against mu_r: runs, monotone fit, calibrated mu_r'>
+{{/plot}}{{#summary}}{{> table}}{{/summary}}{{#fit}}<h3>The fit, point by point</h3>
+{{> table}}{{/fit}}<p>Every field: <a href='{{link}}'>calibration.json</a>.</p>
 )";
 
-// json: predictions.json as text.
+// predictions: table; link: predictions.json.
 const char* const kPredictions = R"(<h2>Predictions at the calibrated mu_r</h2>
-<pre>{{json}}</pre>
+{{#predictions}}{{> table}}{{/predictions}}<p>Every field: <a href='{{link}}'>predictions.json</a>.</p>
 )";
 
 // folders: [{href, dir, title}].
@@ -136,11 +152,11 @@ const char* const kLoopIterations =
 {{#stopped}}<p>Stopped: {{stopped}}.</p>
 {{/stopped}}{{/iterations}})";
 
-// design: {can: [..], cannot: [..]}; grid, not_traced: text or false; jams: [{id, n}] or false;
+// can, cannot: {list: [..]} or false; grid, not_traced: text or false; jams: [{id, n}] or false;
 // unavailable: [{name, why}] or false.
 const char* const kLoopNotes =
-    R"(<p>What this design can decide:</p>
-<ul>{{#can}}<li>{{.}}</li>{{/can}}</ul>{{#cannot}}<p>What it cannot:</p>
+    R"({{#can}}<p>What this design can decide:</p>
+<ul>{{#list}}<li>{{.}}</li>{{/list}}</ul>{{/can}}{{#cannot}}<p>What it cannot:</p>
 <ul>{{#list}}<li>{{.}}</li>{{/list}}</ul>{{/cannot}}{{#grid}}<p>mu_r grid: {{grid}}.</p>
 {{/grid}}{{#not_traced}}<p><strong>Nothing was traced</strong>: {{not_traced}}.</p>
 {{/not_traced}}{{#jams}}<p>Baseline pours that formed no pile and were repeated with new seeds (the lab reports none):</p>

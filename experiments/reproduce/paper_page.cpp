@@ -12,6 +12,7 @@
 #include "experiments/campaign/case_runner.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
+#include "experiments/report/calibration_section.hpp"
 #include "experiments/report/format.hpp"
 #include "experiments/report/gnuplot.hpp"
 #include "experiments/report/html.hpp"
@@ -36,7 +37,8 @@ std::optional<json> read_json_file(const fs::path& p) {
 
 // One of our points: a case's angles over the runs that formed a pile.
 struct OurPoint {
-  std::string label;
+  std::string label;     // the case's name
+  std::string readable;  // its inputs as a person reads them (report::case_label)
   double x = 0.0;
   std::vector<double> angles;
   std::map<std::string, int> without_pile;  // the other runs, by reason
@@ -64,6 +66,7 @@ std::vector<OurPoint> campaign_points(const PaperItem& item, const fs::path& dir
       p.label = name;
       p.x = static_cast<double>(pts.size());
       const json ov = (*meta)["spec"].value("overrides", json::object());
+      p.readable = case_label(name, ov);
       if (!item.x_key.empty() && ov.contains(item.x_key) && ov[item.x_key].is_number())
         p.x = ov[item.x_key].get<double>() * item.x_scale;
       pts.push_back(p);
@@ -91,13 +94,16 @@ std::string reasons_text(const std::map<std::string, int>& m) {
   return t.empty() ? "-" : t;
 }
 
-// The plot of an item: ours with error bars, the paper's points beside them.
+// The plot of an item: ours with error bars, the paper's points beside them. `tics` (one per
+// point of ours, or none) label the x axis when x is only the case's position.
 bool item_plot(const PaperItem& item, const std::vector<std::array<double, 3>>& ours,
                const std::string& our_title, const std::string& x_label, const std::string& y_label,
-               const fs::path& page_dir) {
+               const fs::path& page_dir, const std::vector<std::string>& tics = {}) {
   if (ours.empty() && !item.paper_points) return false;
   std::ostringstream o, p;
-  for (const auto& q : ours) o << q[0] << " " << q[1] << " " << q[2] << "\n";
+  for (std::size_t i = 0; i < ours.size(); ++i)
+    o << ours[i][0] << " " << ours[i][1] << " " << ours[i][2] << " \""
+      << (i < tics.size() ? tics[i] : std::string()) << "\"\n";
   if (item.paper_points)
     for (std::size_t i = 0; i < item.paper_points->x.size(); ++i)
       p << item.paper_points->x[i] << " " << item.paper_points->y[i] << "\n";
@@ -107,16 +113,19 @@ bool item_plot(const PaperItem& item, const std::vector<std::array<double, 3>>& 
   write_file_atomic(pd.string(), p.str());
   std::string plot = "plot ";
   if (!ours.empty())
-    plot += "'" + od.filename().string() + "' using 1:2:3 with yerrorbars pt 7 title '" +
+    plot += "'" + od.filename().string() + "' using 1:2:3" +
+            (tics.empty() ? std::string() : std::string(":xtic(4)")) +
+            " with yerrorbars pt 7 title '" +
             our_title + "'";
   if (item.paper_points)
     plot += std::string(ours.empty() ? "" : ", ") + "'" + pd.filename().string() +
             "' using 1:2 with points pt 5 ps 1.5 title 'paper'";
   const fs::path png = page_dir / (item.name + ".png");
   const std::string script =
-      "cd '" + page_dir.string() + "'\n" + png_terminal(png, 720, 420, false) + "set xlabel '" +
+      png_terminal(png, 720, 420, false) + "set xlabel '" +
       x_label + "'\nset ylabel '" + y_label +
-      "'\nset key top left\nset offsets graph 0.05, graph 0.05, 1, 1\n" + plot + "\n";
+      "'\nset key top left\nset offsets graph 0.05, graph 0.05, 1, 1\n" +
+      (tics.empty() ? std::string() : std::string("set xtics rotate by 30 right\n")) + plot + "\n";
   return run_gnuplot(page_dir / (item.name + ".gp"), script, png);
 }
 
@@ -156,20 +165,27 @@ void campaign_part(const PaperItem& item, const fs::path& dir, const fs::path& p
               "ours: " + item.angle + " angle [deg], mean \u00b1 seed sd", "piles",
               "runs without a pile"};
   std::vector<std::array<double, 3>> plotted;
+  std::vector<std::string> tics;
   for (const OurPoint& p : pts) {
     const SampleStats st = sample_stats(p.angles);
-    Cell c(p.label);
+    Cell c;
+    c.bold = p.readable;
+    if (p.readable != p.label) c.note = p.label;
     c.left = true;
     t.rows.push_back({{c, fixed(p.x, 3), st.n ? mean_sd(st.mean, st.sd) : "-", std::to_string(st.n),
                        reasons_text(p.without_pile)}});
-    if (st.n) plotted.push_back({p.x, st.mean, st.sd});
-    s.ours_text += (s.ours_text.empty() ? "" : "; ") + p.label + ": " +
+    if (st.n) {
+      plotted.push_back({p.x, st.mean, st.sd});
+      tics.push_back(p.readable);
+    }
+    s.ours_text += (s.ours_text.empty() ? "" : "; ") + p.readable + ": " +
                    (st.n ? mean_sd(st.mean, st.sd) : "no pile");
   }
   d.set("ours", to_data(t));
   if (item_plot(item, plotted, "ours (" + item.angle + ")",
                 item.x_label.empty() ? "case" : item.x_label,
-                item.paper_points ? item.paper_points->y_label : "angle of repose [deg]", page_dir))
+                item.paper_points ? item.paper_points->y_label : "angle of repose [deg]", page_dir,
+                item.x_key.empty() ? tics : std::vector<std::string>{}))
     d.set("plot", item.name + ".png");
 }
 
@@ -220,11 +236,8 @@ void calibration_part(const PaperItem& item, const fs::path& dir, const fs::path
                 fixed_or_dash(q["error_deg"])}});
   d.set("ours", to_data(t));
   s.ours_text = "mu_r " + mu + ", " + std::to_string(cal->value("simulations", 0)) + " pile runs";
-  std::vector<std::array<double, 3>> obs;
-  for (const json& o : cal->value("observations", json::array()))
-    obs.push_back({o.value("mu_r", 0.0), o.value("angle_deg", 0.0), 0.0});
-  if (item_plot(item, obs, "our pile runs (" + item.angle + ")", "mu_r", "angle of repose [deg]",
-                page_dir))
+  if (calibration_plot(*cal, read_json_file(dir / "predictions.json").value_or(json()), page_dir,
+                       item.name))
     d.set("plot", item.name + ".png");
 }
 
@@ -327,7 +340,7 @@ std::string build_paper_page(const PaperIndex& index, const std::string& out_dir
   mustache::data intro;
   intro.set("built", utc_now());
   intro.set("version", code_version());
-  intro.set("index", index.file);
+  intro.set("index", path_for_page(index.file));
   intro.set("planned", fixed(planned, 1));
   intro.set("budget", fixed(index.budget_cpu_hours, 1));
   intro.set("within", planned <= index.budget_cpu_hours);

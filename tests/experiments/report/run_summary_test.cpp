@@ -5,13 +5,13 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <regex>
 #include <string>
 
 #include "../../support/tiny_scene.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/photos/pile_images.hpp"
 #include "experiments/pile/pile_run.hpp"
+#include "experiments/report/page_check.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -35,16 +35,6 @@ TinyRun tiny_run(const std::string& name) {
   opt.progress = false;
   t.run = *run_pile_test(t.scene, opt);
   return t;
-}
-
-// Every src='...' and href='...' of the page.
-std::vector<std::string> references(const std::string& html) {
-  std::vector<std::string> refs;
-  const std::regex attr("(src|href)='([^']*)'");
-  for (auto it = std::sregex_iterator(html.begin(), html.end(), attr); it != std::sregex_iterator();
-       ++it)
-    refs.push_back((*it)[2]);
-  return refs;
 }
 
 TEST(RunSummary, PhotographedRunHasTheImageHeadlineAndAPageWhoseImagesExist) {
@@ -74,15 +64,11 @@ TEST(RunSummary, PhotographedRunHasTheImageHeadlineAndAPageWhoseImagesExist) {
 
   // The page: relative links only, each to a file that exists; two side overlays and the top.
   const std::string html = read_file(summary.page);
-  const std::vector<std::string> refs = references(html);
+  for (const report::PageProblem& p : report::page_problems(summary.page))
+    ADD_FAILURE() << report::to_string(p.kind) << ": " << p.what;
   int images = 0;
-  for (const std::string& ref : refs) {
-    EXPECT_FALSE(ref.empty());
-    EXPECT_NE(ref.front(), '/') << ref;
-    EXPECT_EQ(ref.find("://"), std::string::npos) << ref;
-    EXPECT_TRUE(fs::exists(t.dir / ref)) << ref << " does not exist beside summary.html";
+  for (const std::string& ref : report::page_references(html))
     images += ref.find(".measured.png") != std::string::npos;
-  }
   EXPECT_EQ(images, 3);
   for (const char* name : {"headline_angle_deg", "pile.theta_hd_deg", "pile.slice_angle_mean_deg",
                            "flank_deg", "procedure.lift_speed_m_s=0.02", "Provenance"})
@@ -110,7 +96,7 @@ TEST(RunSummary, WithoutPhotographsTheHeadlineIsTheParticleAngleAndSaysSo) {
   EXPECT_NE(html.find("not the lab&apos;s measure"), std::string::npos);
   EXPECT_NE(headline_line(t.run, summary, 1.0).find("particle atan(2H/D): no photographs"),
             std::string::npos);
-  for (const std::string& ref : references(html)) EXPECT_TRUE(fs::exists(t.dir / ref)) << ref;
+  EXPECT_TRUE(report::page_problems(summary.page).empty());
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // and ours are shown, "not yet run" where nothing exists, images exist and links are relative,
 // and no raw JSON reaches the page.
 #include "experiments/reproduce/paper_page.hpp"
+#include "experiments/report/page_check.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -93,6 +94,10 @@ struct Tree {
          {"simulations", 6},
          {"rolling_model", {{"keyword", "epsd"}}},
          {"observations", {{{"mu_r", 0.3}, {"seed", 1}, {"angle_deg", 33.0}}}},
+         {"fit",
+          {{"points",
+            {{{"mu_r", 0.3}, {"n", 1}, {"fitted_deg", 33.0}},
+             {{"mu_r", 0.35}, {"n", 1}, {"fitted_deg", 34.0}}}}}},
          {"jam_rate_per_mu_r",
           {{{"mu_r", 0.3}, {"pours", 2}, {"piles", 1}, {"jams", 1}, {"jam_rate", 0.5}}}}});
   }
@@ -142,6 +147,14 @@ TEST(PaperPage, ShowsThePaperBesideOursOnAFakeTree) {
   if (std::system("gnuplot --version > /dev/null 2>&1") == 0) {
     EXPECT_GE(images, 2);
   }
+  // Nothing a reader of a copied page cannot open: no absolute link or path, no missing file, plot
+  // scripts that name their files by name only.
+  for (const report::PageProblem& p : report::page_problems(page))
+    ADD_FAILURE() << report::to_string(p.kind) << ": " << p.what;
+  // A calibration item's plot shows the fit and the calibrated mu_r.
+  const std::string gp = read_file((fs::path(page).parent_path() / "cal.gp").string());
+  EXPECT_NE(gp.find("cal_fit.dat"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("calibrated mu_r 0.310"), std::string::npos) << gp;
   // Every anchor link points at a section of the page.
   EXPECT_NE(html.find("href='#mass'"), std::string::npos);
   // An earlier page is kept unless forced.
