@@ -428,9 +428,10 @@ TEST(Predict, ASecondCalibrationNeverReplacesAnotherFinishedOneUnasked) {
   const fs::path out = d.path / "out", log = d.path / "log";
   const Campaign c = load_campaign((d.path / "c.toml").string());
   run_calibration(c, out.string(), synthetic_case(log), kAngle, quiet());
-  const std::string text = read_file((out / "calibration.json").string());
-  // The same question again: allowed (every run is reused, the numbers are the same).
+  // The same question again: allowed (every run is reused, the numbers are the same; only the
+  // file's creation time is new, so the text to keep is read after it).
   EXPECT_NO_THROW(run_calibration(c, out.string(), synthetic_case(log), kAngle, quiet()));
+  const std::string text = read_file((out / "calibration.json").string());
   // Another target, or the same target with another angle, in the same folder: refused, and the
   // finished file is left as it was.
   write_file_atomic((d.path / "c.toml").string(), calibration_campaign(3, 36.0));
