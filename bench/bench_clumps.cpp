@@ -4,11 +4,20 @@
 // (tetrahedra: component radius r, centres at 0.9 r from the body's centre, r uniform in
 // [0.5, 0.6] mm in six template sizes, random orientations), and 4N spheres with radii drawn from
 // the same range, so both have the same number of spheres. Each starts on a lattice inside a
-// cylindrical container (radius 30 mm) on a plate (square layers, each shifted by half a spacing
-// from the one below, sites jittered by up to 0.02 mm so that no column stands on its own), falls
-// and settles for --settle steps under
-// --settle-gravity g, then relaxes --relax steps at 1 g with a small velocity damping (as
-// bench_sim), and the settled bed is timed for --steps steps on each requested thread count.
+// cylindrical container (radius --container-mm, 30 mm) on a plate: square layers of spacing s (a
+// grain's largest reach, twice, plus 0.05 mm), each shifted by half a spacing in x and y from the
+// one below and s / sqrt(2) above it, so that a grain's nearest neighbours in the layers below and
+// above are s away as in its own layer (a body-centred lattice, as dense as random orientations
+// allow without overlaps); sites are jittered by up to 0.02 mm so that no column stands on its
+// own. The bed falls and settles for --settle steps under --settle-gravity g, then relaxes
+// --relax steps at 1 g with a small velocity damping (as bench_sim), and the settled bed is timed
+// for --steps steps on each requested thread count. The settle is the cost of building a bed:
+// it grows with the number of grains times the fall, which is the lattice's height, so the
+// issue's 50,000 clumps (--issue) stand in a wide container (120 mm) where the lattice is six
+// layers deep (12 mm) and collapses under 20 g (its top falls 5 mm in about 1,900 steps; 5,000
+// steps), then relaxes 2,000 steps at 1 g: 0.68 contacts per component at the end on a bed of the
+// same depth, as on the deeper beds' 0.74-0.80; the result is a flat settled bed rather than a
+// cone, every grain resting on its neighbours as in a heap's interior.
 // Printed: body-steps/s and component-steps/s for the clumps, particle-steps/s for the spheres,
 // the contacts per sphere of each bed, the time per component-step over the time per sphere
 // particle-step (the issue's target: within 1.3x), and each phase's time. Every thread count
@@ -23,13 +32,15 @@
 // bed (the Yade comparison needs only the clumps). Each thread count's times are also printed as
 // one machine-readable line, "TIMING threads=T clump_seconds=.. clump_cpu_seconds=.. ...".
 //
-// Usage: bench_clumps [--quick] [--clumps N] [--steps N] [--threads 1,2] [--settle N]
-//                     [--relax N] [--settle-gravity G] [--settle-threads N] [--seed S]
-//                     [--beds PREFIX] [--no-spheres] [--write-yade DIR]
+// Usage: bench_clumps [--quick | --issue] [--clumps N] [--container-mm R] [--steps N]
+//                     [--threads 1,2] [--settle N] [--relax N] [--settle-gravity G]
+//                     [--settle-threads N] [--seed S] [--beds PREFIX] [--no-spheres]
+//                     [--write-yade DIR]
 #include <omp.h>
 #include <time.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -52,10 +63,10 @@ using namespace reposetwin::sim;
 constexpr double kRadiusMin = 0.5e-3, kRadiusMax = 0.6e-3;  // component / sphere radii [m]
 constexpr int kSizes = 6;                                   // clump template sizes
 constexpr double kArm = 0.9;                     // component centre distance / radius [-]
-constexpr double kContainer = 0.03;              // container radius [m]
 constexpr double kRelaxDamping = 0.005;          // velocity damping per relax step [-]
 
 struct Options {
+  double container_mm = 30.0;  // container radius [mm]
   int clumps = 5000;
   int steps = 1000;
   int settle = 7000;
@@ -69,7 +80,7 @@ struct Options {
   std::string yade_dir;
 };
 
-Model make_model(double gravity_factor) {
+Model make_model(double gravity_factor, double container_radius) {
   Model m;
   Material rock;
   rock.youngs_modulus = 46.8e9;
@@ -89,8 +100,8 @@ Model make_model(double gravity_factor) {
   can.name = "container";
   can.kind = WallKind::kShell;
   can.z_top = 0.2;
-  can.r_bottom = kContainer;
-  can.r_top = kContainer;
+  can.r_bottom = container_radius;
+  can.r_top = container_radius;
   m.walls.push_back(can);
   for (int k = 0; k < kSizes; ++k) {
     const double r = kRadiusMin + (kRadiusMax - kRadiusMin) * (k + 0.5) / kSizes;
@@ -103,11 +114,14 @@ Model make_model(double gravity_factor) {
   return m;
 }
 
-/// A bed of `count` grains on a cubic lattice of spacing `spacing` inside the container.
+/// A bed of `count` grains on a body-centred lattice of spacing `spacing` inside the container
+/// (design note).
 World make_bed(const Model& model, int count, bool clumps, double spacing, std::uint64_t seed) {
   World w(model);
   Rng rng(seed);
-  const int across = static_cast<int>((kContainer - 0.5 * spacing) / spacing);
+  const double radius = model.walls[1].r_bottom;
+  const double rise = spacing / std::sqrt(2.0) + 0.03e-3;  // layer to layer [m]
+  const int across = static_cast<int>((radius - 0.5 * spacing) / spacing);
   int placed = 0;
   for (int layer = 0; placed < count; ++layer) {
     for (int ix = -across; ix <= across && placed < count; ++ix)
@@ -115,8 +129,8 @@ World make_bed(const Model& model, int count, bool clumps, double spacing, std::
         const double shift = layer % 2 == 0 ? 0.0 : 0.5 * spacing;
         const Vec3 x(spacing * ix + shift + rng.uniform(-0.02e-3, 0.02e-3),
                      spacing * iy + shift + rng.uniform(-0.02e-3, 0.02e-3),
-                     0.5 * spacing + spacing * layer);
-        if (std::hypot(x.x(), x.y()) > kContainer - 0.5 * spacing) continue;
+                     0.5 * spacing + rise * layer);
+        if (std::hypot(x.x(), x.y()) > radius - 0.5 * spacing) continue;
         if (clumps) {
           const Quat q(rng.normal(0, 1), rng.normal(0, 1), rng.normal(0, 1), rng.normal(0, 1));
           w.add_clump(static_cast<int>(rng.uniform() * kSizes), x, q.normalized(), 0);
@@ -129,6 +143,14 @@ World make_bed(const Model& model, int count, bool clumps, double spacing, std::
   return w;
 }
 
+/// The highest sphere surface of the bed [m].
+double bed_top(const World& w) {
+  const Particles& p = w.state().particles;
+  double top = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) top = std::max(top, p.x[i].z() + p.radius[i]);
+  return top;
+}
+
 double touching_per_sphere(const World& w) {
   const Diagnostics d = w.diagnose();
   return static_cast<double>(d.contacts) / static_cast<double>(w.state().particles.size());
@@ -138,7 +160,7 @@ double touching_per_sphere(const World& w) {
 void settle(World& world, const Options& o, const char* what) {
   const auto t0 = std::chrono::steady_clock::now();
   omp_set_num_threads(o.settle_threads);
-  World heavy(make_model(o.settle_gravity));
+  World heavy(make_model(o.settle_gravity, 1e-3 * o.container_mm));
   heavy.state() = world.state();
   for (int s = 0; s < o.settle; ++s) heavy.step();
   world.state() = heavy.state();
@@ -160,7 +182,8 @@ void settle(World& world, const Options& o, const char* what) {
   std::cout << "  " << what << ": settled in "
             << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()
             << " s: KE " << d.kinetic_energy << " J, " << touching_per_sphere(world)
-            << " contacts (pairs + walls) per sphere, max overlap " << d.max_overlap_ratio << ", status "
+            << " contacts (pairs + walls) per sphere, top " << 1e3 * bed_top(world)
+            << " mm, max overlap " << d.max_overlap_ratio << ", status "
             << status_name(d.status) << std::endl;  // kept if a long run is cut off later
   if (d.status != Status::kOk) throw std::runtime_error(std::string("settle: ") + d.detail);
 }
@@ -243,7 +266,7 @@ void write_yade(const World& w, const Options& o, const std::string& dir) {
     << m.youngs_modulus_used(0) << ", " << rock.poisson_ratio << ", " << rock.density
     << ", " << pair.restitution << ", " << pair.friction << "\n"
     << "DT, SKIN, STEPS, CONTAINER_R, CONTAINER_TOP = " << m.dt << ", "
-    << w.state().neighbors.skin << ", " << o.steps << ", " << kContainer << ", "
+    << w.state().neighbors.skin << ", " << o.steps << ", " << m.walls[1].r_bottom << ", "
     << m.walls[1].z_top << "\n"
     << R"PY(here = os.getcwd()  # run in its folder: Yade's __file__ names the yade binary
 mat = O.materials.append(FrictMat(young=E, poisson=NU, density=DENSITY,
@@ -301,8 +324,13 @@ print('YADE clumps=%d spheres=%d steps=%d seconds=%.6g cpu_seconds=%.6g interact
 int main(int argc, char** argv) {
   CLI::App app{"bench_clumps: clumps of four spheres beside spheres (body- and sphere-steps/s)"};
   Options o;
-  bool quick = false;
+  bool quick = false, issue = false;
   app.add_flag("--quick", quick, "1,000 clumps, 3,000 + 1,000 settle and 300 timed steps");
+  app.add_flag("--issue", issue,
+               "the issue's bed: 50,000 clumps in a 120 mm container, settled 5,000 steps at 20 g "
+               "+ 2,000 at 1 g, 300 timed steps");
+  app.add_option("--container-mm", o.container_mm, "container radius [mm]")
+      ->check(CLI::PositiveNumber);
   app.add_option("--clumps", o.clumps, "number of clumps (the sphere bed has 4x as many)")
       ->check(CLI::PositiveNumber);
   app.add_option("--steps", o.steps, "timed steps")->check(CLI::PositiveNumber);
@@ -316,24 +344,34 @@ int main(int argc, char** argv) {
   app.add_flag("--no-spheres", o.no_spheres, "time the clump bed only");
   app.add_option("--write-yade", o.yade_dir, "also write the settled clump bed for Yade here");
   CLI11_PARSE(app, argc, argv);
-  if (quick) {
-    if (app.count("--clumps") == 0) o.clumps = 1000;
-    if (app.count("--settle") == 0) o.settle = 3000;
-    if (app.count("--relax") == 0) o.relax = 1000;
-    if (app.count("--steps") == 0) o.steps = 300;
+  const auto preset = [&](int clumps, double container_mm, int settle, int relax, int steps) {
+    if (app.count("--clumps") == 0) o.clumps = clumps;
+    if (app.count("--container-mm") == 0) o.container_mm = container_mm;
+    if (app.count("--settle") == 0) o.settle = settle;
+    if (app.count("--relax") == 0) o.relax = relax;
+    if (app.count("--steps") == 0) o.steps = steps;
+  };
+  if (quick) preset(1000, 30.0, 3000, 1000, 300);
+  if (issue) {
+    preset(50000, 120.0, 5000, 2000, 300);
+    if (app.count("--settle-gravity") == 0) o.settle_gravity = 20.0;
   }
   try {
-    const Model model = make_model(1.0);
+    const Model model = make_model(1.0, 1e-3 * o.container_mm);
     double reach = 0.0;
     for (const ClumpTemplate& t : model.clumps) reach = std::max(reach, t.reach);
     std::cout << "bench_clumps: " << o.clumps << " tetrahedral clumps of 4 spheres (reach up to "
               << reach * 1e3 << " mm) and " << 4 * o.clumps << " spheres, r " << kRadiusMin * 1e3
-              << "-" << kRadiusMax * 1e3 << " mm; dt " << model.dt << " s\n";
+              << "-" << kRadiusMax * 1e3 << " mm, in a container of radius " << o.container_mm
+              << " mm; dt " << model.dt << " s\n";
     World clumps = make_bed(model, o.clumps, true, 2.0 * reach + 0.05e-3, o.seed);
     World spheres = make_bed(model, o.no_spheres ? 0 : 4 * o.clumps, false,
                              2.0 * kRadiusMax + 0.05e-3, o.seed);
     std::vector<std::pair<World*, const char*>> beds{{&clumps, "clumps"}};
     if (!o.no_spheres) beds.emplace_back(&spheres, "spheres");
+    for (auto [bed, what] : beds)
+      std::cout << "  " << what << ": lattice of " << bed->state().particles.size()
+                << " spheres, top " << 1e3 * bed_top(*bed) << " mm\n";
     for (auto [bed, what] : beds) {
       const std::string file = o.beds + "." + what + ".ckpt";
       if (!o.beds.empty() && std::filesystem::exists(file)) {

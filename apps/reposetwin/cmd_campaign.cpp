@@ -112,6 +112,7 @@ void add_calibrate_command(CLI::App& app) {
     if (!only->empty()) experiments::keep_only_predictions(c, *only);
     if (!c.calibration)
       throw std::invalid_argument(c.file + ": [calibration] is missing (target_deg, mu_r_range)");
+    experiments::check_pile_cases(c);
     if (*predict_only && c.predictions.empty())
       throw std::invalid_argument(c.file + ": --predict-only but the file has no [[predict]]");
     const std::string out = a->out.empty() ? "runs/" + c.name + "_calibration" : a->out;

@@ -103,14 +103,34 @@ CaseFn pile_case_fn(const CaseRunSettings& settings) {
   };
 }
 
+namespace {
+
+// Every distinct scene the campaign file can run, each named as its messages name it: the
+// cases, the calibration at both ends of its mu_r range and every prediction at the range's
+// ends (the calibrated mu_r lies between them; seeds do not change the scene read).
+std::vector<std::pair<std::string, CaseSpec>> runs_to_check(const Campaign& c) {
+  std::vector<std::pair<std::string, CaseSpec>> out;
+  std::set<std::string> names;
+  for (const CaseSpec& spec : c.runs)
+    if (names.insert(spec.case_name).second) out.emplace_back("case " + spec.case_name, spec);
+  if (!c.calibration) return out;
+  const CalibrationSettings& cal = c.calibration->settings;
+  for (const double mu : {cal.mu_r_lo, cal.mu_r_hi}) {
+    out.emplace_back("calibration", calibration_run(c, mu, cal.first_seed));
+    for (const PredictionCase& p : c.predictions)
+      out.emplace_back("prediction " + p.name, prediction_run(c, p, mu, cal.first_seed));
+  }
+  return out;
+}
+
+}  // namespace
+
 void check_pile_cases(const Campaign& campaign) {
-  std::set<std::string> checked;
-  for (const CaseSpec& spec : campaign.runs) {
-    if (!checked.insert(spec.case_name).second) continue;  // seeds do not change the scene read
+  for (const auto& [what, spec] : runs_to_check(campaign)) {
     try {
       (void)build_case_scene(spec).config();
     } catch (const InputError& e) {
-      throw InputError(campaign.file + ": case " + spec.case_name + ": " + e.what());
+      throw InputError(campaign.file + ": " + what + ": " + e.what());
     }
   }
 }

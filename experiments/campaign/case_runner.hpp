@@ -53,11 +53,13 @@ CaseResult case_result_from_json(const nlohmann::json& j);
 
 CaseFn pile_case_fn(const CaseRunSettings& settings);
 
-/// Reads every case's scene as its pile run will (overrides applied, strict parser), so that an
-/// override the scene parser refuses (an elongation below 1, a mass fraction that no longer sums
-/// to 1) is an InputError naming the campaign file, the case and the scene's key and value before
-/// any case runs. read_campaign_file() checks only that each override applies to its scene file,
-/// since a campaign is not always over pile scenes.
+/// Reads every scene the campaign file can run as its pile run will (overrides applied, strict
+/// parser): each case, the [calibration] at both ends of its mu_r range and each [[predict]]
+/// test there, so that an override the scene parser refuses (an elongation below 1, a misspelt
+/// shape key, a mass fraction that no longer sums to 1) is an InputError naming the campaign
+/// file, the case (or "calibration", "prediction NAME") and the scene's key and value before
+/// anything runs. The campaign and calibrate commands call it; read_campaign_file() checks only that
+/// each override applies to its scene file, since a campaign is not always over pile scenes.
 void check_pile_cases(const Campaign& campaign);
 
 /// True when the case made no pile (a clogged outlet: every particle lodged in the container).

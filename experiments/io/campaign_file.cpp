@@ -80,13 +80,15 @@ std::string resolve_scene(const std::string& file, const std::string& key,
   return fs::absolute(p).lexically_normal().string();
 }
 
-// Flattens an overrides table into dotted keys: { "a.b" = 1 } and { a.b = 1 } (a nested table in
-// TOML) both give "a.b" = 1. Arrays are leaves.
+// Flattens an overrides table into dotted keys: { "a.b" = 1 } and { a.b = 1 } (a table made by a
+// dotted key in TOML) both give "a.b" = 1. A table written as a value, { a = { b = 1 } } or
+// { "a" = { b = 1 } }, is one override "a" = { b = 1 } that replaces or creates the whole table,
+// as a person writing a table means it. Arrays are leaves.
 void flatten(const toml::table& t, const std::string& prefix, toml::table& out) {
   for (const auto& [k, v] : t) {
     const std::string key =
         prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
-    if (const auto* sub = v.as_table()) {
+    if (const auto* sub = v.as_table(); sub && !sub->is_inline()) {
       flatten(*sub, key, out);
     } else {
       v.visit([&](const auto& x) { out.insert_or_assign(key, x); });

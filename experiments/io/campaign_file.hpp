@@ -22,7 +22,8 @@
 //   name = "m200"
 //   description = "200 g"                     # optional
 //   scene = "other.toml"                      # optional
-//   overrides = { "sample.mass_kg" = 0.2 }    # quoted dotted keys or nested tables
+//   overrides = { "sample.mass_kg" = 0.2 }    # quoted or bare dotted keys; a table value
+//                                             # ("sample.shape" = { kind = ... }) is set whole
 //   [sweep]                                   # ... or one sweep (case names <leaf>_<value>)
 //   key = "sample.mass_kg"
 //   values = [0.05, 0.2, 0.9]

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "experiments/io/input_error.hpp"
+#include "experiments/io/scene_keys.hpp"
 #include "experiments/io/toml_edit.hpp"
 
 namespace reposetwin::experiments {
@@ -75,7 +76,7 @@ std::vector<std::string> split_dotted_key(std::string_view dotted_key, std::stri
 }
 
 void apply_override(toml::table& doc, std::string_view dotted_key, const toml::node& value,
-                    std::string_view origin, bool create_tables) {
+                    std::string_view origin, MissingTables missing) {
   const auto parts = split_dotted_key(dotted_key, origin);
   const std::string key(dotted_key);
   auto fail = [&](const std::string& why) -> std::invalid_argument {
@@ -98,9 +99,15 @@ void apply_override(toml::table& doc, std::string_view dotted_key, const toml::n
       next = a->get(idx);
     }
     path += (path.empty() ? "" : ".") + seg;
-    if (next == nullptr && create_tables && parent->is_table())
+    const bool create = missing == MissingTables::kCreate ||
+                        (missing == MissingTables::kSceneTables && is_scene_table(path));
+    if (next == nullptr && create && parent->is_table())
       next = parent->as_table()->insert_or_assign(seg, toml::table{}).first->second.as_table();
-    if (next == nullptr) throw fail("'" + path + "' does not exist in the scene");
+    if (next == nullptr)
+      throw fail("'" + path + "' does not exist in the scene" +
+                 (missing == MissingTables::kSceneTables
+                      ? std::string(" and is not a table a scene has (reposetwin keys)")
+                      : std::string()));
     if (!next->is_table() && !next->is_array())
       throw fail("'" + path + "' is a " + type_name(next->type()) + ", not a table");
     parent = next;
@@ -146,7 +153,7 @@ Override parse_override(std::string_view text, std::string_view origin) {
 }
 
 void apply_overrides(toml::table& doc, const std::vector<Override>& overrides,
-                     std::string_view origin, bool create_tables) {
+                     std::string_view origin, MissingTables missing) {
   for (const Override& o : overrides) {
     toml::table value_doc;
     try {
@@ -156,7 +163,7 @@ void apply_overrides(toml::table& doc, const std::vector<Override>& overrides,
                        "\": the value is not a TOML value (" + std::string(e.description()) + ")");
     }
     try {
-      apply_override(doc, o.key, *value_doc.get("v"), origin, create_tables);
+      apply_override(doc, o.key, *value_doc.get("v"), origin, missing);
     } catch (const std::invalid_argument& e) {
       throw InputError(e.what());
     }

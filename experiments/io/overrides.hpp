@@ -5,13 +5,16 @@
 // them with --set and a measured-data row with its condition columns. Applying them to the scene
 // file keeps one scene parser (strict, typed) as the only reader of scene files, so the engine
 // only ever sees typed structs, never strings or key paths. The rules are deliberately strict so
-// a typo cannot silently produce a different experiment: every parent on the path must already
-// exist, and a value keeps its type (an integer may stand for a float, nothing else converts). A
-// new leaf under an existing table is allowed; the strict scene parser then rejects it if the
-// scene format does not know it. A numeric segment indexes an array ("walls.0.friction"). A
-// command line's --set may also create missing tables ("output.frame_interval_s" in a scene
-// without [output]): the strict parser still refuses a table or key it does not know. (A
-// campaign case that gives a sphere scene a grain shape names a scene file that has one.)
+// a typo cannot silently produce a different experiment: a parent on the path that the scene
+// lacks is created only when the scene format has that table ("sample.shape.elongation" on a
+// sphere scene makes its [sample.shape]; "rolling.sprng.k" is refused), and a value keeps its
+// type (an integer may stand for a float, nothing else converts). A new leaf under an existing
+// table is allowed, and a table value is one value: it replaces the table there or is inserted
+// whole ("sample.shape" = { kind = "generated", elongation = 1.5, spheres = 4 }); the strict
+// scene parser then rejects a key the scene format does not know. A numeric segment indexes an
+// array ("walls.0.friction"). A command line's --set may create any missing table
+// ("output.frame_interval_s" in a scene without [output]): the strict parser still refuses a
+// table or key it does not know, and says the key came from --set.
 //
 // The value is kept as canonical TOML text ("0.10000000000000001", "'epsd'", "[ 1, 2 ]"): that is
 // exactly what a user types and what a result file records, it round-trips every TOML value

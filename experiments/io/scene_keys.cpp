@@ -277,6 +277,13 @@ std::string scene_key_pattern(const std::string& dotted) {
   return dotted;
 }
 
+bool is_scene_table(const std::string& dotted) {
+  const std::string under = scene_key_pattern(dotted) + ".";
+  for (const SceneKey& k : scene_keys())
+    if (k.key.rfind(under, 0) == 0) return true;
+  return false;
+}
+
 std::string scene_keys_markdown() {
   std::string t =
       "# Scene keys\n\n"

@@ -34,6 +34,11 @@ const std::vector<SceneKey>& scene_keys();
 /// applies.
 std::string scene_key_pattern(const std::string& dotted);
 
+/// Whether a dotted key path names a table a scene can have ("sample.shape", "output",
+/// "contacts.rock-plate"): some reference key lies under it. An override may create such a table
+/// where a scene has none (io/toml_edit.hpp, MissingTables::kSceneTables).
+bool is_scene_table(const std::string& dotted);
+
 /// The reference as a Markdown page (docs/scene.md is this text).
 std::string scene_keys_markdown();
 

@@ -41,7 +41,7 @@ void SceneDoc::apply_command_line(std::span<const std::string> sets) {
       }
       overrides.push_back(std::move(o));
     }
-    apply_overrides(tree_->doc, overrides, "--set", /*create_tables=*/true);
+    apply_overrides(tree_->doc, overrides, "--set", MissingTables::kCreate);
   } catch (const InputError& e) {
     throw InputError(file_ + ": " + e.what());
   }

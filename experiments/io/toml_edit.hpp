@@ -14,14 +14,23 @@
 
 namespace reposetwin::experiments {
 
-/// Sets the value at `dotted_key` in `doc` to a copy of `value`. Throws std::invalid_argument
-/// naming `origin` (e.g. "campaign.toml, case m200"), the key and the value when a parent on the
-/// path is missing or not a table/array, an array index is out of range, or the new value's type
-/// differs from the existing value's type (an integer replacing a float is converted to float).
-/// With `create_tables`, missing tables on the path are created instead (a missing array element
-/// is still an error).
+/// What an override does with a table on its path that the document does not have.
+enum class MissingTables {
+  kRefuse,       // every parent must exist
+  kSceneTables,  // create a table the scene format has (io/scene_keys.hpp), refuse any other:
+                 // a campaign case may give a sphere scene [sample.shape], and a misspelt
+                 // table is still refused when the campaign loads, before any scene is parsed
+  kCreate,       // create any table (--set: the strict scene parser judges it afterwards)
+};
+
+/// Sets the value at `dotted_key` in `doc` to a copy of `value` (a table value replaces the
+/// table there, or is inserted whole). Throws std::invalid_argument naming `origin` (e.g.
+/// "campaign.toml, case m200"), the key and the value when a parent on the path is missing (and
+/// `missing` does not create it) or not a table/array, an array index is out of range, or the new
+/// value's type differs from the existing value's type (an integer replacing a float is
+/// converted to float). A missing array element is always an error.
 void apply_override(toml::table& doc, std::string_view dotted_key, const toml::node& value,
-                    std::string_view origin = {}, bool create_tables = false);
+                    std::string_view origin = {}, MissingTables missing = MissingTables::kRefuse);
 
 /// Applies every entry of `overrides` (keys are dotted paths, e.g. { "sample.mass_kg" = 0.9 }) to
 /// `doc` in key order, so a whole-table override ("sample") precedes its members
@@ -30,9 +39,11 @@ void apply_overrides(toml::table& doc, const toml::table& overrides, std::string
 
 /// Applies `overrides` to `doc` in order; each value text is parsed as TOML first. Throws
 /// InputError naming `origin`, the key and the value when a value is not TOML or does not apply
-/// (see apply_override).
+/// (see apply_override). Every scene override (a campaign case, a calibration or loop run) goes
+/// through here with the default, so the check when a campaign loads and the run itself agree.
 void apply_overrides(toml::table& doc, const std::vector<Override>& overrides,
-                     std::string_view origin, bool create_tables = false);
+                     std::string_view origin,
+                     MissingTables missing = MissingTables::kSceneTables);
 
 /// Renders a TOML value in TOML syntax for error messages, case names and Override::value ("0.1",
 /// "'x'", "[ 1, 2 ]"); floats are written to read back to the same bits.

@@ -233,3 +233,35 @@ TEST(BadInput, ACampaignCaseWithARefusedShapeValueRunsNothing) {
   expect_mentions(r, {"shapes.toml", "case squat", "sample.shape.elongation", "0.5"});
   EXPECT_FALSE(fs::exists(out)) << "a refused campaign wrote " << out;
 }
+
+// A calibration file whose runs would read a refused shape value, in the common overrides (the
+// calibration runs) or in a [[predict]] test only: calibrate reads every scene it can run before
+// running any, exits 2 naming the file, the run, the key and the value, and makes no output.
+TEST(BadInput, ACalibrationWithARefusedShapeValueRunsNothing) {
+  const fs::path dir = fresh_dir("bad_shape_calibration");
+  write_text(dir / "scene.toml", reposetwin::test_support::kTinyScene);
+  const std::string head = "name = \"cal\"\nscene = \"scene.toml\"\n";
+  const std::string calibration =
+      "[calibration]\ntarget_deg = 25.0\nmu_r_range = [0.1, 0.4]\nseeds_per_point = 1\n";
+  const std::string squat =
+      "sample.shape = { kind = \"generated\", elongation = 0.5, spheres = 4 }";
+  struct Bad {
+    std::string text, run;
+  };
+  const Bad files[] = {
+      {head + "overrides = { " + squat + " }\n" + calibration, "calibration"},
+      {head + calibration + "[[predict]]\nname = \"rods\"\nscene = \"scene.toml\"\n"
+                            "measured_deg = 30.0\noverrides = { " + squat + " }\n",
+       "prediction rods"},
+  };
+  for (const Bad& b : files) {
+    write_text(dir / "cal.toml", b.text);
+    const fs::path out = dir / "out";
+    const CliResult r =
+        run_cli("calibrate " + quoted(dir / "cal.toml") + " --out " + quoted(out) + " --workers 1");
+    SCOPED_TRACE(b.run);
+    EXPECT_EQ(r.code, 2) << r.out;
+    expect_mentions(r, {"cal.toml", b.run, "sample.shape.elongation", "0.5"});
+    EXPECT_FALSE(fs::exists(out)) << "a refused calibration wrote " << out;
+  }
+}

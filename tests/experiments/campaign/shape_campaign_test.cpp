@@ -1,7 +1,8 @@
 // A campaign over grain-shape keys: a sweep of [sample.shape] elongation at a fixed number of
 // spheres runs end to end on the tiny rod scene, each case named by its value and each case's
-// result.json saying which shape it ran; and the k-th of [[sample.shapes]] is overridden by its
-// index, checked against the scene before anything runs.
+// result.json saying which shape it ran; cases give a sphere scene its shape table; and the k-th
+// of [[sample.shapes]] is overridden by its index, checked against the scene before anything
+// runs.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -94,6 +95,89 @@ TEST(ShapeCampaign, ASweepOverElongationRunsEachShapeAndSaysSo) {
   };
   EXPECT_GT(grains(0), grains(1));
   EXPECT_GT(grains(1), grains(2));
+  fs::remove_all(dir);
+}
+
+// A campaign over a sphere scene whose cases add the shape table: one case of spheres, one rod
+// given as a whole table, one given key by key (each creates [sample.shape], which the scene
+// lacks). Each case's result says what it ran: no shape for the spheres, the rod and its
+// elongation for the others.
+TEST(ShapeCampaign, CasesGiveASphereSceneItsGrainShape) {
+  const fs::path dir = fresh_dir("sphere_scene");
+  const Campaign c = campaign_in(
+      dir, "",
+      "name = \"shapes\"\nscene = \"scene.toml\"\nseeds = [3]\n"
+      "overrides = { \"sample.mass_kg\" = 0.004 }\n"
+      "[[case]]\nname = \"spheres\"\n"
+      "[[case]]\nname = \"rod_e1.5\"\n"
+      "overrides = { sample.shape = { name = \"rod\", kind = \"generated\", elongation = 1.5, "
+      "spheres = 4 } }\n"
+      "[[case]]\nname = \"rod_e2\"\n"
+      "overrides = { \"sample.shape.name\" = \"rod\", \"sample.shape.kind\" = \"generated\", "
+      "\"sample.shape.elongation\" = 2.0, \"sample.shape.spheres\" = 4 }\n");
+  ASSERT_EQ(c.runs.size(), 3u);
+  // The whole table is one override; the dotted keys are four.
+  EXPECT_EQ(c.runs[1].overrides.size(), 2u);
+  EXPECT_EQ(c.runs[2].overrides.size(), 5u);
+  check_pile_cases(c);
+  CaseRunSettings rs;
+  rs.images = false;
+  const fs::path out = dir / "out";
+  const auto summary = run_campaign(c, out.string(), pile_case_fn(rs), one_worker());
+  EXPECT_EQ(summary.finished, 3);
+  const auto result_of = [&](const std::string& name) {
+    return read_json(out / "cases" / name / "seed_3" / "result.json").at("result");
+  };
+  const nlohmann::json spheres = result_of("spheres");
+  EXPECT_EQ(spheres.at("stop").at("reason"), "settled");
+  EXPECT_FALSE(spheres.contains("shape")) << spheres.at("shape").dump();
+  EXPECT_FALSE(read_json(out / "cases" / "spheres" / "seed_3" / "run" / "result.json")
+                   .contains("shape"));
+  const std::pair<const char*, double> rods[] = {{"rod_e1.5", 1.5}, {"rod_e2", 2.0}};
+  for (const auto& [name, elongation] : rods) {
+    const nlohmann::json r = result_of(name);
+    EXPECT_EQ(r.at("stop").at("reason"), "settled") << name;
+    ASSERT_TRUE(r.contains("shape")) << name << ": the case's result does not say its shape";
+    const nlohmann::json& shape = r.at("shape").at("shapes").at(0);
+    EXPECT_EQ(shape.at("name"), "rod") << name;
+    EXPECT_EQ(shape.at("kind"), "generated") << name;
+    EXPECT_EQ(shape.at("components"), 4) << name;
+    EXPECT_DOUBLE_EQ(shape.at("elongation").get<double>(), elongation) << name;
+  }
+  fs::remove_all(dir);
+}
+
+// A misspelt key in a case's shape table is refused before anything runs, naming the campaign
+// file, the case, the key as the scene reads it and the value; a table the scene format does not
+// have is refused as the campaign loads.
+TEST(ShapeCampaign, AMisspeltShapeKeyInACaseIsRefused) {
+  const fs::path dir = fresh_dir("typo");
+  write_file_atomic((dir / "scene.toml").string(), test_support::kTinyScene);
+  write_file_atomic((dir / "typo.toml").string(),
+                    "name = \"typo\"\nscene = \"scene.toml\"\nseeds = [1]\n"
+                    "[[case]]\nname = \"rod\"\n"
+                    "overrides = { sample.shape = { kind = \"generated\", elongaton = 1.5, "
+                    "spheres = 4 } }\n");
+  try {
+    check_pile_cases(load_campaign((dir / "typo.toml").string()));
+    FAIL() << "a misspelt shape key was accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    for (const char* part : {"typo.toml", "case rod", "sample.shape.elongaton", "1.5"})
+      EXPECT_NE(what.find(part), std::string::npos) << part << " not in: " << what;
+  }
+  write_file_atomic((dir / "table.toml").string(),
+                    "name = \"table\"\nscene = \"scene.toml\"\nseeds = [1]\n"
+                    "[[case]]\nname = \"rod\"\n"
+                    "overrides = { \"sample.shap.elongation\" = 1.5 }\n");
+  try {
+    (void)load_campaign((dir / "table.toml").string());
+    FAIL() << "an override into a table no scene has was accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    for (const char* part : {"table.toml", "case rod", "sample.shap.elongation", "1.5"})
+      EXPECT_NE(what.find(part), std::string::npos) << part << " not in: " << what;
+  }
   fs::remove_all(dir);
 }
 

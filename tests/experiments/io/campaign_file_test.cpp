@@ -209,6 +209,40 @@ TEST(CampaignFile, BadKeysAndValuesAreRejected) {
   }
 }
 
+// A table written as a value is one override that replaces or creates the table whole; dotted
+// keys (quoted or bare) set members, creating a table the scene format has where the scene has
+// none.
+TEST(CampaignFile, ATableValueIsOneOverrideAndDottedKeysAreMembers) {
+  const ScratchDir scratch("table_values");
+  const auto c = load_campaign(write_campaign(scratch.path, R"(
+name = "tables"
+scene = "scene.toml"
+seeds = [1]
+[[case]]
+name = "whole"
+overrides = { rolling = { model = "cdt" }, sample.shape = { kind = "generated", spheres = 4 } }
+[[case]]
+name = "members"
+overrides = { rolling.model = "cdt", "sample.shape.kind" = "generated", sample.shape.spheres = 4 }
+)").string());
+  ASSERT_EQ(c.runs.size(), 2u);
+  EXPECT_EQ(c.runs[0].overrides.size(), 2u);
+  EXPECT_EQ(c.runs[1].overrides.size(), 3u);
+  const auto whole = build_case_scene(c.runs[0]);
+  EXPECT_EQ(whole.string("rolling.model").value(), "cdt");
+  EXPECT_FALSE(whole.has("rolling.mu_r"));  // the scene's [rolling] replaced
+  EXPECT_EQ(whole.number("sample.shape.spheres").value(), 4);
+  EXPECT_DOUBLE_EQ(whole.number("sample.mass").value(), 0.2);
+  const auto members = build_case_scene(c.runs[1]);
+  EXPECT_EQ(members.string("rolling.model").value(), "cdt");
+  EXPECT_DOUBLE_EQ(members.number("rolling.mu_r").value(), 0.1);  // kept
+  EXPECT_EQ(members.string("sample.shape.kind").value(), "generated");
+  EXPECT_EQ(members.number("sample.shape.spheres").value(), 4);
+  // The case's overrides are recorded as written: the whole table as one JSON object.
+  const nlohmann::json j = to_json(c.runs[0]);
+  EXPECT_EQ(j.at("overrides").at("sample.shape").at("spheres"), 4) << j.dump();
+}
+
 TEST(CampaignFile, SafeNames) {
   EXPECT_TRUE(is_safe_name("mu_r_0.15"));
   EXPECT_TRUE(is_safe_name("W-40mm"));

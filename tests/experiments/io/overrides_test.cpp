@@ -76,6 +76,44 @@ TEST(Overrides, NewLeafUnderAnExistingTableIsAllowed) {
   EXPECT_DOUBLE_EQ(doc["rolling"]["damping"].value<double>().value(), 0.3);
 }
 
+TEST(Overrides, TablesTheSceneFormatHasAreCreatedOthersRefused) {
+  auto doc = scene();
+  const auto scene_tables = MissingTables::kSceneTables;
+  apply_override(doc, "sample.shape.elongation", toml::value<double>(1.5), "c", scene_tables);
+  EXPECT_DOUBLE_EQ(doc["sample"]["shape"]["elongation"].value<double>().value(), 1.5);
+  EXPECT_DOUBLE_EQ(doc["sample"]["mass"].value<double>().value(), 0.2);  // sibling untouched
+  apply_override(doc, "contacts.rock-plate.friction", toml::value<double>(0.4), "c",
+                 scene_tables);
+  EXPECT_DOUBLE_EQ(doc["contacts"]["rock-plate"]["friction"].value<double>().value(), 0.4);
+  // No scene has [rolling.spring] or a [sample.shapes] table (it is an array of tables).
+  for (const char* key : {"rolling.spring.k", "sample.shapes.0.elongation"}) {
+    std::string e;
+    try {
+      apply_override(doc, key, toml::value<double>(1.0), "test.toml, case c1", scene_tables);
+    } catch (const std::invalid_argument& x) {
+      e = x.what();
+    }
+    EXPECT_NE(e.find(key), std::string::npos) << e;
+    EXPECT_NE(e.find("does not exist"), std::string::npos) << e;
+    EXPECT_NE(e.find("reposetwin keys"), std::string::npos) << e;
+  }
+  EXPECT_FALSE(doc["rolling"]["spring"]);
+  // --set's rule creates any table and leaves the judgement to the strict parser.
+  apply_override(doc, "rolling.spring.k", toml::value<double>(1.0), "--set",
+                 MissingTables::kCreate);
+  EXPECT_DOUBLE_EQ(doc["rolling"]["spring"]["k"].value<double>().value(), 1.0);
+}
+
+TEST(Overrides, ATableValueIsSetWhole) {
+  auto doc = scene();
+  apply_override(doc, "rolling", toml::table{{"model", "cdt"}});
+  EXPECT_EQ(doc["rolling"]["model"].value<std::string>().value(), "cdt");
+  EXPECT_FALSE(doc["rolling"]["mu_r"]);  // replaced, not merged
+  apply_override(doc, "sample.shape", toml::table{{"kind", "generated"}, {"spheres", 4}});
+  EXPECT_EQ(doc["sample"]["shape"]["spheres"].value<std::int64_t>().value(), 4);
+  EXPECT_FALSE(error_of(doc, "seed", toml::table{{"a", 1}}).empty());  // an integer there
+}
+
 TEST(Overrides, ArrayIndexSegments) {
   auto doc = scene();
   apply_override(doc, "walls.1.friction", toml::value<double>(0.55));

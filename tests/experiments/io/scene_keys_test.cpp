@@ -163,6 +163,16 @@ TEST(SceneKeys, PatternsNameTheTablesOfUserChosenNames) {
 
 // The shape keys are in the reference with the reader's defaults and ranges, and the reader
 // refuses what the reference says is out of range.
+TEST(SceneKeys, TablesAScenesCanHaveAreKnown) {
+  for (const char* t : {"sample", "sample.shape", "sample.psd", "output", "contacts",
+                        "contacts.rock-plate", "materials.steel", "sample.shapes.1"})
+    EXPECT_TRUE(is_scene_table(t)) << t;
+  // A key is not a table, [[sample.shapes]] is an array of tables, and no scene has the others.
+  for (const char* t : {"sample.mass_kg", "sample.shapes", "rolling", "rolling.spring",
+                        "sample.shap", "contacts.rock-plate.friction"})
+    EXPECT_FALSE(is_scene_table(t)) << t;
+}
+
 TEST(SceneKeys, ShapeKeysCarryDefaultsAndRanges) {
   std::set<std::string> seen;
   for (const SceneKey& k : scene_keys()) {
