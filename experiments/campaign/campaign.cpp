@@ -67,6 +67,18 @@ std::optional<nlohmann::json> interrupted_attempt(const fs::path& dir, const Cas
   return started;
 }
 
+// Removes the temporaries of the runner's own atomic writes (write_file_atomic names them
+// "<file>.tmp.<pid>") that a kill mid-write left in `dir`: they are not the case's output, and a
+// case handed its folder back must find only what it (and started.json) left there.
+void remove_runner_temporaries(const fs::path& dir) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    for (const char* f : {kStartedFile, kResultFile, kErrorFile})
+      if (name.rfind(std::string(f) + ".tmp.", 0) == 0) fs::remove(e.path(), ec);
+  }
+}
+
 // Runs one run in its folder and records result.json or error.json. Never throws. An interrupted
 // attempt with the same inputs keeps its folder, so the case function can continue its work
 // (a pile run resumes from its checkpoint); result.json then records the earlier attempt(s).
@@ -86,6 +98,7 @@ bool execute_run(const CaseSpec& spec, const fs::path& out_dir, const CaseFn& ca
       earlier->erase("spec");
       attempts.push_back(*earlier);
       meta["earlier_attempts"] = attempts;
+      remove_runner_temporaries(dir);
     } else {
       fs::remove_all(dir, ec);  // a failed, forced or changed run restarts clean
       if (ec)

@@ -21,6 +21,7 @@
 #include "experiments/report/format.hpp"
 #include "experiments/report/gnuplot.hpp"
 #include "experiments/report/html.hpp"
+#include "experiments/report/loop_report.hpp"
 #include "experiments/report/paper_comparison.hpp"
 #include "experiments/report/templates.hpp"
 #include "vision/measure.hpp"

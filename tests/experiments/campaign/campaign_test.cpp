@@ -166,7 +166,7 @@ TEST(Campaign, KilledCampaignResumesToTheSameResults) {
   // Resume.
   const auto s2 = run_campaign(c, out.string(), fake_case(log, 5), quiet());
   EXPECT_EQ(s2.finished, 12);
-  EXPECT_EQ(s2.failed, 0);
+  EXPECT_EQ(s2.failed, 0) << s2.manifest["runs"].dump();
   EXPECT_EQ(s2.skipped, static_cast<int>(mtime_before.size()));
   EXPECT_EQ(s2.ran, 12 - static_cast<int>(mtime_before.size()));
   const auto starts_after = read_log(log);
@@ -204,6 +204,27 @@ TEST(Campaign, KilledCampaignResumesToTheSameResults) {
   const auto s4 = run_campaign(c, out.string(), fake_case(log, 1), forced);
   EXPECT_EQ(s4.ran, 12);
   EXPECT_EQ(s4.finished, 12);
+}
+
+// A kill while the runner wrote result.json (or started.json) leaves its temporary beside the
+// interrupted run's output; the resumed run continues from that output, not from a failure.
+TEST(Campaign, ResumeIgnoresTemporaryOfAWriteKilledMidWay) {
+  const ScratchDir scratch("killed_write");
+  const fs::path& dir = scratch.path;
+  const auto c = load_campaign(write_campaign(dir, kRunCampaign).string());
+  const fs::path out = dir / "out";
+  const CaseSpec& s = c.runs[2];
+  const fs::path run = out / s.relative_dir();
+  fs::create_directories(run);
+  write_json_atomic((run / "started.json").string(),
+                    {{"spec", to_json(s)}, {"job", ""}, {"pid", 99999}});
+  std::ofstream(run / "partial.out") << "partial output\n";
+  std::ofstream(run / "result.json.tmp.99999") << "{\"spec\": ";  // cut off by the kill
+  const auto sum = run_campaign(c, out.string(), fake_case(dir / "log", 1), quiet());
+  EXPECT_EQ(sum.failed, 0) << sum.manifest["runs"].dump();
+  EXPECT_EQ(sum.finished, 12);
+  EXPECT_TRUE(result_of(out, s).contains("earlier_attempts"));
+  EXPECT_FALSE(fs::exists(run / "result.json.tmp.99999"));
 }
 
 TEST(Campaign, FailingAndCrashingCasesAreRecordedAndOthersFinish) {
