@@ -29,7 +29,8 @@ constexpr bool kPacked<Vec3> = sizeof(Vec3) == 3 * sizeof(double);
 template <>
 constexpr bool kPacked<Quat> = sizeof(Quat) == 4 * sizeof(double);
 template <>
-constexpr bool kPacked<ContactHistory> = kPacked<Vec3> && sizeof(ContactHistory) == 2 * sizeof(Vec3);
+constexpr bool kPacked<ContactHistory> = kPacked<Vec3> &&
+                                         sizeof(ContactHistory) == 2 * sizeof(Vec3);
 template <class T, std::size_t N>
 constexpr bool kPacked<std::array<T, N>> = kPacked<T> && sizeof(std::array<T, N>) == N * sizeof(T);
 
@@ -50,7 +51,8 @@ class Writer {
   void vec(const std::vector<T, A>& v) {
     static_assert(kPacked<T>, "a type with padding bytes: write its fields");
     count(v);
-    out_.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(T)));
+    out_.write(reinterpret_cast<const char*>(v.data()),
+               static_cast<std::streamsize>(v.size() * sizeof(T)));
   }
   template <class T, class A>
   void count(const std::vector<T, A>& v) {
@@ -225,8 +227,8 @@ void read_checkpoint(World& world, const std::string& path) {
     r.fail("has inconsistent clump components");
   }
   for (std::size_t b = 0; b < nb; ++b) {
-    const std::size_t k = static_cast<std::size_t>(s.body_components.start[b + 1] -
-                                                   s.body_components.start[b]);
+    const std::size_t k =
+        static_cast<std::size_t>(s.body_components.start[b + 1] - s.body_components.start[b]);
     if (k != world.model().clumps[static_cast<std::size_t>(s.bodies.shape[b])].size())
       r.fail("has a body whose components do not match its template");
   }

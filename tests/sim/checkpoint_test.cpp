@@ -1,6 +1,8 @@
 // Checkpoints are byte-reproducible: one state writes one file, whatever memory the state was
 // built in. A checkpoint is compared byte for byte (a campaign's cache, a resumed run's proof), so
 // no byte of it may come from uninitialised memory such as a struct's padding.
+#include "sim/checkpoint.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -8,10 +10,10 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "sim/checkpoint.hpp"
 #include "sim/world.hpp"
 #include "sim_test_util.hpp"
 
@@ -101,7 +103,63 @@ TEST(Checkpoint, TheSameStateWritesTheSameBytes) {
   EXPECT_TRUE(checkpoint_bytes(resumed, temp_path("d.bin")) == reference)
       << "a resumed world wrote another file";
 
-  for (const char* name : {"a.bin", "b.bin", "c.bin", "d.bin"}) std::filesystem::remove(temp_path(name));
+  for (const char* name : {"a.bin", "b.bin", "c.bin", "d.bin"})
+    std::filesystem::remove(temp_path(name));
+}
+
+/// Where the walls' array (its length, then one record per wall) starts in a checkpoint of `w`.
+std::size_t walls_at(const std::string& bytes, const World& w) {
+  const std::uint64_t n = w.state().walls.size();
+  std::string key(reinterpret_cast<const char*>(&n), sizeof n);
+  key.append(reinterpret_cast<const char*>(w.state().walls[0].offset.data()), sizeof(Vec3));
+  const std::size_t at = bytes.find(key);
+  EXPECT_NE(at, std::string::npos);
+  EXPECT_EQ(bytes.find(key, at + 1), std::string::npos) << "the walls' start is ambiguous";
+  return at;
+}
+
+void write_file(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+TEST(Checkpoint, WallRecordsKeepTheirLayoutAndIgnoreTheirReservedBytes) {
+  const std::string path = temp_path("walls.bin");
+  const World w = moved_pour();
+  const std::string reference = checkpoint_bytes(w, path);
+  const std::size_t at = walls_at(reference, w) + sizeof(std::uint64_t);
+  // Each record: offset, velocity, the enabled flag, zeros up to 56 bytes.
+  constexpr std::size_t kRecord = 56, kFields = 2 * sizeof(Vec3) + 1;
+  std::string garbage = reference;
+  for (std::size_t k = 0; k < w.state().walls.size(); ++k) {
+    const WallState& ws = w.state().walls[k];
+    const std::size_t r = at + k * kRecord;
+    EXPECT_EQ(std::memcmp(reference.data() + r, ws.offset.data(), sizeof(Vec3)), 0) << k;
+    EXPECT_EQ(std::memcmp(reference.data() + r + sizeof(Vec3), ws.velocity.data(), sizeof(Vec3)), 0)
+        << k;
+    EXPECT_EQ(reference[r + 2 * sizeof(Vec3)], ws.enabled ? 1 : 0) << k;
+    EXPECT_EQ(reference.substr(r + kFields, kRecord - kFields),
+              std::string(kRecord - kFields, '\0'));
+    garbage.replace(r + kFields, kRecord - kFields, "ed) thr");
+  }
+  // Files whose reserved bytes hold garbage (written from the struct's memory) read the same.
+  write_file(path, garbage);
+  World resumed = testing::funnel_pour(0);
+  read_checkpoint(resumed, path);
+  expect_same_walls(resumed.state(), w.state());
+  EXPECT_TRUE(checkpoint_bytes(resumed, path) == reference);
+  // A flag byte that is no bool is refused, naming the file.
+  std::string bad = reference;
+  bad[at + 2 * sizeof(Vec3)] = 2;  // the first wall's flag
+  write_file(path, bad);
+  try {
+    read_checkpoint(resumed, path);
+    ADD_FAILURE() << "a flag of 2 was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("neither 0 nor 1"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
 }
 
 }  // namespace
