@@ -20,10 +20,11 @@ constexpr char kMagicFormat1[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '1'};
 // Values are written as their bytes in memory, so only types without padding may be: a padding
 // byte holds whatever the memory held before (a temporary's stack, a reused heap block, the file
 // a state was read from), and the same state would write different files. Arithmetic types and
-// Eigen's fixed double vectors are packed; a struct is listed here with its size checked against
-// its members'. A struct with padding (WallState) is written field by field.
+// Eigen's fixed double vectors are packed (long double is not: 10 bytes of 16); a struct is listed
+// here with its size checked against its members'. A struct with padding (WallState) is written
+// field by field.
 template <class T>
-constexpr bool kPacked = std::is_arithmetic_v<T>;
+constexpr bool kPacked = std::is_arithmetic_v<T> && !std::is_same_v<T, long double>;
 template <>
 constexpr bool kPacked<Vec3> = sizeof(Vec3) == 3 * sizeof(double);
 template <>
