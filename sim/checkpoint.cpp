@@ -1,5 +1,6 @@
 #include "sim/checkpoint.hpp"
 
+#include <array>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -16,19 +17,51 @@ constexpr char kMagic[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '3'};
 constexpr char kMagicFormat2[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '2'};
 constexpr char kMagicFormat1[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '1'};
 
+// Values are written as their bytes in memory, so only types without padding may be: a padding
+// byte holds whatever the memory held before (a temporary's stack, a reused heap block, the file
+// a state was read from), and the same state would write different files. Arithmetic types and
+// Eigen's fixed double vectors are packed (long double is not: 10 bytes of 16); a struct is listed
+// here with its size checked against its members'. A struct with padding (WallState) is written
+// field by field.
+template <class T>
+constexpr bool kPacked = std::is_arithmetic_v<T> && !std::is_same_v<T, long double>;
+template <>
+constexpr bool kPacked<Vec3> = sizeof(Vec3) == 3 * sizeof(double);
+template <>
+constexpr bool kPacked<Quat> = sizeof(Quat) == 4 * sizeof(double);
+template <>
+constexpr bool kPacked<ContactHistory> = kPacked<Vec3> &&
+                                         sizeof(ContactHistory) == 2 * sizeof(Vec3);
+template <class T, std::size_t N>
+constexpr bool kPacked<std::array<T, N>> = kPacked<T> && sizeof(std::array<T, N>) == N * sizeof(T);
+
+// Each wall's record: offset, velocity, enabled, then zero bytes up to 56, the size of WallState
+// in memory on x86-64, which every format's files have (the record is read the same way).
+constexpr std::size_t kWallRecordBytes = 56;
+constexpr std::size_t kWallReserved = kWallRecordBytes - 2 * sizeof(Vec3) - sizeof(bool);
+
 class Writer {
  public:
   explicit Writer(std::ofstream& out) : out_(out) {}
   template <class T>
   void pod(const T& v) {
-    static_assert(std::is_standard_layout_v<T>);  // plain data (Eigen fixed vectors included)
+    static_assert(kPacked<T>, "a type with padding bytes: write its fields");
     out_.write(reinterpret_cast<const char*>(&v), sizeof(T));
   }
   template <class T, class A>
   void vec(const std::vector<T, A>& v) {
-    static_assert(std::is_standard_layout_v<T>);  // plain data (Eigen fixed vectors included)
+    static_assert(kPacked<T>, "a type with padding bytes: write its fields");
+    count(v);
+    out_.write(reinterpret_cast<const char*>(v.data()),
+               static_cast<std::streamsize>(v.size() * sizeof(T)));
+  }
+  template <class T, class A>
+  void count(const std::vector<T, A>& v) {
     pod<std::uint64_t>(v.size());
-    out_.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(T)));
+  }
+  /// Zero bytes where the format keeps room.
+  void reserved(std::size_t bytes) {
+    for (std::size_t k = 0; k < bytes; ++k) out_.put('\0');
   }
 
  private:
@@ -40,16 +73,33 @@ class Reader {
   Reader(std::ifstream& in, const std::string& path) : in_(in), path_(path) {}
   template <class T>
   void pod(T& v) {
-    in_.read(reinterpret_cast<char*>(&v), sizeof(T));
-    check();
+    if constexpr (std::is_same_v<T, bool>) {  // a byte other than 0 or 1 is no bool
+      std::uint8_t byte = 0;
+      pod(byte);
+      if (byte > 1) fail("has a flag that is neither 0 nor 1");
+      v = byte == 1;
+    } else {
+      in_.read(reinterpret_cast<char*>(&v), sizeof(T));
+      check();
+    }
   }
   template <class T, class A>
   void vec(std::vector<T, A>& v) {
+    count(v);
+    in_.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(T)));
+    check();
+  }
+  /// Reads an array's length and resizes `v` to it.
+  template <class T, class A>
+  void count(std::vector<T, A>& v) {
     std::uint64_t n = 0;
     pod(n);
     if (n > (std::uint64_t{1} << 34) / sizeof(T)) fail("an array length is implausible");
     v.resize(n);
-    in_.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
+  }
+  /// Skips bytes the format keeps room in; their contents do not matter.
+  void reserved(std::size_t bytes) {
+    in_.ignore(static_cast<std::streamsize>(bytes));
     check();
   }
   [[noreturn]] void fail(const std::string& what) {
@@ -63,6 +113,18 @@ class Reader {
   std::ifstream& in_;
   std::string path_;
 };
+
+/// The walls' states, one fixed-size record each (see kWallRecordBytes).
+template <class Archive, class WallsT>
+void transfer_walls(Archive& ar, WallsT& walls) {
+  ar.count(walls);
+  for (auto& w : walls) {
+    ar.pod(w.offset);
+    ar.pod(w.velocity);
+    ar.pod(w.enabled);
+    ar.reserved(kWallReserved);
+  }
+}
 
 /// The state's contents in file order, for writing (const State) and reading (State): one list,
 /// so the reader cannot drift from the writer.
@@ -84,7 +146,7 @@ void transfer_state(Archive& ar, StateT& s, int format) {
   ar.pod(s.step);
   ar.pod(s.next_id);
   ar.pod(s.forces_valid);
-  ar.vec(s.walls);
+  transfer_walls(ar, s.walls);
   ar.pod(s.neighbors.skin);
   ar.pod(s.neighbors.builds);
   ar.vec(s.neighbors.start);
@@ -166,8 +228,8 @@ void read_checkpoint(World& world, const std::string& path) {
     r.fail("has inconsistent clump components");
   }
   for (std::size_t b = 0; b < nb; ++b) {
-    const std::size_t k = static_cast<std::size_t>(s.body_components.start[b + 1] -
-                                                   s.body_components.start[b]);
+    const std::size_t k =
+        static_cast<std::size_t>(s.body_components.start[b + 1] - s.body_components.start[b]);
     if (k != world.model().clumps[static_cast<std::size_t>(s.bodies.shape[b])].size())
       r.fail("has a body whose components do not match its template");
   }

@@ -4,6 +4,8 @@
 // saved without touching this code. (The clump templates are the Model's, not saved: the resumed
 // world must be built with the same templates.) The neighbor list (with every contact's spring history) is saved
 // as it is, so the resumed run rebuilds it at exactly the same steps as an uninterrupted one.
+// Every byte of a file is a value's (a struct with padding is written field by field), so one
+// state always writes one file and checkpoints can be compared byte for byte.
 // Files are written to a temporary name and renamed into place (never half a checkpoint).
 #pragma once
 
