@@ -263,7 +263,11 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     const SnapshotParticles p = read_vtp((fs::path(job.sim_run_dir) / "final.vtp").string());
     return photograph_pile(p.x, p.radius, p.material, job.variant, case_dir);
   };
-  const std::vector<json> photos = batch_with_retry(dir_, photo_specs, photo_fn, rs);
+  // Photographs run on threads: each keeps its renderer from job to job (a forked job would
+  // build a GL context and compile the shaders again, about half of a small pile's photo time).
+  RunnerSettings photo_rs = rs;
+  photo_rs.mode = WorkerMode::kThreads;
+  const std::vector<json> photos = batch_with_retry(dir_, photo_specs, photo_fn, photo_rs);
   std::map<std::string, json> photo_result;
   for (std::size_t k = 0; k < photo_specs.size(); ++k) photo_result[photo_specs[k].id()] = photos[k];
 
