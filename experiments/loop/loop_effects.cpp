@@ -1,5 +1,6 @@
 #include "experiments/loop/loop_effects.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -79,7 +80,9 @@ const std::vector<CandidateEffect>& candidate_effects() {
        "Rolling resistance that varies with particle size, mu_r (d / d_ref)^alpha with d_ref "
        "the calibration tests' typical grain (shape differs between fine and coarse grains); "
        "shows between samples of different size bands (d_min, d_max).",
-       {{"contacts.{sample}-{sample}.rolling_reference_diameter_m", "{d_ref}"}}},
+       {{"contacts.{sample}-{sample}.rolling_reference_diameter_m", "{d_ref}"}},
+       false,
+       true},
       {"lift_speed", EffectKind::kPhysics, EffectApply::kFactorScene, "procedure.lift_speed_m_s",
        1.0, false, 4.0, 0.1, 20.0, "x declared",
        "The container was lifted faster (or slower) than declared; above a quasi-static "
@@ -249,6 +252,29 @@ std::string effect_unavailable(const LabTest& test, const CandidateEffect& e) {
     return ex.what();
   }
   return "";
+}
+
+std::string effect_unidentifiable(const std::vector<LabTest>& tests, const CandidateEffect& e) {
+  if (!e.needs_size_contrast || tests.size() < 2) return "";
+  auto intervals = [](const LabTest& t) {
+    return sim::resolve_psd(load_scene(t.scene_path, sets_of(t)).psd.spec).intervals;
+  };
+  const std::vector<sim::PsdInterval> first = intervals(tests.front());
+  auto same = [](const sim::PsdInterval& a, const sim::PsdInterval& b) {
+    auto near = [](double x, double y) { return std::abs(x - y) <= 1e-9 * std::max(std::abs(x), 1e-12); };
+    return near(a.lower, b.lower) && near(a.upper, b.upper) &&
+           std::abs(a.mass_fraction - b.mass_fraction) <= 1e-9;
+  };
+  for (std::size_t i = 1; i < tests.size(); ++i) {
+    const std::vector<sim::PsdInterval> other = intervals(tests[i]);
+    if (other.size() != first.size() || !std::equal(first.begin(), first.end(), other.begin(), same))
+      return "";
+  }
+  return "every test simulates the same size distribution (" +
+         significant(1e3 * first.front().lower, 3) + "-" + significant(1e3 * first.back().upper, 3) +
+         " mm), so a size-dependent rolling resistance is a change of mu_r, which the "
+         "calibration takes up; tests of different size bands (d_min, d_max or another PSD) "
+         "tell them apart";
 }
 
 json to_json(const CandidateEffect& e) {

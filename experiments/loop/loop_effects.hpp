@@ -72,6 +72,9 @@ struct CandidateEffect {
   /// Tried only when named (--candidates): its simulations cost several times a sphere
   /// pile's, and a dataset must be designed for it.
   bool opt_in = false;
+  /// Its fingerprint differs from mu_r's only between tests of different grain sizes: with one
+  /// size distribution in every test it is a change of mu_r, which the calibration takes up.
+  bool needs_size_contrast = false;
 };
 
 /// The registry (see the design note).
@@ -119,6 +122,13 @@ double scene_value(const LabTest& test, const std::string& key);
 /// Whether the engine can build `test` with the effect at its probe value; an empty string means
 /// yes, otherwise the reason.
 std::string effect_unavailable(const LabTest& test, const CandidateEffect& effect);
+
+/// Why the effect cannot be told from mu_r on these tests as a whole (empty: it can). An effect
+/// with needs_size_contrast is refused when every test simulates the same size distribution
+/// (resolved sieve intervals and their mass fractions, overrides applied): its probes would cost
+/// simulations and find a fingerprint the mu_r correction absorbs. Throws InputError when a
+/// test's scene cannot be loaded.
+std::string effect_unidentifiable(const std::vector<LabTest>& tests, const CandidateEffect& effect);
 
 nlohmann::json to_json(const CandidateEffect& e);
 

@@ -32,6 +32,7 @@ std::vector<const CandidateEffect*> Loop::available_candidates(
         why = effect_unavailable(t, e);
         if (!why.empty()) why = "test " + t.id + ": " + why;
       }
+    if (why.empty()) why = effect_unidentifiable(data_.tests, e);
     if (!why.empty()) {
       unavailable.push_back({e.name, why});
       say("candidate " + e.name + " unavailable: " + why);

@@ -1,6 +1,7 @@
 // The grain-shape candidate: a request turns every grain into a rod of four spheres of the
 // requested elongation, the scene accepts it, a scene with shapes of its own refuses it, and it
-// is tried only when named.
+// is tried only when named. A size-dependent rolling resistance is refused on tests that all
+// simulate one size distribution, and only then.
 #include "experiments/loop/loop_effects.hpp"
 
 #include <gtest/gtest.h>
@@ -46,6 +47,28 @@ TEST(LoopEffects, AScenesOwnShapesRefuseTheShapeCandidate) {
       {"sample.shape", "{name = \"rod\", kind = \"generated\", elongation = 1.5, spheres = 4}"});
   EXPECT_NE(effect_unavailable(t, find_effect("grain_shape")).find("its own grain shapes"),
             std::string::npos);
+}
+
+// Masses, plates and lift speeds do not tell rolling_size from mu_r: one size distribution in
+// every test. Another d_max or d_min does, and so does another sieve table.
+TEST(LoopEffects, RollingSizeNeedsTestsOfDifferentSizes) {
+  const CandidateEffect& e = find_effect("rolling_size");
+  LabTest a = small_test();
+  LabTest b = small_test();
+  b.id = "m35_wood";
+  b.overrides = {{"sample.mass_kg", "0.035"}, {"procedure.lift_speed_m_s", "0.1"}};
+  const std::string why = effect_unidentifiable({a, b}, e);
+  EXPECT_NE(why.find("same size distribution (3-4 mm)"), std::string::npos) << why;
+  // The others have no such condition.
+  EXPECT_EQ(effect_unidentifiable({a, b}, find_effect("plate_friction")), "");
+  LabTest c = b;
+  c.overrides.push_back({"sample.d_min_mm", "3.5"});
+  EXPECT_EQ(effect_unidentifiable({a, b, c}, e), "");
+  LabTest d = b;
+  d.overrides.push_back(
+      {"sample.psd", "{sieve_mm = [3.0, 3.5, 4.0], passing_percent = [0.0, 30.0, 100.0]}"});
+  EXPECT_EQ(effect_unidentifiable({a, d}, e), "");
+  EXPECT_EQ(effect_unidentifiable({a}, e), "");  // one test: nothing to compare
 }
 
 }  // namespace
