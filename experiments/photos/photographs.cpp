@@ -151,8 +151,15 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
   cv::RNG rng(s.noise_seed * 7919 + 17);
   std::vector<vision::SideMeasurement> measured;
   std::vector<std::string> stems;
-  for (const camera::Camera& truth : side_cameras(scene, s, cams)) {
-    const camera::Camera declared = declared_camera(truth, s);
+  if (!s.declared_cameras.empty() && s.declared_cameras.size() != s.lab_cameras.size())
+    throw InputError("images: " + std::to_string(s.declared_cameras.size()) +
+                     " declared cameras for " + std::to_string(s.lab_cameras.size()) +
+                     " lab cameras");
+  const std::vector<camera::Camera> truths = side_cameras(scene, s, cams);
+  for (std::size_t k = 0; k < truths.size(); ++k) {
+    const camera::Camera& truth = truths[k];
+    const camera::Camera declared =
+        s.declared_cameras.empty() ? declared_camera(truth, s) : s.declared_cameras[k];
     SideView view;
     view.azimuth_deg = s.lab_cameras.empty() ? 180.0 * photos.sides.size() / s.side_views
                                              : azimuth_of(truth);

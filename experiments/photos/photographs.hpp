@@ -57,6 +57,11 @@ struct PhotoSettings {
   // height_px, side_views, distance_radii, camera_height_m and k1 then do not apply to the side
   // views. Empty: the twin frames its own cameras from the pile's size.
   std::vector<camera::Camera> lab_cameras;
+  // With lab_cameras, the cameras the measurement assumes and the sidecars carry, one per lab
+  // camera, when the true cameras differ from the declared ones (the loop's measurement
+  // effects: a lab camera really higher, or distorted, than its sidecar says). Empty: the lab
+  // cameras themselves (declared_height_m / declared_k1 applied).
+  std::vector<camera::Camera> declared_cameras;
   std::optional<camera::Camera> lab_top_camera;  // the same for the top view
   // Fixtures standing in the picture besides the plate (the funnel of a mid-run frame, at its
   // position then), on the world z axis; with any, the pile is not re-centred, since the
