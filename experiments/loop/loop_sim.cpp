@@ -81,7 +81,7 @@ std::string ImageVariant::key() const {
   s << width_px << "x" << height_px << "_v" << side_views << "_d" << num(distance_radii) << "_h"
     << num(camera_height_m) << "_k" << num(k1) << "_dh" << num(declared_height_m) << "_dk"
     << num(declared_k1) << "_n" << num(noise_sd) << "_s" << noise_seed
-    << (keep_photos ? "_keep" : "");
+    << (keep_photos ? "_keep" : "") << (aim_at_axis_foot ? "_aim" : "");
   // Absent lab cameras leave the key as it was, so photos cached without them stay valid.
   if (!lab_cameras.empty()) {
     json cams = json::array();
@@ -117,17 +117,20 @@ PhotoSettings photo_settings(const ImageVariant& v) {
   s.distance_radii = v.distance_radii;
   s.camera_height_m = v.camera_height_m;
   s.k1 = v.k1;
+  s.aim_at_axis_foot = v.aim_at_axis_foot;
   if (v.lab_cameras.empty()) {
     s.declared_height_m = v.declared_height_m;
     s.declared_k1 = v.declared_k1;
   }
   // The lab's cameras as declared are what the measurement assumes; the true ones carry the
-  // measurement effects (a level raise keeps the lab camera's pitch).
+  // measurement effects (a level raise keeps the lab camera's pitch; an aimed one looks at the
+  // axis foot).
   const double raise = v.camera_height_m - v.declared_height_m;
   for (const camera::Camera& lab : v.lab_cameras) {
     camera::Camera truth = lab;
     truth.extrinsics.position.z() += raise;
     truth.extrinsics.look_at.z() += raise;
+    if (v.aim_at_axis_foot) truth.extrinsics.look_at = Eigen::Vector3d::Zero();
     truth.intrinsics.k1 += v.k1 - v.declared_k1;
     s.lab_cameras.push_back(truth);
     s.declared_cameras.push_back(lab);

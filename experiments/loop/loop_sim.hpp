@@ -46,6 +46,8 @@ struct ImageVariant {
   double distance_radii = 12.0;    // camera distance in pile radii [-]
   double camera_height_m = 0.0;    // true camera height above the plate [m]
   double k1 = 0.0;                 // true lens radial distortion [-]
+  bool aim_at_axis_foot = false;   // true camera pitched down at the axis foot (a person's
+                                   // hold), not level; the measurement still assumes level
   double declared_height_m = 0.0;  // camera height the measurement assumes [m]
   double declared_k1 = 0.0;        // distortion the measurement assumes [-]
   double noise_sd = 0.0;           // Gaussian image noise, grey levels (0-255) [-]

@@ -39,6 +39,11 @@ struct PhotoSettings {
   double distance_radii = 12.0;             // camera distance in pile radii [-]
   double camera_height_m = 0.0;             // true side camera height above the plate [m]
   double k1 = 0.0;                          // true lens radial distortion [-]
+  // The true side cameras pitched down to look at the axis foot (as a person holds a camera
+  // camera_height_m above the plate), framed without a shift lens so the pitched view keeps
+  // the pile in the frame; false: level cameras [-]. With lab_cameras: each aimed at the axis
+  // foot from its own position.
+  bool aim_at_axis_foot = false;
   std::optional<double> declared_height_m;  // height the measurement assumes; absent: the true
   std::optional<double> declared_k1;        // distortion the measurement assumes; absent: true
   double noise_sd = 0.0;                    // Gaussian image noise, grey levels (0-255) [-]

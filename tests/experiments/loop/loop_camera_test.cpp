@@ -155,5 +155,77 @@ TEST(LoopCamera, TwinPhotographsWithTheLabsDeclaredCamera) {
   EXPECT_NEAR(m.height_m, kH, 0.5e-3);
 }
 
+// The camera_pose candidate at h: the request's true camera is raised by h and pitched down so
+// its optical axis meets the axis foot, pitch atan(h / L) at the horizontal distance L of the
+// twin's framing (12 pile radii), while the measurement and the sidecar assume it level. Vision
+// reads the pitch back from the pile's base ellipse in the photo within 1 deg.
+TEST(LoopCamera, CameraPosePitchesAtTheAxisFootAndVisionReadsThePitch) {
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_loop_camera_pose_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  write_file_atomic((dir / "lab.csv").string(),
+                    "id,role,scene,angle_deg\nlab1,calibrate," + kScene + ",30\n");
+  const LabData data = read_lab_csv((dir / "lab.csv").string());
+  const CandidateEffect& e = find_effect("camera_pose");
+  EXPECT_EQ(e.kind, EffectKind::kMeasurement);
+  // The off value is the base model's level camera.
+  const ImageVariant off = make_request(data.tests[0], "contacts.{sample}-{sample}.rolling_friction",
+                                        0.1, 1, {{&e, 0.0}}, ImageVariant{})
+                               .image;
+  EXPECT_EQ(off.key(), ImageVariant{}.key());
+  const Cone c = cone();
+  // At the registry's probe (2 deg of pitch) vision measures the photos through the level
+  // camera (so the candidate has a fingerprint); at 5 deg it refuses them with the pitch it
+  // read (the candidate is then reported unavailable at that probe).
+  for (double h : {e.probe, 0.025}) {
+    ImageVariant v = make_request(data.tests[0], "contacts.{sample}-{sample}.rolling_friction",
+                                  0.1, 1, {{&e, h}}, ImageVariant{})
+                         .image;
+    EXPECT_TRUE(v.aim_at_axis_foot);
+    EXPECT_DOUBLE_EQ(v.camera_height_m, h);
+    EXPECT_DOUBLE_EQ(v.declared_height_m, 0.0);
+    v.keep_photos = true;
+    const fs::path out = dir / ("h" + std::to_string(static_cast<int>(1e3 * h + 0.5)));
+    const PilePhotos photos =
+        photograph_pile(PileSpheres{c.x, c.r, c.m}, photo_settings(v), out.string());
+    ASSERT_EQ(photos.sides.size(), 2u);
+    for (const SideView& view : photos.sides) {
+      const camera::Camera& truth = view.camera;
+      const Eigen::Vector3d& p = truth.extrinsics.position;
+      const double l = p.head<2>().norm();
+      EXPECT_NEAR(p.z(), h, 1e-12);
+      // The twin's framing: 12 pile radii (the cone's reach) from the axis.
+      EXPECT_NEAR(l, 12.0 * kR, 0.05 * 12.0 * kR);
+      // Aimed at the axis foot: the foot lies on the optical axis.
+      const Eigen::Vector3d f = (truth.extrinsics.look_at - p).normalized();
+      EXPECT_LT((-p - (-p).dot(f) * f).norm(), 1e-12);
+      const double pitch = std::atan2(-f.z(), f.head<2>().norm()) * 180.0 / M_PI;
+      const double closed = std::atan(h / l) * 180.0 / M_PI;
+      EXPECT_NEAR(pitch, closed, 1e-9);
+      // The measurement and the sidecar assume the same camera level with the plate.
+      const std::string base = (out / view.stem).string();
+      const camera::Camera declared = camera::read_sidecar(base + ".json");
+      EXPECT_DOUBLE_EQ(declared.extrinsics.position.z(), 0.0);
+      EXPECT_DOUBLE_EQ(declared.extrinsics.look_at.z(), 0.0);
+      // Vision's pose estimate from the photo's base ellipse.
+      const cv::Mat image = cv::imread(base + ".png");
+      const vision::SideImage prepared = vision::prepare_side(image, {}, base);
+      const vision::SideProfile px = vision::measure_side_pixels(prepared, {}, base);
+      const auto pose = vision::estimate_side_pose(prepared, px, declared, Eigen::Vector3d::Zero());
+      ASSERT_TRUE(pose) << base;
+      std::printf("h %.0f mm, az %.0f: pitch closed form %.3f deg, vision %.3f +- %.3f deg; "
+                  "measured: %s\n",
+                  1e3 * h, view.azimuth_deg, closed, pose->pitch_deg, pose->sigma_pitch_deg,
+                  view.measured ? "yes" : view.error.c_str());
+      EXPECT_NEAR(pose->pitch_deg, closed, 1.0) << base;
+      if (h == e.probe) {
+        EXPECT_TRUE(view.measured.has_value()) << view.error;
+      } else {
+        EXPECT_NE(view.error.find("declared pitched 0.0 deg"), std::string::npos) << view.error;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace reposetwin::experiments
