@@ -4,7 +4,8 @@
 // Design note (see also loop_trace.hpp for the statistics and the acceptance rule).
 //  * Model. Following Kennedy and O'Hagan, measured angle = twin(conditions, mu_r, effects) +
 //    discrepancy + noise. The twin's angle is the vision angle of its own photographs of the pile,
-//    so measured and simulated angles come through the same measurement.
+//    so measured and simulated angles come through the same measurement, and through the same
+//    camera where the lab declares its own (its photos' sidecars: loop_sim.hpp).
 //  * Baseline. Every test is simulated on a grid of mu_r values with several seeds (the same seeds
 //    for every test and grid point: common random numbers). Per test, a monotone fit of the angle
 //    against mu_r (calibration.hpp's fit_monotone) interpolates between the grid points; mu_r is

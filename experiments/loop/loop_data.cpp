@@ -235,6 +235,10 @@ void read_photos(LabTest& test, const Row& row, const Where& w, const fs::path& 
   test.diameter_mm = 1e3 * m.summary.diameter_m.mean;
   test.photo_measurement = m.record;
   test.photo_measurement["declared_in_csv"] = declared;
+  // One camera photographing several piles is one view of each twin pile, not several.
+  std::set<std::string> seen;
+  for (const camera::Camera& c : m.cameras)
+    if (seen.insert(camera::to_json(c).dump()).second) test.cameras.push_back(c);
 }
 
 // One data row as a test: the phases above, then the angle's range.
@@ -295,6 +299,10 @@ json to_json(const LabTest& t) {
   if (!t.photos.empty()) {
     j["photos"] = t.photos;
     j["photo_measurement"] = t.photo_measurement;
+  }
+  if (!t.cameras.empty()) {
+    j["cameras"] = json::array();
+    for (const camera::Camera& c : t.cameras) j["cameras"].push_back(camera::to_json(c));
   }
   return j;
 }

@@ -18,6 +18,8 @@
 #include <utility>
 #include <vector>
 
+#include "camera/camera.hpp"
+
 namespace reposetwin::experiments {
 
 /// One measured lab test.
@@ -36,6 +38,10 @@ struct LabTest {
   int repeats = 1;                            // piles averaged into the measured values [-]
   std::vector<std::string> photos;            // absolute paths (side views), may be empty
   nlohmann::json photo_measurement;           // what vision measured on the photos (if any)
+  // The lab's declared side cameras of its photos (sidecars), distinct, in photo order: the
+  // twin photographs its piles of this test with them (ImageVariant::lab_cameras). Empty: the
+  // photos declare no camera (or there are none), and the twin frames its own.
+  std::vector<camera::Camera> cameras;
   double reference_diameter_m = 0.0;          // dataset's typical grain d_ref, 0: own d50 [m]
 };
 

@@ -96,6 +96,13 @@ const std::vector<CandidateEffect>& candidate_effects() {
        "The photographs were taken from above plate level while measured as if level "
        "(perspective grows with height over distance).",
        {}},
+      {"camera_pose", EffectKind::kMeasurement, EffectApply::kImagePose,
+       "image.camera_pose_height_m", 0.0, false, 0.01, 0.0, 1.0, "m",
+       "The photographs were taken from above the plate with the camera pitched down at the "
+       "pile's foot, as a person holds a camera, while measured as if level (pitch "
+       "atan(h / distance)).",
+       {},
+       true},
       {"lens_k1", EffectKind::kMeasurement, EffectApply::kImageK1, "image.k1", 0.0, false, -0.1,
        -0.25, 0.25, "-",
        "Radial lens distortion of the lab camera, measured as if undistorted.", {}},
@@ -191,6 +198,7 @@ SimRequest make_request(const LabTest& test, const std::string& mu_key, double m
   r.test = &test;
   r.seed = seed;
   r.image = base_image;
+  if (!test.cameras.empty()) r.image.lab_cameras = test.cameras;
   if (test.camera_height_m) {
     r.image.camera_height_m = *test.camera_height_m;
     r.image.declared_height_m = *test.camera_height_m;
@@ -216,6 +224,11 @@ SimRequest make_request(const LabTest& test, const std::string& mu_key, double m
         break;
       case EffectApply::kImageHeight:
         r.image.camera_height_m = r.image.declared_height_m + s.value;
+        break;
+      case EffectApply::kImagePose:
+        // At 0 the base model's level camera and framing, so the off value is the baseline.
+        r.image.camera_height_m = r.image.declared_height_m + s.value;
+        r.image.aim_at_axis_foot = s.value != 0.0;
         break;
       case EffectApply::kImageK1:
         r.image.k1 = r.image.declared_k1 + s.value;

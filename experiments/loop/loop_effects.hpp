@@ -20,6 +20,15 @@
 // may need a mu_r outside the calibrated grid. With d_ref at the typical grain, mu_r stays the
 // typical grain's rolling friction and alpha only tilts it between fine and coarse grains.
 //
+// The camera's pose (`camera_pose`, opt-in) is how a person holds a camera: raised by h and
+// pitched down to aim at the pile's axis foot, pitch atan(h / L) at horizontal distance L, while
+// the lab declares it level. `camera_height` is the same height held level. Vision reads the
+// pitch from the pile's base ellipse (vision/camera_pose.hpp) and refuses a photo whose pitch
+// contradicts the declared one by more than 3 deg, so beyond a few degrees its probe reports
+// the candidate unavailable with vision's numbers rather than a fingerprint. Opt-in until the
+// synthetic loop tests have been run with it beside camera_height, whose fingerprint it nears
+// at small pitches.
+//
 // Grain shape (`grain_shape`, opt-in) is the paper's own candidate for what spheres lack: every
 // grain becomes a generated clump (io/grain_shape.hpp) of a fixed number of spheres in a row,
 // and the one parameter is its elongation L/I (off: spheres, the base model; at L/I = 1 the
@@ -45,6 +54,8 @@ enum class EffectApply {
   kFactorScene,  // scene key = value x the test's resolved value of that key
   kImageHeight,  // true camera height = value [m] (the lab declares its own, default level)
   kImageK1,      // true lens distortion k1 = value (the lab declares 0)
+  kImagePose,    // true camera raised by value [m] and pitched down at the axis foot, declared
+                 // level (a person's hold): pitch atan(value / distance)
   kShape,        // every grain a generated clump of kShapeSpheres spheres, elongation = value
 };
 

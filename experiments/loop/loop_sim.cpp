@@ -81,7 +81,13 @@ std::string ImageVariant::key() const {
   s << width_px << "x" << height_px << "_v" << side_views << "_d" << num(distance_radii) << "_h"
     << num(camera_height_m) << "_k" << num(k1) << "_dh" << num(declared_height_m) << "_dk"
     << num(declared_k1) << "_n" << num(noise_sd) << "_s" << noise_seed
-    << (keep_photos ? "_keep" : "");
+    << (keep_photos ? "_keep" : "") << (aim_at_axis_foot ? "_aim" : "");
+  // Absent lab cameras leave the key as it was, so photos cached without them stay valid.
+  if (!lab_cameras.empty()) {
+    json cams = json::array();
+    for (const camera::Camera& c : lab_cameras) cams.push_back(camera::to_json(c));
+    s << "_cam" << lab_cameras.size() << "_" << fnv1a_hex(cams.dump());
+  }
   return s.str();
 }
 
@@ -101,9 +107,7 @@ std::vector<std::string> resolved_overrides(const SimRequest& r) {
   return out;
 }
 
-json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
-                     const std::vector<double>& radii, const std::vector<int>& materials,
-                     const ImageVariant& v, const std::string& out_dir) {
+PhotoSettings photo_settings(const ImageVariant& v) {
   if (v.side_views < 1) throw InputError("loop images: side_views must be at least 1");
   PhotoSettings s;
   s.width_px = v.width_px;
@@ -113,8 +117,24 @@ json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
   s.distance_radii = v.distance_radii;
   s.camera_height_m = v.camera_height_m;
   s.k1 = v.k1;
-  s.declared_height_m = v.declared_height_m;
-  s.declared_k1 = v.declared_k1;
+  s.aim_at_axis_foot = v.aim_at_axis_foot;
+  if (v.lab_cameras.empty()) {
+    s.declared_height_m = v.declared_height_m;
+    s.declared_k1 = v.declared_k1;
+  }
+  // The lab's cameras as declared are what the measurement assumes; the true ones carry the
+  // measurement effects (a level raise keeps the lab camera's pitch; an aimed one looks at the
+  // axis foot).
+  const double raise = v.camera_height_m - v.declared_height_m;
+  for (const camera::Camera& lab : v.lab_cameras) {
+    camera::Camera truth = lab;
+    truth.extrinsics.position.z() += raise;
+    truth.extrinsics.look_at.z() += raise;
+    if (v.aim_at_axis_foot) truth.extrinsics.look_at = Eigen::Vector3d::Zero();
+    truth.intrinsics.k1 += v.k1 - v.declared_k1;
+    s.lab_cameras.push_back(truth);
+    s.declared_cameras.push_back(lab);
+  }
   s.noise_sd = v.noise_sd;
   s.noise_seed = v.noise_seed;
   s.tint_seed = v.noise_seed;
@@ -124,6 +144,13 @@ json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
   s.write_photos = v.keep_photos;
   s.write_overlays = false;
   s.views_must_measure = false;  // a small pile's pours are repeated when no view measures
+  return s;
+}
+
+json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
+                     const std::vector<double>& radii, const std::vector<int>& materials,
+                     const ImageVariant& v, const std::string& out_dir) {
+  const PhotoSettings s = photo_settings(v);
   const PilePhotos photos = photograph_pile(PileSpheres{positions, radii, materials}, s, out_dir);
   json views = json::array();
   for (const SideView& view : photos.sides) {

@@ -17,7 +17,10 @@
 // A photograph is taken by the true camera (ImageVariant: height, distortion, distance, noise)
 // and measured with the camera the lab declares (level with the plate and undistorted unless
 // declared otherwise), which is how a lab's unknown camera elevation or lens distortion biases
-// its measured H, D and angle.
+// its measured H, D and angle. When the lab's photos come with camera sidecars, its declared
+// cameras are the twin's (ImageVariant::lab_cameras): like for like, the twin's pile is
+// photographed from the lab's pose, through its lens, at its resolution, not framed by the
+// pile's size.
 #pragma once
 
 #include <Eigen/Core>
@@ -28,8 +31,10 @@
 #include <utility>
 #include <vector>
 
+#include "camera/camera.hpp"
 #include "experiments/io/hash.hpp"
 #include "experiments/loop/loop_data.hpp"
+#include "experiments/photos/photographs.hpp"
 
 namespace reposetwin::experiments {
 
@@ -41,12 +46,22 @@ struct ImageVariant {
   double distance_radii = 12.0;    // camera distance in pile radii [-]
   double camera_height_m = 0.0;    // true camera height above the plate [m]
   double k1 = 0.0;                 // true lens radial distortion [-]
+  bool aim_at_axis_foot = false;   // true camera pitched down at the axis foot (a person's
+                                   // hold), not level; the measurement still assumes level
   double declared_height_m = 0.0;  // camera height the measurement assumes [m]
   double declared_k1 = 0.0;        // distortion the measurement assumes [-]
   double noise_sd = 0.0;           // Gaussian image noise, grey levels (0-255) [-]
   std::uint64_t noise_seed = 1;    // seed of the noise and of the particle tint
   bool keep_photos = false;        // write the PNGs and their declared-camera sidecars
-  /// A short text naming the settings (part of the photograph's cache key).
+  // The lab's declared side cameras (its photos' sidecars, LabTest::cameras): when given, the
+  // twin photographs its pile with exactly these, one view each (the same pose, lens,
+  // resolution and distortion), and width_px, height_px, side_views and distance_radii do not
+  // apply. The measurement effects then act on them: the true camera is a lab camera raised by
+  // camera_height_m - declared_height_m, its k1 changed by k1 - declared_k1, while the
+  // measurement assumes the lab camera as declared. Empty: the twin frames its own cameras.
+  std::vector<camera::Camera> lab_cameras;
+  /// A short text naming the settings (part of the photograph's cache key; the lab cameras
+  /// enter by a hash of their JSON, so photos through another camera are never reused).
   std::string key() const;
 };
 
@@ -122,6 +137,12 @@ std::vector<std::string> resolved_overrides(const SimRequest& request);
 /// overrides (in order) and the code version.
 std::string sim_case_name(const std::string& scene_hash, const std::vector<std::string>& sets,
                           const std::string& version);
+
+/// The photo pipeline's settings for `variant` (photos/photographs.hpp): the true cameras (the
+/// twin's framing, or the lab's with the measurement effects applied) and the declared ones the
+/// measurement assumes; no top view, no scale bar, no overlays. Throws InputError for
+/// side_views < 1.
+PhotoSettings photo_settings(const ImageVariant& variant);
 
 /// Photographs a pile (centres, radii, material ids) with `variant` through the one photo
 /// pipeline (photos/photographs.hpp: the true camera renders, the declared camera measures; a

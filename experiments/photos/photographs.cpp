@@ -114,15 +114,22 @@ double azimuth_of(const camera::Camera& cam) {
 std::vector<camera::Camera> side_cameras(const render::Scene& scene, const PhotoSettings& s,
                                          render::LabCameraSettings cams) {
   if (!s.lab_cameras.empty()) {
-    for (std::size_t i = 0; i < s.lab_cameras.size(); ++i)
-      camera::validate(s.lab_cameras[i], "images: lab camera " + std::to_string(i + 1));
-    return s.lab_cameras;
+    std::vector<camera::Camera> out = s.lab_cameras;
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      if (s.aim_at_axis_foot) out[i].extrinsics.look_at = Eigen::Vector3d::Zero();
+      camera::validate(out[i], "images: lab camera " + std::to_string(i + 1));
+    }
+    return out;
   }
   std::vector<camera::Camera> out;
+  // A pitched camera centred on the foot: a shift lens framed for a level view would push the
+  // pile out of the top of the picture.
+  if (s.aim_at_axis_foot) cams.shift_lens = false;
   for (int k = 0; k < s.side_views; ++k) {
     cams.azimuth_deg = 180.0 * k / s.side_views;
     camera::Camera truth = render::lab_side_camera(scene, cams);
     truth.intrinsics.k1 = s.k1;
+    if (s.aim_at_axis_foot) truth.extrinsics.look_at = Eigen::Vector3d::Zero();
     out.push_back(truth);
   }
   return out;
@@ -202,8 +209,15 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
   cv::RNG rng(s.noise_seed * 7919 + 17);
   std::vector<vision::SideMeasurement> measured;
   std::vector<std::string> stems;
-  for (const camera::Camera& truth : side_cameras(scene, s, cams)) {
-    const camera::Camera declared = declared_camera(truth, s);
+  if (!s.declared_cameras.empty() && s.declared_cameras.size() != s.lab_cameras.size())
+    throw InputError("images: " + std::to_string(s.declared_cameras.size()) +
+                     " declared cameras for " + std::to_string(s.lab_cameras.size()) +
+                     " lab cameras");
+  const std::vector<camera::Camera> truths = side_cameras(scene, s, cams);
+  for (std::size_t k = 0; k < truths.size(); ++k) {
+    const camera::Camera& truth = truths[k];
+    const camera::Camera declared =
+        s.declared_cameras.empty() ? declared_camera(truth, s) : s.declared_cameras[k];
     SideView view;
     view.azimuth_deg = s.lab_cameras.empty() ? 180.0 * photos.sides.size() / s.side_views
                                              : azimuth_of(truth);

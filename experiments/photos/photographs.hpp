@@ -39,6 +39,11 @@ struct PhotoSettings {
   double distance_radii = 12.0;             // camera distance in pile radii [-]
   double camera_height_m = 0.0;             // true side camera height above the plate [m]
   double k1 = 0.0;                          // true lens radial distortion [-]
+  // The true side cameras pitched down to look at the axis foot (as a person holds a camera
+  // camera_height_m above the plate), framed without a shift lens so the pitched view keeps
+  // the pile in the frame; false: level cameras [-]. With lab_cameras: each aimed at the axis
+  // foot from its own position.
+  bool aim_at_axis_foot = false;
   std::optional<double> declared_height_m;  // height the measurement assumes; absent: the true
   std::optional<double> declared_k1;        // distortion the measurement assumes; absent: true
   double noise_sd = 0.0;                    // Gaussian image noise, grey levels (0-255) [-]
@@ -57,6 +62,11 @@ struct PhotoSettings {
   // height_px, side_views, distance_radii, camera_height_m and k1 then do not apply to the side
   // views. Empty: the twin frames its own cameras from the pile's size.
   std::vector<camera::Camera> lab_cameras;
+  // With lab_cameras, the cameras the measurement assumes and the sidecars carry, one per lab
+  // camera, when the true cameras differ from the declared ones (the loop's measurement
+  // effects: a lab camera really higher, or distorted, than its sidecar says). Empty: the lab
+  // cameras themselves (declared_height_m / declared_k1 applied).
+  std::vector<camera::Camera> declared_cameras;
   std::optional<camera::Camera> lab_top_camera;  // the same for the top view
   // Fixtures standing in the picture besides the plate (the funnel of a mid-run frame, at its
   // position then), on the world z axis; with any, the pile is not re-centred, since the
