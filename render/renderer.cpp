@@ -257,8 +257,8 @@ struct Renderer::Impl {
   // The light's depth map of the spheres (camera-frame centres): an orthographic view along the
   // light drawn by the sphere program into a depth texture.
   LightFrame draw_shadow_map(const std::vector<Eigen::Vector3d>& centres,
-                             const std::vector<double>& radii, const RenderOptions& options) {
-    const int size = options.shadow_map_px;
+                             const std::vector<double>& radii, const RenderOptions& options,
+                             int size) {
     const LightFrame light = frame_light(centres, radii, options.light_direction_camera, size);
     if (shadow_fbo == 0) {
       glGenFramebuffers(1, &shadow_fbo);
@@ -427,6 +427,7 @@ struct Renderer::Impl {
 
     const auto t1 = std::chrono::steady_clock::now();
     std::optional<LightFrame> light;
+    int shadow_px = 0;
     double softness_m = options.shadow_softness_m;
     if (options.shadows) {
       if (softness_m == 0.0) {
@@ -434,7 +435,8 @@ struct Renderer::Impl {
         for (const double r : scene.radii) sum += r;
         softness_m = 0.5 * sum / static_cast<double>(n);
       }
-      light = draw_shadow_map(centres, scene.radii, options);
+      shadow_px = shadow_map_side(options, canvas.width, canvas.height);
+      light = draw_shadow_map(centres, scene.radii, options, shadow_px);
     }
     ensure_framebuffer(canvas.width, canvas.height);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo);
@@ -490,7 +492,8 @@ struct Renderer::Impl {
     const auto t3 = std::chrono::steady_clock::now();
     auto seconds = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
     profile =
-        RenderProfile{seconds(t0, t1), seconds(t1, t2), seconds(t2, t3), 0.0, instances.size()};
+        RenderProfile{seconds(t0, t1), seconds(t1, t2), seconds(t2, t3), 0.0, instances.size(),
+                      shadow_px};
     if (canvas.map_u.empty()) return image;
     cv::Mat out;
     cv::remap(image, out, canvas.map_u, canvas.map_v, cv::INTER_LINEAR, cv::BORDER_CONSTANT,

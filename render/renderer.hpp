@@ -47,6 +47,7 @@ struct RenderProfile {
   double readback_s = 0.0;  // glReadPixels
   double warp_s = 0.0;      // distortion warp (cv::remap); 0 without distortion
   std::size_t spheres_drawn = 0;
+  int shadow_map_px = 0;  // side of the shadow map drawn [px]; 0 without shadows
 };
 
 /// Owns an offscreen GL context, the shaders and the buffers; reuse one for many renders.

@@ -130,8 +130,9 @@ void validate(const Scene& scene, const camera::Camera& cam, const RenderOptions
   validate_color_fraction(options.shadow_strength, "options.shadow_strength");
   if (!(options.shadow_softness_m >= 0.0) || !std::isfinite(options.shadow_softness_m))
     fail("options.shadow_softness_m", "must be non-negative, got " + str(options.shadow_softness_m));
-  if (options.shadow_map_px < 64 || options.shadow_map_px > 8192)
-    fail("options.shadow_map_px", "must be in [64, 8192], got " + str(options.shadow_map_px));
+  if (options.shadow_map_px != 0 && (options.shadow_map_px < 64 || options.shadow_map_px > 8192))
+    fail("options.shadow_map_px", "must be 0 (chosen from the image) or in [64, 8192], got " +
+                                       str(options.shadow_map_px));
   validate_color_fraction(options.ambient, "options.ambient");
   validate_color_fraction(options.diffuse, "options.diffuse");
   if (!options.light_direction_camera.allFinite() || options.light_direction_camera.norm() < 1e-12)
@@ -178,6 +179,13 @@ void apply_lab_look(Scene& scene, RenderOptions& options) {
   options.tint_fraction = 0.16;
   options.tone_warmth = 0.35;
   options.shadows = true;
+}
+
+int shadow_map_side(const RenderOptions& options, int width_px, int height_px) {
+  if (options.shadow_map_px > 0) return options.shadow_map_px;
+  int side = 512;
+  while (side < std::max(width_px, height_px) && side < 2048) side *= 2;
+  return side;
 }
 
 std::optional<Eigen::Vector3d> scale_reference_center(const Scene& scene, const camera::Camera& cam,
