@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <atomic>
 #include <filesystem>
-#include <mutex>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 #include <unistd.h>
-#include <vector>
 
 #include "experiments/io/input_error.hpp"
 #include "render/output.hpp"
@@ -135,52 +135,26 @@ std::vector<camera::Camera> side_cameras(const render::Scene& scene, const Photo
   return out;
 }
 
-// Renderers kept for the process's life and lent to one photograph at a time (a renderer makes
-// its context current at each render, so it may move between threads): creating the GL context,
-// compiling the shaders and llvmpipe's compile of them at the first draw cost about 0.3 s, more
-// than photographing a small pile, and a loop photographs thousands. A reused renderer gives the
-// same bytes as a fresh one (tests/render: SameInputRendersBitIdentically).
+// This thread's renderer, kept for the thread's life: creating the GL context, compiling the
+// shaders and llvmpipe's compile of them at the first draw cost about 0.3 s, more than
+// photographing a small pile, and a loop photographs thousands (on threads, loop_sim.cpp). A
+// reused renderer gives the same bytes as a fresh one (tests/render: SameInputRendersBitIdentically).
+// One per thread, never handed to another: a context left current in a thread that makes another
+// one current is released there, under the other thread's feet.
 // A process forked after it rendered cannot render: llvmpipe's rasteriser threads are
 // process-wide and do not exist in the child, where any new context waits on them forever. So a
 // child asking for a renderer gets an error, not a hang; callers photograph on threads, or in
 // children of a process that has not rendered (the campaign's pool).
-class RendererLease {
- public:
-  RendererLease() {
-    Pool& p = pool();
-    std::lock_guard<std::mutex> lock(p.mutex);
-    if (p.pid == 0) p.pid = ::getpid();
-    if (p.pid != ::getpid())
-      throw std::logic_error(
-          "render: this process was forked after its parent rendered (llvmpipe's threads are "
-          "not in the child, so a render would hang); photograph on threads or before forking");
-    if (!p.idle.empty()) {
-      renderer_ = p.idle.back();
-      p.idle.pop_back();
-    }
-    if (renderer_ == nullptr) renderer_ = new render::Renderer();
-  }
-  ~RendererLease() {
-    Pool& p = pool();
-    std::lock_guard<std::mutex> lock(p.mutex);
-    p.idle.push_back(renderer_);
-  }
-  RendererLease(const RendererLease&) = delete;
-  RendererLease& operator=(const RendererLease&) = delete;
-  render::Renderer& operator*() const { return *renderer_; }
-
- private:
-  struct Pool {
-    std::mutex mutex;
-    pid_t pid = 0;  // the process whose renderers these are
-    std::vector<render::Renderer*> idle;  // never freed: GL teardown at exit gains nothing
-  };
-  static Pool& pool() {
-    static Pool* p = new Pool();
-    return *p;
-  }
-  render::Renderer* renderer_ = nullptr;
-};
+render::Renderer& thread_renderer() {
+  static std::atomic<pid_t> rendering_process{0};
+  pid_t first = 0;
+  if (!rendering_process.compare_exchange_strong(first, ::getpid()) && first != ::getpid())
+    throw std::logic_error(
+        "render: this process was forked after its parent rendered (llvmpipe's threads are not "
+        "in the child, so a render would hang); photograph on threads or before forking");
+  thread_local render::Renderer renderer;
+  return renderer;
+}
 
 }  // namespace
 
@@ -195,8 +169,7 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
   scene.scale_reference.count = bar_bands(scene);
   scene.shells = s.shells;
   if (s.write_photos || s.write_overlays) fs::create_directories(out_dir);
-  const RendererLease lease;
-  render::Renderer& renderer = *lease;
+  render::Renderer& renderer = thread_renderer();
   render::RenderOptions options;
   if (s.lab_look) render::apply_lab_look(scene, options);
   options.tint_seed = s.tint_seed;

@@ -1,6 +1,6 @@
-// photograph_pile lends renderers kept for the process's life (photographs.cpp): one photograph
-// gives the same measurement whether its renderer is new, reused on another pile, or lent to two
-// threads at once; and a child forked after its parent rendered gets an error at once instead of
+// photograph_pile keeps one renderer per thread for the thread's life (photographs.cpp): one
+// photograph gives the same measurement whether its renderer is new, reused after another pile,
+// or one of two threads' photographing at once; and a child forked after its parent rendered gets an error at once instead of
 // the hang llvmpipe would give it (its rasteriser threads are not in the child).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -52,7 +52,7 @@ TEST(RendererReuse, EveryWayOfGettingARendererGivesTheSameMeasurement) {
   EXPECT_NE(first.theta_deg, other.theta_deg);  // the comparison can fail
   expect_same(photograph_cone(), first);
 
-  // Two threads at once: each gets its own renderer (one from the pool, one new).
+  // Two threads at once, each with its own new renderer.
   Reading in_thread[2];
   std::thread t0([&] { in_thread[0] = photograph_cone(); });
   std::thread t1([&] { in_thread[1] = photograph_cone(); });
