@@ -26,6 +26,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
@@ -83,6 +84,9 @@ struct SimOutcome {
                               // for a photograph cached by a version that did not record it
   double height_mm = 0.0;     // vision H [mm]
   double diameter_mm = 0.0;   // vision D [mm]
+  double crest_mm = std::numeric_limits<double>::quiet_NaN();  // vision crest width, mean over
+                              // the side views [mm]; NaN for a photograph cached by a version
+                              // that did not record it
   double positions_angle_deg = 0.0;  // atan(2H/D) from particle positions [deg]
   std::string sim_dir;        // the pile run's folder
   std::string image_dir;      // the photograph's folder
@@ -147,7 +151,7 @@ PhotoSettings photo_settings(const ImageVariant& variant);
 /// Photographs a pile (centres, radii, material ids) with `variant` through the one photo
 /// pipeline (photos/photographs.hpp: the true camera renders, the declared camera measures; a
 /// view vision cannot measure is recorded and the others count) and returns the loop's record
-/// {angle_deg, flank_deg, height_mm, diameter_mm, views[...]}, or
+/// {angle_deg, flank_deg, height_mm, diameter_mm, crest_width_mm, views[...]}, or
 /// {error, views[...]} if no view could be measured (a pile of a few spheres). Writes the
 /// photographs and their declared-camera sidecars into `out_dir` when keep_photos is set
 /// (names side_az000.png / .json ...). Uses OSMesa: call it in a worker, not before forking.
