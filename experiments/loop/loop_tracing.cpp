@@ -290,7 +290,20 @@ IterationRecord Loop::trace(int it, const LoopState& state,
   IterationRecord rec;
   rec.iteration = it;
   rec.mu_r = state.fit.mu;
-  const JointProblem joint = joint_problem(state, rec.channels_left_out);
+  JointProblem joint = joint_problem(state, rec.channels_left_out);
+  // A crest fingerprint from photographs cached before the crest was recorded has no value: the
+  // channel then leaves this trace rather than carry NaN into every score.
+  if (joint.channels.back().name == "crest")
+    for (const FingerprintRecord& f : fps) {
+      if (state.used.count(f.name)) continue;
+      bool finite = f.crest_mm.size() == data_.tests.size();
+      for (std::size_t i : trace_) finite = finite && std::isfinite(f.crest_mm[i]);
+      if (finite) continue;
+      joint.channels.pop_back();
+      rec.channels_left_out.push_back("crest: the photographs of " + f.name +
+                                      "'s fingerprint do not record it");
+      break;
+    }
   for (const TraceChannel& ch : joint.channels) rec.channels.push_back(ch.name);
   TraceProblem p;
   p.residual = joint.channels[0].residual;
