@@ -61,6 +61,10 @@ struct ImageVariant {
   // camera_height_m - declared_height_m, its k1 changed by k1 - declared_k1, while the
   // measurement assumes the lab camera as declared. Empty: the twin frames its own cameras.
   std::vector<camera::Camera> lab_cameras;
+  // Whether make_request takes a test's declared cameras into lab_cameras (reposetwin loop
+  // --own-cameras: false, the twin frames its own; the synthetic loop tests, whose premise is a
+  // lab camera other than the loop's). Not part of the key: it only decides lab_cameras.
+  bool use_lab_cameras = true;
   /// A short text naming the settings (part of the photograph's cache key; the lab cameras
   /// enter by a hash of their JSON, so photos through another camera are never reused).
   std::string key() const;

@@ -102,6 +102,13 @@ TEST(LoopCamera, TwinPhotographsWithTheLabsDeclaredCamera) {
                        .image;
   ASSERT_EQ(v.lab_cameras.size(), 1u);
   EXPECT_NE(v.key(), ImageVariant{}.key());
+  // --own-cameras: the twin's own framing, the key of a test without sidecars.
+  ImageVariant own;
+  own.use_lab_cameras = false;
+  EXPECT_EQ(make_request(data.tests[0], "contacts.{sample}-{sample}.rolling_friction", 0.1, 1, {},
+                         own)
+                .image.key(),
+            ImageVariant{}.key());
   ImageVariant other = v;
   other.lab_cameras[0].extrinsics.position.z() += 1e-3;
   EXPECT_NE(v.key(), other.key()) << "a photo through another camera must not be reused";
