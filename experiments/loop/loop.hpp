@@ -30,9 +30,9 @@
 //    any residual only with an absurd strength.
 //  * Selection: loop_trace.hpp (WLS with the mu_r correction bounded to the grid, leave-one-
 //    test-out ranking, accept when |c| > 3 se and the LOO RMSE gain beats the seed noise) and
-//    loop_joint.hpp (angle, H, D and the crest width jointly: one candidate named only when it beats the others
-//    by more than the noise allows, else none; a uniform offset beyond mu_r's reach flagged as a
-//    suspected measurement error).
+//    loop_joint.hpp (angle, H, D and the crest width jointly: one candidate named only when it
+//    beats the others by more than the noise allows, else none; a uniform offset beyond mu_r's
+//    reach flagged as a suspected measurement error).
 //  * Refit by simulation. The chosen effect's linear estimate p1 = off + c (probe - off) (clamped
 //    to its range) is simulated on the whole mu_r grid. The model becomes
 //    twin(mu_r, p) = (1 - t) twin_before(mu_r) + t twin_p1(mu_r), t = (p - off) / (p1 - off),

@@ -95,10 +95,9 @@ struct Row {
 // Phase 1: the header names only known columns, each once, and the required ones.
 Columns read_header(const CsvTable& csv, const std::string& file) {
   const std::string at = file + " line " + std::to_string(csv.header_line);
-  std::set<std::string> known = {"id",        "role",          "scene",           "H_mm",
-                                 "D_mm",      "angle_deg",     "photo",           "photo_camera",
-                                 "mm_per_px", "camera_height_m", "repeats",       "note",
-                                 "crest_mm"};
+  std::set<std::string> known = {
+      "id",           "role",      "scene",           "H_mm",    "D_mm", "angle_deg", "photo",
+      "photo_camera", "mm_per_px", "camera_height_m", "repeats", "note", "crest_mm"};
   for (const auto& c : condition_columns()) known.insert(c.column);
   Columns cols;
   for (std::size_t i = 0; i < csv.header.size(); ++i) {

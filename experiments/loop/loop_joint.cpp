@@ -91,8 +91,8 @@ bool add_optional_channel(JointProblem& p, const OptionalChannel& obs,
                           std::vector<std::string>& left_out) {
   const TraceChannel& ch = obs.channel;
   const std::size_t n = obs.measured.size();
-  const std::size_t have = static_cast<std::size_t>(
-      std::count(obs.measured.begin(), obs.measured.end(), true));
+  const std::size_t have =
+      static_cast<std::size_t>(std::count(obs.measured.begin(), obs.measured.end(), true));
   if (have == 0) return false;
   if (have < n) {
     left_out.push_back(ch.name + ": measured on " + std::to_string(have) + " of " +

@@ -88,9 +88,9 @@ struct SimOutcome {
                               // for a photograph cached by a version that did not record it
   double height_mm = 0.0;     // vision H [mm]
   double diameter_mm = 0.0;   // vision D [mm]
-  double crest_mm = std::numeric_limits<double>::quiet_NaN();  // vision crest width, mean over
-                              // the side views [mm]; NaN for a photograph cached by a version
-                              // that did not record it
+  // Vision crest width, mean over the side views [mm]; NaN for a photograph cached by a version
+  // that did not record it.
+  double crest_mm = std::numeric_limits<double>::quiet_NaN();
   double positions_angle_deg = 0.0;  // atan(2H/D) from particle positions [deg]
   std::string sim_dir;        // the pile run's folder
   std::string image_dir;      // the photograph's folder

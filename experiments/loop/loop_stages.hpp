@@ -33,7 +33,7 @@ struct Curve {
   std::vector<double> h, d, angle;               // seed means per grid point [mm, mm, deg]
   std::vector<std::vector<double>> angle_seeds;  // per grid point, per seed [deg]
   std::vector<std::vector<double>> h_seeds, d_seeds;
-  std::vector<double> crest;                     // crest width seed means [mm] (NaN: not recorded)
+  std::vector<double> crest;  // crest width seed means [mm] (NaN: not recorded)
   std::vector<std::vector<double>> crest_seeds;
   std::vector<int> clogged;  // per grid point: pours that formed no pile
 

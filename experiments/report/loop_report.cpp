@@ -206,9 +206,8 @@ std::string residuals_section(const json& loop, const fs::path& plot_dir) {
   // The crest width (a fourth observable) gets its columns only where the lab measured it.
   bool crest = false;
   for (const json& t : tests) crest = crest || t.contains("crest_mm");
-  std::vector<std::string> header = {"test",          "role",           "measured", "before",
-                                     "after",         "residual before", "residual after",
-                                     "sigma"};
+  std::vector<std::string> header = {
+      "test", "role", "measured", "before", "after", "residual before", "residual after", "sigma"};
   if (crest)
     for (const char* h : {"crest measured [mm]", "crest before [mm]", "crest after [mm]"})
       header.push_back(h);

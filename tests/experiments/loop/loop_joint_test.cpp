@@ -309,8 +309,7 @@ TEST(LoopJoint, TheCrestWidthDecidesWhereTheLabMeasuredIt) {
     std::normal_distribution<double> unit(0.0, 1.0);
     Eigen::VectorXd r(kTests);
     for (int i = 0; i < kTests; ++i) r[i] = 0.8 * crest_a[i] + kCrestSigma * unit(rng);
-    OptionalChannel crest{channel("crest", r, kCrestSigma, -5.0),
-                          std::vector<bool>(kTests, true)};
+    OptionalChannel crest{channel("crest", r, kCrestSigma, -5.0), std::vector<bool>(kTests, true)};
     auto cols = [&](const Fp& f, const Eigen::VectorXd& c) {
       std::vector<Eigen::VectorXd> v = f.cols(3);
       v.push_back(c);
