@@ -45,6 +45,7 @@ void add_loop_command(CLI::App& app) {
     std::string at_bound = "extend";
     experiments::LoopSettings settings;
     bool quiet = false;
+    bool own_cameras = false;
   };
   auto args = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
@@ -103,6 +104,9 @@ void add_loop_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--views", args->settings.image.side_views, "Side views per pile")
       ->capture_default_str();
+  cmd->add_flag("--own-cameras", args->own_cameras,
+                "Photograph the twin's piles with its own framing (--width, --height, --views) "
+                "even where the lab's photos declare their cameras in sidecars");
   cmd->add_option("--cache", args->settings.cache_dir, "Simulation cache (default OUT/cache)");
   cmd->add_option("--angle", args->angle,
                   "Angle compared: image (vision atan(2H/D), as the lab reads its photos), "
@@ -133,6 +137,7 @@ void add_loop_command(CLI::App& app) {
     s.angle = experiments::parse_angle_measure(args->angle, "--angle");
     s.at_bound = experiments::parse_grid_bound(args->at_bound, "--at-bound");
     s.progress = !args->quiet;
+    s.image.use_lab_cameras = !args->own_cameras;
     s.page = experiments::write_loop_html;
     const experiments::LabData data = experiments::read_lab_csv(args->data);
     const nlohmann::json loop = experiments::run_loop(data, args->out, s);

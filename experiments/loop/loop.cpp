@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <set>
 
 #include "experiments/io/input_error.hpp"
@@ -123,7 +124,7 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
     c.mu = grid_;
     std::vector<Observation> obs;
     for (std::size_t j = 0; j < g; ++j) {
-      std::vector<double> a, h, d;
+      std::vector<double> a, h, d, cr;
       int clogged = 0;
       for (std::size_t r = 0; r < k; ++r, ++q) {
         const SimOutcome& o = out[q];
@@ -144,6 +145,7 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
         a.push_back(angle);
         h.push_back(o.height_mm);
         d.push_back(o.diameter_mm);
+        cr.push_back(o.crest_mm);
         obs.push_back({grid_[j], o.seed, std::clamp(angle, 0.0, 90.0)});
       }
       c.angle.push_back(sample_stats(a).mean);
@@ -152,6 +154,8 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
       c.angle_seeds.push_back(a);
       c.h_seeds.push_back(h);
       c.d_seeds.push_back(d);
+      c.crest.push_back(sample_stats(cr).mean);
+      c.crest_seeds.push_back(cr);
       c.clogged.push_back(clogged);
     }
     c.fit = fit_monotone(obs);
@@ -166,14 +170,19 @@ const Surface& Loop::simulate_baseline() {
   return *surfaces_.back();
 }
 
-// The seed spread of one pile's angle (channel 0), H (1) or D (2), pooled over every test and
-// grid point.
+// The seed spread of one pile's angle (channel 0), H (1), D (2) or crest width (3), pooled over
+// every test and grid point. A crest width some photograph did not record (cached by an older
+// version) gives NaN, so its channel is left out rather than given a made-up noise.
 double Loop::pooled_seed_sd(const Surface& base, int channel) const {
   double ss = 0.0;
   int dof = 0;
   for (const Curve& c : base.curve)
-    for (const auto& a : channel == 0 ? c.angle_seeds : channel == 1 ? c.h_seeds : c.d_seeds) {
+    for (const auto& a : channel == 0   ? c.angle_seeds
+                         : channel == 1 ? c.h_seeds
+                         : channel == 2 ? c.d_seeds
+                                        : c.crest_seeds) {
       const double m = sample_stats(a).mean;
+      if (channel == 3 && !std::isfinite(m)) return std::numeric_limits<double>::quiet_NaN();
       for (double x : a) ss += (x - m) * (x - m);
       dof += static_cast<int>(a.size()) - 1;
     }
@@ -186,13 +195,18 @@ void Loop::set_seed_noise(const Surface& base) {
   noise_sd_ = pooled_seed_sd(base, 0);
   noise_sd_h_ = pooled_seed_sd(base, 1);
   noise_sd_d_ = pooled_seed_sd(base, 2);
+  crest_measured_ = std::any_of(data_.tests.begin(), data_.tests.end(),
+                                [](const LabTest& t) { return t.crest_mm.has_value(); });
+  noise_sd_crest_ = crest_measured_ ? pooled_seed_sd(base, 3) : 0.0;
   seed_se_ = noise_sd_ / std::sqrt(double(s_.seeds.size()));
   const double k = static_cast<double>(s_.seeds.size());
   auto sigma = [k](double sd, int repeats) { return std::sqrt(sd * sd / repeats + sd * sd / k); };
   sigma_.clear();
   sigma_h_.clear();
   sigma_d_.clear();
+  sigma_crest_.clear();
   for (const LabTest& t : data_.tests) {
+    sigma_crest_.push_back(sigma(noise_sd_crest_, t.repeats));
     sigma_.push_back(sigma(noise_sd_, t.repeats));
     sigma_h_.push_back(sigma(noise_sd_h_, t.repeats));
     sigma_d_.push_back(sigma(noise_sd_d_, t.repeats));

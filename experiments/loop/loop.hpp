@@ -20,7 +20,8 @@
 //    before anything is traced, or the loop says why it traces nothing.
 //  * Fingerprints. At the grid point nearest the calibrated mu_r, each available candidate is
 //    switched on at its probe value with the baseline's seeds; the fingerprint is the mean change
-//    of angle (and of H and D). Measurement candidates re-photograph the same piles. Fingerprints
+//    of angle (and of H, D and, where the lab measured it, the crest width). Measurement
+//    candidates re-photograph the same piles. Fingerprints
 //    are computed once, on the baseline model, and reused in later iterations (first order): the
 //    residual after adding an effect is regressed on the same columns. A fingerprint lost in the
 //    seed noise (below the seed standard error of a predicted angle, or not standing out of its
@@ -29,9 +30,9 @@
 //    any residual only with an absurd strength.
 //  * Selection: loop_trace.hpp (WLS with the mu_r correction bounded to the grid, leave-one-
 //    test-out ranking, accept when |c| > 3 se and the LOO RMSE gain beats the seed noise) and
-//    loop_joint.hpp (angle, H and D jointly: one candidate named only when it beats the others
-//    by more than the noise allows, else none; a uniform offset beyond mu_r's reach flagged as a
-//    suspected measurement error).
+//    loop_joint.hpp (angle, H, D and the crest width jointly: one candidate named only when it
+//    beats the others by more than the noise allows, else none; a uniform offset beyond mu_r's
+//    reach flagged as a suspected measurement error).
 //  * Refit by simulation. The chosen effect's linear estimate p1 = off + c (probe - off) (clamped
 //    to its range) is simulated on the whole mu_r grid. The model becomes
 //    twin(mu_r, p) = (1 - t) twin_before(mu_r) + t twin_p1(mu_r), t = (p - off) / (p1 - off),

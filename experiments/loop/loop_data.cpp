@@ -95,9 +95,9 @@ struct Row {
 // Phase 1: the header names only known columns, each once, and the required ones.
 Columns read_header(const CsvTable& csv, const std::string& file) {
   const std::string at = file + " line " + std::to_string(csv.header_line);
-  std::set<std::string> known = {"id",        "role",          "scene",           "H_mm",
-                                 "D_mm",      "angle_deg",     "photo",           "photo_camera",
-                                 "mm_per_px", "camera_height_m", "repeats",       "note"};
+  std::set<std::string> known = {
+      "id",           "role",      "scene",           "H_mm",    "D_mm", "angle_deg", "photo",
+      "photo_camera", "mm_per_px", "camera_height_m", "repeats", "note", "crest_mm"};
   for (const auto& c : condition_columns()) known.insert(c.column);
   Columns cols;
   for (std::size_t i = 0; i < csv.header.size(); ++i) {
@@ -204,6 +204,12 @@ bool read_measured(LabTest& test, const Row& row, const Where& w) {
     const auto& v = std::string(c) == "H_mm" ? test.height_mm : test.diameter_mm;
     if (v && !(*v > 0.0)) throw InputError(w.at(c) + ": " + row.get(c) + " must be positive");
   }
+  // The crest width is optional; a sharp cone's is 0.
+  if (!row.get("crest_mm").empty()) {
+    test.crest_mm = parse_number(row.get("crest_mm"), w, "crest_mm");
+    if (*test.crest_mm < 0.0)
+      throw InputError(w.at("crest_mm") + ": " + row.get("crest_mm") + " must not be negative");
+  }
   if (!row.get("angle_deg").empty()) {
     test.angle_deg = parse_number(row.get("angle_deg"), w, "angle_deg");
     return true;
@@ -293,6 +299,7 @@ json to_json(const LabTest& t) {
             {"angle_deg", t.angle_deg}};
   if (t.height_mm) j["H_mm"] = *t.height_mm;
   if (t.diameter_mm) j["D_mm"] = *t.diameter_mm;
+  if (t.crest_mm) j["crest_mm"] = *t.crest_mm;
   if (t.camera_height_m) j["camera_height_m"] = *t.camera_height_m;
   j["repeats"] = t.repeats;
   if (t.reference_diameter_m > 0.0) j["reference_diameter_m"] = t.reference_diameter_m;

@@ -34,6 +34,7 @@ struct LabTest {
   double angle_deg = 0.0;                     // measured angle of repose [deg], in (0, 90)
   std::optional<double> height_mm;            // measured H [mm]
   std::optional<double> diameter_mm;          // measured D [mm]
+  std::optional<double> crest_mm;             // measured crest (flat top) width [mm], >= 0
   std::optional<double> camera_height_m;      // declared camera height above the plate [m]
   int repeats = 1;                            // piles averaged into the measured values [-]
   std::vector<std::string> photos;            // absolute paths (side views), may be empty

@@ -198,7 +198,7 @@ SimRequest make_request(const LabTest& test, const std::string& mu_key, double m
   r.test = &test;
   r.seed = seed;
   r.image = base_image;
-  if (!test.cameras.empty()) r.image.lab_cameras = test.cameras;
+  if (base_image.use_lab_cameras && !test.cameras.empty()) r.image.lab_cameras = test.cameras;
   if (test.camera_height_m) {
     r.image.camera_height_m = *test.camera_height_m;
     r.image.declared_height_m = *test.camera_height_m;

@@ -87,6 +87,34 @@ double loo_chi2(const Stacked& st, Eigen::Index n, std::size_t channels, double 
 
 }  // namespace
 
+bool add_optional_channel(JointProblem& p, const OptionalChannel& obs,
+                          std::vector<std::string>& left_out) {
+  const TraceChannel& ch = obs.channel;
+  const std::size_t n = obs.measured.size();
+  const std::size_t have =
+      static_cast<std::size_t>(std::count(obs.measured.begin(), obs.measured.end(), true));
+  if (have == 0) return false;
+  if (have < n) {
+    left_out.push_back(ch.name + ": measured on " + std::to_string(have) + " of " +
+                       std::to_string(n) + " traced tests");
+    return false;
+  }
+  if (static_cast<std::size_t>(ch.residual.size()) != n ||
+      static_cast<std::size_t>(ch.sigma.size()) != n ||
+      static_cast<std::size_t>(ch.mu_sensitivity.size()) != n)
+    throw std::invalid_argument("joint trace: channel " + ch.name + " has a different size");
+  if (!ch.residual.allFinite() || !ch.sigma.allFinite() || !ch.mu_sensitivity.allFinite()) {
+    left_out.push_back(ch.name + ": the twin's photographs do not all record it");
+    return false;
+  }
+  if (!(ch.sigma.minCoeff() > 0.0)) {
+    left_out.push_back(ch.name + ": its seed noise is zero (the twin's value does not vary)");
+    return false;
+  }
+  p.channels.push_back(ch);
+  return true;
+}
+
 JointScore score_joint(const JointProblem& p, const std::string& name,
                        const std::vector<Eigen::VectorXd>& fp) {
   check(p, fp, name);

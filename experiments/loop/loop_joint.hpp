@@ -11,7 +11,10 @@
 //    channels share one weighted fit
 //        r_ci / sigma_ci = b s_ci / sigma_ci + c f_ci / sigma_ci + N(0, 1),
 //    one mu_r correction b (bounded as in loop_trace.hpp) and one strength c for all channels.
-//    A further observable (the crest width) is one more Channel; nothing else changes.
+//    A further observable is one more channel; nothing else changes. The crest width (the flat
+//    top's width, vision/crest.hpp) is one where the lab data give it (add_optional_channel): a
+//    fast lift and a rough plate may lower the angle alike while one widens the crest and the
+//    other does not.
 //  * Telling candidates apart. With the noise known, chi^2 is -2 log likelihood up to a
 //    constant, and every candidate has the same two coefficients, so chi^2_A - chi^2_B is the
 //    log likelihood ratio of A against B. Among the candidates that meet the acceptance rule
@@ -46,7 +49,7 @@ namespace reposetwin::experiments {
 
 /// One observable over the traced tests.
 struct TraceChannel {
-  std::string name;                // "angle", "H", "D"
+  std::string name;                // "angle", "H", "D", "crest"
   std::string units;               // "deg", "mm"
   Eigen::VectorXd residual;        // (n) measured - predicted [units]
   Eigen::VectorXd sigma;           // (n) 1-sigma noise of the residual [units]
@@ -59,6 +62,21 @@ struct JointProblem {
   double mu_shift_lo = -std::numeric_limits<double>::infinity();  // [-]
   double mu_shift_hi = std::numeric_limits<double>::infinity();   // [-]
 };
+
+/// An observable the lab may not have measured (the crest width, an optional CSV column): its
+/// channel over the traced tests and, per test, whether the lab measured it.
+struct OptionalChannel {
+  TraceChannel channel;
+  std::vector<bool> measured;  // (n) the lab measured it on this test
+};
+
+/// Appends `obs` to `p` when the lab measured it on every traced test and its residuals, noise
+/// and sensitivities are finite (a twin photograph cached by a version that did not record it
+/// has none): the channel then joins the joint fit. When no test has it (the column is absent)
+/// `p` and `left_out` stay exactly as they were, so the trace is the one without it; otherwise
+/// the reason it is not used is appended to `left_out`. Returns whether it was added.
+bool add_optional_channel(JointProblem& p, const OptionalChannel& obs,
+                          std::vector<std::string>& left_out);
 
 /// One hypothesis fitted to every channel at once.
 struct JointScore {

@@ -35,6 +35,12 @@ double Model::d(std::size_t i, double m) const {
   return s;
 }
 
+double Model::crest(std::size_t i, double m) const {
+  double s = 0.0;
+  for (const auto& [w, surf] : terms) s += w * surf->curve[i].lin(surf->curve[i].crest, m);
+  return s;
+}
+
 // The loop's joint fit, not calibration::calibrate_batch's: calibrate matches ONE test's angle
 // by inverting a monotone (isotonic) fit it samples adaptively, with a bootstrap interval; the
 // loop fits one mu_r to MANY tests at once on a fixed grid (weighted least squares over the
@@ -113,6 +119,10 @@ std::vector<ResidualRow> Loop::residuals(const Model& model, double m) const {
     r.predicted_d_mm = model.d(i, m);
     if (t.height_mm) r.residual_h_mm = *t.height_mm - r.predicted_h_mm;
     if (t.diameter_mm) r.residual_d_mm = *t.diameter_mm - r.predicted_d_mm;
+    if (t.crest_mm) {
+      r.predicted_crest_mm = model.crest(i, m);
+      r.residual_crest_mm = *t.crest_mm - *r.predicted_crest_mm;
+    }
     rows.push_back(r);
   }
   return rows;

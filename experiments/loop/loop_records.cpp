@@ -41,6 +41,8 @@ json to_json(const ResidualRow& r) {
             {"predicted_D_mm", r.predicted_d_mm}};
   if (r.residual_h_mm) j["residual_H_mm"] = *r.residual_h_mm;
   if (r.residual_d_mm) j["residual_D_mm"] = *r.residual_d_mm;
+  if (r.predicted_crest_mm) j["predicted_crest_mm"] = *r.predicted_crest_mm;
+  if (r.residual_crest_mm) j["residual_crest_mm"] = *r.residual_crest_mm;
   return j;
 }
 
@@ -72,14 +74,16 @@ json to_json(const BaselineRecord& b) {
 }
 
 json to_json(const FingerprintRecord& f) {
-  return {{"name", f.name},
-          {"probe", f.probe},
-          {"mu_r", f.mu_r},
-          {"angle_deg", f.angle_deg},
-          {"angle_se_deg", f.angle_se_deg},
-          {"H_mm", f.h_mm},
-          {"D_mm", f.d_mm},
-          {"probes_tried", f.probes_tried}};
+  json j = {{"name", f.name},
+            {"probe", f.probe},
+            {"mu_r", f.mu_r},
+            {"angle_deg", f.angle_deg},
+            {"angle_se_deg", f.angle_se_deg},
+            {"H_mm", f.h_mm},
+            {"D_mm", f.d_mm},
+            {"probes_tried", f.probes_tried}};
+  if (!f.crest_mm.empty()) j["crest_mm"] = f.crest_mm;
+  return j;
 }
 
 json to_json(const GridRecord& g) {
@@ -308,6 +312,8 @@ ResidualRow residual_row_from_json(const json& j) {
   r.predicted_d_mm = num(j, "predicted_D_mm");
   r.residual_h_mm = optional_of(j, "residual_H_mm");
   r.residual_d_mm = optional_of(j, "residual_D_mm");
+  r.predicted_crest_mm = optional_of(j, "predicted_crest_mm");
+  r.residual_crest_mm = optional_of(j, "residual_crest_mm");
   return r;
 }
 
@@ -361,6 +367,7 @@ FingerprintRecord fingerprint_record_from_json(const json& j) {
   f.angle_se_deg = numbers("angle_se_deg");
   f.h_mm = numbers("H_mm");
   f.d_mm = numbers("D_mm");
+  if (j.contains("crest_mm")) f.crest_mm = numbers("crest_mm");
   if (j.contains("probes_tried")) f.probes_tried = numbers("probes_tried");
   return f;
 }

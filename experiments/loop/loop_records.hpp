@@ -43,6 +43,8 @@ struct ResidualRow {
   double predicted_d_mm = 0.0;          // [mm]
   std::optional<double> residual_h_mm;  // when the lab measured H [mm]
   std::optional<double> residual_d_mm;  // when the lab measured D [mm]
+  std::optional<double> predicted_crest_mm;  // crest width, when the lab measured it [mm]
+  std::optional<double> residual_crest_mm;   // [mm]
 };
 
 /// RMS residuals by role.
@@ -87,6 +89,8 @@ struct FingerprintRecord {
   std::vector<double> h_mm;          // per test: mean change of H [mm]
   std::vector<double> d_mm;          // per test: mean change of D [mm]
   std::vector<double> probes_tried;  // every probe simulated, the one used last
+  std::vector<double> crest_mm;      // per test: mean change of the crest width [mm]; empty
+                                     // when no test has a measured crest
 };
 
 /// The mu_r grid as the loop settled it: extended beyond a bound mu_r landed on, or left.

@@ -172,6 +172,7 @@ json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
           {"flank_deg", m.flank_deg.mean},
           {"height_mm", 1e3 * m.height_m.mean},
           {"diameter_mm", 1e3 * m.diameter_m.mean},
+          {"crest_width_mm", 1e3 * m.crest_width_m.mean},
           {"views", views},
           {"variant", v.key()}};
 }
@@ -317,6 +318,7 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     o.flank_deg = p.value("flank_deg", std::numeric_limits<double>::quiet_NaN());
     o.height_mm = p.at("height_mm");
     o.diameter_mm = p.at("diameter_mm");
+    o.crest_mm = p.value("crest_width_mm", std::numeric_limits<double>::quiet_NaN());
     o.positions_angle_deg = s.at("pile").value("theta_hd_deg", 0.0);
   }
   return out;

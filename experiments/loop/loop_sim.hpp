@@ -26,6 +26,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
@@ -60,6 +61,10 @@ struct ImageVariant {
   // camera_height_m - declared_height_m, its k1 changed by k1 - declared_k1, while the
   // measurement assumes the lab camera as declared. Empty: the twin frames its own cameras.
   std::vector<camera::Camera> lab_cameras;
+  // Whether make_request takes a test's declared cameras into lab_cameras (reposetwin loop
+  // --own-cameras: false, the twin frames its own; the synthetic loop tests, whose premise is a
+  // lab camera other than the loop's). Not part of the key: it only decides lab_cameras.
+  bool use_lab_cameras = true;
   /// A short text naming the settings (part of the photograph's cache key; the lab cameras
   /// enter by a hash of their JSON, so photos through another camera are never reused).
   std::string key() const;
@@ -83,6 +88,9 @@ struct SimOutcome {
                               // for a photograph cached by a version that did not record it
   double height_mm = 0.0;     // vision H [mm]
   double diameter_mm = 0.0;   // vision D [mm]
+  // Vision crest width, mean over the side views [mm]; NaN for a photograph cached by a version
+  // that did not record it.
+  double crest_mm = std::numeric_limits<double>::quiet_NaN();
   double positions_angle_deg = 0.0;  // atan(2H/D) from particle positions [deg]
   std::string sim_dir;        // the pile run's folder
   std::string image_dir;      // the photograph's folder
@@ -147,7 +155,7 @@ PhotoSettings photo_settings(const ImageVariant& variant);
 /// Photographs a pile (centres, radii, material ids) with `variant` through the one photo
 /// pipeline (photos/photographs.hpp: the true camera renders, the declared camera measures; a
 /// view vision cannot measure is recorded and the others count) and returns the loop's record
-/// {angle_deg, flank_deg, height_mm, diameter_mm, views[...]}, or
+/// {angle_deg, flank_deg, height_mm, diameter_mm, crest_width_mm, views[...]}, or
 /// {error, views[...]} if no view could be measured (a pile of a few spheres). Writes the
 /// photographs and their declared-camera sidecars into `out_dir` when keep_photos is set
 /// (names side_az000.png / .json ...). Uses OSMesa: call it in a worker, not before forking.

@@ -33,6 +33,8 @@ struct Curve {
   std::vector<double> h, d, angle;               // seed means per grid point [mm, mm, deg]
   std::vector<std::vector<double>> angle_seeds;  // per grid point, per seed [deg]
   std::vector<std::vector<double>> h_seeds, d_seeds;
+  std::vector<double> crest;  // crest width seed means [mm] (NaN: not recorded)
+  std::vector<std::vector<double>> crest_seeds;
   std::vector<int> clogged;  // per grid point: pours that formed no pile
 
   double clamp(double m) const { return std::clamp(m, mu.front(), mu.back()); }
@@ -55,6 +57,7 @@ struct Model {
   double angle(std::size_t test, double mu) const;       // [deg]
   double h(std::size_t test, double mu) const;           // [mm]
   double d(std::size_t test, double mu) const;           // [mm]
+  double crest(std::size_t test, double mu) const;       // crest width [mm]
 };
 
 /// What the iterations change: the model, its fit and the effects in it.
@@ -151,6 +154,9 @@ class Loop {
   double seed_se_ = 0.0;                // seed standard error of a predicted angle [deg]
   std::vector<double> sigma_;           // per test: 1-sigma noise of its residual [deg]
   std::vector<double> sigma_h_, sigma_d_;  // per test: the same for H and D [mm]
+  double noise_sd_crest_ = 0.0;            // pooled seed spread of the crest width [mm]
+  std::vector<double> sigma_crest_;        // per test: its residual's noise [mm]
+  bool crest_measured_ = false;            // some test has a measured crest width
   std::vector<std::unique_ptr<Surface>> surfaces_;
 };
 

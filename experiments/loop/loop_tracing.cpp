@@ -161,20 +161,23 @@ std::optional<FingerprintRecord> Loop::probe_candidate(
 // baseline's order) against the baseline's piles at the grid point.
 FingerprintRecord Loop::fingerprint(const CandidateEffect& e, double probe, const Surface& base,
                                     std::size_t node, const std::vector<SimOutcome>& on) const {
-  FingerprintRecord f{e.name, probe, grid_[node], {}, {}, {}, {}, {}};
+  FingerprintRecord f{e.name, probe, grid_[node], {}, {}, {}, {}, {}, {}};
   std::size_t q = 0;
   for (std::size_t i = 0; i < data_.tests.size(); ++i) {
-    std::vector<double> da, dh, dd;
+    std::vector<double> da, dh, dd, dc;
     for (std::size_t r = 0; r < s_.seeds.size(); ++r, ++q) {
       const SimOutcome& off = base.raw[i][node][r];
       da.push_back(twin_angle(on[q], s_.angle) - twin_angle(off, s_.angle));
       dh.push_back(on[q].height_mm - off.height_mm);
       dd.push_back(on[q].diameter_mm - off.diameter_mm);
+      dc.push_back(on[q].crest_mm - off.crest_mm);
     }
     const double mean_da = sample_stats(da).mean;
     f.angle_deg.push_back(mean_da);
     f.h_mm.push_back(sample_stats(dh).mean);
     f.d_mm.push_back(sample_stats(dd).mean);
+    // Recorded only where the lab measured a crest, so a dataset without one keeps its record.
+    if (crest_measured_) f.crest_mm.push_back(sample_stats(dc).mean);
     double v = 0.0;
     for (double x : da) v += (x - mean_da) * (x - mean_da);
     f.angle_se_deg.push_back(std::sqrt(v / (da.size() - 1) / da.size()));
@@ -221,21 +224,25 @@ std::string Loop::untraceable(const FingerprintRecord& f) const {
   return "";
 }
 
-// The slope of the current model's angle (channel 0), H (1) or D (2) against mu_r at the fit,
+// The slope of the current model's angle (channel 0), H (1), D (2) or crest width (3) against
+// mu_r at the fit,
 // over a tenth of the grid span (the monotone fit is piecewise linear).
 double Loop::mu_slope(const LoopState& state, std::size_t i, int channel) const {
   const double span = grid_.back() - grid_.front();
   const double a = std::max(grid_.front(), state.fit.mu - 0.05 * span);
   const double b = std::min(grid_.back(), state.fit.mu + 0.05 * span);
   auto v = [&](double m) {
-    return channel == 0 ? state.model.angle(i, m)
-                        : channel == 1 ? state.model.h(i, m) : state.model.d(i, m);
+    return channel == 0   ? state.model.angle(i, m)
+           : channel == 1 ? state.model.h(i, m)
+           : channel == 2 ? state.model.d(i, m)
+                          : state.model.crest(i, m);
   };
   return (v(b) - v(a)) / (b - a);
 }
 
 // The observables traced jointly: the angle always; H and D when every traced test has them
-// measured. A further observable (the crest width) is one more channel here.
+// measured; the crest width when the lab data give it on every traced test (absent from
+// every test: the problem is the one without it).
 JointProblem Loop::joint_problem(const LoopState& state, std::vector<std::string>& left_out) const {
   JointProblem p;
   p.mu_shift_lo = grid_.front() - state.fit.mu;
@@ -262,6 +269,18 @@ JointProblem Loop::joint_problem(const LoopState& state, std::vector<std::string
     if (c == 0 && ch.mu_sensitivity.cwiseAbs().maxCoeff() < 1e-6) ch.mu_sensitivity.setOnes();
     p.channels.push_back(std::move(ch));
   }
+  if (!crest_measured_) return p;
+  OptionalChannel crest{{"crest", "mm", Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n)},
+                        std::vector<bool>(static_cast<std::size_t>(n))};
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const std::size_t i = trace_[k];
+    const LabTest& t = data_.tests[i];
+    crest.measured[static_cast<std::size_t>(k)] = t.crest_mm.has_value();
+    crest.channel.residual[k] = t.crest_mm ? *t.crest_mm - state.model.crest(i, state.fit.mu) : 0.0;
+    crest.channel.sigma[k] = sigma_crest_[i];
+    crest.channel.mu_sensitivity[k] = mu_slope(state, i, 3);
+  }
+  add_optional_channel(p, crest, left_out);
   return p;
 }
 
@@ -272,7 +291,20 @@ IterationRecord Loop::trace(int it, const LoopState& state,
   IterationRecord rec;
   rec.iteration = it;
   rec.mu_r = state.fit.mu;
-  const JointProblem joint = joint_problem(state, rec.channels_left_out);
+  JointProblem joint = joint_problem(state, rec.channels_left_out);
+  // A crest fingerprint from photographs cached before the crest was recorded has no value: the
+  // channel then leaves this trace rather than carry NaN into every score.
+  if (joint.channels.back().name == "crest")
+    for (const FingerprintRecord& f : fps) {
+      if (state.used.count(f.name)) continue;
+      bool finite = f.crest_mm.size() == data_.tests.size();
+      for (std::size_t i : trace_) finite = finite && std::isfinite(f.crest_mm[i]);
+      if (finite) continue;
+      joint.channels.pop_back();
+      rec.channels_left_out.push_back("crest: the photographs of " + f.name +
+                                      "'s fingerprint do not record it");
+      break;
+    }
   for (const TraceChannel& ch : joint.channels) rec.channels.push_back(ch.name);
   TraceProblem p;
   p.residual = joint.channels[0].residual;
@@ -286,8 +318,11 @@ IterationRecord Loop::trace(int it, const LoopState& state,
   for (const FingerprintRecord& f : fps) {
     if (state.used.count(f.name)) continue;
     std::vector<Eigen::VectorXd> cols;
-    for (const std::vector<double>* v : {&f.angle_deg, &f.h_mm, &f.d_mm}) {
-      if (cols.size() == joint.channels.size()) break;
+    for (const TraceChannel& ch : joint.channels) {
+      const std::vector<double>* v = ch.name == "angle" ? &f.angle_deg
+                                     : ch.name == "H"   ? &f.h_mm
+                                     : ch.name == "D"   ? &f.d_mm
+                                                        : &f.crest_mm;
       Eigen::VectorXd col(n);
       for (Eigen::Index k = 0; k < n; ++k) col[k] = (*v)[trace_[k]];
       cols.push_back(col);

@@ -203,13 +203,30 @@ std::string residuals_section(const json& loop, const fs::path& plot_dir) {
   const json& tests = loop.at("tests");
   const json& before = loop.at("baseline").at("residuals");
   const json& after = loop.at("final").at("residuals");
-  Table t = numeric_table({"test", "role", "measured", "before", "after", "residual before",
-                           "residual after", "sigma"});
-  for (std::size_t i = 0; i < tests.size(); ++i)
-    t.rows.push_back({{left(tests[i]["id"]), left(tests[i]["role"]), sig3(tests[i]["angle_deg"]),
-                       sig3(before[i]["predicted_deg"]), sig3(after[i]["predicted_deg"]),
-                       sig3(before[i]["residual_deg"]), sig3(after[i]["residual_deg"]),
-                       sig3(before[i]["sigma_deg"])}});
+  // The crest width (a fourth observable) gets its columns only where the lab measured it.
+  bool crest = false;
+  for (const json& t : tests) crest = crest || t.contains("crest_mm");
+  std::vector<std::string> header = {
+      "test", "role", "measured", "before", "after", "residual before", "residual after", "sigma"};
+  if (crest)
+    for (const char* h : {"crest measured [mm]", "crest before [mm]", "crest after [mm]"})
+      header.push_back(h);
+  Table t = numeric_table(header);
+  for (std::size_t i = 0; i < tests.size(); ++i) {
+    TableRow row{{left(tests[i]["id"]), left(tests[i]["role"]), sig3(tests[i]["angle_deg"]),
+                  sig3(before[i]["predicted_deg"]), sig3(after[i]["predicted_deg"]),
+                  sig3(before[i]["residual_deg"]), sig3(after[i]["residual_deg"]),
+                  sig3(before[i]["sigma_deg"])}};
+    if (crest) {
+      auto cell = [](const json& j, const char* k) -> Cell {
+        return j.contains(k) ? Cell(sig3(j[k])) : left("-");
+      };
+      row.cells.push_back(cell(tests[i], "crest_mm"));
+      row.cells.push_back(cell(before[i], "predicted_crest_mm"));
+      row.cells.push_back(cell(after[i], "predicted_crest_mm"));
+    }
+    t.rows.push_back(row);
+  }
   mustache::data d;
   d.set("plots", to_data(residual_plots(loop, plot_dir)));
   d.set("residuals", to_data(t));

@@ -102,6 +102,13 @@ TEST(LoopCamera, TwinPhotographsWithTheLabsDeclaredCamera) {
                        .image;
   ASSERT_EQ(v.lab_cameras.size(), 1u);
   EXPECT_NE(v.key(), ImageVariant{}.key());
+  // --own-cameras: the twin's own framing, the key of a test without sidecars.
+  ImageVariant own;
+  own.use_lab_cameras = false;
+  EXPECT_EQ(
+      make_request(data.tests[0], "contacts.{sample}-{sample}.rolling_friction", 0.1, 1, {}, own)
+          .image.key(),
+      ImageVariant{}.key());
   ImageVariant other = v;
   other.lab_cameras[0].extrinsics.position.z() += 1e-3;
   EXPECT_NE(v.key(), other.key()) << "a photo through another camera must not be reused";
@@ -127,8 +134,8 @@ TEST(LoopCamera, TwinPhotographsWithTheLabsDeclaredCamera) {
   const double f = in.focal_length_mm / in.sensor_width_mm * in.width_px;
   const double az = kAz * M_PI / 180.0;
   const Eigen::Vector3d cam(kL * std::sin(az), -kL * std::cos(az), 0.0);
-  const Eigen::Vector3d forward(-std::sin(az), std::cos(az), 0.0), right(std::cos(az),
-                                                                           std::sin(az), 0.0);
+  const Eigen::Vector3d forward(-std::sin(az), std::cos(az), 0.0),
+      right(std::cos(az), std::sin(az), 0.0);
   auto project = [&](const Eigen::Vector3d& p) {
     const Eigen::Vector3d d = p - cam;
     return Eigen::Vector2d(kCx + f * d.dot(right) / d.dot(forward),
@@ -147,10 +154,11 @@ TEST(LoopCamera, TwinPhotographsWithTheLabsDeclaredCamera) {
   EXPECT_NEAR(v_plate, foot.y(), 1.0);
   // The apex, H above the foot, lands f H / L above the plate row.
   EXPECT_NEAR(v_plate - px.height_px, top.y(), 1.5);
-  std::printf("axis column: closed form %.2f, silhouette %.2f, toes' middle %.2f; plate row at "
-              "the axis: closed form %.2f, detected %.2f; apex row closed form %.2f, detected "
-              "%.2f px\n",
-              foot.x(), u_axis, u_toes, foot.y(), v_plate, top.y(), v_plate - px.height_px);
+  std::printf(
+      "axis column: closed form %.2f, silhouette %.2f, toes' middle %.2f; plate row at "
+      "the axis: closed form %.2f, detected %.2f; apex row closed form %.2f, detected "
+      "%.2f px\n",
+      foot.x(), u_axis, u_toes, foot.y(), v_plate, top.y(), v_plate - px.height_px);
   // And the twin measures the cone it was given through the lab's camera.
   EXPECT_NEAR(m.height_m, kH, 0.5e-3);
 }
@@ -169,17 +177,18 @@ TEST(LoopCamera, CameraPosePitchesAtTheAxisFootAndVisionReadsThePitch) {
   const CandidateEffect& e = find_effect("camera_pose");
   EXPECT_EQ(e.kind, EffectKind::kMeasurement);
   // The off value is the base model's level camera.
-  const ImageVariant off = make_request(data.tests[0], "contacts.{sample}-{sample}.rolling_friction",
-                                        0.1, 1, {{&e, 0.0}}, ImageVariant{})
-                               .image;
+  const ImageVariant off =
+      make_request(data.tests[0], "contacts.{sample}-{sample}.rolling_friction", 0.1, 1,
+                   {{&e, 0.0}}, ImageVariant{})
+          .image;
   EXPECT_EQ(off.key(), ImageVariant{}.key());
   const Cone c = cone();
   // At the registry's probe (2 deg of pitch) vision measures the photos through the level
   // camera (so the candidate has a fingerprint); at 5 deg it refuses them with the pitch it
   // read (the candidate is then reported unavailable at that probe).
   for (double h : {e.probe, 0.025}) {
-    ImageVariant v = make_request(data.tests[0], "contacts.{sample}-{sample}.rolling_friction",
-                                  0.1, 1, {{&e, h}}, ImageVariant{})
+    ImageVariant v = make_request(data.tests[0], "contacts.{sample}-{sample}.rolling_friction", 0.1,
+                                  1, {{&e, h}}, ImageVariant{})
                          .image;
     EXPECT_TRUE(v.aim_at_axis_foot);
     EXPECT_DOUBLE_EQ(v.camera_height_m, h);
@@ -213,10 +222,11 @@ TEST(LoopCamera, CameraPosePitchesAtTheAxisFootAndVisionReadsThePitch) {
       const vision::SideProfile px = vision::measure_side_pixels(prepared, {}, base);
       const auto pose = vision::estimate_side_pose(prepared, px, declared, Eigen::Vector3d::Zero());
       ASSERT_TRUE(pose) << base;
-      std::printf("h %.0f mm, az %.0f: pitch closed form %.3f deg, vision %.3f +- %.3f deg; "
-                  "measured: %s\n",
-                  1e3 * h, view.azimuth_deg, closed, pose->pitch_deg, pose->sigma_pitch_deg,
-                  view.measured ? "yes" : view.error.c_str());
+      std::printf(
+          "h %.0f mm, az %.0f: pitch closed form %.3f deg, vision %.3f +- %.3f deg; "
+          "measured: %s\n",
+          1e3 * h, view.azimuth_deg, closed, pose->pitch_deg, pose->sigma_pitch_deg,
+          view.measured ? "yes" : view.error.c_str());
       EXPECT_NEAR(pose->pitch_deg, closed, 1.0) << base;
       if (h == e.probe) {
         EXPECT_TRUE(view.measured.has_value()) << view.error;

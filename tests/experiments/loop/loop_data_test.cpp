@@ -227,6 +227,35 @@ TEST(LoopData, BadInputNamesTheLineAndColumn) {
   EXPECT_NE(e.find("column scene"), std::string::npos) << e;
 }
 
+// The crest width is an optional column: read where given (0, a sharp cone, included), absent
+// on a row left empty, and a bad value refused naming the file, line, test, column and value.
+TEST(LoopData, AnOptionalCrestColumnIsReadAndBadValuesRefused) {
+  const std::string head = "id,role,scene,angle_deg,crest_mm\n";
+  const std::string path =
+      write_csv("crest", head + "a,calibrate," + kScene + ",30,7.25\n" + "b,validate," + kScene +
+                             ",31,\n" + "c,validate," + kScene + ",32,0\n");
+  const LabData d = read_lab_csv(path);
+  ASSERT_EQ(d.tests.size(), 3u);
+  ASSERT_TRUE(d.tests[0].crest_mm.has_value());
+  EXPECT_DOUBLE_EQ(*d.tests[0].crest_mm, 7.25);
+  EXPECT_FALSE(d.tests[1].crest_mm.has_value());
+  EXPECT_DOUBLE_EQ(d.tests[2].crest_mm.value_or(-1.0), 0.0);
+  EXPECT_DOUBLE_EQ(to_json(d.tests[0]).at("crest_mm").get<double>(), 7.25);
+  EXPECT_FALSE(to_json(d.tests[1]).contains("crest_mm"));
+  // Without the column, no test has a crest.
+  const LabData none = read_lab_csv(
+      write_csv("nocrest", "id,role,scene,angle_deg\na,calibrate," + kScene + ",30\n"));
+  EXPECT_FALSE(none.tests[0].crest_mm.has_value());
+  std::string e = error_of("crestneg", head + "a,calibrate," + kScene + ",30,-2.5\n");
+  EXPECT_NE(e.find("crestneg.csv line 2 (test a), column crest_mm: -2.5 must not be negative"),
+            std::string::npos)
+      << e;
+  e = error_of("crestword", head + "a,calibrate," + kScene + ",30,wide\n");
+  EXPECT_NE(e.find("crestword.csv line 2 (test a), column crest_mm: \"wide\" is not a number"),
+            std::string::npos)
+      << e;
+}
+
 TEST(LoopData, ATestTheEngineCannotBuildNamesItsColumn) {
   // A scene key that does not exist and a plate material that does not exist.
   std::string e = error_of("badkey", "id,role,scene,set:contacts.rock-plate.fricton,angle_deg\n"

@@ -7,7 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
+#include <utility>
 
 namespace reposetwin::experiments {
 namespace {
@@ -278,6 +280,100 @@ TEST(LoopJoint, TheDesignSaysWhatItCanDecide) {
   EXPECT_EQ(back.can, lab.can);
   EXPECT_EQ(back.cannot, lab.cannot);
   EXPECT_EQ(back.refit_on_all, lab.refit_on_all);
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
+
+namespace reposetwin::experiments {
+namespace {
+
+// The crest width as a fourth observable: two candidates alike on the angle, H and D (the same
+// columns) cannot be told apart on those three, whatever the residual; where the lab measured
+// the crest and they move it differently (A widens the flat top, B narrows it), the planted one
+// is named. Where no test has a crest, the problem and every score are those without it.
+TEST(LoopJoint, TheCrestWidthDecidesWhereTheLabMeasuredIt) {
+  Fp a, b;
+  collinear_pair(a, b);
+  b = a;  // alike on angle, H and D
+  Eigen::VectorXd crest_a(kTests), crest_b(kTests);
+  for (int i = 0; i < kTests; ++i) {
+    crest_a[i] = 2.0 + 0.5 * (i % 3);
+    crest_b[i] = -1.0 - 0.3 * (i % 2);
+  }
+  constexpr double kCrestSigma = 0.4;  // [mm]
+  int named_a = 0;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    const JointProblem three = problem_of(a, 0.8, 3, seed);
+    std::mt19937_64 rng(seed + 100);
+    std::normal_distribution<double> unit(0.0, 1.0);
+    Eigen::VectorXd r(kTests);
+    for (int i = 0; i < kTests; ++i) r[i] = 0.8 * crest_a[i] + kCrestSigma * unit(rng);
+    OptionalChannel crest{channel("crest", r, kCrestSigma, -5.0), std::vector<bool>(kTests, true)};
+    auto cols = [&](const Fp& f, const Eigen::VectorXd& c) {
+      std::vector<Eigen::VectorXd> v = f.cols(3);
+      v.push_back(c);
+      return v;
+    };
+
+    // Absent on every test: nothing changes, byte for byte.
+    JointProblem absent = three;
+    std::vector<std::string> left_out;
+    OptionalChannel none = crest;
+    none.measured.assign(kTests, false);
+    EXPECT_FALSE(add_optional_channel(absent, none, left_out));
+    EXPECT_TRUE(left_out.empty());
+    ASSERT_EQ(absent.channels.size(), 3u);
+    const auto decide = [&](const JointProblem& p, bool with_crest) {
+      const JointScore ja = score_joint(p, "A", with_crest ? cols(a, crest_a) : a.cols(3));
+      const JointScore jb = score_joint(p, "B", with_crest ? cols(b, crest_b) : b.cols(3));
+      return std::make_pair(ja, decide_trace(accepted({"B", "A"}), {ja, jb}, score_offset(p),
+                                             score_joint(p, "mu", {}), {}));
+    };
+    const auto [ja3, d3] = decide(three, false);
+    const auto [ja_absent, d_absent] = decide(absent, false);
+    EXPECT_EQ(to_json(ja_absent).dump(), to_json(ja3).dump());
+    EXPECT_EQ(to_json(d_absent).dump(), to_json(d3).dump());
+    // On angle, H and D alone the two are one hypothesis: reported, neither named.
+    EXPECT_EQ(d3.verdict, TraceVerdict::kIndistinguishable) << d3.statement;
+
+    // Measured on every test: the channel joins and decides.
+    JointProblem four = three;
+    EXPECT_TRUE(add_optional_channel(four, crest, left_out));
+    EXPECT_TRUE(left_out.empty());
+    ASSERT_EQ(four.channels.size(), 4u);
+    const auto [ja4, d4] = decide(four, true);
+    EXPECT_EQ(ja4.rows, 4 * kTests);
+    ASSERT_EQ(ja4.chi2_by_channel.size(), 4u);
+    EXPECT_NEAR(ja4.chi2_by_channel[0] + ja4.chi2_by_channel[1] + ja4.chi2_by_channel[2] +
+                    ja4.chi2_by_channel[3],
+                ja4.chi2, 1e-9);
+    EXPECT_NE(d4.named, "B") << d4.statement;
+    if (d4.verdict == TraceVerdict::kNamed && d4.named == "A") ++named_a;
+  }
+  // The crest fingerprints differ by 3-4.5 mm per test against a noise of 0.4 mm.
+  EXPECT_EQ(named_a, 20);
+}
+
+TEST(LoopJoint, ACrestNotMeasuredEverywhereIsLeftOutWithTheReason) {
+  Fp a, b;
+  collinear_pair(a, b);
+  const JointProblem three = problem_of(a, 0.8, 3, 1);
+  OptionalChannel crest{channel("crest", Eigen::VectorXd::Ones(kTests), 0.4, -5.0),
+                        std::vector<bool>(kTests, true)};
+  crest.measured[3] = false;
+  JointProblem p = three;
+  std::vector<std::string> left_out;
+  EXPECT_FALSE(add_optional_channel(p, crest, left_out));
+  EXPECT_EQ(p.channels.size(), 3u);
+  ASSERT_EQ(left_out.size(), 1u);
+  EXPECT_EQ(left_out[0], "crest: measured on 7 of 8 traced tests");
+  // A twin photograph cached without the crest gives NaN: left out, not fitted.
+  crest.measured.assign(kTests, true);
+  crest.channel.sigma[2] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(add_optional_channel(p, crest, left_out));
+  EXPECT_EQ(p.channels.size(), 3u);
+  EXPECT_NE(left_out.back().find("do not all record it"), std::string::npos) << left_out.back();
 }
 
 }  // namespace

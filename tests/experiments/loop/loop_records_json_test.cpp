@@ -14,7 +14,8 @@ using nlohmann::json;
 
 ResidualRow residual(double x) {
   ResidualRow r{"t" + std::to_string(x), "validate", x + 0.1, x + 0.2, x + 0.3, x + 0.4,
-                x + 0.5,                 x + 0.6,    x + 0.7, {},      x + 0.8};
+                x + 0.5,                 x + 0.6,    x + 0.7, {},      x + 0.8,
+                x + 0.9,                 x + 1.0};
   return r;
 }
 
@@ -89,7 +90,7 @@ TEST(LoopRecordsJson, BaselineAndFingerprintRoundTrip) {
   EXPECT_EQ(back.curves[0].pour_seeds[1][1], 1003u);
 
   FingerprintRecord f{"plate_friction", 0.15, 0.3, {1.0, -0.5}, {0.2, 0.3},
-                      {0.4, 0.1},       {-2.0, 3.0}, {0.075, 0.15}};
+                      {0.4, 0.1},       {-2.0, 3.0}, {0.075, 0.15}, {0.5, -0.25}};
   expect_round_trip(f, fingerprint_record_from_json);
   EXPECT_EQ(fingerprint_record_from_json(to_json(f)).d_mm, f.d_mm);
   EXPECT_EQ(fingerprint_record_from_json(to_json(f)).probes_tried, f.probes_tried);

@@ -112,6 +112,10 @@ LoopSettings settings(std::vector<double> mu_grid = {0.1, 0.2, 0.35}) {
   s.image.width_px = 960;
   s.image.height_px = 720;
   s.image.side_views = 2;
+  // The synthetic labs photograph with their own hidden camera (distance, noise) and write its
+  // declared sidecars; these tests trace with the loop's own framing, a camera other than the
+  // lab's, as they were designed (like for like through the sidecars is LoopCamera's).
+  s.image.use_lab_cameras = false;
   s.max_effects = 1;
   // These designs put mu_r on the grid's bound whenever an effect is hidden (a smooth plate or a
   // fast lift at its low end, cohesion at its top): they test the tracing of what mu_r cannot

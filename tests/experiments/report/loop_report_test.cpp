@@ -122,3 +122,27 @@ TEST(ReportLoop, PageShowsTheDesignTheGridAndTheJointDecision) {
 
 }  // namespace
 }  // namespace reposetwin::experiments
+
+namespace reposetwin::experiments {
+namespace {
+
+// The crest width gets its residual-table columns only where the lab measured it: measured,
+// before and after for a test with a crest, "-" for one without; none at all without a crest.
+TEST(ReportLoop, CrestColumnsAppearOnlyWhereTheLabMeasuredTheCrest) {
+  const fs::path out = fs::temp_directory_path() / "reposetwin_loop_report_crest_test";
+  fs::remove_all(out);
+  json loop = small_loop(false);
+  write_loop_html(loop, out.string());
+  EXPECT_EQ(read_file((out / "index.html").string()).find("crest measured"), std::string::npos);
+  loop["tests"][0]["crest_mm"] = 6.25;
+  loop["baseline"]["residuals"][0]["predicted_crest_mm"] = 4.75;
+  loop["final"]["residuals"][0]["predicted_crest_mm"] = 5.5;
+  write_loop_html(loop, out.string());
+  const std::string html = read_file((out / "index.html").string());
+  for (const char* s : {"crest measured [mm]", "crest before [mm]", "crest after [mm]",
+                        "<td>6.25</td><td>4.75</td><td>5.5</td>", "<td class='l'>-</td>"})
+    EXPECT_NE(html.find(s), std::string::npos) << s;
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
