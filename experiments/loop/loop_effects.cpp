@@ -272,16 +272,15 @@ std::string effect_unidentifiable(const std::vector<LabTest>& tests, const Candi
   auto intervals = [](const LabTest& t) {
     return sim::resolve_psd(load_scene(t.scene_path, sets_of(t)).psd.spec).intervals;
   };
-  const std::vector<sim::PsdInterval> first = intervals(tests.front());
+  // Sizes in metres and fractions near 1: one absolute tolerance serves both.
   auto same = [](const sim::PsdInterval& a, const sim::PsdInterval& b) {
-    auto near = [](double x, double y) { return std::abs(x - y) <= 1e-9 * std::max(std::abs(x), 1e-12); };
-    return near(a.lower, b.lower) && near(a.upper, b.upper) &&
+    return std::abs(a.lower - b.lower) <= 1e-12 && std::abs(a.upper - b.upper) <= 1e-12 &&
            std::abs(a.mass_fraction - b.mass_fraction) <= 1e-9;
   };
+  const std::vector<sim::PsdInterval> first = intervals(tests.front());
   for (std::size_t i = 1; i < tests.size(); ++i) {
     const std::vector<sim::PsdInterval> other = intervals(tests[i]);
-    if (other.size() != first.size() || !std::equal(first.begin(), first.end(), other.begin(), same))
-      return "";
+    if (!std::equal(first.begin(), first.end(), other.begin(), other.end(), same)) return "";
   }
   return "every test simulates the same size distribution (" +
          significant(1e3 * first.front().lower, 3) + "-" + significant(1e3 * first.back().upper, 3) +
