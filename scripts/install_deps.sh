@@ -17,6 +17,7 @@ PACKAGES=(
   libgtest-dev             # tests
   gnuplot-nox              # report plots
   libopenmpi-dev openmpi-bin  # optional campaign spreading under mpirun
+  jq                       # experiments/loop_validation/run.sh: its summary from loop.json
 )
 # scripts/fuzz.sh only: clang with libFuzzer and the sanitizers' runtime.
 if [ "${1:-}" = "--fuzz" ]; then

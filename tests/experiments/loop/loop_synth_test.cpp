@@ -4,30 +4,28 @@
 // baseline grid and the fingerprints are simulated once for all datasets, whichever test runs
 // first; a test run alone still computes everything it needs.
 //
+// The suite keeps the cases that share one design and one fingerprint node (the smooth plate,
+// traced from all tests and from one calibration test) and the two that must name nothing (no
+// effect; a uniform offset). The hidden fast lift, cohesion and size-dependent rolling cases
+// each need their own refits and fingerprints and would take the suite past ten minutes on two
+// cores; they run as the loop's validation experiment with the same settings
+// (experiments/loop_validation/run.sh, results/loop_validation/summary.csv).
+//
 // Design (measured 2026-11-22; docs/loop.md "Synthetic end-to-end tests"):
 //  * Scene: data/loop/small_scene.toml, 15 or 35 g of 3-4 mm spheres (piles 3-5 layers high).
 //    One photographed pile scatters by about 1.0 deg (the tiny scene's 2-3 layer piles: 4.4 deg),
 //    so with 3 lab piles per test and 3 twin seeds the residual floor after a perfect refit is
 //    1.0 sqrt(1/3 + 1/3) = 0.8 deg.
 //  * Conditions: mass (15, 35 g) x plate (steel, declared friction 0.5; wood, 0.25) x declared
-//    lift speed (0.03, 0.1 m/s), eight tests, one held out. Each hidden effect leaves its own
-//    pattern: a smooth plate changes steel more than wood; a faster lift changes the fast series
-//    more; cohesion steepens the heavier piles more and lifts every angle beyond mu_r's reach.
-//    (A camera 6 mm above the plate, declared level, is not a test: with vision reading H from
-//    the toe line, its true effect, about 0.5 deg, is below one pile's scatter and the loop
-//    names nothing.)
+//    lift speed (0.03, 0.1 m/s), eight tests, one held out (data/loop/synth_plate.toml is the
+//    same design as a loop-synth file). A smooth plate changes steel more than wood, which a
+//    faster lift or cohesion (the candidates it must beat) do not.
 //  * The lab is the twin with hidden mu_r 0.25 (between grid points), other seeds, a different
 //    camera (14 instead of 12 pile radii away, three views instead of two, image noise); the
 //    twin keeps its own framing here (use_lab_cameras = false). Through the lab's cameras
 //    with two lab views the cohesion dataset was read as a uniform offset of 1.36 +- 0.44 deg
 //    (measurement_suspected) and cohesion not named; plate and lift were still named.
-//  * Size design (rolling resistance that varies with grain size has no fingerprint when every
-//    test has the same PSD): data/loop/size_scene.toml (one 2-5 mm sieve table, lifted at
-//    0.02 m/s), a fine band (d_min_mm 2, d_max_mm 2.5; 10 and 20 g) and a coarse band (4.5-5 mm;
-//    30 and 60 g) x plate (steel, wood), eight tests, one held out; hidden mu_r 0.25 and
-//    mu_r (d / d_ref)^3. Small fine piles respond little to mu_r and coarse piles scatter, so the
-//    effect must be strong to stand out of one pile's 1.06 deg scatter: at exponent 2.5 the loop
-//    names nothing (its fingerprint's leave-one-out gain is below the seed noise).
+
 #include "experiments/loop/loop_synth.hpp"
 
 #include <gtest/gtest.h>
@@ -76,30 +74,6 @@ SynthDesign design(const std::vector<std::pair<std::string, double>>& hidden) {
         t.role = (mass == 0.035 && lift == 0.03 && std::string(plate) == "wood") ? "validate"
                                                                                  : "calibrate";
         t.conditions = {{"mass_kg", mass}, {"lift_speed_m_s", lift}};
-        t.labels = {{"plate", plate}};
-        d.tests.push_back(t);
-      }
-  return d;
-}
-
-// The size design: a fine (2-2.5 mm; 10 and 20 g) and a coarse (4.5-5 mm; 30 and 60 g) band of
-// one sieve table x plate; the coarse 60 g pile on wood is held out.
-SynthDesign size_design(const std::vector<std::pair<std::string, double>>& hidden) {
-  SynthDesign d = lab(kSizeScene, 0.25, hidden);
-  struct Band {
-    const char* name;
-    double d_min_mm, d_max_mm;
-    std::vector<int> masses_g;
-  };
-  const std::vector<Band> bands = {{"fine", 2.0, 2.5, {10, 20}}, {"coarse", 4.5, 5.0, {30, 60}}};
-  for (const char* plate : {"steel", "wood"})
-    for (const Band& b : bands)
-      for (int mass_g : b.masses_g) {
-        SynthTest t;
-        t.id = std::string(b.name) + "_m" + std::to_string(mass_g) + "_" + plate;
-        t.role = (mass_g == 60 && std::string(plate) == "wood") ? "validate" : "calibrate";
-        t.conditions = {
-            {"mass_kg", 1e-3 * mass_g}, {"d_min_mm", b.d_min_mm}, {"d_max_mm", b.d_max_mm}};
         t.labels = {{"plate", plate}};
         d.tests.push_back(t);
       }
@@ -181,41 +155,6 @@ TEST(LoopSynth, HiddenSmoothPlateIsFound) {
   EXPECT_EQ(loop["summary"]["rmse_calibrate_after_deg"],
             loop["summary"]["rmse_calibrate_before_deg"]);
   EXPECT_EQ(loop["simulations"]["pile_runs_started"], 0);
-}
-
-// The funnel was lifted five times faster than declared.
-TEST(LoopSynth, HiddenFastLiftIsFound) {
-  expect_found(run_case("lift", design({{"lift_speed", 5.0}})), "lift_speed", true);
-}
-
-// The grains are cohesive (simplified JKR, 12 kJ/m^3 between rock grains; the funnel is rock too,
-// so grains also stick to its wall): the piles stand steeper than the grid's highest mu_r makes
-// them, the 35 g piles most. Measured (docs/loop.md): 10 kJ/m^3 leaves a 2.5 deg residual and is
-// named but cut 56%; 12 and 13 kJ/m^3 cut 77% and 76%; at 14 kJ/m^3 the refit's first value
-// clogs one test at the grid's top and the cut is 30%; from 15 kJ/m^3 the lab's own 26 mm funnel
-// arches on the slow 15 g tests (17-28% of the grains lodged). The cut is chaotic, not only
-// dependent on the strength: the same 12 kJ/m^3 data re-simulated after a change of rounding
-// alone in the contact kernel gave 50% (1.91 -> 0.97 deg; held out 3.86 -> 2.06),
-// because cohesion and mu_r both steepen the piles and the three seeds per point leave the
-// strength poorly determined (docs/loop.md). So this test holds cohesion to a 45% cut; naming
-// it and fitting it above zero are what it proves.
-TEST(LoopSynth, HiddenCohesionIsFound) {
-  expect_found(run_case("cohesion", design({{"cohesion", 12000.0}})), "cohesion", true, 0.45);
-}
-
-// Rolling resistance grows with grain size, mu_r (d / d_ref)^3: fine piles flatter, coarse
-// steeper than one mu_r makes them (cohesion would do the opposite).
-// DISABLED (docs/loop.md): the design's residual is too weak against its noise floor for the 70%
-// cut to be more than a coin toss. With vision reading the plate line from the toe the cut is
-// 68% (after-RMSE 0.63 deg against a floor of about 0.7); the trial simulated at the true
-// exponent fits no better (0.78 deg). And its fingerprint at mu_r 0.5 does not stand out of
-// its own seed noise (RMS 0.88 deg against 1.15 per test), so the traceability filter, which
-// checks that, lets nothing be named. Run it with
-// --gtest_also_run_disabled_tests.
-TEST(LoopSynth, DISABLED_HiddenSizeDependentRollingIsFound) {
-  expect_found(
-      run_case("rolling_size", size_design({{"rolling_size", 3.0}}), settings({0.1, 0.25, 0.5})),
-      "rolling_size", true);
 }
 
 // The size-dependent rolling resistance is defined around the calibration tests' typical grain:
