@@ -92,6 +92,11 @@ LoopSettings settings(std::vector<double> mu_grid = {0.1, 0.2, 0.35}) {
   // lab's, as they were designed (like for like through the sidecars is LoopCamera's).
   s.image.use_lab_cameras = false;
   s.max_effects = 1;
+  // Every candidate but lens_k1, whose fingerprint on these piles (0.06 deg RMS at its largest
+  // probe, against 0.7 deg of seed noise) never stands out and whose three probes cost 72
+  // photographs per fingerprint node; the validation experiment keeps the whole registry.
+  s.candidates = {"plate_friction", "lift_speed", "cohesion", "camera_height", "rolling_size",
+                  "fines"};
   // These designs put mu_r on the grid's bound whenever an effect is hidden (a smooth plate or a
   // fast lift at its low end, cohesion at its top): they test the tracing of what mu_r cannot
   // take up, with the correction held inside the grid. Extending it would simulate mu_r = 0 (or
@@ -218,9 +223,11 @@ TEST(LoopSynth, OneCalibrationTestTracesAPlantedPlateEffect) {
   EXPECT_LT(after, 0.5 * before) << loop["summary"].dump();
 }
 
-// A measurement wrong everywhere: the null dataset with 6 deg added to every lab angle (H and
-// D as measured). mu_r goes to the grid's top and cannot take the rest up; the residual is
-// flagged as a suspected measurement error and no physical effect is named.
+// A measurement wrong everywhere: the null dataset with 6 deg taken from every lab angle (H and
+// D as measured). mu_r goes to the grid's bottom and cannot take the rest up; the residual is
+// flagged as a suspected measurement error and no physical effect is named, although a smooth
+// plate, whose fingerprint is simulated at that end of the grid (and shared with the plate
+// tests), lowers every angle too.
 TEST(LoopSynth, AUniformMeasurementOffsetIsFlaggedNotNamed) {
   SimCache cache((test_root() / "cache").string(), {2, false});
   const std::string csv =
@@ -228,7 +235,7 @@ TEST(LoopSynth, AUniformMeasurementOffsetIsFlaggedNotNamed) {
   LabData data = read_lab_csv(csv);
   for (LabTest& t : data.tests) {
     ASSERT_TRUE(t.height_mm && t.diameter_mm) << t.id;
-    t.angle_deg += 6.0;
+    t.angle_deg -= 6.0;
     t.photos.clear();  // the angle as typed: the photos would give it back as measured
   }
   const nlohmann::json loop = run_loop(data, (test_root() / "offset" / "loop").string(), settings());
@@ -238,7 +245,7 @@ TEST(LoopSynth, AUniformMeasurementOffsetIsFlaggedNotNamed) {
   EXPECT_TRUE(loop["grid"]["mu_r_at_bound"].get<bool>());
   const nlohmann::json& it = loop["iterations"].at(0);
   EXPECT_EQ(it["channels"].size(), 3u);
-  EXPECT_NEAR(it["offset"]["coef"].get<double>(), 5.0, 2.5) << it["offset"].dump();
+  EXPECT_NEAR(it["offset"]["coef"].get<double>(), -5.0, 2.5) << it["offset"].dump();
   // A candidate lost in the seed noise was probed at larger values before it was given up.
   for (const nlohmann::json& u : loop["unavailable_candidates"]) {
     const std::string why = u["why"].get<std::string>();
