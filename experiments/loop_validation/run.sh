@@ -76,7 +76,9 @@ for row in "${cases[@]}"; do
   rows+=("$row")
 done
 
-# One line per case from its loop.json; "held" applies the case's expectation.
+# One line per case from its loop.json; "held" applies the case's expectation. angle_only and
+# joint give the first iteration's two best candidates by the angle alone (leave-one-out RMSE)
+# and by the joint fit of angle, H and D (chi^2 per channel), to show where they part.
 summary=$out/summary.json
 for row in "${rows[@]}"; do
   IFS='|' read -r name design grid want side cut <<<"$row"
@@ -93,6 +95,10 @@ for row in "${rows[@]}"; do
      rmse_validate_after_deg: $s.rmse_validate_after_deg,
      cut: $s.reduction, least_cut: $cut,
      pile_runs: .simulations.pile_runs_started, wall_s: .simulations.wall_s,
+     angle_only: [.iterations[0].candidates // [] | sort_by(.loo_rmse_deg)[:2][] |
+                  {name, loo_rmse_deg, t, accepted}],
+     joint: [.iterations[0].joint // [] | sort_by(.chi2)[:2][] |
+             {name, chi2, chi2_by_channel, values}],
      code_version: .provenance.code_version} |
     .held = (if $want == "none" then .named == null
              else (.named == $want and .cut >= $cut and
