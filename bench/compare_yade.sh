@@ -14,8 +14,10 @@
 # does not inflate as much as wall time. The physics is close, not identical: bench/README.md
 # lists the differences (rolling resistance above all).
 #
-# Usage: bench/compare_yade.sh [--quick] [--clumps N] [--steps N] [--settle N] [--relax N]
-#                              [--seed S] [--beds PREFIX] [--build DIR] [--work DIR]
+# Usage: bench/compare_yade.sh [--quick | --issue] [--clumps N] [--steps N] [--settle N]
+#                              [--relax N] [--container-mm R] [--seed S] [--beds PREFIX]
+#                              [--build DIR] [--work DIR]
+# --issue is bench_clumps' issue bed: 50,000 clumps in a 120 mm container (bench/README.md).
 # This is a benchmark, not CI: it installs the Debian package yade if it is missing.
 set -euo pipefail
 
@@ -26,14 +28,14 @@ work=/tmp/reposetwin-yade
 bench_args=()
 while [[ $# -gt 0 ]]; do
   case "$1" in
-    --quick) bench_args+=(--quick); shift ;;
-    --clumps|--steps|--settle|--relax|--seed|--beds)
+    --quick|--issue) bench_args+=("$1"); shift ;;
+    --clumps|--steps|--settle|--relax|--seed|--beds|--container-mm)
       [[ $# -ge 2 ]] || { echo "compare_yade.sh: $1 needs a value" >&2; exit 2; }
       bench_args+=("$1" "$2"); shift 2 ;;
     --build|--work)
       [[ $# -ge 2 ]] || { echo "compare_yade.sh: $1 needs a value" >&2; exit 2; }
       [[ "$1" == --build ]] && build="$2" || work="$2"; shift 2 ;;
-    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
     *) echo "compare_yade.sh: unknown option '$1'" >&2; exit 2 ;;
   esac
 done
