@@ -246,13 +246,20 @@ TEST(LoopSynth, AUniformMeasurementOffsetIsFlaggedNotNamed) {
   const nlohmann::json& it = loop["iterations"].at(0);
   EXPECT_EQ(it["channels"].size(), 3u);
   EXPECT_NEAR(it["offset"]["coef"].get<double>(), -5.0, 2.5) << it["offset"].dump();
-  // A candidate lost in the seed noise was probed at larger values before it was given up.
+  // A candidate lost in the seed noise was probed at larger values before it was given up: the
+  // largest probe is named, or the larger probe that could not be photographed (at the grid's
+  // bottom, camera_height's doubled probe, 20 mm, gave photos of the flattest piles in which
+  // vision found no pile).
+  int lost = 0;
   for (const nlohmann::json& u : loop["unavailable_candidates"]) {
     const std::string why = u["why"].get<std::string>();
-    if (why.find("seed noise") != std::string::npos) {
-      EXPECT_NE(why.find("largest probe tried"), std::string::npos) << u.dump();
-    }
+    if (why.find("seed noise") == std::string::npos) continue;
+    ++lost;
+    EXPECT_TRUE(why.find("largest probe tried") != std::string::npos ||
+                why.find("failed at probe") != std::string::npos)
+        << u.dump();
   }
+  EXPECT_GE(lost, 1) << loop["unavailable_candidates"].dump(1);
 }
 
 // No hidden effect: the loop must add nothing.
