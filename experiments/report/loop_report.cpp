@@ -74,6 +74,14 @@ std::string psd_label(const json& test) {
   return label;
 }
 
+// A test's numeric conditions by column, with the declared camera height (a column the loop
+// keeps apart from the scene's conditions).
+json numeric_conditions(const json& test) {
+  json c = test.at("conditions");
+  if (test.contains("camera_height_m")) c["camera_height_m"] = test["camera_height_m"];
+  return c;
+}
+
 // Every plot: each numeric condition on its axis, each text condition (a plate material) as
 // categories, and the size distribution as categories of its own when the tests differ in it.
 std::vector<ResidualPlot> residual_plots(const json& loop) {
@@ -108,7 +116,8 @@ std::vector<ResidualPlot> residual_plots(const json& loop) {
   };
   std::set<std::string> numeric, text;
   for (const json& t : tests) {
-    for (const auto& [k, v] : t.at("conditions").items()) numeric.insert(k);
+    const json numbers = numeric_conditions(t);
+    for (const auto& [k, v] : numbers.items()) numeric.insert(k);
     const json words = t.value("text_conditions", json::object());
     for (const auto& [k, v] : words.items())
       if (k.rfind("set:sample.psd", 0) != 0) text.insert(k);  // shown on the PSD's own plot
@@ -117,8 +126,8 @@ std::vector<ResidualPlot> residual_plots(const json& loop) {
   for (const std::string& c : numeric) {
     ResidualPlot& p = plots.emplace_back(empty_plot(c));
     for (std::size_t i = 0; i < tests.size(); ++i)
-      if (tests[i]["conditions"].contains(c))
-        p.points[series_of(i)].push_back(point(i, json_number(tests[i]["conditions"][c])));
+      if (const json v = numeric_conditions(tests[i]); v.contains(c))
+        p.points[series_of(i)].push_back(point(i, json_number(v[c])));
   }
   // A category axis: the tests' values of `value_of` (empty: the test has none), sorted.
   auto categorical = [&](const std::string& c, auto value_of) {

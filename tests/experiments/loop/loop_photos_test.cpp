@@ -15,6 +15,7 @@
 #include "experiments/loop/loop_data.hpp"
 #include "experiments/photos/photographs.hpp"
 #include "experiments/report/loop_report.hpp"
+#include "experiments/report/page_check.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -98,6 +99,9 @@ TEST(LoopPhotos, LoopJsonNamesTheLabAndTwinPhotosOfEachTestWithPhotos) {
   const std::string html = read_file((out / "index.html").string());
   EXPECT_NE(html.find("src='photos/pic/lab.measured.png'"), std::string::npos);
   EXPECT_NE(html.find("src='photos/pic/twin.measured.png'"), std::string::npos);
+  // And opens in a copied folder: every image and link relative and present, no machine path.
+  for (const report::PageProblem& q : report::page_problems(out / "index.html"))
+    ADD_FAILURE() << report::to_string(q.kind) << ": " << q.what;
 
   // Again on the same cache: nothing is simulated or photographed anew.
   s.force = true;

@@ -244,6 +244,7 @@ TEST(ReportLoop, TextConditionsAndThePsdGetTheirOwnPlotsAndSeries) {
        {"role", "validate"},
        {"angle_deg", 35},
        {"conditions", {{"mass_kg", 1.0}}},
+       {"camera_height_m", 0.05},
        {"text_conditions", {{"plate", "wood"}, {"set:sample.psd_file", "psd/fine.toml"}}}}};
   loop["baseline"]["residuals"] = {r1, r2, r3};
   loop["final"]["residuals"] = {r1, r2, r3};
@@ -260,6 +261,10 @@ TEST(ReportLoop, TextConditionsAndThePsdGetTheirOwnPlotsAndSeries) {
   const std::string psd_gp = read_file((plots / "residual_PSD.gp").string());
   EXPECT_NE(psd_gp.find("set xtics ('2-4 mm' 0, '3-4 mm' 1, 'fine.toml' 2)"), std::string::npos)
       << psd_gp;
+  // The declared camera height, a column kept apart from the scene's conditions, is one too.
+  EXPECT_NE(
+      read_file((plots / "residual_camera_height_m.dat").string()).find("\n0.05 2.5 2.5 0.2 0\n"),
+      std::string::npos);
   EXPECT_FALSE(fs::exists(plots / "residual_set_sample_psd_file.dat"))
       << "the sieve-table file is shown on the PSD's plot, not twice";
   // On the mass axis, one series per distribution, named in the key.
