@@ -59,6 +59,7 @@ json Loop::run() {
   }
 
   rec.final_model = final_record(state);
+  rec.photo_pairs = photo_pairs(state);
   rec.provenance = provenance(*base);
   rec.simulations = {
       cache_.simulations_started(), cache_.photos_started(),

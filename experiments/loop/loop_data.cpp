@@ -147,6 +147,7 @@ void read_overrides(LabTest& test, const Row& row, const Where& w) {
     if (v.empty()) continue;
     if (c.factor == 0.0) {
       test.overrides.emplace_back(c.key, "\"" + v + "\"");
+      test.text_conditions[c.column] = v;
     } else {
       const double x = parse_number(v, w, c.column);
       if (!(x > 0.0)) throw InputError(w.at(c.column) + ": " + v + " must be positive");
@@ -161,9 +162,18 @@ void read_overrides(LabTest& test, const Row& row, const Where& w) {
     if (v.empty()) continue;
     test.overrides.emplace_back(h.substr(4), typed_override(h.substr(4), v, h).value);
     test.override_columns.push_back(h);
+    // A number is plotted on an axis; anything else (a file name, a model keyword) as a
+    // category.
+    std::size_t used = 0;
     try {
-      test.conditions[h] = std::stod(v);
+      test.conditions[h] = std::stod(v, &used);
     } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != v.size()) {
+      test.conditions.erase(h);
+      test.text_conditions[h] =
+          v.size() >= 2 && v.front() == '"' && v.back() == '"' ? v.substr(1, v.size() - 2) : v;
     }
   }
   std::vector<std::string> sets;
@@ -233,8 +243,9 @@ void read_photos(LabTest& test, const Row& row, const Where& w, const fs::path& 
   std::optional<double> mmpx;
   if (!row.get("mm_per_px").empty()) mmpx = parse_number(row.get("mm_per_px"), w, "mm_per_px");
   json declared = {{"angle_deg", have_angle ? json(test.angle_deg) : json()}};
+  test.photo_scale = {cam, mmpx};
   const LabPhotoMeasurement m = measure_lab_photos(
-      test.photos, {cam, mmpx},
+      test.photos, test.photo_scale,
       {w.at("photo"), w.at("photo_camera"), w.at("mm_per_px"), "photo_camera", "mm_per_px"});
   test.angle_deg = m.summary.theta_deg.mean;
   test.height_mm = 1e3 * m.summary.height_m.mean;
@@ -297,6 +308,7 @@ json to_json(const LabTest& t) {
   json j = {{"id", t.id},          {"line", t.line},           {"role", t.role},
             {"scene", t.scene_path}, {"overrides", o},         {"conditions", t.conditions},
             {"angle_deg", t.angle_deg}};
+  if (!t.text_conditions.empty()) j["text_conditions"] = t.text_conditions;
   if (t.height_mm) j["H_mm"] = *t.height_mm;
   if (t.diameter_mm) j["D_mm"] = *t.diameter_mm;
   if (t.crest_mm) j["crest_mm"] = *t.crest_mm;

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "camera/camera.hpp"
+#include "experiments/photos/lab_photos.hpp"
 
 namespace reposetwin::experiments {
 
@@ -31,6 +32,9 @@ struct LabTest {
   std::vector<std::pair<std::string, std::string>> overrides;  // dotted key -> TOML value text
   std::vector<std::string> override_columns;  // the column each override came from (same order)
   std::map<std::string, double> conditions;   // numeric conditions by column (for plots)
+  // Text conditions by column (a plate material, a set:KEY string such as a PSD file): the
+  // page plots the residuals against them as categories.
+  std::map<std::string, std::string> text_conditions;
   double angle_deg = 0.0;                     // measured angle of repose [deg], in (0, 90)
   std::optional<double> height_mm;            // measured H [mm]
   std::optional<double> diameter_mm;          // measured D [mm]
@@ -38,6 +42,7 @@ struct LabTest {
   std::optional<double> camera_height_m;      // declared camera height above the plate [m]
   int repeats = 1;                            // piles averaged into the measured values [-]
   std::vector<std::string> photos;            // absolute paths (side views), may be empty
+  LabPhotoScale photo_scale;                  // how the photos' scale is known (the row's)
   nlohmann::json photo_measurement;           // what vision measured on the photos (if any)
   // The lab's declared side cameras of its photos (sidecars), distinct, in photo order: the
   // twin photographs its piles of this test with them (ImageVariant::lab_cameras). Empty: the

@@ -195,6 +195,20 @@ json to_json(const SimulationCounts& s) {
           {"wall_s", s.wall_s}};
 }
 
+json to_json(const PhotoView& v) {
+  return {{"photo", v.photo},         {"overlay", v.overlay},   {"source", v.source},
+          {"mm_per_px", v.mm_per_px}, {"width_px", v.width_px}, {"height_px", v.height_px},
+          {"angle_deg", v.angle_deg}};
+}
+
+json to_json(const PhotoPair& p) {
+  json effects = json::object();
+  for (const auto& [name, value] : p.effects) effects[name] = value;
+  return {{"id", p.id},     {"lab", to_json(p.lab)}, {"twin", p.twin ? to_json(*p.twin) : json()},
+          {"mu_r", p.mu_r}, {"seed", p.seed},        {"effects", effects},
+          {"note", p.note}};
+}
+
 json to_json(const LoopRecord& loop) {
   const double before = loop.baseline.rmse.calibrate_deg;
   const double after = loop.final_model.rmse.calibrate_deg;
@@ -264,7 +278,8 @@ json to_json(const LoopRecord& loop) {
           {"final", to_json(loop.final_model)},
           {"summary", summary},
           {"simulations", to_json(loop.simulations)},
-          {"provenance", to_json(loop.provenance)}};
+          {"provenance", to_json(loop.provenance)},
+          {"photo_pairs", to_json_array(loop.photo_pairs)}};
 }
 
 namespace {
@@ -474,6 +489,29 @@ LoopProvenance loop_provenance_from_json(const json& j) {
 SimulationCounts simulation_counts_from_json(const json& j) {
   return {j.at("pile_runs_started").get<int>(), j.at("photos_started").get<int>(),
           num(j, "wall_s")};
+}
+
+PhotoView photo_view_from_json(const json& j) {
+  return {j.at("photo").get<std::string>(),
+          j.at("overlay").get<std::string>(),
+          j.at("source").get<std::string>(),
+          num(j, "mm_per_px"),
+          j.at("width_px").get<int>(),
+          j.at("height_px").get<int>(),
+          num(j, "angle_deg")};
+}
+
+PhotoPair photo_pair_from_json(const json& j) {
+  PhotoPair p;
+  p.id = j.at("id").get<std::string>();
+  p.lab = photo_view_from_json(j.at("lab"));
+  if (!j.at("twin").is_null()) p.twin = photo_view_from_json(j["twin"]);
+  p.mu_r = num(j, "mu_r");
+  p.seed = j.at("seed").get<std::uint64_t>();
+  for (const auto& [name, value] : j.at("effects").items())
+    p.effects.emplace_back(name, json_number(value));
+  p.note = j.at("note").get<std::string>();
+  return p;
 }
 
 }  // namespace reposetwin::experiments

@@ -196,6 +196,31 @@ struct SimulationCounts {
   double wall_s = 0.0;
 };
 
+/// One photograph shown on the loop's page: the picture and vision's overlay on it, copied into
+/// the loop's output folder, with the scale that lets the page show two at one scale.
+struct PhotoView {
+  std::string photo;       // path relative to the loop's folder (photos/<id>/...)
+  std::string overlay;     // the same with vision's measurement drawn on it
+  std::string source;      // where it was copied from (the lab's file, the cache's)
+  double mm_per_px = 0.0;  // scale at the pile axis [mm/px]
+  int width_px = 0;        // [px]
+  int height_px = 0;       // [px]
+  double angle_deg = 0.0;  // vision atan(2H/D) on this photo [deg]
+};
+
+/// A test's lab photo beside one twin photo of the same test (the first measured view of the
+/// first seed's pile at the grid point nearest the final mu_r, on the simulated surface that
+/// weighs most in the final model, photographed through the lab's cameras when it gave them).
+struct PhotoPair {
+  std::string id;  // the test
+  PhotoView lab;
+  std::optional<PhotoView> twin;  // absent: no twin view could be measured (`note` says why)
+  double mu_r = 0.0;              // grid point of the twin pile [-]
+  std::uint64_t seed = 0;         // its pour's seed
+  std::vector<std::pair<std::string, double>> effects;  // effects simulated in it, by name
+  std::string note;
+};
+
 /// The whole of loop.json.
 struct LoopRecord {
   std::vector<LabTest> tests;
@@ -210,6 +235,7 @@ struct LoopRecord {
   FinalRecord final_model;
   SimulationCounts simulations;
   LoopProvenance provenance;
+  std::vector<PhotoPair> photo_pairs;  // tests with photos only; empty without photos
 };
 
 nlohmann::json to_json(const ResidualRow& r);
@@ -227,6 +253,8 @@ nlohmann::json to_json(const IterationRecord& it);
 nlohmann::json to_json(const FinalRecord& f);
 nlohmann::json to_json(const LoopProvenance& p);
 nlohmann::json to_json(const SimulationCounts& s);
+nlohmann::json to_json(const PhotoView& v);
+nlohmann::json to_json(const PhotoPair& p);
 /// loop.json: the records, the candidate registry, the rule and a summary.
 nlohmann::json to_json(const LoopRecord& loop);
 
@@ -249,5 +277,7 @@ IterationRecord iteration_record_from_json(const nlohmann::json& j);
 FinalRecord final_record_from_json(const nlohmann::json& j);
 LoopProvenance loop_provenance_from_json(const nlohmann::json& j);
 SimulationCounts simulation_counts_from_json(const nlohmann::json& j);
+PhotoView photo_view_from_json(const nlohmann::json& j);
+PhotoPair photo_pair_from_json(const nlohmann::json& j);
 
 }  // namespace reposetwin::experiments

@@ -81,7 +81,8 @@ std::string ImageVariant::key() const {
   s << width_px << "x" << height_px << "_v" << side_views << "_d" << num(distance_radii) << "_h"
     << num(camera_height_m) << "_k" << num(k1) << "_dh" << num(declared_height_m) << "_dk"
     << num(declared_k1) << "_n" << num(noise_sd) << "_s" << noise_seed
-    << (keep_photos ? "_keep" : "") << (aim_at_axis_foot ? "_aim" : "");
+    << (keep_photos ? "_keep" : "") << (keep_overlays ? "_ovl" : "")
+    << (aim_at_axis_foot ? "_aim" : "");
   // Absent lab cameras leave the key as it was, so photos cached without them stay valid.
   if (!lab_cameras.empty()) {
     json cams = json::array();
@@ -142,7 +143,7 @@ PhotoSettings photo_settings(const ImageVariant& v) {
   // (a 10-band bar is taller than a small pile and would shrink it to a few pixels).
   s.scale_reference = false;
   s.write_photos = v.keep_photos;
-  s.write_overlays = false;
+  s.write_overlays = v.keep_overlays;
   s.views_must_measure = false;  // a small pile's pours are repeated when no view measures
   return s;
 }
@@ -157,6 +158,7 @@ json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
     json j = view.measured ? vision::to_json(*view.measured) : json{{"error", view.error}};
     j["azimuth_deg"] = view.azimuth_deg;
     if (v.keep_photos) j["photo"] = view.stem + ".png";
+    if (v.keep_overlays && view.measured) j["overlay"] = view.stem + ".measured.png";
     views.push_back(j);
   }
   // A pile too small for any view (a few spheres through a jammed outlet) has no angle: the
@@ -309,6 +311,7 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     if (photo_of[i].empty()) continue;
     const json& p = photo_result[photo_of[i]];
     o.image_dir = (fs::path(dir_) / "cases" / photo_of[i]).string();
+    o.views = p.value("views", json::array());
     if (p.contains("error")) {
       o.no_pile = p.at("error").get<std::string>();
       continue;

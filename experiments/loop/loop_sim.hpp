@@ -54,6 +54,7 @@ struct ImageVariant {
   double noise_sd = 0.0;           // Gaussian image noise, grey levels (0-255) [-]
   std::uint64_t noise_seed = 1;    // seed of the noise and of the particle tint
   bool keep_photos = false;        // write the PNGs and their declared-camera sidecars
+  bool keep_overlays = false;      // write each measured view's overlay PNG (stem.measured.png)
   // The lab's declared side cameras (its photos' sidecars, LabTest::cameras): when given, the
   // twin photographs its pile with exactly these, one view each (the same pose, lens,
   // resolution and distortion), and width_px, height_px, side_views and distance_radii do not
@@ -94,6 +95,7 @@ struct SimOutcome {
   double positions_angle_deg = 0.0;  // atan(2H/D) from particle positions [deg]
   std::string sim_dir;        // the pile run's folder
   std::string image_dir;      // the photograph's folder
+  nlohmann::json views;       // the photograph's views as measured (photograph_pile's record)
   nlohmann::json provenance;  // the run's provenance (scene, seed, dt, softened E, version)
   std::uint64_t seed = 0;     // the seed of the pour that gave this outcome
   int clogged_pours = 0;      // earlier pours of the request that formed no pile (repeated)
@@ -158,7 +160,9 @@ PhotoSettings photo_settings(const ImageVariant& variant);
 /// {angle_deg, flank_deg, height_mm, diameter_mm, crest_width_mm, views[...]}, or
 /// {error, views[...]} if no view could be measured (a pile of a few spheres). Writes the
 /// photographs and their declared-camera sidecars into `out_dir` when keep_photos is set
-/// (names side_az000.png / .json ...). Uses OSMesa: call it in a worker, not before forking.
+/// (names side_az000.png / .json ...; each view's "photo"), and each measured view's overlay
+/// when keep_overlays is set (side_az000.measured.png; the view's "overlay"). Uses OSMesa: call it
+/// in a worker, not before forking.
 nlohmann::json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
                                const std::vector<double>& radii, const std::vector<int>& materials,
                                const ImageVariant& variant, const std::string& out_dir);

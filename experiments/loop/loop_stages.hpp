@@ -112,6 +112,8 @@ class Loop {
   IterationRecord trace(int it, const LoopState& state,
                         const std::vector<FingerprintRecord>& fps) const;
   FinalRecord final_record(const LoopState& state) const;
+  // The lab's photo beside a twin photo per test with photos (loop_photos.cpp).
+  std::vector<PhotoPair> photo_pairs(const LoopState& state);
   LoopProvenance provenance(const Surface& base) const;
   nlohmann::json write(const LoopRecord& rec) const;  // OUT/loop.json and OUT/index.html
 

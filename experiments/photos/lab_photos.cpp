@@ -32,7 +32,8 @@ std::string number_text(double v) { return significant(v, 17); }
 }  // namespace
 
 LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
-                                       const LabPhotoScale& scale, const LabPhotoFields& fields) {
+                                       const LabPhotoScale& scale, const LabPhotoFields& fields,
+                                       bool draw_overlays) {
   if (photos.empty()) throw InputError(fields.photo + ": no photo given");
   vision::ScaleSpec common;
   if (!scale.camera_json.empty()) {
@@ -53,6 +54,7 @@ LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
   const SingleOpenCvThread one_thread;
   std::vector<vision::SideMeasurement> views;
   std::vector<camera::Camera> cameras;
+  std::vector<cv::Mat> overlays;
   json unmeasured = json::array();
   for (const std::string& p : photos) {
     cv::Mat image;
@@ -76,6 +78,7 @@ LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
     if (this_scale.camera) cameras.push_back(*this_scale.camera);
     try {
       views.push_back(vision::measure_side(image, this_scale, {}, p));
+      if (draw_overlays) overlays.push_back(vision::draw_side_overlay(image, views.back()));
     } catch (const std::exception& e) {
       // A photo without any scale source is an error at once; with several photos of one test,
       // one that cannot be measured is recorded and the others still count.
@@ -99,6 +102,7 @@ LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
   for (const auto& v : views) m.record["views"].push_back(vision::to_json(v));
   m.record["unmeasured"] = unmeasured;
   m.cameras = std::move(cameras);
+  m.overlays = std::move(overlays);
   return m;
 }
 

@@ -43,12 +43,17 @@ struct LabPhotoMeasurement {
   // The lab's camera of every photo that has one (a common camera sidecar or the photo's own),
   // in photo order: what PhotoSettings::lab_cameras takes, so the twin photographs like for like.
   std::vector<camera::Camera> cameras;
+  // Vision's overlay (H and D lines, toe line, apex) of every measured photo, in the order of
+  // record["views"]; empty unless asked for (the loop's page shows one per test).
+  std::vector<cv::Mat> overlays;
 };
 
 /// Measures the side photos (paths as given) of one pile test. Uses one OpenCV thread, so that a
 /// worker pool may fork afterwards. Throws InputError naming `fields` for an unreadable photo, a
-/// bad scale, a photo without any scale, or when no photo could be measured.
+/// bad scale, a photo without any scale, or when no photo could be measured. With
+/// `draw_overlays`, also draws each measured photo's overlay (LabPhotoMeasurement::overlays).
 LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
-                                       const LabPhotoScale& scale, const LabPhotoFields& fields);
+                                       const LabPhotoScale& scale, const LabPhotoFields& fields,
+                                       bool draw_overlays = false);
 
 }  // namespace reposetwin::experiments

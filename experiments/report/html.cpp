@@ -1,5 +1,6 @@
 #include "experiments/report/html.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "experiments/report/templates.hpp"
@@ -50,6 +51,13 @@ mustache::data to_data(const Table& t) {
   d.set("caption_html", text_or_false(t.caption_html));
   d.set("numeric", t.numeric);
   return d;
+}
+
+double beside_scale(const std::vector<ScaledImage>& images, double max_width_px) {
+  double common = 0.0;
+  for (const ScaledImage& im : images)
+    common = std::max({common, im.mm_per_px, im.width_px * im.mm_per_px / max_width_px});
+  return common;
 }
 
 mustache::data to_data(const Figure& f) {

@@ -63,6 +63,22 @@ struct Page {
   std::vector<std::string> sections;
 };
 
+/// One picture to be shown beside others at one scale.
+struct ScaledImage {
+  int width_px = 0;        // [px]
+  double mm_per_px = 0.0;  // its scale at the pile axis [mm/px], > 0
+};
+
+/// The common scale [mm/px] at which `images` are shown side by side so that one mm is as many
+/// page pixels in each: the coarsest of their own scales (none is enlarged past its pixels), or
+/// coarser still so that the widest on the page is at most `max_width_px`.
+double beside_scale(const std::vector<ScaledImage>& images, double max_width_px);
+
+/// An image's width on the page at the common scale `common` [px].
+inline double page_width(const ScaledImage& image, double common) {
+  return image.width_px * image.mm_per_px / common;
+}
+
 mustache::data to_data(const Table& t);
 mustache::data to_data(const Figure& f);
 mustache::data to_data(const std::vector<Figure>& fs);

@@ -1,12 +1,18 @@
 // write_loop_html (loop_report.hpp): the loop's page, with the report's page skeleton, tables and
-// plotting. Tables from loop.json and gnuplot plots of the residuals against each condition,
-// before and after the chosen effects. Reads loop.json only (never simulates).
+// plotting. Tables from loop.json, gnuplot plots of the residuals against each condition (text
+// conditions as categories, the size distribution as series and categories of its own), before
+// and after the chosen effects, and each test's lab photo beside a twin photo at one scale.
+// Reads loop.json and the files it names only (never simulates).
 #include "experiments/report/loop_report.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <optional>
 #include <set>
 #include <sstream>
 
+#include "experiments/io/json_fields.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/loop/loop.hpp"
 #include "experiments/report/format.hpp"
@@ -34,42 +40,247 @@ Table numeric_table(std::vector<std::string> header) {
   return t;
 }
 
-// One plot per condition: the residual of every test before and after, against the condition.
-std::vector<Figure> residual_plots(const json& loop, const fs::path& dir) {
+// One residual point: a test's residual before and after, at its value of one condition.
+struct ResidualPoint {
+  double x = 0.0;                                 // the condition's value, or its category's index
+  double before = 0.0, after = 0.0, sigma = 0.0;  // [deg]
+  bool calibrate = false;
+};
+
+// The residuals against one condition, in series (one per size distribution when the tests
+// differ in it, so that a PSD is not lost on another condition's axis).
+struct ResidualPlot {
+  std::string condition;                // axis label
+  std::vector<std::string> categories;  // the x tick labels of a text condition; empty: numbers
+  std::vector<std::string> series;      // names (one unnamed series when there is one)
+  std::vector<std::vector<ResidualPoint>> points;  // per series
+};
+
+// A test's size distribution in words: its size band (d_min_mm, d_max_mm) and any PSD scene
+// key of a set: column (a sieve table file, its cut-offs); "" when the test declares none.
+std::string psd_label(const json& test) {
+  std::string label;
+  auto add = [&label](const std::string& s) { label += (label.empty() ? "" : ", ") + s; };
+  const json& c = test.at("conditions");
+  if (c.contains("d_min_mm") || c.contains("d_max_mm"))
+    add((c.contains("d_min_mm") ? sig3(c["d_min_mm"]) : std::string("?")) + "-" +
+        (c.contains("d_max_mm") ? sig3(c["d_max_mm"]) : std::string("?")) + " mm");
+  auto psd_key = [](const std::string& k) { return k.rfind("set:sample.psd", 0) == 0; };
+  for (const auto& [k, v] : c.items())
+    if (psd_key(k)) add(short_key(k.substr(4)) + " " + sig3(v));
+  const json text = test.value("text_conditions", json::object());
+  for (const auto& [k, v] : text.items())
+    if (psd_key(k)) add(fs::path(v.get<std::string>()).filename().string());
+  return label;
+}
+
+// A test's numeric conditions by column, with the declared camera height (a column the loop
+// keeps apart from the scene's conditions).
+json numeric_conditions(const json& test) {
+  json c = test.at("conditions");
+  if (test.contains("camera_height_m")) c["camera_height_m"] = test["camera_height_m"];
+  return c;
+}
+
+// Every plot: each numeric condition on its axis, each text condition (a plate material) as
+// categories, and the size distribution as categories of its own when the tests differ in it.
+std::vector<ResidualPlot> residual_plots(const json& loop) {
   const json& tests = loop.at("tests");
   const json& before = loop.at("baseline").at("residuals");
   const json& after = loop.at("final").at("residuals");
-  std::set<std::string> conditions;
-  for (const json& t : tests)
-    for (const auto& [k, v] : t.at("conditions").items()) conditions.insert(k);
-  std::vector<Figure> figures;
-  for (const std::string& c : conditions) {
-    std::string safe = c;
-    for (char& ch : safe)
-      if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-    const fs::path data = dir / ("residual_" + safe + ".dat");
-    const fs::path png = dir / ("residual_" + safe + ".png");
-    std::ostringstream d;
-    d << "# " << c << " residual_before_deg residual_after_deg sigma_deg role(1=calibrate)\n";
-    for (std::size_t i = 0; i < tests.size(); ++i) {
-      if (!tests[i]["conditions"].contains(c)) continue;
-      d << tests[i]["conditions"][c].get<double>() << " " << before[i]["residual_deg"] << " "
-        << after[i]["residual_deg"] << " " << before[i]["sigma_deg"] << " "
-        << (tests[i]["role"] == "calibrate" ? 1 : 0) << "\n";
-    }
-    write_file_atomic(data.string(), d.str());
-    const std::string script =
-        png_terminal(png, 640, 420) + "set xlabel '" + c +
-        "' noenhanced\nset ylabel 'measured - predicted angle [deg]'\n"
-        "set key outside top center horizontal\nset grid\nset offsets graph 0.05, graph 0.05, "
-        "graph 0.05, graph 0.05\nset xzeroaxis lt -1\nplot '" + data.filename().string() +
-        "' u ($1):2:4 w yerrorbars pt 7 lc rgb '#c0392b' t 'before', "
-        "'' u ($1):3:4 w yerrorbars pt 5 lc rgb '#2471a3' t 'after'\n";
-    if (run_gnuplot(dir / ("residual_" + safe + ".gp"), script, png))
-      figures.push_back({"plots/" + png.filename().string(),
-                         "Residual against " + c + " (error bars: seed noise of one residual)", 0});
+  std::vector<std::string> psd;
+  std::set<std::string> psds;
+  for (const json& t : tests) psds.insert(psd.emplace_back(psd_label(t)));
+  const bool split = psds.size() > 1;
+  const std::vector<std::string> psd_names(psds.begin(), psds.end());
+  auto point = [&](std::size_t i, double x) {
+    return ResidualPoint{x, json_number(before[i]["residual_deg"]),
+                         json_number(after[i]["residual_deg"]), json_number(before[i]["sigma_deg"]),
+                         tests[i]["role"] == "calibrate"};
+  };
+  auto series_of = [&](std::size_t i) -> std::size_t {
+    if (!split) return 0;
+    return static_cast<std::size_t>(std::find(psd_names.begin(), psd_names.end(), psd[i]) -
+                                    psd_names.begin());
+  };
+  auto empty_plot = [&](const std::string& condition) {
+    ResidualPlot p;
+    p.condition = condition;
+    if (split)
+      for (const std::string& n : psd_names)
+        p.series.push_back("PSD " + (n.empty() ? "of the scene" : n));
+    else
+      p.series.push_back("");
+    p.points.resize(p.series.size());
+    return p;
+  };
+  std::set<std::string> numeric, text;
+  for (const json& t : tests) {
+    const json numbers = numeric_conditions(t);
+    for (const auto& [k, v] : numbers.items()) numeric.insert(k);
+    const json words = t.value("text_conditions", json::object());
+    for (const auto& [k, v] : words.items())
+      if (k.rfind("set:sample.psd", 0) != 0) text.insert(k);  // shown on the PSD's own plot
   }
+  std::vector<ResidualPlot> plots;
+  for (const std::string& c : numeric) {
+    ResidualPlot& p = plots.emplace_back(empty_plot(c));
+    for (std::size_t i = 0; i < tests.size(); ++i)
+      if (const json v = numeric_conditions(tests[i]); v.contains(c))
+        p.points[series_of(i)].push_back(point(i, json_number(v[c])));
+  }
+  // A category axis: the tests' values of `value_of` (empty: the test has none), sorted.
+  auto categorical = [&](const std::string& c, auto value_of) {
+    ResidualPlot p;
+    p.condition = c;
+    p.series = {std::string()};
+    p.points.resize(1);
+    std::set<std::string> values;
+    for (std::size_t i = 0; i < tests.size(); ++i)
+      if (!value_of(i).empty()) values.insert(value_of(i));
+    p.categories.assign(values.begin(), values.end());
+    for (std::size_t i = 0; i < tests.size(); ++i) {
+      const std::string v = value_of(i);
+      if (v.empty()) continue;
+      const auto at = std::find(p.categories.begin(), p.categories.end(), v);
+      p.points[0].push_back(point(i, static_cast<double>(at - p.categories.begin())));
+    }
+    plots.push_back(p);
+  };
+  for (const std::string& c : text)
+    categorical(c, [&](std::size_t i) {
+      return tests[i].value("text_conditions", json::object()).value(c, std::string());
+    });
+  if (split) categorical("PSD", [&](std::size_t i) { return psd[i].empty() ? "scene's" : psd[i]; });
+  return plots;
+}
+
+// A string for a gnuplot single-quoted literal.
+std::string gnuplot_quoted(const std::string& s) {
+  std::string q = "'";
+  for (char ch : s) q += ch == '\'' ? std::string("''") : std::string(1, ch);
+  return q + "'";
+}
+
+// The plot's data (one block per series) and gnuplot script; its figure when gnuplot drew it.
+std::optional<Figure> draw(const ResidualPlot& p, const fs::path& dir) {
+  std::string safe = p.condition;
+  for (char& ch : safe)
+    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+  const fs::path data = dir / ("residual_" + safe + ".dat");
+  const fs::path png = dir / ("residual_" + safe + ".png");
+  std::ostringstream d;
+  d << "# " << p.condition << (p.categories.empty() ? "" : " (category index)")
+    << " residual_before_deg residual_after_deg sigma_deg role(1=calibrate)\n";
+  for (std::size_t s = 0; s < p.series.size(); ++s) {
+    if (s > 0) d << "\n\n";
+    d << "# series " << s << ": " << (p.series[s].empty() ? "all tests" : p.series[s]) << "\n";
+    for (const ResidualPoint& q : p.points[s])
+      d << q.x << " " << q.before << " " << q.after << " " << q.sigma << " "
+        << (q.calibrate ? 1 : 0) << "\n";
+  }
+  write_file_atomic(data.string(), d.str());
+  static const char* const kColours[] = {"#c0392b", "#2471a3", "#27ae60",
+                                         "#8e44ad", "#d68910", "#555555"};
+  std::string script = png_terminal(png, 640, 420) + "set xlabel " + gnuplot_quoted(p.condition) +
+                       " noenhanced\nset ylabel 'measured - predicted angle [deg]'\n"
+                       "set key outside top center horizontal noenhanced\nset grid\n"
+                       "set offsets graph 0.05, graph 0.05, graph 0.05, graph 0.05\n"
+                       "set xzeroaxis lt -1\n";
+  if (!p.categories.empty()) {
+    script += "set xrange [-0.5:" + std::to_string(p.categories.size()) + "-0.5]\nset xtics (";
+    for (std::size_t k = 0; k < p.categories.size(); ++k)
+      script += (k ? ", " : "") + gnuplot_quoted(p.categories[k]) + " " + std::to_string(k);
+    script += ")\nset offsets 0, 0, graph 0.05, graph 0.05\n";
+  }
+  // Before and after side by side on a category; one colour per series when there are several.
+  const std::string shift = p.categories.empty() ? "" : "0.08";
+  std::string plot;
+  for (std::size_t s = 0; s < p.series.size(); ++s) {
+    if (p.points[s].empty()) continue;
+    const std::string name = p.series[s].empty() ? "" : ", " + p.series[s];
+    const std::string index = " index " + std::to_string(s);
+    const bool one = p.series.size() == 1;
+    const std::string c_before = one ? "#c0392b" : kColours[s % 6];
+    const std::string c_after = one ? "#2471a3" : kColours[s % 6];
+    plot += std::string(plot.empty() ? "plot " : ", ") + "'" + data.filename().string() + "'" +
+            index + " u ($1" + (shift.empty() ? "" : "-" + shift) + "):2:4 w yerrorbars pt " +
+            (one ? "7" : "6") + " lc rgb '" + c_before + "' t " + gnuplot_quoted("before" + name) +
+            ", ''" + index + " u ($1" + (shift.empty() ? "" : "+" + shift) +
+            "):3:4 w yerrorbars pt " + (one ? "5" : "7") + " lc rgb '" + c_after + "' t " +
+            gnuplot_quoted("after" + name);
+  }
+  script += plot + "\n";
+  if (!run_gnuplot(dir / ("residual_" + safe + ".gp"), script, png)) return std::nullopt;
+  std::string caption = "Residual against " + p.condition;
+  if (!p.categories.empty()) caption += " (a category each)";
+  if (p.series.size() > 1)
+    caption += ", one colour per size distribution (open: before, filled: after)";
+  return Figure{"plots/" + png.filename().string(),
+                caption + " (error bars: seed noise of one residual)", 0};
+}
+
+std::vector<Figure> residual_figures(const json& loop, const fs::path& dir) {
+  std::vector<Figure> figures;
+  for (const ResidualPlot& p : residual_plots(loop))
+    if (std::optional<Figure> f = draw(p, dir)) figures.push_back(*f);
   return figures;
+}
+
+// The width of the wider image of a pair on the page [px].
+constexpr double kPairWidthPx = 560.0;
+
+// Per test with photos, the lab's overlay beside the twin's at one mm per page pixel (CSS
+// width from each image's own scale), and the files with their scales.
+std::string photos_section(const json& loop) {
+  const json pairs = loop.value("photo_pairs", json::array());
+  if (pairs.empty()) return "";
+  mustache::data list(mustache::data::type::list);
+  for (const json& p : pairs) {
+    std::vector<std::pair<std::string, const json*>> views = {{"lab", &p.at("lab")}};
+    if (!p.at("twin").is_null()) views.emplace_back("twin", &p.at("twin"));
+    std::vector<ScaledImage> images;
+    for (const auto& view : views)
+      images.push_back(
+          {view.second->at("width_px").get<int>(), json_number(view.second->at("mm_per_px"))});
+    const double common = beside_scale(images, kPairWidthPx);
+    std::vector<Figure> figures;
+    Table files = numeric_table(
+        {"", "photo", "overlay", "mm per px", "size [px]", "on the page [px]", "atan(2H/D) [deg]"});
+    for (std::size_t k = 0; k < views.size(); ++k) {
+      const json& v = *views[k].second;
+      const int width = static_cast<int>(std::lround(page_width(images[k], common)));
+      std::string caption = views[k].first == "lab" ? "lab photo" : "twin photo";
+      caption += ", vision atan(2H/D) " + sig3(v["angle_deg"]) + " deg";
+      if (views[k].first == "twin") {
+        caption += "; mu_r " + sig3(p["mu_r"]) + ", seed " + p["seed"].dump();
+        const json effects = p.value("effects", json::object());
+        for (const auto& [name, value] : effects.items())
+          caption += ", " + name + " " + sig3(value);
+      }
+      figures.push_back({v.at("overlay").get<std::string>(), caption, width});
+      Cell photo, overlay;
+      photo.left = overlay.left = true;
+      photo.links = {{v["photo"].get<std::string>(),
+                      fs::path(v["photo"].get<std::string>()).filename().string()}};
+      overlay.links = {{v["overlay"].get<std::string>(),
+                        fs::path(v["overlay"].get<std::string>()).filename().string()}};
+      files.rows.push_back({{left(views[k].first), photo, overlay, sig3(v["mm_per_px"]),
+                             v["width_px"].dump() + " x " + v["height_px"].dump(),
+                             std::to_string(width), sig3(v["angle_deg"])}});
+    }
+    mustache::data x;
+    x.set("id", left(p["id"]).text);
+    x.set("scale", views.size() > 1 ? "Both at " + sig3(common) + " mm per page pixel."
+                                    : "At " + sig3(common) + " mm per page pixel.");
+    x.set("figures", to_data(figures));
+    x.set("note", text_or_false(p.value("note", std::string())));
+    x.set("files", to_data(files));
+    list.push_back(x);
+  }
+  mustache::data d;
+  d.set("pairs", list);
+  return render(templates::kLoopPhotos, d);
 }
 
 std::string intro_section(const json& loop) {
@@ -228,7 +439,7 @@ std::string residuals_section(const json& loop, const fs::path& plot_dir) {
     t.rows.push_back(row);
   }
   mustache::data d;
-  d.set("plots", to_data(residual_plots(loop, plot_dir)));
+  d.set("plots", to_data(residual_figures(loop, plot_dir)));
   d.set("residuals", to_data(t));
   return render(templates::kLoopResiduals, d);
 }
@@ -238,11 +449,11 @@ std::string residuals_section(const json& loop, const fs::path& plot_dir) {
 void write_loop_html(const json& loop, const std::string& out_dir) {
   const fs::path plot_dir = fs::path(out_dir) / "plots";
   fs::create_directories(plot_dir);
-  const Page page{"ReposeTwin loop",
-                  "Closing the loop",
-                  {intro_section(loop), error_section(loop), effects_section(loop),
-                   iterations_section(loop), notes_section(loop),
-                   residuals_section(loop, plot_dir)}};
+  const Page page{
+      "ReposeTwin loop",
+      "Closing the loop",
+      {intro_section(loop), error_section(loop), effects_section(loop), iterations_section(loop),
+       notes_section(loop), residuals_section(loop, plot_dir), photos_section(loop)}};
   write_file_atomic((fs::path(out_dir) / "index.html").string(), render_page(page));
 }
 

@@ -307,10 +307,9 @@ std::string lab_photo_section(const ReportSettings& settings, const fs::path& ou
   const bool same_scale = has_render && beside.mm_per_px > 0 && m.mm_per_px > 0;
   double common = m.mm_per_px;  // [mm/px]
   if (same_scale)
-    common = std::max({m.mm_per_px, beside.mm_per_px, lab.cols * m.mm_per_px / kBesideWidthPx,
-                       twin.cols * beside.mm_per_px / kBesideWidthPx});
+    common = beside_scale({{lab.cols, m.mm_per_px}, {twin.cols, beside.mm_per_px}}, kBesideWidthPx);
   else
-    common = std::max(m.mm_per_px, lab.cols * m.mm_per_px / kBesideWidthPx);
+    common = beside_scale({{lab.cols, m.mm_per_px}}, kBesideWidthPx);
   cv::imwrite((out / "lab_photo.measured.png").string(), resized(lab, m.mm_per_px / common));
   std::vector<Figure> photos = {
       {"lab_photo.measured.png",

@@ -169,6 +169,15 @@ const char* const kLoopNotes =
 const char* const kLoopResiduals = R"(<h2>Residuals</h2>
 {{#plots}}{{> figure}}{{/plots}}{{#residuals}}{{> table}}{{/residuals}})";
 
+// pairs: [{id, scale, figures, note (or false), files: table}].
+const char* const kLoopPhotos = R"(<h2>Lab and twin, like for like</h2>
+<p>Per test with photos: the lab's photo and one twin photo of the same test, each with vision's measurement drawn on it (the H and D lines, the toe line, the apex), shown at one scale, so a pile of one size is one size in both. The twin's is the first seed's pile at the grid point nearest the final mu_r, with the effects of the model's main simulated surface.</p>
+{{#pairs}}<h3>{{id}}</h3>
+<p>{{scale}}</p>
+<div class='beside'>{{#figures}}{{> figure}}{{/figures}}</div>
+{{#note}}<p class='note'>{{note}}</p>
+{{/note}}{{#files}}{{> table}}{{/files}}{{/pairs}})";
+
 // index, version, built, planned, budget, within (bool); summary: table.
 const char* const kPaperIntro = R"(<p>Built {{built}} by {{version}} from the paper index <code>{{index}}</code>: every table and figure of the paper beside ours. The paper's stated values are points where its text gives numbers; shape-only figures are its described trend. Ours: mean &plusmn; seed sd over the runs that formed a pile. Planned cost {{planned}} CPU-hours{{#within}}, within{{/within}}{{^within}}, ABOVE{{/within}} the budget of {{budget}} CPU-hours (run plan: particles x steps at its stated rate, one thread).</p>
 {{#summary}}{{> table}}{{/summary}})";

@@ -42,5 +42,6 @@ extern const char* const kLoopEffects;
 extern const char* const kLoopIterations;
 extern const char* const kLoopNotes;
 extern const char* const kLoopResiduals;
+extern const char* const kLoopPhotos;
 
 }  // namespace reposetwin::experiments::report::templates

@@ -65,6 +65,32 @@ TEST(LoopData, AGoodFileBecomesTestsWithOverrides) {
   EXPECT_FALSE(d.tests[1].height_mm.has_value());
 }
 
+// Text conditions (a plate material, a set: column holding a word) are kept by column for the
+// page's category plots, apart from the numeric ones; a set: column holding a number stays a
+// number, and one that only starts with a number is text.
+TEST(LoopData, TextConditionsAreKeptApartFromNumbers) {
+  const LabData d = read_lab_csv(
+      write_csv("text",
+                "id,role,scene,plate,set:scene.name,set:contacts.rock-plate.friction,angle_deg\n"
+                "a,calibrate," +
+                    kScene +
+                    ",plate,tiny_a,0.3,30\n"
+                    "b,calibrate," +
+                    kScene + ",,\"2b\",0.4,31\n"));
+  const LabTest& a = d.tests.at(0);
+  EXPECT_EQ(a.text_conditions.at("plate"), "plate");
+  EXPECT_EQ(a.text_conditions.at("set:scene.name"), "tiny_a");
+  EXPECT_EQ(a.conditions.count("set:scene.name"), 0u);
+  EXPECT_NEAR(a.conditions.at("set:contacts.rock-plate.friction"), 0.3, 1e-15);
+  EXPECT_EQ(a.text_conditions.count("set:contacts.rock-plate.friction"), 0u);
+  const LabTest& b = d.tests.at(1);
+  EXPECT_EQ(b.text_conditions.count("plate"), 0u);
+  EXPECT_EQ(b.text_conditions.at("set:scene.name"), "2b");
+  EXPECT_EQ(b.conditions.count("set:scene.name"), 0u);
+  EXPECT_EQ(to_json(a).at("text_conditions").at("plate"), "plate");
+  EXPECT_FALSE(to_json(b).at("text_conditions").contains("plate"));
+}
+
 // A calibrated parameter may be several scene keys set together (rock-rock and rock-plate rolling
 // friction, as the Table 3 calibrations do); each takes the same mu_r, and a key the test's scene
 // does not have is an error naming the key and the test.

@@ -52,6 +52,22 @@ void expect_round_trip(const T& x, F from) {
   EXPECT_EQ(to_json(from(json::parse(text))).dump(), text);
 }
 
+// A photo pair with both views and one whose twin view is missing (null, with its note).
+TEST(LoopRecordsJson, PhotoPairsRoundTrip) {
+  const PhotoView lab{
+      "photos/a/lab.jpg", "photos/a/lab.measured.png", "/lab/a.jpg", 0.2, 400, 300, 31.5};
+  const PhotoView twin{
+      "photos/a/twin.png", "photos/a/twin.measured.png", "/cache/x.png", 0.125, 960, 720, 29.25};
+  expect_round_trip(lab, photo_view_from_json);
+  const PhotoPair both{"a", lab, twin, 0.15, 1000002, {{"plate_friction", 0.3}, {"cohesion", 2.5}},
+                       ""};
+  expect_round_trip(both, photo_pair_from_json);
+  const PhotoPair one{"b", lab, std::nullopt, 0.3, 7, {}, "no view could be measured"};
+  expect_round_trip(one, photo_pair_from_json);
+  EXPECT_TRUE(to_json(one).at("twin").is_null());
+  EXPECT_EQ(photo_pair_from_json(to_json(both)).twin->mm_per_px, 0.125);
+}
+
 TEST(LoopRecordsJson, SmallRecordsRoundTrip) {
   expect_round_trip(residual(1.0), residual_row_from_json);
   ResidualRow both = residual(2.0);

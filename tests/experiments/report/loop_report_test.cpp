@@ -146,3 +146,143 @@ TEST(ReportLoop, CrestColumnsAppearOnlyWhereTheLabMeasuredTheCrest) {
 
 }  // namespace
 }  // namespace reposetwin::experiments
+
+#include <opencv2/imgcodecs.hpp>
+
+namespace reposetwin::experiments {
+namespace {
+
+// The width attribute of the <img> whose src is `src`, or -1.
+int img_width(const std::string& html, const std::string& src) {
+  const std::string tag = "<img src='" + src + "' width='";
+  const std::size_t at = html.find(tag);
+  return at == std::string::npos ? -1 : std::stoi(html.substr(at + tag.size(), 8));
+}
+
+// A lab photo and a twin photo of different sizes and scales are placed side by side at one
+// mm per page pixel: the lab's 400 px at 0.2 mm/px (80 mm of field) and the twin's 960 px at
+// 0.1 mm/px (96 mm) at the coarser scale, 0.2 mm per page px (0.2 x 400 / 560 and 0.1 x 960 /
+// 560 are finer): 400 and 480 px, in the ratio 96 / 80 of their fields; both overlays and both
+// plain photos are linked. A test whose twin view could not be measured shows its lab photo
+// and the reason.
+TEST(ReportLoop, LabAndTwinPhotosSideBySideAtOneScale) {
+  const fs::path out = fs::temp_directory_path() / "reposetwin_loop_report_photos_test";
+  fs::remove_all(out);
+  fs::create_directories(out / "photos" / "t1");
+  auto png = [&](const std::string& name, int w, int h, int grey) {
+    cv::imwrite((out / "photos" / "t1" / name).string(),
+                cv::Mat(h, w, CV_8UC3, cv::Scalar::all(grey)));
+  };
+  png("lab.png", 400, 300, 90);
+  png("lab.measured.png", 400, 300, 120);
+  png("twin.png", 960, 720, 150);
+  png("twin.measured.png", 960, 720, 180);
+  json loop = small_loop(false);
+  auto view = [](const std::string& who, int w, int h, double mm) {
+    return json{{"photo", "photos/t1/" + who + ".png"},
+                {"overlay", "photos/t1/" + who + ".measured.png"},
+                {"source", "/lab/" + who + ".png"},
+                {"mm_per_px", mm},
+                {"width_px", w},
+                {"height_px", h},
+                {"angle_deg", 33.5}};
+  };
+  loop["photo_pairs"] = {{{"id", "t1"},
+                          {"lab", view("lab", 400, 300, 0.2)},
+                          {"twin", view("twin", 960, 720, 0.1)},
+                          {"mu_r", 0.15},
+                          {"seed", 1001},
+                          {"effects", {{"plate_friction", 0.4}}},
+                          {"note", ""}},
+                         {{"id", "t2"},
+                          {"lab", view("lab", 400, 300, 0.2)},
+                          {"twin", nullptr},
+                          {"mu_r", 0.15},
+                          {"seed", 1001},
+                          {"effects", json::object()},
+                          {"note", "no view of the twin's photograph could be measured"}}};
+  write_loop_html(loop, out.string());
+  const std::string html = read_file((out / "index.html").string());
+  const int lab = img_width(html, "photos/t1/lab.measured.png");
+  const int twin = img_width(html, "photos/t1/twin.measured.png");
+  EXPECT_EQ(lab, 400);
+  EXPECT_EQ(twin, 480);
+  EXPECT_NEAR(double(twin) / lab, (960 * 0.1) / (400 * 0.2), 1.0 / lab);
+  for (const char* s : {"<h2>Lab and twin, like for like</h2>", "<h3>t1</h3>",
+                        "Both at 0.2 mm per page pixel.", "href='photos/t1/lab.measured.png'",
+                        "href='photos/t1/twin.measured.png'", "href='photos/t1/lab.png'",
+                        "href='photos/t1/twin.png'", "mu_r 0.15, seed 1001, plate_friction 0.4",
+                        "<h3>t2</h3>", "no view of the twin&apos;s photograph could be measured"})
+    EXPECT_NE(html.find(s), std::string::npos) << s;
+  // Without photo pairs (an older loop.json, or data without photos) there is no such section.
+  write_loop_html(small_loop(false), out.string());
+  EXPECT_EQ(read_file((out / "index.html").string()).find("like for like"), std::string::npos);
+}
+
+// A text condition gets a plot with one category per value, and tests of different size
+// distributions (a size band, a sieve-table file) get a PSD plot of their own and one series
+// per distribution on every numeric condition's plot, each point in its own series.
+TEST(ReportLoop, TextConditionsAndThePsdGetTheirOwnPlotsAndSeries) {
+  const fs::path out = fs::temp_directory_path() / "reposetwin_loop_report_conditions_test";
+  fs::remove_all(out);
+  json loop = small_loop(false);
+  const json r1 = {{"residual_deg", 1.25}, {"sigma_deg", 0.2}, {"predicted_deg", 35.0}};
+  const json r2 = {{"residual_deg", -0.75}, {"sigma_deg", 0.2}, {"predicted_deg", 35.0}};
+  const json r3 = {{"residual_deg", 2.5}, {"sigma_deg", 0.2}, {"predicted_deg", 35.0}};
+  loop["tests"] = {
+      {{"id", "t1"},
+       {"role", "calibrate"},
+       {"angle_deg", 35},
+       {"conditions", {{"mass_kg", 0.5}, {"d_min_mm", 3}, {"d_max_mm", 4}}},
+       {"text_conditions", {{"plate", "wood"}}}},
+      {{"id", "t2"},
+       {"role", "calibrate"},
+       {"angle_deg", 35},
+       {"conditions", {{"mass_kg", 0.5}, {"d_min_mm", 2}, {"d_max_mm", 4}}},
+       {"text_conditions", {{"plate", "steel"}}}},
+      {{"id", "t3"},
+       {"role", "validate"},
+       {"angle_deg", 35},
+       {"conditions", {{"mass_kg", 1.0}}},
+       {"camera_height_m", 0.05},
+       {"text_conditions", {{"plate", "wood"}, {"set:sample.psd_file", "psd/fine.toml"}}}}};
+  loop["baseline"]["residuals"] = {r1, r2, r3};
+  loop["final"]["residuals"] = {r1, r2, r3};
+  write_loop_html(loop, out.string());
+  const fs::path plots = out / "plots";
+  // The plate: categories steel (0) and wood (1); t1 and t3 on wood, t2 on steel.
+  const std::string plate_gp = read_file((plots / "residual_plate.gp").string());
+  EXPECT_NE(plate_gp.find("set xtics ('steel' 0, 'wood' 1)"), std::string::npos) << plate_gp;
+  const std::string plate = read_file((plots / "residual_plate.dat").string());
+  for (const char* row :
+       {"\n1 1.25 1.25 0.2 1\n", "\n0 -0.75 -0.75 0.2 1\n", "\n1 2.5 2.5 0.2 0\n"})
+    EXPECT_NE(plate.find(row), std::string::npos) << row << plate;
+  // The PSD's own plot: one category per distribution.
+  const std::string psd_gp = read_file((plots / "residual_PSD.gp").string());
+  EXPECT_NE(psd_gp.find("set xtics ('2-4 mm' 0, '3-4 mm' 1, 'fine.toml' 2)"), std::string::npos)
+      << psd_gp;
+  // The declared camera height, a column kept apart from the scene's conditions, is one too.
+  EXPECT_NE(
+      read_file((plots / "residual_camera_height_m.dat").string()).find("\n0.05 2.5 2.5 0.2 0\n"),
+      std::string::npos);
+  EXPECT_FALSE(fs::exists(plots / "residual_set_sample_psd_file.dat"))
+      << "the sieve-table file is shown on the PSD's plot, not twice";
+  // On the mass axis, one series per distribution, named in the key.
+  const std::string mass = read_file((plots / "residual_mass_kg.dat").string());
+  for (const char* block : {"# series 0: PSD 2-4 mm\n0.5 -0.75", "# series 1: PSD 3-4 mm\n0.5 1.25",
+                            "# series 2: PSD fine.toml\n1 2.5"})
+    EXPECT_NE(mass.find(block), std::string::npos) << block << mass;
+  const std::string mass_gp = read_file((plots / "residual_mass_kg.gp").string());
+  for (const char* t : {"index 0", "index 2", "t 'before, PSD 3-4 mm'", "t 'after, PSD fine.toml'"})
+    EXPECT_NE(mass_gp.find(t), std::string::npos) << t << mass_gp;
+  if (fs::exists(plots / "residual_plate.png")) {  // gnuplot is optional
+    const std::string html = read_file((out / "index.html").string());
+    for (const char* s :
+         {"src='plots/residual_plate.png'", "src='plots/residual_PSD.png'",
+          "Residual against plate (a category each)", "one colour per size distribution"})
+      EXPECT_NE(html.find(s), std::string::npos) << s;
+  }
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments

@@ -1,0 +1,149 @@
+// Loop::photo_pairs (loop_stages.hpp): for every test with photos, the lab's photo and one twin
+// photo of the same test, each with vision's overlay, copied into OUT/photos/<id>/ for the page.
+//
+// Design note. The page reads loop.json and the files it names, and never simulates, so the
+// loop keeps the pictures. The twin's is one pile the loop has already simulated: the first
+// seed's pour at the grid point nearest the final mu_r, on the surface that weighs most in the
+// final model (the baseline, or an effect's refit trial), so the pile run is found in the cache
+// and only its photograph is new (one photo job per test, with the photos and overlays kept; a
+// dataset without photos costs nothing). It is photographed as every twin pile is (the lab's
+// cameras when it gave them), and the view shown is the one through the lab photo's camera.
+#include <cmath>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+
+#include "experiments/loop/loop_stages.hpp"
+
+namespace reposetwin::experiments::loop_detail {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// The surface with the largest weight in the model.
+const Surface& heaviest(const Model& model) {
+  std::size_t best = 0;
+  for (std::size_t k = 1; k < model.terms.size(); ++k)
+    if (model.terms[k].first > model.terms[best].first) best = k;
+  return *model.terms.at(best).second;
+}
+
+std::size_t nearest(const std::vector<double>& grid, double mu) {
+  std::size_t j = 0;
+  for (std::size_t k = 1; k < grid.size(); ++k)
+    if (std::abs(grid[k] - mu) < std::abs(grid[j] - mu)) j = k;
+  return j;
+}
+
+// The lab's first photo vision measures, with its overlay written and the photo copied into
+// `dir`; `camera` receives the index of its camera in test.cameras (0 without cameras).
+PhotoView lab_view(const LabTest& test, const std::string& data_file, const fs::path& out,
+                   const fs::path& rel, std::size_t& camera) {
+  const std::string where =
+      data_file + " line " + std::to_string(test.line) + " (test " + test.id + ")";
+  std::string last_error;
+  for (const std::string& photo : test.photos) {
+    LabPhotoMeasurement m;
+    try {
+      m = measure_lab_photos({photo}, test.photo_scale,
+                             {where + ", column photo", where + ", column photo_camera",
+                              where + ", column mm_per_px", "photo_camera", "mm_per_px"},
+                             true);
+    } catch (const std::exception& e) {
+      last_error = e.what();  // recorded as unmeasured when the CSV was read; try the next
+      continue;
+    }
+    const std::string name = "lab" + fs::path(photo).extension().string();
+    fs::copy_file(photo, out / rel / name, fs::copy_options::overwrite_existing);
+    const cv::Mat& overlay = m.overlays.at(0);
+    if (!cv::imwrite((out / rel / "lab.measured.png").string(), overlay))
+      throw std::runtime_error((out / rel / "lab.measured.png").string() + ": cannot write");
+    camera = 0;
+    if (!m.cameras.empty())
+      for (std::size_t k = 0; k < test.cameras.size(); ++k)
+        if (camera::to_json(test.cameras[k]) == camera::to_json(m.cameras[0])) camera = k;
+    const json& v = m.record.at("views").at(0);
+    return {(rel / name).string(),
+            (rel / "lab.measured.png").string(),
+            photo,
+            v.at("scale").at("mm_per_px").get<double>(),
+            overlay.cols,
+            overlay.rows,
+            v.at("theta_deg").get<double>()};
+  }
+  throw std::runtime_error(where + ": none of its photos could be measured again for the page (" +
+                           last_error + ")");
+}
+
+// The twin's view through camera `camera` (or the first measured one), copied into `dir`;
+// none when no view of the photograph was measured.
+std::optional<PhotoView> twin_view(const SimOutcome& o, std::size_t camera, const fs::path& out,
+                                   const fs::path& rel) {
+  if (!o.views.is_array()) return std::nullopt;
+  const json* pick = nullptr;
+  for (std::size_t k = 0; k < o.views.size(); ++k) {
+    const json& v = o.views[k];
+    if (!v.contains("overlay")) continue;
+    if (pick == nullptr || k == camera) pick = &v;
+    if (k == camera) break;
+  }
+  if (pick == nullptr) return std::nullopt;
+  const fs::path dir(o.image_dir);
+  const fs::path photo = dir / pick->at("photo").get<std::string>();
+  const fs::path overlay = dir / pick->at("overlay").get<std::string>();
+  fs::copy_file(photo, out / rel / "twin.png", fs::copy_options::overwrite_existing);
+  fs::copy_file(overlay, out / rel / "twin.measured.png", fs::copy_options::overwrite_existing);
+  const cv::Mat img = cv::imread(overlay.string(), cv::IMREAD_UNCHANGED);
+  if (img.empty()) throw std::runtime_error(overlay.string() + ": cannot read the twin's overlay");
+  return PhotoView{(rel / "twin.png").string(),
+                   (rel / "twin.measured.png").string(),
+                   photo.string(),
+                   pick->at("scale").at("mm_per_px").get<double>(),
+                   img.cols,
+                   img.rows,
+                   pick->at("theta_deg").get<double>()};
+}
+
+}  // namespace
+
+std::vector<PhotoPair> Loop::photo_pairs(const LoopState& state) {
+  std::vector<PhotoPair> pairs;
+  std::vector<std::size_t> cameras;
+  std::vector<SimRequest> requests;
+  const Surface& surf = heaviest(state.model);
+  ImageVariant image = s_.image;
+  image.keep_photos = true;
+  image.keep_overlays = true;
+  for (std::size_t i = 0; i < data_.tests.size(); ++i) {
+    const LabTest& test = data_.tests[i];
+    if (test.photos.empty()) continue;
+    const fs::path rel = fs::path("photos") / test.id;
+    fs::create_directories(fs::path(out_) / rel);
+    PhotoPair& p = pairs.emplace_back();
+    p.id = test.id;
+    p.lab = lab_view(test, data_.file, out_, rel, cameras.emplace_back());
+    const Curve& c = surf.curve.at(i);
+    const std::size_t j = nearest(c.mu, state.fit.mu);
+    p.mu_r = c.mu[j];
+    p.seed = surf.raw.at(i).at(j).at(0).seed;  // the pour that made the first seed's pile
+    for (const EffectSetting& e : surf.effects) p.effects.emplace_back(e.effect->name, e.value);
+    requests.push_back(make_request(test, s_.mu_key, p.mu_r, p.seed, surf.effects, image));
+    // The lab photo's camera picks the twin's view only when the twin photographs through the
+    // lab's cameras (else its own framing's first view).
+    if (requests.back().image.lab_cameras.empty()) cameras.back() = 0;
+  }
+  if (requests.empty()) return pairs;
+  say("photographing " + std::to_string(requests.size()) + " twin pile(s) for the page");
+  const std::vector<SimOutcome> out = cache_.run(requests);
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const fs::path rel = fs::path("photos") / pairs[k].id;
+    pairs[k].twin = twin_view(out[k], cameras[k], out_, rel);
+    if (!pairs[k].twin)
+      pairs[k].note = out[k].no_pile.empty()
+                          ? "the twin's pile was not photographed (" + out[k].sim_dir + ")"
+                          : "no view of the twin's photograph could be measured: " + out[k].no_pile;
+  }
+  return pairs;
+}
+
+}  // namespace reposetwin::experiments::loop_detail
