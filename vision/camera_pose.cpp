@@ -244,6 +244,12 @@ std::string pose_contradiction(const PoseEstimate& e, double tolerance_deg) {
     why += "the toe line cuts through the pile's base: the base ellipse's ends lie " +
            num(e.toe_line_gap_px) + " px below it (its front " +
            num(e.toe_line_gap_px + e.semi_minor_px) + " px)";
+    // The pose in numbers also when the pitch alone is within its tolerance, so that the reader
+    // sees what the photo says against what was declared.
+    if (!pitch_contradicts(e, tolerance_deg))
+      why += "; the ellipse says the camera is pitched " + num(e.pitch_deg) + " +- " +
+             num(e.sigma_pitch_deg) + " deg below the horizontal, declared " +
+             num(e.declared_pitch_deg) + " deg";
   }
   return why;
 }

@@ -71,8 +71,8 @@ std::optional<PoseEstimate> estimate_side_pose(const SideImage& prepared,
 
 /// Why a side photo cannot be measured through its declared camera, in numbers: the pitch the
 /// photo shows contradicts the declared one (pitch_contradicts), or the toe line cuts through
-/// the pile's base (its ellipse's ends more than max(3 px, 3 sigma) below it). Empty when
-/// neither.
+/// the pile's base (its ellipse's ends more than max(3 px, 3 sigma) below it). Either way the
+/// message gives the estimated and the declared pitch. Empty when neither.
 std::string pose_contradiction(const PoseEstimate& pose, double tolerance_deg = 3.0);
 
 /// True when the estimated pitch differs from the declared one by more than

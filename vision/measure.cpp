@@ -209,7 +209,7 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
     m.pose = estimate_side_pose(prepared, p, cam, scale.axis_foot);
     const std::string why = m.pose ? pose_contradiction(*m.pose) : std::string();
     if (!why.empty())
-      throw std::runtime_error(where + ": not measured through the declared camera: " + why);
+      throw PoseContradiction(where + ": not measured through the declared camera: " + why);
   }
   // Without the plate's top face in the picture there is no base ellipse to check the pose
   // with; a camera that puts the axis foot off the plate line does not match the image.

@@ -33,6 +33,7 @@
 #include <nlohmann/json_fwd.hpp>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,14 @@ struct ScaleSpec {
 /// "mm_per_px_at_axis". Throws std::invalid_argument naming the path and field.
 ScaleSpec scale_from_sidecar(const std::string& path);
 
+/// Thrown by measure_side when the photo's own pose contradicts its declared camera
+/// (ScaleSpec::check_pose): the photo could be read, but the camera it was declared with is
+/// wrong, so the caller refuses the photo rather than skip it as unreadable.
+class PoseContradiction : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// A side view measured in metres and degrees.
 struct SideMeasurement {
   std::string source;                  // file name or label of the image
@@ -101,7 +110,9 @@ struct SideMeasurement {
 
 /// Measures a side view (`image`: any image vision::gray_levels accepts). `where` names the
 /// image in error messages. Throws std::invalid_argument / std::runtime_error as the pixel
-/// measurement does, and std::runtime_error when the scale cannot be determined.
+/// measurement does, std::runtime_error when the scale cannot be determined, and
+/// PoseContradiction (naming the photo, the estimated and the declared pitch) for a photo whose
+/// base ellipse contradicts its declared camera.
 SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale = {},
                              const SideSettings& settings = {}, const std::string& where = "image");
 

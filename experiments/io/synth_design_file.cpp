@@ -32,11 +32,31 @@ SynthDesignFile read_synth_design_file(const std::string& path, SynthDesignFile 
     if (d.seeds.empty()) r.fail("seeds", "must not be empty");
   }
   if (auto c = r.table("camera", true)) {
-    d.camera.distance_radii = c->number("distance_radii", d.camera.distance_radii);
-    d.camera.noise_sd = c->number("noise_sd", d.camera.noise_sd);
-    d.camera.width_px = static_cast<int>(c->integer("width_px", d.camera.width_px));
-    d.camera.height_px = static_cast<int>(c->integer("height_px", d.camera.height_px));
-    d.camera.side_views = static_cast<int>(c->integer("side_views", d.camera.side_views));
+    SynthCamera& cam = d.camera;
+    // Each value is checked as it is read, so the message names its key and the value given.
+    auto number_in = [&](const char* key, double fallback, double lo, double hi,
+                         const std::string& unit) {
+      const double v = c->number(key, fallback);
+      if (!std::isfinite(v) || !(v >= lo) || !(v <= hi))
+        c->fail(key, "= " + num(v) + " must be in [" + num(lo) + ", " + num(hi) + "]" + unit);
+      return v;
+    };
+    auto integer_in = [&](const char* key, int fallback, int lo, int hi) {
+      const std::int64_t v = c->integer(key, fallback);
+      if (v < lo || v > hi)
+        c->fail(key, "= " + std::to_string(v) + " must be a whole number in [" +
+                         std::to_string(lo) + ", " + std::to_string(hi) + "]");
+      return static_cast<int>(v);
+    };
+    // The renderer's own floor (render::LabCameraSettings), named here at the design's key.
+    cam.distance_radii = number_in("distance_radii", cam.distance_radii, 10.0, 1e3, " pile radii");
+    cam.noise_sd = number_in("noise_sd", cam.noise_sd, 0.0, 128.0, " grey levels");
+    cam.width_px = integer_in("width_px", cam.width_px, 64, 8192);
+    cam.height_px = integer_in("height_px", cam.height_px, 64, 8192);
+    cam.side_views = integer_in("side_views", cam.side_views, 1, 36);
+    cam.height_m = number_in("height_m", cam.height_m, 0.0, 1.0, " m");
+    cam.aim_at_axis_foot = c->boolean("aim_at_axis_foot", cam.aim_at_axis_foot);
+    cam.k1 = number_in("k1", cam.k1, -0.5, 0.5, "");
     c->finish();
   }
   if (auto h = r.table("hidden", true)) {

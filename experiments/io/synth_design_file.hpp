@@ -31,6 +31,9 @@ struct SynthCamera {
   int width_px = 960;            // [px]
   int height_px = 720;           // [px]
   int side_views = 2;            // azimuths over 180 degrees [-]
+  double height_m = 0.0;         // true camera height above the plate; the sidecars say 0 [m]
+  bool aim_at_axis_foot = false;  // true camera pitched down at the axis foot, declared level
+  double k1 = 0.0;               // true lens radial distortion; the sidecars say 0 [-]
 };
 
 /// A design file as read; every field not in the file keeps the value it had on input.

@@ -219,6 +219,7 @@ bool read_measured(LabTest& test, const Row& row, const Where& w) {
     test.crest_mm = parse_number(row.get("crest_mm"), w, "crest_mm");
     if (*test.crest_mm < 0.0)
       throw InputError(w.at("crest_mm") + ": " + row.get("crest_mm") + " must not be negative");
+    test.crest_source = "typed";
   }
   if (!row.get("angle_deg").empty()) {
     test.angle_deg = parse_number(row.get("angle_deg"), w, "angle_deg");
@@ -250,6 +251,11 @@ void read_photos(LabTest& test, const Row& row, const Where& w, const fs::path& 
   test.angle_deg = m.summary.theta_deg.mean;
   test.height_mm = 1e3 * m.summary.height_m.mean;
   test.diameter_mm = 1e3 * m.summary.diameter_m.mean;
+  if (!test.crest_mm) {
+    test.crest_mm = 1e3 * m.summary.crest_width_m.mean;
+    test.crest_sigma_mm = 1e3 * m.summary.crest_width_m.sigma_mean;
+    test.crest_source = "photo";
+  }
   test.photo_measurement = m.record;
   test.photo_measurement["declared_in_csv"] = declared;
   // One camera photographing several piles is one view of each twin pile, not several.
@@ -311,7 +317,11 @@ json to_json(const LabTest& t) {
   if (!t.text_conditions.empty()) j["text_conditions"] = t.text_conditions;
   if (t.height_mm) j["H_mm"] = *t.height_mm;
   if (t.diameter_mm) j["D_mm"] = *t.diameter_mm;
-  if (t.crest_mm) j["crest_mm"] = *t.crest_mm;
+  if (t.crest_mm) {
+    j["crest_mm"] = *t.crest_mm;
+    j["crest_source"] = t.crest_source;
+  }
+  if (t.crest_sigma_mm) j["crest_sigma_mm"] = *t.crest_sigma_mm;
   if (t.camera_height_m) j["camera_height_m"] = *t.camera_height_m;
   j["repeats"] = t.repeats;
   if (t.reference_diameter_m > 0.0) j["reference_diameter_m"] = t.reference_diameter_m;

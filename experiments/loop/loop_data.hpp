@@ -8,7 +8,10 @@
 // measured values are either numbers typed from the lab sheet or the photographs themselves,
 // which the loop measures with vision/ exactly as it measures the twin's renders (a photo needs
 // a scale: its camera sidecar JSON, or mm_per_px, or the render convention's scale marker in the
-// image). Full format: docs/loop.md.
+// image). The photos' measurement replaces typed H, D and angle (the like-for-like value), but
+// not a typed crest width: vision reads the crest on the photos only where the sheet gives none,
+// since a lab that typed one measured its flat top another way (a calliper, a top photo) and
+// says so. Full format: docs/loop.md.
 #pragma once
 
 #include <map>
@@ -39,6 +42,12 @@ struct LabTest {
   std::optional<double> height_mm;            // measured H [mm]
   std::optional<double> diameter_mm;          // measured D [mm]
   std::optional<double> crest_mm;             // measured crest (flat top) width [mm], >= 0
+  // Where crest_mm came from: "typed" (the crest_mm column, which wins over the photos) or
+  // "photo" (vision's mean over the row's photos); empty when there is none.
+  std::string crest_source;
+  // The photo crest's uncertainty: the views' spread over sqrt(views) and each view's own
+  // (vision's SideSummary::crest_width_m.sigma_mean) [mm]; absent for a typed crest.
+  std::optional<double> crest_sigma_mm;
   std::optional<double> camera_height_m;      // declared camera height above the plate [m]
   int repeats = 1;                            // piles averaged into the measured values [-]
   std::vector<std::string> photos;            // absolute paths (side views), may be empty

@@ -28,8 +28,14 @@ SynthDesign read_synth_design(const std::string& path) {
   defaults.mu_key = d.mu_key;
   defaults.mu_r = d.mu_r;
   defaults.seeds = d.seeds;
-  defaults.camera = {d.camera.distance_radii, d.camera.noise_sd, d.camera.width_px,
-                     d.camera.height_px, d.camera.side_views};
+  defaults.camera = {.distance_radii = d.camera.distance_radii,
+                     .noise_sd = d.camera.noise_sd,
+                     .width_px = d.camera.width_px,
+                     .height_px = d.camera.height_px,
+                     .side_views = d.camera.side_views,
+                     .height_m = d.camera.camera_height_m,
+                     .aim_at_axis_foot = d.camera.aim_at_axis_foot,
+                     .k1 = d.camera.k1};
   SynthDesignRules rules;
   rules.check_effect = [](const std::string& name) { (void)find_effect(name); };
   for (const auto& c : condition_columns())
@@ -44,6 +50,11 @@ SynthDesign read_synth_design(const std::string& path) {
   d.camera.width_px = f.camera.width_px;
   d.camera.height_px = f.camera.height_px;
   d.camera.side_views = f.camera.side_views;
+  // The sidecars declare the lab's camera level and undistorted (declared_height_m and
+  // declared_k1 stay 0): the true height, aim and k1 are hidden.
+  d.camera.camera_height_m = f.camera.height_m;
+  d.camera.aim_at_axis_foot = f.camera.aim_at_axis_foot;
+  d.camera.k1 = f.camera.k1;
   d.hidden = std::move(f.hidden);
   d.tests = std::move(f.tests);
   return d;
@@ -119,16 +130,24 @@ std::string make_synthetic_dataset(const SynthDesign& d, const std::string& out_
   std::size_t q = 0;
   for (std::size_t i = 0; i < tests.size(); ++i) {
     double h = 0.0, dd = 0.0, a = 0.0;
+    int measured = 0;
     std::string photos;
     for (std::size_t k = 0; k < d.seeds.size(); ++k, ++q) {
       const SimOutcome& o = out[q];
-      if (!o.pile)
+      // A pile whose photos vision refuses through the declared camera (a hidden tilt that the
+      // photo's base ellipse gives away) is still the lab's pile: its photos are written and
+      // the typed values average the piles vision did measure (none: left empty), so reading
+      // the dataset meets the refusal a lab would meet. No pile at all is an error.
+      if (!o.pile && o.no_pile.empty())
         throw std::runtime_error("synthetic dataset: test " + tests[i].id + " seed " +
                                  std::to_string(d.seeds[k]) + " formed no pile (" + o.sim_dir +
                                  ")");
-      h += o.height_mm;
-      dd += o.diameter_mm;
-      a += o.angle_deg;
+      if (o.pile) {
+        h += o.height_mm;
+        dd += o.diameter_mm;
+        a += o.angle_deg;
+        ++measured;
+      }
       std::vector<fs::path> files;
       for (const auto& entry : fs::directory_iterator(o.image_dir)) files.push_back(entry.path());
       std::sort(files.begin(), files.end());
@@ -142,14 +161,15 @@ std::string make_synthetic_dataset(const SynthDesign& d, const std::string& out_
           photos += (photos.empty() ? "" : ";") + std::string("photos/") + to;
       }
     }
-    const double n = static_cast<double>(d.seeds.size());
+    const double n = static_cast<double>(measured);
+    auto mean = [&](double sum) { return measured > 0 ? num(sum / n) : std::string(); };
     csv << tests[i].id << "," << tests[i].role << ",scene.toml";
     for (const auto& c : cols)
       csv << "," << (d.tests[i].conditions.count(c) ? num(d.tests[i].conditions.at(c)) : "");
     for (const auto& c : text_cols)
       csv << "," << (d.tests[i].labels.count(c) ? d.tests[i].labels.at(c) : "");
-    csv << "," << d.seeds.size() << "," << num(h / n) << "," << num(dd / n) << "," << num(a / n)
-        << ",\"" << photos << "\"\n";
+    csv << "," << d.seeds.size() << "," << mean(h) << "," << mean(dd) << "," << mean(a) << ",\""
+        << photos << "\"\n";
   }
   const std::string path = (fs::path(out_dir) / "measured.csv").string();
   write_file_atomic(path, csv.str());

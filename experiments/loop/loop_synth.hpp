@@ -10,16 +10,24 @@
 // (seeds), as labs repeat a test; the CSV's photo column lists all of its photographs and
 // `repeats` says how many piles they show.
 //
-// Design file (TOML, strict):
+// The sidecars always declare the camera level with the plate and undistorted, whatever its true
+// height, aim and k1; a pile whose photos vision refuses through that declared camera (a tilt its
+// base ellipse shows) keeps its photos, its typed H, D and angle averaging only the piles vision
+// measured (left empty when none did), so reading the dataset meets the refusal a lab would.
+//
+// Design file (TOML, strict; a value out of range is an error naming the file, key and value):
 //   scene = "tiny_scene.toml"             # base scene, relative to the design file
 //   mu_r = 0.2                            # hidden true mu_r
 //   seeds = [7001, 7002]                  # hidden pile seeds (one pile per seed and test)
 //   [camera]                              # hidden true camera (all optional)
-//   distance_radii = 15.0
-//   noise_sd = 3.0                        # grey levels
-//   width_px = 960
-//   height_px = 720
-//   side_views = 2
+//   distance_radii = 15.0                 # in [10, 1000] pile radii
+//   noise_sd = 3.0                        # grey levels, in [0, 128]
+//   width_px = 960                        # [64, 8192]
+//   height_px = 720                       # [64, 8192]
+//   side_views = 2                        # [1, 36]
+//   height_m = 0.0                        # true height above the plate [m], in [0, 1]
+//   aim_at_axis_foot = false              # true: pitched down at the pile's axis foot
+//   k1 = 0.0                              # true lens radial distortion, in [-0.5, 0.5]
 //   [hidden]                              # hidden effects: registry name = value (optional)
 //   plate_friction = 0.1
 //   [[test]]                              # one per lab test; condition columns of docs/loop.md

@@ -79,6 +79,11 @@ LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
     try {
       views.push_back(vision::measure_side(image, this_scale, {}, p));
       if (draw_overlays) overlays.push_back(vision::draw_side_overlay(image, views.back()));
+    } catch (const vision::PoseContradiction& e) {
+      // The declared camera is wrong for this photo: the test is refused, not measured on the
+      // other photos, which the same wrong declaration most likely describes too.
+      throw InputError(fields.photo + ": " + e.what() +
+                       " (declare the camera as it stood, or give a level photo)");
     } catch (const std::exception& e) {
       // A photo without any scale source is an error at once; with several photos of one test,
       // one that cannot be measured is recorded and the others still count.

@@ -8,7 +8,10 @@
 // (orthographic view assumed), from a render-style sidecar STEM.json next to each photo, and last
 // from the scale reference vision finds in the image. A photo that cannot be read, or that has no
 // scale from any source, is an error naming the field that gave it; with several photos of one
-// test, one that vision cannot measure is recorded (`unmeasured`) and the others still count.
+// test, one that vision cannot measure is recorded (`unmeasured`) and the others still count. A
+// photo whose pose contradicts its declared camera (vision/camera_pose.hpp: a camera pitched
+// down at the pile, declared level) is refused with both pitches, whatever the other photos
+// show: its camera is declared wrong, and so, most likely, are those of the same setup.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -50,8 +53,9 @@ struct LabPhotoMeasurement {
 
 /// Measures the side photos (paths as given) of one pile test. Uses one OpenCV thread, so that a
 /// worker pool may fork afterwards. Throws InputError naming `fields` for an unreadable photo, a
-/// bad scale, a photo without any scale, or when no photo could be measured. With
-/// `draw_overlays`, also draws each measured photo's overlay (LabPhotoMeasurement::overlays).
+/// bad scale, a photo without any scale, a photo whose pose contradicts its declared camera, or
+/// when no photo could be measured. With `draw_overlays`, also draws each measured photo's
+/// overlay (LabPhotoMeasurement::overlays).
 LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
                                        const LabPhotoScale& scale, const LabPhotoFields& fields,
                                        bool draw_overlays = false);

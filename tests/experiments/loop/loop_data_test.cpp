@@ -267,6 +267,8 @@ TEST(LoopData, AnOptionalCrestColumnIsReadAndBadValuesRefused) {
   EXPECT_FALSE(d.tests[1].crest_mm.has_value());
   EXPECT_DOUBLE_EQ(d.tests[2].crest_mm.value_or(-1.0), 0.0);
   EXPECT_DOUBLE_EQ(to_json(d.tests[0]).at("crest_mm").get<double>(), 7.25);
+  EXPECT_EQ(to_json(d.tests[0]).at("crest_source"), "typed");
+  EXPECT_FALSE(to_json(d.tests[1]).contains("crest_source"));
   EXPECT_FALSE(to_json(d.tests[1]).contains("crest_mm"));
   // Without the column, no test has a crest.
   const LabData none = read_lab_csv(

@@ -237,6 +237,10 @@ TEST(LoopSynth, AUniformMeasurementOffsetIsFlaggedNotNamed) {
     ASSERT_TRUE(t.height_mm && t.diameter_mm) << t.id;
     t.angle_deg -= 6.0;
     t.photos.clear();  // the angle as typed: the photos would give it back as measured
+    // The lab typed angle, H and D only: no crest (the photos' would be a fourth channel).
+    t.crest_mm.reset();
+    t.crest_sigma_mm.reset();
+    t.crest_source.clear();
   }
   const nlohmann::json loop = run_loop(data, (test_root() / "offset" / "loop").string(), settings());
   std::cerr << "offset: " << loop["summary"].dump() << "\n";

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "../../support/frustum_scene.hpp"
 #include "render/renderer.hpp"
 #include "render/scene.hpp"
 #include "vision/measure.hpp"
@@ -20,18 +21,7 @@ namespace {
 
 TEST(CrestRender, FrustumFixtureGivesItsTopWidth) {
   constexpr double kH = 0.03, kRb = 0.06, kRt = 0.02, kL = 0.6;  // [m]
-  render::Scene scene;
-  scene.positions = {Eigen::Vector3d(0.0, 0.0, 0.005)};  // one sphere, hidden inside the shell
-  scene.radii = {0.002};
-  scene.material_ids = {0};
-  scene.scale_reference.enabled = false;
-  render::Shell shell;
-  shell.z_bottom_m = 0.0;
-  shell.z_top_m = kH;
-  shell.r_bottom_m = kRb;
-  shell.r_top_m = kRt;
-  shell.color = {108, 115, 120};
-  scene.shells = {shell};
+  const render::Scene scene = test_support::frustum_scene(kH, kRb, kRt);
   const camera::Camera cam = camera::side_view(kL, 0.2, 0.0, 20.0, 960, 720);
   const cv::Mat image = render::render_image(scene, cam, {});
   const vision::SideMeasurement m = vision::measure_side_camera(image, cam, {}, "frustum.png");
