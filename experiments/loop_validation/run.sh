@@ -42,6 +42,7 @@ cases=(
   "lift|synth_lift.toml|0.1,0.2,0.35|lift_speed|above|0.70"
   "cohesion|synth_cohesion.toml|0.1,0.2,0.35|cohesion|above|0.45"
   "null|synth_null.toml|0.1,0.2,0.35|none|-|0"
+  "camera|synth_camera.toml|0.1,0.2,0.35|camera_height|above|0.70"
   "rolling_size|synth_size.toml|0.1,0.25,0.5|rolling_size|above|0.70"
 )
 
