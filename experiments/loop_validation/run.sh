@@ -35,14 +35,15 @@ done
 [[ -x $bin ]] || { echo "run.sh: no reposetwin binary at $bin (build first, or set REPOSETWIN)" >&2; exit 2; }
 command -v jq >/dev/null || { echo "run.sh: jq is needed (scripts/install_deps.sh installs it)" >&2; exit 2; }
 
-# name | design (data/loop/) | mu_r grid | effect expected (none: nothing named) | side of its
-# off value the fit must land (below/above/-) | least RMSE cut on the calibration tests
+# name | design (data/loop/) | mu_r grid | effect expected (none: nothing named; refused: the
+# loop must refuse the data before it simulates) | side of its off value the fit must land
+# (below/above/-) | least RMSE cut on the calibration tests
 cases=(
   "plate|synth_plate.toml|0.1,0.2,0.35|plate_friction|below|0.70"
   "lift|synth_lift.toml|0.1,0.2,0.35|lift_speed|above|0.70"
   "cohesion|synth_cohesion.toml|0.1,0.2,0.35|cohesion|above|0.45"
   "null|synth_null.toml|0.1,0.2,0.35|none|-|0"
-  "camera|synth_camera.toml|0.1,0.2,0.35|camera_height|above|0.70"
+  "camera|synth_camera.toml|0.1,0.2,0.35|refused|-|0"
   "rolling_size|synth_size.toml|0.1,0.25,0.5|rolling_size|above|0.70"
 )
 
@@ -52,10 +53,12 @@ for c in "${only[@]}"; do
   [[ $known == *" $c "* ]] || { echo "run.sh: unknown case '$c' (cases:$known)" >&2; exit 2; }
 done
 
+# A loop that refuses its data (exit 2: bad input, e.g. photos that contradict their declared
+# camera) leaves DIR/CASE/refused.txt with its message instead of a loop.json.
 run_case() {
   local name=$1 design=$2 grid=$3
   local dir=$out/$name
-  if [[ -f $dir/loop/loop.json && $force == 0 ]]; then
+  if [[ ( -f $dir/loop/loop.json || -f $dir/refused.txt ) && $force == 0 ]]; then
     echo "[validation] $name: finished earlier (kept; --force recomputes)"
     return
   fi
@@ -63,10 +66,19 @@ run_case() {
   "$bin" loop-synth "$root/data/loop/$design" --out "$dir/data" --cache "$out/cache" \
     --workers "$workers" >/dev/null
   echo "[validation] $name: loop"
+  rm -f "$dir/refused.txt"
+  local rc=0
   "$bin" loop "$dir/data/measured.csv" --out "$dir/loop" --cache "$out/cache" \
     --mu-grid "$grid" --seeds 1001,1002,1003 --width 960 --height 720 --views 2 --own-cameras \
     --max-effects 1 --at-bound trace --grid-extensions 0 --workers "$workers" --force --quiet \
-    >/dev/null
+    >/dev/null 2>"$dir/loop_stderr.txt" || rc=$?
+  if ((rc == 2)); then
+    mv "$dir/loop_stderr.txt" "$dir/refused.txt"
+    echo "[validation] $name: the loop refused the data: $(head -c 300 "$dir/refused.txt")"
+  elif ((rc != 0)); then
+    echo "[validation] $name: the loop failed (exit $rc): $(tail -c 300 "$dir/loop_stderr.txt")" >&2
+    exit 1
+  fi
 }
 
 rows=()
@@ -83,6 +95,13 @@ done
 summary=$out/summary.json
 for row in "${rows[@]}"; do
   IFS='|' read -r name design grid want side cut <<<"$row"
+  if [[ -f $out/$name/refused.txt ]]; then
+    jq -n -c --arg name "$name" --arg design "data/loop/$design" --arg grid "$grid" \
+      --arg want "$want" --rawfile why "$out/$name/refused.txt" \
+      '{case: $name, design: $design, mu_grid: $grid, expected: $want, named: null,
+        verdict: "refused", refused: ($why | rtrimstr("\n")), held: ($want == "refused")}'
+    continue
+  fi
   jq -c --arg name "$name" --arg design "data/loop/$design" --arg grid "$grid" \
     --arg want "$want" --arg side "$side" --argjson cut "$cut" '
     .summary as $s | (.final.effects[0] // null) as $e |
@@ -109,7 +128,7 @@ done | jq -s '.' >"$summary.tmp" && mv "$summary.tmp" "$summary"
 jq -r '(["case","expected","named","value","value_se","mu_r","rmse_cal_before_deg",
          "rmse_cal_after_deg","rmse_val_before_deg","rmse_val_after_deg","cut","least_cut",
          "held","code_version"] | @csv),
-       (.[] | [.case,.expected,.named,.value,.value_se,.mu_r,.rmse_calibrate_before_deg,
+       (.[] | [.case,.expected,(.named // .verdict),.value,.value_se,.mu_r,.rmse_calibrate_before_deg,
                .rmse_calibrate_after_deg,.rmse_validate_before_deg,.rmse_validate_after_deg,
                .cut,.least_cut,.held,.code_version] | @csv)' "$summary" >"$out/summary.csv.tmp"
 mv "$out/summary.csv.tmp" "$out/summary.csv"
