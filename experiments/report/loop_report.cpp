@@ -230,9 +230,24 @@ std::vector<Figure> residual_figures(const json& loop, const fs::path& dir) {
 // The width of the wider image of a pair on the page [px].
 constexpr double kPairWidthPx = 560.0;
 
+// A file the page names, as a link where it is in the page's folder, else as plain text that says
+// so: a loop folder whose photos were left out (results/ keeps loop.json and the page, not the
+// megabytes of photos the command re-makes) still opens without a broken image.
+Cell file_cell(const fs::path& dir, const std::string& rel) {
+  Cell c;
+  c.left = true;
+  const std::string name = fs::path(rel).filename().string();
+  if (fs::is_regular_file(dir / rel))
+    c.links = {{rel, name}};
+  else
+    c.text = name + " (not in this folder)";
+  return c;
+}
+
 // Per test with photos, the lab's overlay beside the twin's at one mm per page pixel (CSS
-// width from each image's own scale), and the files with their scales.
-std::string photos_section(const json& loop) {
+// width from each image's own scale), and the files with their scales. An overlay missing from
+// `dir` is not drawn; its numbers stay in the table.
+std::string photos_section(const json& loop, const fs::path& dir) {
   const json pairs = loop.value("photo_pairs", json::array());
   if (pairs.empty()) return "";
   mustache::data list(mustache::data::type::list);
@@ -245,6 +260,7 @@ std::string photos_section(const json& loop) {
           {view.second->at("width_px").get<int>(), json_number(view.second->at("mm_per_px"))});
     const double common = beside_scale(images, kPairWidthPx);
     std::vector<Figure> figures;
+    int missing = 0;
     Table files = numeric_table(
         {"", "photo", "overlay", "mm per px", "size [px]", "on the page [px]", "atan(2H/D) [deg]"});
     for (std::size_t k = 0; k < views.size(); ++k) {
@@ -258,14 +274,13 @@ std::string photos_section(const json& loop) {
         for (const auto& [name, value] : effects.items())
           caption += ", " + name + " " + sig3(value);
       }
-      figures.push_back({v.at("overlay").get<std::string>(), caption, width});
-      Cell photo, overlay;
-      photo.left = overlay.left = true;
-      photo.links = {{v["photo"].get<std::string>(),
-                      fs::path(v["photo"].get<std::string>()).filename().string()}};
-      overlay.links = {{v["overlay"].get<std::string>(),
-                        fs::path(v["overlay"].get<std::string>()).filename().string()}};
-      files.rows.push_back({{left(views[k].first), photo, overlay, sig3(v["mm_per_px"]),
+      const std::string overlay = v.at("overlay").get<std::string>();
+      if (fs::is_regular_file(dir / overlay))
+        figures.push_back({overlay, caption, width});
+      else
+        ++missing;
+      files.rows.push_back({{left(views[k].first), file_cell(dir, v["photo"].get<std::string>()),
+                             file_cell(dir, overlay), sig3(v["mm_per_px"]),
                              v["width_px"].dump() + " x " + v["height_px"].dump(),
                              std::to_string(width), sig3(v["angle_deg"])}});
     }
@@ -273,8 +288,15 @@ std::string photos_section(const json& loop) {
     x.set("id", left(p["id"]).text);
     x.set("scale", views.size() > 1 ? "Both at " + sig3(common) + " mm per page pixel."
                                     : "At " + sig3(common) + " mm per page pixel.");
+    x.set("any_figures", !figures.empty());
     x.set("figures", to_data(figures));
-    x.set("note", text_or_false(p.value("note", std::string())));
+    std::string note = p.value("note", std::string());
+    if (missing > 0)
+      note += std::string(note.empty() ? "" : " ") + std::to_string(missing) +
+              (missing == 1 ? " photo is" : " photos are") +
+              " not in this folder (the loop's command makes them again); their scales and "
+              "angles are in the table.";
+    x.set("note", text_or_false(note));
     x.set("files", to_data(files));
     list.push_back(x);
   }
@@ -453,7 +475,7 @@ void write_loop_html(const json& loop, const std::string& out_dir) {
       "ReposeTwin loop",
       "Closing the loop",
       {intro_section(loop), error_section(loop), effects_section(loop), iterations_section(loop),
-       notes_section(loop), residuals_section(loop, plot_dir), photos_section(loop)}};
+       notes_section(loop), residuals_section(loop, plot_dir), photos_section(loop, out_dir)}};
   write_file_atomic((fs::path(out_dir) / "index.html").string(), render_page(page));
 }
 

@@ -174,8 +174,8 @@ const char* const kLoopPhotos = R"(<h2>Lab and twin, like for like</h2>
 <p>Per test with photos: the lab's photo and one twin photo of the same test, each with vision's measurement drawn on it (the H and D lines, the toe line, the apex), shown at one scale, so a pile of one size is one size in both. The twin's is the first seed's pile at the grid point nearest the final mu_r, with the effects of the model's main simulated surface.</p>
 {{#pairs}}<h3>{{id}}</h3>
 <p>{{scale}}</p>
-<div class='beside'>{{#figures}}{{> figure}}{{/figures}}</div>
-{{#note}}<p class='note'>{{note}}</p>
+{{#any_figures}}<div class='beside'>{{#figures}}{{> figure}}{{/figures}}</div>
+{{/any_figures}}{{#note}}<p class='note'>{{note}}</p>
 {{/note}}{{#files}}{{> table}}{{/files}}{{/pairs}})";
 
 // index, version, built, planned, budget, within (bool); summary: table.

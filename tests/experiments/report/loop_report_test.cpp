@@ -7,6 +7,7 @@
 #include "experiments/io/provenance.hpp"
 #include "experiments/loop/loop.hpp"
 #include "experiments/report/loop_report.hpp"
+#include "experiments/report/page_check.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -217,6 +218,18 @@ TEST(ReportLoop, LabAndTwinPhotosSideBySideAtOneScale) {
   // Without photo pairs (an older loop.json, or data without photos) there is no such section.
   write_loop_html(small_loop(false), out.string());
   EXPECT_EQ(read_file((out / "index.html").string()).find("like for like"), std::string::npos);
+
+  // Rebuilt after the photos were left out of the folder (results/ keeps loop.json and the page,
+  // not the photos): no image or link points at a missing file, the scales and angles stay,
+  // and the page says the photos are not there.
+  fs::remove_all(out / "photos");
+  write_loop_html(loop, out.string());
+  const std::string pruned = read_file((out / "index.html").string());
+  EXPECT_EQ(pruned.find("photos/t1/"), std::string::npos);
+  for (const char* s : {"<h3>t1</h3>", "lab.measured.png (not in this folder)",
+                        "2 photos are not in this folder", "Both at 0.2 mm per page pixel."})
+    EXPECT_NE(pruned.find(s), std::string::npos) << s;
+  EXPECT_TRUE(report::page_problems(out / "index.html").empty());
 }
 
 // A text condition gets a plot with one category per value, and tests of different size
