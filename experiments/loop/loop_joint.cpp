@@ -185,6 +185,11 @@ std::string describe(const JointScore& s) {
 
 }  // namespace
 
+bool accepted_jointly(const JointScore& j, const JointScore& mu_only, const AcceptanceRule& rule) {
+  return j.chi2_by_channel.size() > 1 && j.identifiable && j.t > rule.min_t &&
+         mu_only.loo_chi2 - j.loo_chi2 > rule.min_delta_chi2;
+}
+
 TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
                            const std::vector<JointScore>& joint, const JointScore& offset,
                            const JointScore& mu_only, const AcceptanceRule& rule) {
@@ -197,6 +202,13 @@ TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
       throw std::invalid_argument("decide_trace: no joint score for " + a.name);
     contenders.push_back(&*it);
   }
+  std::vector<std::string> joint_only;  // contend by the joint rule alone
+  for (const JointScore& j : joint)
+    if (accepted_jointly(j, mu_only, rule) &&
+        std::find(contenders.begin(), contenders.end(), &j) == contenders.end()) {
+      contenders.push_back(&j);
+      joint_only.push_back(j.name);
+    }
   std::stable_sort(contenders.begin(), contenders.end(),
                    [](const JointScore* x, const JointScore* y) { return x->chi2 < y->chi2; });
   const bool offset_flag = offset.identifiable && offset.t > rule.min_t &&
@@ -239,6 +251,10 @@ TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
   d.verdict = TraceVerdict::kNamed;
   d.named = contenders.front()->name;
   d.statement = "named " + describe(*contenders.front());
+  if (std::find(joint_only.begin(), joint_only.end(), d.named) != joint_only.end())
+    d.statement += " (accepted on the joint fit, not on the angle alone: leave-one-out " +
+                   fmt(contenders.front()->loo_chi2) + " against " + fmt(mu_only.loo_chi2) +
+                   " with the mu_r correction alone)";
   if (contenders.size() > 1)
     d.statement += "; next " + describe(*contenders[1]) + ", worse by " +
                    fmt(contenders[1]->chi2 - best) + " > " + fmt(rule.min_delta_chi2);

@@ -18,10 +18,19 @@
 //  * Telling candidates apart. With the noise known, chi^2 is -2 log likelihood up to a
 //    constant, and every candidate has the same two coefficients, so chi^2_A - chi^2_B is the
 //    log likelihood ratio of A against B. Among the candidates that meet the acceptance rule
-//    (loop_trace.hpp, on the angle), the one with the lowest joint chi^2 is named only when every
-//    other is worse by more than min_delta_chi2 (default 4: the named one at least e^2 = 7.4 times
-//    as likely). Otherwise the loop reports them as indistinguishable with their numbers and
-//    names none: which to believe is for a further observable or test to decide.
+//    (loop_trace.hpp, on the angle) or its joint form, the one with the lowest joint chi^2 is
+//    named only when every other is worse by more than min_delta_chi2 (default 4: the named one
+//    at least e^2 = 7.4 times as likely). Otherwise the loop reports them as indistinguishable
+//    with their numbers and names none: which to believe is for a further observable or test to
+//    decide.
+//  * Accepted jointly. A candidate whose angle fingerprint alone barely beats mu_r can explain
+//    H, D and the crest far better than any other (elongated grains steepen the flanks and
+//    narrow the crest, where mu_r raises the apex). Shutting it out on the angle alone would
+//    hand its residual to a worse candidate that passed there. So, where two or more channels
+//    are traced, a candidate also contends when it meets the rule in its joint form:
+//    |c|/se > min_t in the joint fit, and a leave-one-test-out chi^2 below the mu_r correction
+//    alone's by more than min_delta_chi2 (the same evidence threshold as the naming). With the
+//    angle alone the angle rule stands by itself.
 //  * A measurement suspected. A residual nearly the same on every test, that mu_r cannot take
 //    up inside its range, is the mark of a measurement (or a declared condition) wrong
 //    everywhere, not of a physical effect whose pattern follows the conditions. The offset
@@ -117,10 +126,15 @@ struct TraceDecision {
   std::string statement;             // in words, with the numbers
 };
 
-/// Decides among `angle` (the candidates' angle scores; the accepted ones compete) by their
-/// joint scores `joint` (matched by name), the offset hypothesis `offset` and the mu_r
-/// correction alone `mu_only` (design note). Throws std::invalid_argument when an accepted
-/// candidate has no joint score.
+/// Whether `j` meets the acceptance rule in its joint form against the mu_r correction alone
+/// (design note): two or more channels, |c|/se > min_t, and a leave-one-test-out chi^2 lower
+/// by more than min_delta_chi2.
+bool accepted_jointly(const JointScore& j, const JointScore& mu_only, const AcceptanceRule& rule);
+
+/// Decides among `angle` (the candidates' angle scores; the accepted ones compete, and so do the
+/// scores of `joint` accepted jointly) by their joint scores `joint` (matched by name), the
+/// offset hypothesis `offset` and the mu_r correction alone `mu_only` (design note). Throws
+/// std::invalid_argument when an accepted candidate has no joint score.
 TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
                            const std::vector<JointScore>& joint, const JointScore& offset,
                            const JointScore& mu_only, const AcceptanceRule& rule);

@@ -174,6 +174,51 @@ TEST(LoopJoint, IndistinguishableCandidatesAreReportedWithTheirNumbers) {
                std::invalid_argument);
 }
 
+// The shape validation's first trace (four channels, 8 tests): grain_shape's angle fingerprint
+// barely beats mu_r (not accepted on the angle), but it explains angle, H, D and crest far better
+// than lift_speed, which passed on the angle. It contends by the joint rule and is named; with a
+// leave-one-out gain of 4 or less it does not contend; with the angle channel alone (one
+// channel) only the angle rule counts.
+TEST(LoopJoint, ACandidateFarBetterOnEveryChannelContendsByTheJointRule) {
+  auto score = [](const std::string& name, double t, double chi2, double loo, int channels) {
+    JointScore j;
+    j.name = name;
+    j.t = t;
+    j.coef = 1.0;
+    j.coef_se = 1.0 / t;
+    j.chi2 = chi2;
+    j.loo_chi2 = loo;
+    j.rows = 8 * channels;
+    j.chi2_by_channel.assign(channels, chi2 / channels);
+    return j;
+  };
+  std::vector<CandidateScore> angle = accepted({"lift_speed", "grain_shape"});
+  angle[1].accepted = false;
+  const JointScore mu = score("mu_r only", 0.0, 85.9, 91.7, 4);
+  const JointScore offset = score("offset", 2.8, 78.0, 88.6, 4);
+  const JointScore lift = score("lift_speed", 5.5, 56.0, 64.3, 4);
+  const JointScore shape = score("grain_shape", 6.9, 38.1, 42.5, 4);
+  EXPECT_TRUE(accepted_jointly(shape, mu, {}));
+  const TraceDecision d = decide_trace(angle, {lift, shape}, offset, mu, {});
+  EXPECT_EQ(d.verdict, TraceVerdict::kNamed) << d.statement;
+  EXPECT_EQ(d.named, "grain_shape") << d.statement;
+  EXPECT_NE(d.statement.find("accepted on the joint fit"), std::string::npos) << d.statement;
+  // A leave-one-out gain within min_delta_chi2 is no evidence: the angle's choice stands.
+  const JointScore near = score("grain_shape", 6.9, 38.1, 88.0, 4);
+  EXPECT_FALSE(accepted_jointly(near, mu, {}));
+  EXPECT_EQ(decide_trace(angle, {lift, near}, offset, mu, {}).named, "lift_speed");
+  // Nor is a strength inside the noise.
+  EXPECT_FALSE(accepted_jointly(score("grain_shape", 2.0, 38.1, 42.5, 4), mu, {}));
+  // With the angle alone there is no joint form of the rule.
+  const JointScore mu1 = score("mu_r only", 0.0, 85.9, 91.7, 1);
+  const JointScore shape1 = score("grain_shape", 6.9, 38.1, 42.5, 1);
+  EXPECT_FALSE(accepted_jointly(shape1, mu1, {}));
+  EXPECT_EQ(decide_trace(angle, {score("lift_speed", 5.5, 56.0, 64.3, 1), shape1},
+                         score("offset", 2.8, 78.0, 88.6, 1), mu1, {})
+                .named,
+            "lift_speed");
+}
+
 TEST(LoopJoint, AUniformOffsetBeyondMuReachIsAMeasurementSuspect) {
   // +5 deg on every test with mu_r already at the grid's top (no upward correction), H and D as
   // predicted: a wrong angle reading, not a physical effect. A cohesion-like candidate that
