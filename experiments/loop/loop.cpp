@@ -271,15 +271,27 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
   }
   const CandidateScore sc = iter.candidates[static_cast<std::size_t>(best)];
   const CandidateEffect& e = find_effect(sc.name);
+  // A candidate admitted on the joint evidence alone (loop_joint.hpp) is refitted on it: its
+  // strength is the joint fit's, and mu_r and the effect are fitted to every traced observable.
+  // One that passed on the angle keeps the angle's strength and fit.
+  double coef = sc.coef;
+  std::vector<int> channels = {0};
+  if (!sc.accepted) {
+    for (const JointScore& j : iter.joint)
+      if (j.name == sc.name) coef = j.coef;
+    for (const std::string& ch : iter.channels)
+      if (ch != "angle") channels.push_back(ch == "H" ? 1 : ch == "D" ? 2 : 3);
+  }
   const double off = e.off_from_scene ? scene_value(data_.tests.front(), e.key) : e.off;
   const FingerprintRecord& fp =
       *std::find_if(fps.begin(), fps.end(), [&](const auto& f) { return f.name == e.name; });
   // c is in units of the probe the fingerprint was simulated at (scaled when the registry's
   // probe was lost in the seed noise).
-  const double p1 = std::clamp(off + sc.coef * (fp.probe - off), e.lo, e.hi);
-  say("iteration " + std::to_string(it) + ": " + e.name + " accepted (" + sc.why +
-      "); linear estimate " + std::to_string(p1) + " " + e.units + ", simulating the grid");
-  const Refit refit = refit_by_simulation(e, off, p1, sc.coef, fp, grid_[node], state);
+  const double p1 = std::clamp(off + coef * (fp.probe - off), e.lo, e.hi);
+  say("iteration " + std::to_string(it) + ": " + e.name + " accepted (" +
+      (sc.accepted ? sc.why : "on the joint fit") + "); linear estimate " + std::to_string(p1) +
+      " " + e.units + ", simulating the grid");
+  const Refit refit = refit_by_simulation(e, off, p1, coef, fp, grid_[node], state, channels);
   if (refit.trials.empty()) {
     iter.refit_failed = RefitFailed{e.name, refit.notes, p1};
     return false;

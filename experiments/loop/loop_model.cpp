@@ -41,6 +41,22 @@ double Model::crest(std::size_t i, double m) const {
   return s;
 }
 
+double Model::value(std::size_t i, double m, int channel) const {
+  return channel == 0 ? angle(i, m) : channel == 1 ? h(i, m) : channel == 2 ? d(i, m) : crest(i, m);
+}
+
+double Loop::observed(std::size_t i, int channel) const {
+  const LabTest& t = data_.tests[i];
+  return channel == 0 ? t.angle_deg
+         : channel == 1 ? t.height_mm.value_or(0.0)
+         : channel == 2 ? t.diameter_mm.value_or(0.0)
+                        : t.crest_mm.value_or(0.0);
+}
+
+double Loop::noise(std::size_t i, int channel) const {
+  return channel == 0 ? sigma_[i] : channel == 1 ? sigma_h_[i] : channel == 2 ? sigma_d_[i] : sigma_crest_[i];
+}
+
 // The loop's joint fit, not calibration::calibrate_batch's: calibrate matches ONE test's angle
 // by inverting a monotone (isotonic) fit it samples adaptively, with a bootstrap interval; the
 // loop fits one mu_r to MANY tests at once on a fixed grid (weighted least squares over the
@@ -49,24 +65,26 @@ double Model::crest(std::size_t i, double m) const {
 // monotone curve both give the crossing of the interpolated curve, but neither generalises to the
 // other's problem, so they stay two estimators.
 MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max,
-                   const std::vector<std::size_t>& tests) const {
+                   const std::vector<std::size_t>& tests, const std::vector<int>& channels) const {
   const double lo = grid_.front(), hi = grid_.back();
   const int steps = 2000;
+  const Model alone{{{1.0, extra}}};
   MuFit best;
   double best_sse = 1e300;
   for (int q = 0; q <= steps; ++q) {
     const double m = lo + (hi - lo) * q / steps;
     double swdy = 0.0, swdd = 0.0;
-    std::vector<double> y, dd, w;
-    for (std::size_t i : tests) {
-      const double base = model.angle(i, m);
-      const double di = extra ? extra->curve[i].at(m) - base : 0.0;
-      y.push_back(data_.tests[i].angle_deg - base);
-      dd.push_back(di);
-      w.push_back(1.0 / (sigma_[i] * sigma_[i]));
-      swdy += w.back() * di * y.back();
-      swdd += w.back() * di * di;
-    }
+    std::vector<double> y, dd, w;  // residual, extra surface's change, weight 1 / sigma^2
+    for (std::size_t i : tests)
+      for (int c : channels) {
+        const double base = model.value(i, m, c);
+        const double di = extra ? alone.value(i, m, c) - base : 0.0;
+        y.push_back(observed(i, c) - base);
+        dd.push_back(di);
+        w.push_back(1.0 / (noise(i, c) * noise(i, c)));
+        swdy += w.back() * di * y.back();
+        swdd += w.back() * di * di;
+      }
     const double t = (extra && swdd > 0.0) ? std::clamp(swdy / swdd, 0.0, t_max) : 0.0;
     double sse = 0.0;
     for (std::size_t k = 0; k < y.size(); ++k) sse += w[k] * std::pow(y[k] - t * dd[k], 2);
@@ -77,19 +95,21 @@ MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max,
     }
   }
   best.at_edge = best.mu <= lo + 1e-12 || best.mu >= hi - 1e-12;
-  // Standard errors from the Jacobian of the prediction in (mu, t).
+  // Standard errors from the Jacobian of the prediction in (mu, t), each row over its noise.
   const double h = (hi - lo) / 100.0;
-  Eigen::MatrixXd jac(tests.size(), extra ? 2 : 1);
-  for (std::size_t k = 0; k < tests.size(); ++k) {
-    const std::size_t i = tests[k];
-    auto pred = [&](double m) {
-      const double base = model.angle(i, m);
-      return extra ? base + best.t * (extra->curve[i].at(m) - base) : base;
-    };
-    const double a = std::max(lo, best.mu - h), b = std::min(hi, best.mu + h);
-    jac(k, 0) = (pred(b) - pred(a)) / (b - a) / sigma_[i];
-    if (extra) jac(k, 1) = (extra->curve[i].at(best.mu) - model.angle(i, best.mu)) / sigma_[i];
-  }
+  Eigen::MatrixXd jac(tests.size() * channels.size(), extra ? 2 : 1);
+  Eigen::Index k = 0;
+  for (std::size_t i : tests)
+    for (int c : channels) {
+      auto pred = [&](double m) {
+        const double base = model.value(i, m, c);
+        return extra ? base + best.t * (alone.value(i, m, c) - base) : base;
+      };
+      const double a = std::max(lo, best.mu - h), b = std::min(hi, best.mu + h);
+      jac(k, 0) = (pred(b) - pred(a)) / (b - a) / noise(i, c);
+      if (extra) jac(k, 1) = (alone.value(i, best.mu, c) - model.value(i, best.mu, c)) / noise(i, c);
+      ++k;
+    }
   const Eigen::MatrixXd info = jac.transpose() * jac;
   Eigen::FullPivLU<Eigen::MatrixXd> lu(info);
   if (lu.isInvertible()) {

@@ -39,7 +39,8 @@ double Loop::calibration_rmse(const Model& model, double mu) const {
 // cannot see (a smooth plate spreads a small sample into a monolayer): then it steps back
 // halfway towards off, twice at most. Returns false when no attempt could be simulated.
 bool Loop::run_trial(const CandidateEffect& e, double off, double p, const FingerprintRecord& fp,
-                     double mu_node, const LoopState& state, Refit& refit) {
+                     double mu_node, const LoopState& state, const std::vector<int>& channels,
+                     Refit& refit) {
   std::unique_ptr<Surface> surf;
   for (int attempt = 0; attempt < 3 && !surf; ++attempt) {
     std::vector<EffectSetting> with = state.effects;
@@ -58,16 +59,21 @@ bool Loop::run_trial(const CandidateEffect& e, double off, double p, const Finge
   Trial tr;
   tr.p = p;
   tr.surf = surfaces_.back().get();
+  // The response in units of the fingerprint, over the refit's channels, each over its noise.
+  const Model alone{{{1.0, tr.surf}}};
   double num = 0.0, den = 0.0;
-  for (std::size_t i : fit_) {
-    num += (tr.surf->curve[i].at(mu_node) - state.model.angle(i, mu_node)) * fp.angle_deg[i];
-    den += fp.angle_deg[i] * fp.angle_deg[i];
-  }
+  for (std::size_t i : fit_)
+    for (int c : channels) {
+      const double f = (c == 0 ? fp.angle_deg : c == 1 ? fp.h_mm : c == 2 ? fp.d_mm : fp.crest_mm)[i];
+      const double w = c == 0 ? 1.0 : std::pow(noise(i, 0) / noise(i, c), 2);
+      num += w * (alone.value(i, mu_node, c) - state.model.value(i, mu_node, c)) * f;
+      den += w * f * f;
+    }
   tr.fraction = den > 0.0 ? num / den : 0.0;
   // t may extrapolate beyond the simulated value, but never past the effect's range.
   const double bound = (p < off ? e.lo : e.hi) - off;
   const double t_max = p != off ? std::min(s_.t_max, std::max(1.0, bound / (p - off))) : s_.t_max;
-  tr.joint = fit_mu(state.model, tr.surf, t_max, fit_);
+  tr.joint = fit_mu(state.model, tr.surf, t_max, fit_, channels);
   for (const auto& [w, sf] : state.model.terms)
     tr.model.terms.push_back({(1.0 - tr.joint.t) * w, sf});
   tr.model.terms.push_back({tr.joint.t, tr.surf});
@@ -76,17 +82,18 @@ bool Loop::run_trial(const CandidateEffect& e, double off, double p, const Finge
   return true;
 }
 
-// Secant refinement. The linear estimate p1 assumes the response grows linearly from off to the
+// Secant refinement (on the refit's channels: the angle, or every traced observable for a
+// candidate admitted on the joint evidence). The linear estimate p1 assumes the response grows linearly from off to the
 // probe; a threshold effect (a plate that starts to slide below some friction) breaks that. When
 // the simulated response fraction misses the traced strength `coef` by more than half, the next
 // value interpolates coef between the known responses (off: 0, probe: 1, and the trials), at
 // most twice more.
 Refit Loop::refit_by_simulation(const CandidateEffect& e, double off, double p1, double coef,
                                 const FingerprintRecord& fp, double mu_node,
-                                const LoopState& state) {
+                                const LoopState& state, const std::vector<int>& channels) {
   Refit refit;
   const int kMaxRefinements = 2;
-  if (!run_trial(e, off, p1, fp, mu_node, state, refit)) return refit;
+  if (!run_trial(e, off, p1, fp, mu_node, state, channels, refit)) return refit;
   for (int k = 0; k < kMaxRefinements; ++k) {
     const Trial& last = refit.trials.back();
     if (std::abs(last.fraction - coef) <= 0.5 * std::abs(coef)) break;
@@ -103,7 +110,7 @@ Refit Loop::refit_by_simulation(const CandidateEffect& e, double off, double p1,
     say(e.name + ": simulated response " + std::to_string(last.fraction) + " of the probe's at " +
         std::to_string(last.p) + " (traced " + std::to_string(coef) + "); refining at " +
         std::to_string(next));
-    if (!run_trial(e, off, next, fp, mu_node, state, refit)) break;
+    if (!run_trial(e, off, next, fp, mu_node, state, channels, refit)) break;
   }
   return refit;
 }

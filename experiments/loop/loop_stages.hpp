@@ -58,6 +58,8 @@ struct Model {
   double h(std::size_t test, double mu) const;           // [mm]
   double d(std::size_t test, double mu) const;           // [mm]
   double crest(std::size_t test, double mu) const;       // crest width [mm]
+  /// Channel 0 angle, 1 H, 2 D, 3 crest.
+  double value(std::size_t test, double mu, int channel) const;
 };
 
 /// What the iterations change: the model, its fit and the effects in it.
@@ -129,16 +131,21 @@ class Loop {
   double mu_slope(const LoopState& state, std::size_t i, int channel) const;
   double pooled_seed_sd(const Surface& base, int channel) const;
 
-  // The model's fit and residuals (loop_model.cpp). fit_mu fits the tests `tests`.
+  // The model's fit and residuals (loop_model.cpp). fit_mu fits the tests `tests` on the
+  // observables `channels` (0 angle, 1 H, 2 D, 3 crest; each residual over its own noise).
   MuFit fit_mu(const Model& model, const Surface* extra, double t_max,
-               const std::vector<std::size_t>& tests) const;
+               const std::vector<std::size_t>& tests, const std::vector<int>& channels = {0}) const;
+  double observed(std::size_t test, int channel) const;  // the lab's value
+  double noise(std::size_t test, int channel) const;     // its residual's 1-sigma noise
   std::vector<ResidualRow> residuals(const Model& model, double mu) const;
 
   // Refit by simulation (loop_refit.cpp).
   Refit refit_by_simulation(const CandidateEffect& e, double off, double p1, double coef,
-                            const FingerprintRecord& fp, double mu_node, const LoopState& state);
+                            const FingerprintRecord& fp, double mu_node, const LoopState& state,
+                            const std::vector<int>& channels);
   bool run_trial(const CandidateEffect& e, double off, double p, const FingerprintRecord& fp,
-                 double mu_node, const LoopState& state, Refit& refit);
+                 double mu_node, const LoopState& state, const std::vector<int>& channels,
+                 Refit& refit);
   std::string unconfirmed_reason(const Trial& best, const LoopState& state) const;
   double calibration_rmse(const Model& model, double mu) const;
 
