@@ -46,7 +46,7 @@ cases=(
   "null|synth_null.toml|0.1,0.2,0.35|none|-|0|"
   "camera|synth_camera.toml|0.1,0.2,0.35|refused|-|0|"
   "rolling_size|synth_size.toml|0.1,0.25,0.5|rolling_size|above|0.70|"
-  "shape|synth_shape.toml|0.2,0.35,0.5|grain_shape|above|0.70|grain_shape,plate_friction,lift_speed,cohesion,camera_height"
+  "shape|synth_shape.toml|0.2,0.35,0.5|grain_shape|above|0.45|grain_shape,plate_friction,lift_speed,cohesion,camera_height"
 )
 
 mkdir -p "$out"
