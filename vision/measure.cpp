@@ -303,6 +303,49 @@ void measure_through_camera(SideMeasurement& m, const camera::Camera& cam,
   m.sigma_crest_width_m = m.crest.sigma_px * k;
 }
 
+// The top view's crest (vision/top_crest.hpp) in metres. Through a camera its circle is mapped
+// onto the plane of the flat top (z = crest_height_m when given, else the plate, said so);
+// without one the plate's scale is used, as for the footprint.
+void read_top_crest(const cv::Mat& image, const ScaleSpec& scale, const std::string& where,
+                    TopMeasurement& m) {
+  m.crest = measure_top_crest(image, m.pixels, {}, where);
+  const double h = scale.crest_height_m.value_or(0.0);
+  std::ostringstream plane;
+  if (scale.crest_height_m)
+    plane << "z = " << std::fixed << std::setprecision(1) << 1e3 * h << " mm (the side views' H)";
+  else
+    plane << "the plate (no crest height given)";
+  m.crest_plane = plane.str();
+  if (!m.crest.found) return;
+  if (!scale.camera) {
+    m.crest_width_m = 2.0 * m.crest.radius_px * m.mm_per_px / 1000.0;
+    m.sigma_crest_width_m = 2.0 * m.crest.sigma_radius_px * m.mm_per_px / 1000.0;
+    m.crest_plane += ", orthographic view assumed";
+    return;
+  }
+  const Eigen::Vector3d on_plane = scale.axis_foot + Eigen::Vector3d(0.0, 0.0, h);
+  auto width_at = [&](double r_px) {
+    std::vector<cv::Point2d> mm;
+    for (int i = 0; i < 72; ++i) {
+      const double a = 2.0 * std::numbers::pi * i / 72.0;
+      const cv::Point2d q = m.crest.center + r_px * cv::Point2d(std::cos(a), std::sin(a));
+      const auto w =
+          camera::pixel_on_plane(*scale.camera, ev(q), on_plane, Eigen::Vector3d::UnitZ());
+      if (w) mm.emplace_back(1000.0 * w->x(), 1000.0 * w->y());
+    }
+    cv::Point2d c;
+    double r = 0.0, rms = 0.0;
+    if (mm.size() < 16 || !fit_circle(mm, c, r, rms))
+      throw std::runtime_error(where + ": the crest does not map onto its plane");
+    return 2.0 * r / 1000.0;
+  };
+  const double r = m.crest.radius_px, s = m.crest.sigma_radius_px;
+  m.crest_width_m = r > 0.0 ? width_at(r) : 0.0;
+  // A crest bounded from 0 (no step read) is uncertain by the whole bound.
+  m.sigma_crest_width_m =
+      r > s ? 0.5 * (width_at(r + s) - width_at(r - s)) : width_at(r + s) - m.crest_width_m;
+}
+
 }  // namespace
 
 TopMeasurement measure_top(const cv::Mat& image, const ScaleSpec& scale,
@@ -344,6 +387,7 @@ TopMeasurement measure_top(const cv::Mat& image, const ScaleSpec& scale,
         std::hypot(p.sigma_diameter_circle_px * k, m.diameter_circle_m * m.sigma_scale_rel);
     m.circle_residual_m = p.circle_residual_px * k;
     m.ellipticity = p.ellipticity;
+    read_top_crest(image, scale, where, m);
     return m;
   }
   // Known camera: the outline on the plate plane, in millimetres.
@@ -375,6 +419,7 @@ TopMeasurement measure_top(const cv::Mat& image, const ScaleSpec& scale,
   m.circle_residual_m = rms / 1000.0;
   m.ellipticity =
       1.0 - std::min(el.size.width, el.size.height) / std::max(el.size.width, el.size.height);
+  read_top_crest(image, scale, where, m);
   return m;
 }
 

@@ -42,6 +42,7 @@
 #include "vision/crest.hpp"
 #include "vision/scale_marker.hpp"
 #include "vision/side_view.hpp"
+#include "vision/top_crest.hpp"
 #include "vision/top_view.hpp"
 
 namespace reposetwin::vision {
@@ -62,6 +63,9 @@ struct ScaleSpec {
   // Check the camera's pose against the photo's base ellipse (vision/camera_pose.hpp) and refuse
   // the photo, with both numbers, when they contradict.
   bool check_pose = true;
+  // A top view's crest stands H above the plate, nearer the camera than the plate the scale is
+  // given on: with this height (the side views' H) its width is read on the plane z = H.
+  std::optional<double> crest_height_m;
   std::string note;                          // recorded with the result (e.g. the sidecar's path)
 };
 
@@ -136,6 +140,10 @@ struct TopMeasurement {
   bool perspective_corrected = false;  // false: an orthographic view was assumed
   std::optional<CheckerCard> checker_card;
   std::string note;
+  TopCrest crest;                  // the flat top in pixels (vision/top_crest.hpp's rule)
+  double crest_width_m = 0.0;      // its width, when crest.found [m]
+  double sigma_crest_width_m = 0.0;
+  std::string crest_plane;         // the plane its pixels were scaled on, in words
 };
 
 /// Measures a top view; scale as for measure_side (the marker is the checker card). When the

@@ -101,6 +101,34 @@ nlohmann::json to_json(const SideMeasurement& m) {
   return j;
 }
 
+namespace {
+
+// The top view's crest: its width, or why it went unread, and the shading it was read from.
+nlohmann::json to_json_crest(const TopMeasurement& m) {
+  const TopCrest& c = m.crest;
+  nlohmann::json j = {{"found", c.found},
+                      {"plane", m.crest_plane},
+                      {"pixels",
+                       {{"center", pt(c.center)},
+                        {"radius_px", c.radius_px},
+                        {"sigma_radius_px", c.sigma_radius_px},
+                        {"light_azimuth_deg", c.light_azimuth_deg},
+                        {"flank_harmonic", c.flank_amplitude},
+                        {"sigma_flank_harmonic", c.flank_sigma},
+                        {"inner_level", c.inner_level},
+                        {"outer_level", c.outer_level},
+                        {"sigma_step", c.step_sigma}}}};
+  if (c.found) {
+    j["width_m"] = m.crest_width_m;
+    j["sigma_width_m"] = m.sigma_crest_width_m;
+  } else {
+    j["reason"] = c.reason;
+  }
+  return j;
+}
+
+}  // namespace
+
 nlohmann::json to_json(const TopMeasurement& m) {
   const TopProfile& p = m.pixels;
   nlohmann::json card = nullptr;
@@ -131,7 +159,8 @@ nlohmann::json to_json(const TopMeasurement& m) {
         {"ellipse_axes_px", {p.ellipse_major_px, p.ellipse_minor_px}},
         {"ellipse_angle_deg", p.ellipse_angle_deg},
         {"outline_points", p.outline.size()},
-        {"cue", p.cue}}}};
+        {"cue", p.cue}}},
+      {"crest", to_json_crest(m)}};
 }
 
 nlohmann::json to_json(const SideSummary& s) {

@@ -120,11 +120,18 @@ cv::Mat draw_top_overlay(const cv::Mat& image, const TopMeasurement& m) {
              cv::Scalar(0, 0, 230), t, cv::LINE_AA);
   cv::drawMarker(img, ip(p.center), cv::Scalar(0, 0, 230), cv::MARKER_CROSS, 4 * t + 10, t);
   if (m.checker_card) cv::rectangle(img, m.checker_card->box, cv::Scalar(255, 0, 0), t);
+  if (m.crest.found && m.crest.radius_px > 0.0)
+    cv::circle(img, ip(m.crest.center), static_cast<int>(std::lround(m.crest.radius_px)),
+               cv::Scalar(0, 215, 255), t, cv::LINE_AA);
   text_block(img,
              {"D (circle fit) = " + fixed(1000.0 * m.diameter_circle_m, 1) + " +- " +
                   fixed(1000.0 * m.sigma_diameter_circle_m, 1) + " mm",
               "D (equal area) = " + fixed(1000.0 * m.diameter_area_m, 1) +
                   " mm   ellipticity = " + fixed(m.ellipticity, 3),
+              m.crest.found
+                  ? "crest (flat top, from the shading) = " + fixed(1000.0 * m.crest_width_m, 1) +
+                        " +- " + fixed(1000.0 * m.sigma_crest_width_m, 1) + " mm"
+                  : "crest: not read from this view",
               "scale: " + to_string(m.scale_source) + ", " + fixed(m.mm_per_px, 4) + " mm/px; " +
                   (m.perspective_corrected ? "perspective corrected" : "assumed orthographic")});
   return img;

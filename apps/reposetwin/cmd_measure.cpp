@@ -111,7 +111,9 @@ void run_measure(const MeasureOptions& o) {
   cv::Mat top_overlay;
   if (!o.top.empty()) {
     const cv::Mat img = vision::load_image(o.top);
-    const vision::ScaleSpec scale = resolve_scale(o.top, o.top_mm_per_px, o.top_camera, o.marker);
+    vision::ScaleSpec scale = resolve_scale(o.top, o.top_mm_per_px, o.top_camera, o.marker);
+    // The crest stands at the pile's height: its width is read on that plane.
+    scale.crest_height_m = vision::combine_sides(views).height_m.mean;
     top = vision::measure_top(img, scale, {}, o.top);
     if (!o.no_overlay) top_overlay = vision::draw_top_overlay(img, *top);
   }

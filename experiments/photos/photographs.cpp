@@ -228,7 +228,10 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
     render::write_render(base, image, render::make_sidecar(scene, cam, options, provenance));
   photos.top_taken = true;
   try {
-    photos.top = vision::measure_top_camera(image, cam, {}, base + ".png");
+    vision::ScaleSpec spec;
+    spec.camera = cam;
+    if (photos.summary) spec.crest_height_m = photos.summary->height_m.mean;
+    photos.top = vision::measure_top(image, spec, {}, base + ".png");
     if (s.write_overlays)
       cv::imwrite(base + ".measured.png",
                   stamp_warning(vision::draw_top_overlay(image, *photos.top), s.warning));

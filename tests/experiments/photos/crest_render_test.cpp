@@ -12,6 +12,7 @@
 #include <string>
 
 #include "../../support/frustum_scene.hpp"
+#include <opencv2/imgcodecs.hpp>
 #include "render/renderer.hpp"
 #include "render/scene.hpp"
 #include "vision/measure.hpp"
@@ -32,6 +33,40 @@ TEST(CrestRender, FrustumFixtureGivesItsTopWidth) {
   EXPECT_NEAR(1e3 * m.crest_width_m, 2e3 * kRt, 1.0);
   EXPECT_NEAR(m.height_m, kH * kL / (kL - kRt), 0.3e-3);
   EXPECT_NEAR(m.diameter_m, 2.0 * kRb, 1e-3);
+}
+
+// The crest from above: the same frustum, capped (a flat disc at its top rim), photographed
+// from straight above under the renderer's light (35 deg off the view), measured by vision
+// through the camera with the crest's height given. Its top width is 2 r_top; the cap's plane is
+// h above the plate, so read on the plate plane it would come out L / (L - h) too wide.
+TEST(CrestRender, FrustumFromAboveGivesItsTopWidthFromTheShading) {
+  constexpr double kH = 0.03, kRb = 0.07, kRt = 0.02, kL = 0.6;  // [m]
+  render::Scene scene = test_support::frustum_scene(kH, kRb, kRt);
+  // Light rock, so that its side turned from the light stays far off the plate's grey and the
+  // footprint is the whole base (the crest's rings are centred on it).
+  scene.shells.front().color = {235, 228, 215};
+  render::Shell cap = scene.shells.front();
+  cap.z_bottom_m = kH - 1e-5;  // a cone 10 um tall: the disc of the top
+  cap.r_bottom_m = 0.0;
+  cap.r_top_m = kRt;
+  scene.shells.push_back(cap);
+  const camera::Camera cam = camera::top_view(kL, 0.3, 960, 720);
+  const cv::Mat image = render::render_image(scene, cam, {});
+  cv::imwrite("/tmp/tc/frustum_top.png", image);
+  vision::ScaleSpec spec;
+  spec.camera = cam;
+  spec.crest_height_m = kH;
+  const vision::TopMeasurement m = vision::measure_top(image, spec, {}, "frustum_top.png");
+  spec.crest_height_m.reset();
+  const vision::TopMeasurement on_plate = vision::measure_top(image, spec, {}, "frustum_top.png");
+  std::printf("frustum from above: crest %.2f +- %.2f mm (%.1f px, light %.0f deg), on the plate "
+              "plane %.2f mm\n",
+              1e3 * m.crest_width_m, 1e3 * m.sigma_crest_width_m, m.crest.radius_px,
+              m.crest.light_azimuth_deg, 1e3 * on_plate.crest_width_m);
+  ASSERT_TRUE(m.crest.found) << m.crest.reason;
+  EXPECT_NEAR(1e3 * m.crest_width_m, 2e3 * kRt, std::max(1.0, 2.0 * 1e3 * m.sigma_crest_width_m));
+  EXPECT_LT(m.sigma_crest_width_m, 1.5e-3);
+  EXPECT_NEAR(on_plate.crest_width_m / m.crest_width_m, kL / (kL - kH), 1e-3);
 }
 
 // A flat monolayer of grains (80 or 25 spheres of 3.5 mm lying on the plate, spread evenly over
