@@ -280,7 +280,7 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
     for (const JointScore& j : iter.joint)
       if (j.name == sc.name) coef = j.coef;
     for (const std::string& ch : iter.channels)
-      if (ch != "angle") channels.push_back(ch == "H" ? 1 : ch == "D" ? 2 : 3);
+      if (channel_index(ch) != 0) channels.push_back(channel_index(ch));
   }
   const double off = e.off_from_scene ? scene_value(data_.tests.front(), e.key) : e.off;
   const FingerprintRecord& fp =

@@ -1,5 +1,7 @@
 #include "experiments/loop/loop_records.hpp"
 
+#include <stdexcept>
+
 #include "experiments/io/json_fields.hpp"
 #include "experiments/loop/loop_effects.hpp"
 
@@ -71,6 +73,29 @@ json to_json(const BaselineRecord& b) {
           {"residuals", to_json_array(b.residuals)},
           {"rmse", to_json(b.rmse)},
           {"curves", to_json_array(b.curves)}};
+}
+
+const char* channel_name(int channel) {
+  static const char* const kNames[] = {"angle", "H", "D", "crest"};
+  if (channel < 0 || channel > 3)
+    throw std::logic_error("loop: no channel " + std::to_string(channel));
+  return kNames[channel];
+}
+
+int channel_index(const std::string& name) {
+  for (int c = 0; c < 4; ++c)
+    if (name == channel_name(c)) return c;
+  throw std::logic_error("loop: no channel named '" + name + "'");
+}
+
+const std::vector<double>& FingerprintRecord::column(int channel) const {
+  switch (channel) {
+    case 0: return angle_deg;
+    case 1: return h_mm;
+    case 2: return d_mm;
+    case 3: return crest_mm;
+  }
+  throw std::logic_error("loop: no channel " + std::to_string(channel));
 }
 
 json to_json(const FingerprintRecord& f) {

@@ -79,6 +79,13 @@ struct BaselineRecord {
   std::vector<BaselineCurve> curves;
 };
 
+/// The observables the loop traces, by the index every per-channel branch uses (Model::value,
+/// Loop::observed, Loop::noise): 0 the angle [deg], 1 H, 2 D, 3 the crest width [mm]. Their
+/// names are the joint trace's (IterationRecord::channels).
+const char* channel_name(int channel);
+/// The index of a channel named as channel_name gives it; throws std::logic_error for another.
+int channel_index(const std::string& name);
+
 /// A candidate's simulated change of every test's angle, H and D at its probe value.
 struct FingerprintRecord {
   std::string name;
@@ -91,6 +98,9 @@ struct FingerprintRecord {
   std::vector<double> probes_tried;  // every probe simulated, the one used last
   std::vector<double> crest_mm;      // per test: mean change of the crest width [mm]; empty
                                      // when no test has a measured crest
+
+  /// The per-test change of one channel (channel_index's numbering).
+  const std::vector<double>& column(int channel) const;
 };
 
 /// The mu_r grid as the loop settled it: extended beyond a bound mu_r landed on, or left.

@@ -64,7 +64,7 @@ bool Loop::run_trial(const CandidateEffect& e, double off, double p, const Finge
   double num = 0.0, den = 0.0;
   for (std::size_t i : fit_)
     for (int c : channels) {
-      const double f = (c == 0 ? fp.angle_deg : c == 1 ? fp.h_mm : c == 2 ? fp.d_mm : fp.crest_mm)[i];
+      const double f = fp.column(c)[i];
       const double w = c == 0 ? 1.0 : std::pow(noise(i, 0) / noise(i, c), 2);
       num += w * (alone.value(i, mu_node, c) - state.model.value(i, mu_node, c)) * f;
       den += w * f * f;

@@ -253,7 +253,7 @@ JointProblem Loop::joint_problem(const LoopState& state, std::vector<std::string
     hd = hd && data_.tests[i].height_mm.has_value() && data_.tests[i].diameter_mm.has_value();
   if (!hd) left_out.push_back("H and D: not measured on every test");
   for (int c = 0; c < (hd ? 3 : 1); ++c) {
-    TraceChannel ch{c == 0 ? "angle" : c == 1 ? "H" : "D", c == 0 ? "deg" : "mm",
+    TraceChannel ch{channel_name(c), c == 0 ? "deg" : "mm",
                     Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n)};
     for (Eigen::Index k = 0; k < n; ++k) {
       const std::size_t i = trace_[k];
@@ -270,7 +270,7 @@ JointProblem Loop::joint_problem(const LoopState& state, std::vector<std::string
     p.channels.push_back(std::move(ch));
   }
   if (!crest_measured_) return p;
-  OptionalChannel crest{{"crest", "mm", Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n)},
+  OptionalChannel crest{{channel_name(3), "mm", Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n)},
                         std::vector<bool>(static_cast<std::size_t>(n))};
   for (Eigen::Index k = 0; k < n; ++k) {
     const std::size_t i = trace_[k];
@@ -294,7 +294,7 @@ IterationRecord Loop::trace(int it, const LoopState& state,
   JointProblem joint = joint_problem(state, rec.channels_left_out);
   // A crest fingerprint from photographs cached before the crest was recorded has no value: the
   // channel then leaves this trace rather than carry NaN into every score.
-  if (joint.channels.back().name == "crest")
+  if (joint.channels.back().name == channel_name(3))
     for (const FingerprintRecord& f : fps) {
       if (state.used.count(f.name)) continue;
       bool finite = f.crest_mm.size() == data_.tests.size();
@@ -319,12 +319,9 @@ IterationRecord Loop::trace(int it, const LoopState& state,
     if (state.used.count(f.name)) continue;
     std::vector<Eigen::VectorXd> cols;
     for (const TraceChannel& ch : joint.channels) {
-      const std::vector<double>* v = ch.name == "angle" ? &f.angle_deg
-                                     : ch.name == "H"   ? &f.h_mm
-                                     : ch.name == "D"   ? &f.d_mm
-                                                        : &f.crest_mm;
+      const std::vector<double>& v = f.column(channel_index(ch.name));
       Eigen::VectorXd col(n);
-      for (Eigen::Index k = 0; k < n; ++k) col[k] = (*v)[trace_[k]];
+      for (Eigen::Index k = 0; k < n; ++k) col[k] = v[trace_[k]];
       cols.push_back(col);
     }
     rec.candidates.push_back(score_candidate(p, f.name, cols[0], rec.null, s_.rule));

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
 
 namespace reposetwin::experiments {
 namespace {
@@ -15,6 +16,25 @@ ResidualRow row(const std::string& role, double residual) {
   r.role = role;
   r.residual_deg = residual;
   return r;
+}
+
+// One numbering of the traced observables: the joint trace's names map to the index the model,
+// the noise and the fingerprint's columns use, and back; a name the trace never gives is an
+// error, not channel 3.
+TEST(LoopRecords, ChannelsMapByNameToTheFingerprintsColumns) {
+  FingerprintRecord f;
+  f.angle_deg = {1.0};
+  f.h_mm = {2.0};
+  f.d_mm = {3.0};
+  f.crest_mm = {4.0};
+  for (int c = 0; c < 4; ++c) {
+    EXPECT_EQ(channel_index(channel_name(c)), c);
+    EXPECT_EQ(f.column(c).front(), c + 1.0);
+  }
+  EXPECT_EQ(channel_index("H"), 1);
+  EXPECT_EQ(&f.column(channel_index("crest")), &f.crest_mm);
+  EXPECT_THROW(channel_index("theta"), std::logic_error);
+  EXPECT_THROW(f.column(4), std::logic_error);
 }
 
 TEST(LoopRecords, RmseByRoleSplitsCalibrationAndValidation) {
