@@ -282,7 +282,7 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
     for (const std::string& ch : iter.channels)
       if (channel_index(ch) != 0) channels.push_back(channel_index(ch));
   }
-  const double off = e.off_from_scene ? scene_value(data_.tests.front(), e.key) : e.off;
+  const double off = effect_off(e);
   const FingerprintRecord& fp =
       *std::find_if(fps.begin(), fps.end(), [&](const auto& f) { return f.name == e.name; });
   // c is in units of the probe the fingerprint was simulated at (scaled when the registry's

@@ -185,6 +185,17 @@ std::string describe(const JointScore& s) {
 
 }  // namespace
 
+std::string outside_range(double coef, double coef_se, double off, double probe, double lo,
+                          double hi, const std::string& units) {
+  const double value = off + coef * (probe - off);
+  const double band = 2.0 * coef_se * std::abs(probe - off);
+  if (value + band >= lo && value - band <= hi) return "";
+  const bool below = value + band < lo;
+  return "c = " + fmt(coef) + " +- " + fmt(coef_se) + " puts it at " + fmt(value) + " +- " +
+         fmt(0.5 * band) + " " + units + ", " + (below ? "below" : "above") + " its range's " +
+         (below ? "end " + fmt(lo) : "end " + fmt(hi)) + " " + units;
+}
+
 bool accepted_jointly(const JointScore& j, const JointScore& mu_only, const AcceptanceRule& rule) {
   return j.chi2_by_channel.size() > 1 && j.identifiable && j.t > rule.min_t &&
          mu_only.loo_chi2 - j.loo_chi2 > rule.min_delta_chi2;
@@ -194,21 +205,36 @@ TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
                            const std::vector<JointScore>& joint, const JointScore& offset,
                            const JointScore& mu_only, const AcceptanceRule& rule) {
   std::vector<const JointScore*> contenders;
+  std::vector<std::string> outside;  // met the rule with a fit outside the effect's range
   for (const CandidateScore& a : angle) {
     if (!a.accepted) continue;
     const auto it = std::find_if(joint.begin(), joint.end(),
                                  [&](const JointScore& j) { return j.name == a.name; });
     if (it == joint.end())
       throw std::invalid_argument("decide_trace: no joint score for " + a.name);
-    contenders.push_back(&*it);
+    if (!a.out_of_range.empty())
+      outside.push_back(a.name + " (on the angle: " + a.out_of_range + ")");
+    else
+      contenders.push_back(&*it);
   }
   std::vector<std::string> joint_only;  // contend by the joint rule alone
-  for (const JointScore& j : joint)
-    if (accepted_jointly(j, mu_only, rule) &&
-        std::find(contenders.begin(), contenders.end(), &j) == contenders.end()) {
-      contenders.push_back(&j);
-      joint_only.push_back(j.name);
+  for (const JointScore& j : joint) {
+    const bool angle_accepted = std::any_of(angle.begin(), angle.end(), [&](const CandidateScore& a) {
+      return a.accepted && a.name == j.name;
+    });
+    if (angle_accepted || !accepted_jointly(j, mu_only, rule)) continue;
+    if (!j.out_of_range.empty()) {
+      outside.push_back(j.name + " (jointly: " + j.out_of_range + ")");
+      continue;
     }
+    contenders.push_back(&j);
+    joint_only.push_back(j.name);
+  }
+  std::string outside_words;
+  if (!outside.empty()) {
+    outside_words = "; met the rule with a fit outside the effect's range, so not a contender:";
+    for (const std::string& o : outside) outside_words += " " + o + ";";
+  }
   std::stable_sort(contenders.begin(), contenders.end(),
                    [](const JointScore* x, const JointScore* y) { return x->chi2 < y->chi2; });
   const bool offset_flag = offset.identifiable && offset.t > rule.min_t &&
@@ -229,10 +255,13 @@ TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
                        ? std::string("; no candidate meets the acceptance rule")
                        : "; the best candidate, " + describe(*contenders.front()) +
                              ", does not beat it by more than " + fmt(rule.min_delta_chi2));
+    d.statement += outside_words;
     return d;
   }
   if (contenders.empty()) {
-    d.statement = "no candidate meets the acceptance rule";
+    d.statement = outside.empty() ? "no candidate meets the acceptance rule"
+                                  : "no candidate meets the acceptance rule within its range";
+    d.statement += outside_words;
     return d;
   }
   const double best = contenders.front()->chi2;
@@ -245,6 +274,7 @@ TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
       if (c->chi2 - best <= rule.min_delta_chi2) d.statement += " " + describe(*c) + ";";
     d.statement += " their joint chi^2 differ by " + fmt(rule.min_delta_chi2) +
                    " or less; a further observable or test must decide";
+    d.statement += outside_words;
     return d;
   }
   d.tied.clear();
@@ -259,6 +289,7 @@ TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
     d.statement += "; next " + describe(*contenders[1]) + ", worse by " +
                    fmt(contenders[1]->chi2 - best) + " > " + fmt(rule.min_delta_chi2);
   if (offset_flag) d.statement += "; it beats " + offset_words;
+  d.statement += outside_words;
   return d;
 }
 
@@ -308,7 +339,8 @@ nlohmann::json to_json(const JointScore& s) {
           {"t", s.t},               {"mu_shift", s.mu_shift},
           {"mu_shift_at_bound", s.mu_shift_at_bound},
           {"chi2", s.chi2},         {"loo_chi2", s.loo_chi2},
-          {"values", s.rows},       {"chi2_by_channel", s.chi2_by_channel}};
+          {"values", s.rows},       {"chi2_by_channel", s.chi2_by_channel},
+          {"out_of_range", s.out_of_range.empty() ? nlohmann::json() : nlohmann::json(s.out_of_range)}};
 }
 
 nlohmann::json to_json(const TraceDecision& d) {
@@ -337,6 +369,9 @@ JointScore joint_score_from_json(const nlohmann::json& j) {
   s.loo_chi2 = json_number(j.at("loo_chi2"));
   s.rows = j.at("values").get<int>();
   for (const auto& x : j.at("chi2_by_channel")) s.chi2_by_channel.push_back(json_number(x));
+  // Absent from loop.json files written before the range gate.
+  if (j.contains("out_of_range") && !j["out_of_range"].is_null())
+    s.out_of_range = j["out_of_range"].get<std::string>();
   return s;
 }
 

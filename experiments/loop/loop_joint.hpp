@@ -99,6 +99,8 @@ struct JointScore {
   double loo_chi2 = 0.0;             // the same, each test predicted from the others [-]
   int rows = 0;                      // tests x channels
   std::vector<double> chi2_by_channel;
+  std::string out_of_range;  // set by the caller (outside_range): why c lies outside the
+                             // effect's range; empty inside it
 };
 
 /// Fits the hypothesis with one fingerprint column per channel (`fingerprint[c]` has n rows),
@@ -126,13 +128,21 @@ struct TraceDecision {
   std::string statement;             // in words, with the numbers
 };
 
+/// Why a fitted strength c +- se (in units of the probe: the value is off + c (probe - off))
+/// puts an effect outside its range [lo, hi]: the words with the numbers when even the 2-sigma
+/// band stays outside (a camera below the plate, a negative cohesion), else empty. Such a fit
+/// says the fingerprint's shape matches the residual, not that the effect can make it.
+std::string outside_range(double coef, double coef_se, double off, double probe, double lo,
+                          double hi, const std::string& units);
+
 /// Whether `j` meets the acceptance rule in its joint form against the mu_r correction alone
 /// (design note): two or more channels, |c|/se > min_t, and a leave-one-test-out chi^2 lower
 /// by more than min_delta_chi2.
 bool accepted_jointly(const JointScore& j, const JointScore& mu_only, const AcceptanceRule& rule);
 
 /// Decides among `angle` (the candidates' angle scores; the accepted ones compete, and so do the
-/// scores of `joint` accepted jointly) by their joint scores `joint` (matched by name), the
+/// scores of `joint` accepted jointly, each unless the strength it would be refitted with, the
+/// angle's or the joint one, lies outside its range) by their joint scores `joint` (matched by name), the
 /// offset hypothesis `offset` and the mu_r correction alone `mu_only` (design note). Throws
 /// std::invalid_argument when an accepted candidate has no joint score.
 TraceDecision decide_trace(const std::vector<CandidateScore>& angle,

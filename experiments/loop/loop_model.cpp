@@ -53,6 +53,10 @@ double Loop::observed(std::size_t i, int channel) const {
                         : t.crest_mm.value_or(0.0);
 }
 
+double Loop::effect_off(const CandidateEffect& e) const {
+  return e.off_from_scene ? scene_value(data_.tests.front(), e.key) : e.off;
+}
+
 double Loop::noise(std::size_t i, int channel) const {
   return channel == 0 ? sigma_[i] : channel == 1 ? sigma_h_[i] : channel == 2 ? sigma_d_[i] : sigma_crest_[i];
 }

@@ -136,6 +136,7 @@ class Loop {
   MuFit fit_mu(const Model& model, const Surface* extra, double t_max,
                const std::vector<std::size_t>& tests, const std::vector<int>& channels = {0}) const;
   double observed(std::size_t test, int channel) const;  // the lab's value
+  double effect_off(const CandidateEffect& e) const;  // its value in the base model
   double noise(std::size_t test, int channel) const;     // its residual's 1-sigma noise
   std::vector<ResidualRow> residuals(const Model& model, double mu) const;
 

@@ -107,6 +107,7 @@ struct CandidateScore {
   bool predictive = false;   // rule 2
   bool accepted = false;     // both
   std::string why;           // the rule in words with the numbers
+  std::string out_of_range;  // set by the caller: why c lies outside the effect's range
 };
 
 /// The no-effect model's scores (mu_r correction only): in-sample and leave-one-out RMSE.

@@ -112,7 +112,7 @@ std::vector<FingerprintRecord> Loop::fingerprint_candidates(
 std::optional<FingerprintRecord> Loop::probe_candidate(
     const CandidateEffect& e, const Surface& base, std::size_t node,
     std::vector<UnavailableCandidate>& unavailable) {
-  const double off = e.off_from_scene ? scene_value(data_.tests.front(), e.key) : e.off;
+  const double off = effect_off(e);
   std::vector<double> tried;
   std::string why;
   double probe = e.probe;
@@ -326,6 +326,14 @@ IterationRecord Loop::trace(int it, const LoopState& state,
     }
     rec.candidates.push_back(score_candidate(p, f.name, cols[0], rec.null, s_.rule));
     rec.joint.push_back(score_joint(joint, f.name, cols));
+    // The strength each fit asks for, against what the effect can do.
+    const CandidateEffect& e = find_effect(f.name);
+    const double off = effect_off(e);
+    CandidateScore& a = rec.candidates.back();
+    JointScore& j = rec.joint.back();
+    a.out_of_range = outside_range(a.coef, a.coef_se, off, f.probe, e.lo, e.hi, e.units);
+    if (j.identifiable)
+      j.out_of_range = outside_range(j.coef, j.coef_se, off, f.probe, e.lo, e.hi, e.units);
   }
   rec.offset = score_offset(joint);
   rec.mu_only = score_joint(joint, "mu_r only", {});
