@@ -207,7 +207,9 @@ TopCrest measure_top_crest(const cv::Mat& image, const TopProfile& footprint,
                  " px; at least 4 are needed";
     return out;
   }
-  const double sigma_unit = flank_noise(p);
+  // Never below what 8-bit levels alone leave (1/sqrt(12) per pixel, doubled by the harmonic's
+  // fit): a noise-free render would otherwise weigh its rings infinitely.
+  const double sigma_unit = std::max(flank_noise(p), std::sqrt(2.0 / 12.0));
   std::vector<double> flank_a1;
   double var_sum = 0.0;
   for (std::size_t k : p.flank) {
