@@ -45,6 +45,25 @@ std::string path_for_page(const std::string& path) {
   return p.filename().string();
 }
 
+std::string paths_for_page(const std::string& text) {
+  const std::string stops = " \t\n:,;)'\"";
+  std::string out;
+  std::size_t i = 0;
+  while (i < text.size()) {
+    const bool starts_word =
+        i == 0 || std::string(" \t\n('\"").find(text[i - 1]) != std::string::npos;
+    if (text[i] != '/' || !starts_word) {
+      out += text[i++];
+      continue;
+    }
+    std::size_t j = i;
+    while (j < text.size() && stops.find(text[j]) == std::string::npos) ++j;
+    out += path_for_page(text.substr(i, j - i));
+    i = j;
+  }
+  return out;
+}
+
 std::string short_key(const std::string& key) {
   const std::string last = key.substr(key.rfind('.') + 1);
   return last == "rolling_friction" ? "mu_r" : last;

@@ -33,6 +33,11 @@ std::string mean_sd(double mean, double sd, int digits = 2);
 /// builder's folders; the record keeps the full path).
 std::string path_for_page(const std::string& path);
 
+/// Free text (an error message recorded in a result) as a page shows it: every absolute path in
+/// it, a run of characters from a '/' that starts a word up to a space, ':', ',', ';', ')' or a
+/// quote, shown by path_for_page.
+std::string paths_for_page(const std::string& text);
+
 /// A short name of a scene key for labels: "mu_r" for a rolling friction, else the key's last
 /// dotted part (contacts.rock-rock.rolling_friction -> mu_r, sample.d_min_mm -> d_min_mm).
 std::string short_key(const std::string& key);

@@ -405,7 +405,7 @@ std::string notes_section(const json& loop) {
   for (const json& u : loop["unavailable_candidates"]) {
     mustache::data x;
     x.set("name", left(u["name"]).text);
-    x.set("why", left(u["why"]).text);
+    x.set("why", left(paths_for_page(u["why"].get<std::string>())).text);
     unavailable.push_back(x);
   }
   auto listed = [](mustache::data items) {

@@ -10,6 +10,18 @@
 namespace reposetwin::experiments::report {
 namespace {
 
+// An error message recorded in loop.json names the scene by the path the loop resolved; a
+// committed page must not carry the builder's folders (CommittedReports.OpenInAFreshClone).
+TEST(ReportHtml, PathsInFreeTextAreShownAsThePageShowsAPath) {
+  const std::string why =
+      "test t1: /nowhere/built/here/data/scene.toml: sample.psd: d_min = 1.4 mm (see "
+      "/nowhere/x.csv), ratio 2/3 and a/b stay";
+  EXPECT_EQ(paths_for_page(why),
+            "test t1: scene.toml: sample.psd: d_min = 1.4 mm (see x.csv), ratio 2/3 and a/b stay");
+  EXPECT_EQ(paths_for_page("no path here"), "no path here");
+  EXPECT_EQ(paths_for_page("/a/b.png"), "b.png");
+}
+
 TEST(ReportHtml, PageEscapesValuesAndKeepsRenderedSections) {
   const Page page{"a <b> & \"c\"", "Heading <i>", {"<p>section one</p>", "<p>two</p>"}};
   const std::string html = render_page(page);
