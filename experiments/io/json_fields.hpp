@@ -5,6 +5,7 @@
 
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <string>
 
 namespace reposetwin::experiments {
 
@@ -18,6 +19,17 @@ inline double json_number(const nlohmann::json& j, const char* key, double fallb
   const auto it = j.find(key);
   if (it == j.end()) return fallback;
   return it->is_null() ? std::numeric_limits<double>::quiet_NaN() : it->get<double>();
+}
+
+/// A text that may be absent, as JSON: null when empty.
+inline nlohmann::json text_or_null(const std::string& text) {
+  return text.empty() ? nlohmann::json() : nlohmann::json(text);
+}
+
+/// j[key] as a text: empty when the key is absent (a file older than the field) or null.
+inline std::string json_text(const nlohmann::json& j, const char* key) {
+  const auto it = j.find(key);
+  return it == j.end() || it->is_null() ? std::string() : it->get<std::string>();
 }
 
 }  // namespace reposetwin::experiments

@@ -280,7 +280,7 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
     for (const JointScore& j : iter.joint)
       if (j.name == sc.name) coef = j.coef;
     for (const std::string& ch : iter.channels)
-      if (channel_index(ch) != 0) channels.push_back(channel_index(ch));
+      if (const int c = channel_index(ch); c != 0) channels.push_back(c);
   }
   const double off = effect_off(e);
   const FingerprintRecord& fp =

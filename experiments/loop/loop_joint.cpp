@@ -192,8 +192,8 @@ std::string outside_range(double coef, double coef_se, double off, double probe,
   if (value + band >= lo && value - band <= hi) return "";
   const bool below = value + band < lo;
   return "c = " + fmt(coef) + " +- " + fmt(coef_se) + " puts it at " + fmt(value) + " +- " +
-         fmt(0.5 * band) + " " + units + ", " + (below ? "below" : "above") + " its range's " +
-         (below ? "end " + fmt(lo) : "end " + fmt(hi)) + " " + units;
+         fmt(0.5 * band) + " " + units + ", " + (below ? "below" : "above") + " its range's end " +
+         fmt(below ? lo : hi) + " " + units;
 }
 
 bool accepted_jointly(const JointScore& j, const JointScore& mu_only, const AcceptanceRule& rule) {
@@ -201,11 +201,20 @@ bool accepted_jointly(const JointScore& j, const JointScore& mu_only, const Acce
          mu_only.loo_chi2 - j.loo_chi2 > rule.min_delta_chi2;
 }
 
-TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
-                           const std::vector<JointScore>& joint, const JointScore& offset,
-                           const JointScore& mu_only, const AcceptanceRule& rule) {
-  std::vector<const JointScore*> contenders;
-  std::vector<std::string> outside;  // met the rule with a fit outside the effect's range
+namespace {
+
+// The candidates that meet the acceptance rule, on the angle or jointly (design note), and
+// those that met it with a fit outside the effect's range, in words.
+struct Contenders {
+  std::vector<const JointScore*> list;  // sorted by joint chi^2
+  std::vector<std::string> joint_only;  // contend by the joint rule alone
+  std::vector<std::string> outside;     // met the rule outside the effect's range
+};
+
+Contenders gather_contenders(const std::vector<CandidateScore>& angle,
+                             const std::vector<JointScore>& joint, const JointScore& mu_only,
+                             const AcceptanceRule& rule) {
+  Contenders c;
   for (const CandidateScore& a : angle) {
     if (!a.accepted) continue;
     const auto it = std::find_if(joint.begin(), joint.end(),
@@ -213,75 +222,72 @@ TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
     if (it == joint.end())
       throw std::invalid_argument("decide_trace: no joint score for " + a.name);
     if (!a.out_of_range.empty())
-      outside.push_back(a.name + " (on the angle: " + a.out_of_range + ")");
+      c.outside.push_back(a.name + " (on the angle: " + a.out_of_range + ")");
     else
-      contenders.push_back(&*it);
+      c.list.push_back(&*it);
   }
-  std::vector<std::string> joint_only;  // contend by the joint rule alone
   for (const JointScore& j : joint) {
-    const bool angle_accepted = std::any_of(angle.begin(), angle.end(), [&](const CandidateScore& a) {
+    const bool on_angle = std::any_of(angle.begin(), angle.end(), [&](const CandidateScore& a) {
       return a.accepted && a.name == j.name;
     });
-    if (angle_accepted || !accepted_jointly(j, mu_only, rule)) continue;
+    if (on_angle || !accepted_jointly(j, mu_only, rule)) continue;
     if (!j.out_of_range.empty()) {
-      outside.push_back(j.name + " (jointly: " + j.out_of_range + ")");
+      c.outside.push_back(j.name + " (jointly: " + j.out_of_range + ")");
       continue;
     }
-    contenders.push_back(&j);
-    joint_only.push_back(j.name);
+    c.list.push_back(&j);
+    c.joint_only.push_back(j.name);
   }
-  std::string outside_words;
-  if (!outside.empty()) {
-    outside_words = "; met the rule with a fit outside the effect's range, so not a contender:";
-    for (const std::string& o : outside) outside_words += " " + o + ";";
-  }
-  std::stable_sort(contenders.begin(), contenders.end(),
+  std::stable_sort(c.list.begin(), c.list.end(),
                    [](const JointScore* x, const JointScore* y) { return x->chi2 < y->chi2; });
+  return c;
+}
+
+// The verdict among the contenders, the offset hypothesis and the mu_r correction alone.
+TraceDecision decide_among(const Contenders& c, const JointScore& offset, const JointScore& mu_only,
+                           const AcceptanceRule& rule) {
+  const std::vector<const JointScore*>& contenders = c.list;
   const bool offset_flag = offset.identifiable && offset.t > rule.min_t &&
                            mu_only.chi2 - offset.chi2 > rule.min_delta_chi2;
   TraceDecision d;
   const std::string offset_words =
       "a uniform offset of " + fmt(offset.coef) + " +- " + fmt(offset.coef_se) +
-      " deg on every test (|c|/se " + fmt(offset.t) +
-      "), beyond mu_r's reach (joint chi^2 " + fmt(offset.chi2) + " against " +
-      fmt(mu_only.chi2) + " with the mu_r correction alone" +
+      " deg on every test (|c|/se " + fmt(offset.t) + "), beyond mu_r's reach (joint chi^2 " +
+      fmt(offset.chi2) + " against " + fmt(mu_only.chi2) + " with the mu_r correction alone" +
       (offset.mu_shift_at_bound ? ", which stops at the grid's bound)" : ")");
   if (offset_flag &&
       (contenders.empty() || offset.chi2 - contenders.front()->chi2 <= rule.min_delta_chi2)) {
     d.verdict = TraceVerdict::kMeasurementSuspected;
-    d.statement = "suspected measurement or declared-condition error, no physical effect named: " +
-                  offset_words +
-                  (contenders.empty()
-                       ? std::string("; no candidate meets the acceptance rule")
-                       : "; the best candidate, " + describe(*contenders.front()) +
-                             ", does not beat it by more than " + fmt(rule.min_delta_chi2));
-    d.statement += outside_words;
+    d.statement =
+        "suspected measurement or declared-condition error, no physical effect named: " +
+        offset_words +
+        (contenders.empty() ? std::string("; no candidate meets the acceptance rule")
+                            : "; the best candidate, " + describe(*contenders.front()) +
+                                  ", does not beat it by more than " + fmt(rule.min_delta_chi2));
     return d;
   }
   if (contenders.empty()) {
-    d.statement = outside.empty() ? "no candidate meets the acceptance rule"
-                                  : "no candidate meets the acceptance rule within its range";
-    d.statement += outside_words;
+    d.statement = c.outside.empty() ? "no candidate meets the acceptance rule"
+                                    : "no candidate meets the acceptance rule within its range";
     return d;
   }
   const double best = contenders.front()->chi2;
-  for (const JointScore* c : contenders)
-    if (c->chi2 - best <= rule.min_delta_chi2) d.tied.push_back(c->name);
+  for (const JointScore* x : contenders)
+    if (x->chi2 - best <= rule.min_delta_chi2) d.tied.push_back(x->name);
   if (d.tied.size() > 1) {
     d.verdict = TraceVerdict::kIndistinguishable;
     d.statement = "indistinguishable within the noise, none named:";
-    for (const JointScore* c : contenders)
-      if (c->chi2 - best <= rule.min_delta_chi2) d.statement += " " + describe(*c) + ";";
+    for (const JointScore* x : contenders)
+      if (x->chi2 - best <= rule.min_delta_chi2) d.statement += " " + describe(*x) + ";";
     d.statement += " their joint chi^2 differ by " + fmt(rule.min_delta_chi2) +
                    " or less; a further observable or test must decide";
-    d.statement += outside_words;
     return d;
   }
   d.tied.clear();
   d.verdict = TraceVerdict::kNamed;
   d.named = contenders.front()->name;
   d.statement = "named " + describe(*contenders.front());
-  if (std::find(joint_only.begin(), joint_only.end(), d.named) != joint_only.end())
+  if (std::find(c.joint_only.begin(), c.joint_only.end(), d.named) != c.joint_only.end())
     d.statement += " (accepted on the joint fit, not on the angle alone: leave-one-out " +
                    fmt(contenders.front()->loo_chi2) + " against " + fmt(mu_only.loo_chi2) +
                    " with the mu_r correction alone)";
@@ -289,7 +295,20 @@ TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
     d.statement += "; next " + describe(*contenders[1]) + ", worse by " +
                    fmt(contenders[1]->chi2 - best) + " > " + fmt(rule.min_delta_chi2);
   if (offset_flag) d.statement += "; it beats " + offset_words;
-  d.statement += outside_words;
+  return d;
+}
+
+}  // namespace
+
+TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
+                           const std::vector<JointScore>& joint, const JointScore& offset,
+                           const JointScore& mu_only, const AcceptanceRule& rule) {
+  const Contenders c = gather_contenders(angle, joint, mu_only, rule);
+  TraceDecision d = decide_among(c, offset, mu_only, rule);
+  if (!c.outside.empty()) {
+    d.statement += "; met the rule with a fit outside the effect's range, so not a contender:";
+    for (const std::string& o : c.outside) d.statement += " " + o + ";";
+  }
   return d;
 }
 
@@ -334,18 +353,23 @@ DesignRecord describe_design(int n_cal, int n_val) {
 }
 
 nlohmann::json to_json(const JointScore& s) {
-  return {{"name", s.name},         {"identifiable", s.identifiable},
-          {"coef", s.coef},         {"coef_se", s.coef_se},
-          {"t", s.t},               {"mu_shift", s.mu_shift},
+  return {{"name", s.name},
+          {"identifiable", s.identifiable},
+          {"coef", s.coef},
+          {"coef_se", s.coef_se},
+          {"t", s.t},
+          {"mu_shift", s.mu_shift},
           {"mu_shift_at_bound", s.mu_shift_at_bound},
-          {"chi2", s.chi2},         {"loo_chi2", s.loo_chi2},
-          {"values", s.rows},       {"chi2_by_channel", s.chi2_by_channel},
-          {"out_of_range", s.out_of_range.empty() ? nlohmann::json() : nlohmann::json(s.out_of_range)}};
+          {"chi2", s.chi2},
+          {"loo_chi2", s.loo_chi2},
+          {"values", s.rows},
+          {"chi2_by_channel", s.chi2_by_channel},
+          {"out_of_range", text_or_null(s.out_of_range)}};
 }
 
 nlohmann::json to_json(const TraceDecision& d) {
   return {{"verdict", trace_verdict_name(d.verdict)},
-          {"named", d.named.empty() ? nlohmann::json() : nlohmann::json(d.named)},
+          {"named", text_or_null(d.named)},
           {"indistinguishable", d.tied},
           {"statement", d.statement}};
 }
@@ -369,9 +393,7 @@ JointScore joint_score_from_json(const nlohmann::json& j) {
   s.loo_chi2 = json_number(j.at("loo_chi2"));
   s.rows = j.at("values").get<int>();
   for (const auto& x : j.at("chi2_by_channel")) s.chi2_by_channel.push_back(json_number(x));
-  // Absent from loop.json files written before the range gate.
-  if (j.contains("out_of_range") && !j["out_of_range"].is_null())
-    s.out_of_range = j["out_of_range"].get<std::string>();
+  s.out_of_range = json_text(j, "out_of_range");  // absent before the range gate
   return s;
 }
 

@@ -234,22 +234,21 @@ double rmse(const std::vector<double>& v) {
 }
 
 nlohmann::json to_json(const CandidateScore& s) {
-  return {
-      {"name", s.name},
-      {"coef", s.coef},
-      {"coef_se", s.coef_se},
-      {"t", s.t},
-      {"mu_shift", s.mu_shift},
-      {"mu_shift_at_bound", s.mu_shift_at_bound},
-      {"rmse_fit_deg", s.rmse_fit},
-      {"loo_rmse_deg", s.loo_rmse},
-      {"loo_gain_deg", s.loo_gain},
-      {"explained", s.explained},
-      {"significant", s.significant},
-      {"predictive", s.predictive},
-      {"accepted", s.accepted},
-      {"why", s.why},
-      {"out_of_range", s.out_of_range.empty() ? nlohmann::json() : nlohmann::json(s.out_of_range)}};
+  return {{"name", s.name},
+          {"coef", s.coef},
+          {"coef_se", s.coef_se},
+          {"t", s.t},
+          {"mu_shift", s.mu_shift},
+          {"mu_shift_at_bound", s.mu_shift_at_bound},
+          {"rmse_fit_deg", s.rmse_fit},
+          {"loo_rmse_deg", s.loo_rmse},
+          {"loo_gain_deg", s.loo_gain},
+          {"explained", s.explained},
+          {"significant", s.significant},
+          {"predictive", s.predictive},
+          {"accepted", s.accepted},
+          {"why", s.why},
+          {"out_of_range", text_or_null(s.out_of_range)}};
 }
 
 nlohmann::json to_json(const NullScore& s) {
@@ -275,9 +274,7 @@ CandidateScore candidate_score_from_json(const nlohmann::json& j) {
   s.predictive = j.at("predictive").get<bool>();
   s.accepted = j.at("accepted").get<bool>();
   s.why = j.at("why").get<std::string>();
-  // Absent from loop.json files written before the range gate.
-  if (j.contains("out_of_range") && !j["out_of_range"].is_null())
-    s.out_of_range = j["out_of_range"].get<std::string>();
+  s.out_of_range = json_text(j, "out_of_range");  // absent before the range gate
   return s;
 }
 
