@@ -303,6 +303,19 @@ void measure_through_camera(SideMeasurement& m, const camera::Camera& cam,
   m.sigma_crest_width_m = m.crest.sigma_px * k;
 }
 
+// Pixels mapped through the camera onto the level plane through `on_plane`, in millimetres;
+// a pixel whose ray misses the plane is left out.
+std::vector<cv::Point2d> on_level_plane_mm(const camera::Camera& cam,
+                                           const std::vector<cv::Point2d>& pixels,
+                                           const Eigen::Vector3d& on_plane) {
+  std::vector<cv::Point2d> mm;
+  for (const auto& q : pixels) {
+    const auto w = camera::pixel_on_plane(cam, ev(q), on_plane, Eigen::Vector3d::UnitZ());
+    if (w) mm.emplace_back(1000.0 * w->x(), 1000.0 * w->y());
+  }
+  return mm;
+}
+
 // The top view's crest (vision/top_crest.hpp) in metres. Through a camera its circle is mapped
 // onto the plane of the flat top (z = crest_height_m when given, else the plate, said so);
 // without one the plate's scale is used, as for the footprint.
@@ -310,12 +323,8 @@ void read_top_crest(const cv::Mat& image, const ScaleSpec& scale, const std::str
                     TopMeasurement& m) {
   m.crest = measure_top_crest(image, m.pixels, {}, where);
   const double h = scale.crest_height_m.value_or(0.0);
-  std::ostringstream plane;
-  if (scale.crest_height_m)
-    plane << "z = " << std::fixed << std::setprecision(1) << 1e3 * h << " mm (the side views' H)";
-  else
-    plane << "the plate (no crest height given)";
-  m.crest_plane = plane.str();
+  m.crest_plane = scale.crest_height_m ? "z = " + fixed(1e3 * h, 1) + " mm (the side views' H)"
+                                       : "the plate (no crest height given)";
   if (!m.crest.found) return;
   if (!scale.camera) {
     m.crest_width_m = 2.0 * m.crest.radius_px * m.mm_per_px / 1000.0;
@@ -325,14 +334,12 @@ void read_top_crest(const cv::Mat& image, const ScaleSpec& scale, const std::str
   }
   const Eigen::Vector3d on_plane = scale.axis_foot + Eigen::Vector3d(0.0, 0.0, h);
   auto width_at = [&](double r_px) {
-    std::vector<cv::Point2d> mm;
+    std::vector<cv::Point2d> px;
     for (int i = 0; i < 72; ++i) {
       const double a = 2.0 * std::numbers::pi * i / 72.0;
-      const cv::Point2d q = m.crest.center + r_px * cv::Point2d(std::cos(a), std::sin(a));
-      const auto w =
-          camera::pixel_on_plane(*scale.camera, ev(q), on_plane, Eigen::Vector3d::UnitZ());
-      if (w) mm.emplace_back(1000.0 * w->x(), 1000.0 * w->y());
+      px.push_back(m.crest.center + r_px * cv::Point2d(std::cos(a), std::sin(a)));
     }
+    const std::vector<cv::Point2d> mm = on_level_plane_mm(*scale.camera, px, on_plane);
     cv::Point2d c;
     double r = 0.0, rms = 0.0;
     if (mm.size() < 16 || !fit_circle(mm, c, r, rms))
@@ -394,11 +401,7 @@ TopMeasurement measure_top(const cv::Mat& image, const ScaleSpec& scale,
   const camera::Camera& cam = *scale.camera;
   m.scale_source = ScaleSource::kCamera;
   m.perspective_corrected = true;
-  std::vector<cv::Point2d> mm;
-  for (const auto& q : p.outline) {
-    const auto w = camera::pixel_on_plane(cam, ev(q), scale.axis_foot, Eigen::Vector3d::UnitZ());
-    if (w) mm.emplace_back(1000.0 * w->x(), 1000.0 * w->y());
-  }
+  const std::vector<cv::Point2d> mm = on_level_plane_mm(cam, p.outline, scale.axis_foot);
   cv::Point2d c;
   double r = 0.0, rms = 0.0;
   if (mm.size() < 16 || !fit_circle(mm, c, r, rms))
