@@ -152,7 +152,7 @@ StepFit fit_step(const Profile& p, double rc, double sigma_unit,
 
 // The step scanned over rc = 0 .. r_max in `steps` steps.
 struct Scan {
-  std::vector<double> rc, chi2;
+  std::vector<double> rc;
   std::vector<StepFit> fits;
   std::size_t best = 0;
 };
@@ -163,10 +163,11 @@ Scan scan_steps(const Profile& p, double r_max, double sigma_unit) {
   for (int i = 0; i <= steps; ++i) {
     s.rc.push_back(r_max * i / steps);
     s.fits.push_back(fit_step(p, s.rc.back(), sigma_unit));
-    s.chi2.push_back(s.fits.back().chi2);
   }
-  s.best =
-      static_cast<std::size_t>(std::min_element(s.chi2.begin(), s.chi2.end()) - s.chi2.begin());
+  s.best = static_cast<std::size_t>(
+      std::min_element(s.fits.begin(), s.fits.end(),
+                       [](const StepFit& a, const StepFit& b) { return a.chi2 < b.chi2; }) -
+      s.fits.begin());
   return s;
 }
 
@@ -245,7 +246,7 @@ TopCrest measure_top_crest(const cv::Mat& image, const TopProfile& footprint,
   out.inner_level = f.low;
   out.outer_level = f.high;
   out.step_sigma = f.sigma_step * std::sqrt(inflate);
-  const double chi2_one_level = scan.chi2.front();
+  const double chi2_one_level = scan.fits.front().chi2;
   if (chi2_one_level - f.chi2 < settings.min_flank_snr * settings.min_flank_snr * inflate) {
     // No step worth the name: the crest is 0, bounded by the widest crest (a1 dropping by the
     // flank's P inside it: a level top has no harmonic) within chi^2 + 4 of one level.
@@ -266,8 +267,9 @@ TopCrest measure_top_crest(const cv::Mat& image, const TopProfile& footprint,
     return out;
   }
   double lo = scan.rc[scan.best], hi = lo;
-  for (std::size_t s = scan.best; s-- > 0 && scan.chi2[s] - f.chi2 <= inflate;) lo = scan.rc[s];
-  for (std::size_t s = scan.best; s < scan.rc.size() && scan.chi2[s] - f.chi2 <= inflate; ++s)
+  for (std::size_t s = scan.best; s-- > 0 && scan.fits[s].chi2 - f.chi2 <= inflate;)
+    lo = scan.rc[s];
+  for (std::size_t s = scan.best; s < scan.rc.size() && scan.fits[s].chi2 - f.chi2 <= inflate; ++s)
     hi = scan.rc[s];
   out.found = true;
   out.radius_px = scan.rc[scan.best];
