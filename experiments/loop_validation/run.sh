@@ -38,7 +38,8 @@ command -v jq >/dev/null || { echo "run.sh: jq is needed (scripts/install_deps.s
 # name | design (data/loop/) | mu_r grid | effect expected (none: nothing named; refused: the
 # loop must refuse the data before it simulates) | side of its off value the fit must land
 # (below/above/-) | least RMSE cut on the calibration tests | candidates (empty: the loop's
-# default, every registry effect but the opt-in grain_shape)
+# default, every registry effect but the opt-in grain_shape) | the loop's seeds (empty:
+# 1001,1002,1003; as many as the design's repeats where a case needs the lower noise)
 cases=(
   "plate|synth_plate.toml|0.1,0.2,0.35|plate_friction|below|0.70|"
   "lift|synth_lift.toml|0.1,0.2,0.35|lift_speed|above|0.70|"
@@ -47,6 +48,7 @@ cases=(
   "camera|synth_camera.toml|0.1,0.2,0.35|refused|-|0|"
   "rolling_size|synth_size.toml|0.1,0.25,0.5|rolling_size|above|0.70|"
   "shape|synth_shape.toml|0.2,0.35,0.5|grain_shape|above|0.45|grain_shape,plate_friction,lift_speed,cohesion,camera_height"
+  "shape_repeats|synth_shape_repeats.toml|0.2,0.35,0.5|grain_shape|above|0.70|grain_shape,plate_friction,lift_speed,cohesion,camera_height|1001,1002,1003,1004,1005,1006"
 )
 
 mkdir -p "$out"
@@ -58,7 +60,7 @@ done
 # A loop that refuses its data (exit 2: bad input, e.g. photos that contradict their declared
 # camera) leaves DIR/CASE/refused.txt with its message instead of a loop.json.
 run_case() {
-  local name=$1 design=$2 grid=$3 candidates=$4
+  local name=$1 design=$2 grid=$3 candidates=$4 seeds=${5:-1001,1002,1003}
   local dir=$out/$name
   if [[ ( -f $dir/loop/loop.json || -f $dir/refused.txt ) && $force == 0 ]]; then
     echo "[validation] $name: finished earlier (kept; --force recomputes)"
@@ -71,7 +73,7 @@ run_case() {
   rm -f "$dir/refused.txt"
   local rc=0
   "$bin" loop "$dir/data/measured.csv" --out "$dir/loop" --cache "$out/cache" \
-    --mu-grid "$grid" --seeds 1001,1002,1003 --width 960 --height 720 --views 2 --own-cameras \
+    --mu-grid "$grid" --seeds "$seeds" --width 960 --height 720 --views 2 --own-cameras \
     ${candidates:+--candidates "$candidates"} \
     --max-effects 1 --at-bound trace --grid-extensions 0 --workers "$workers" --force --quiet \
     >/dev/null 2>"$dir/loop_stderr.txt" || rc=$?
@@ -86,9 +88,9 @@ run_case() {
 
 rows=()
 for row in "${cases[@]}"; do
-  IFS='|' read -r name design grid want side cut candidates <<<"$row"
+  IFS='|' read -r name design grid want side cut candidates seeds <<<"$row"
   if ((${#only[@]})) && [[ " ${only[*]} " != *" $name "* ]]; then continue; fi
-  run_case "$name" "$design" "$grid" "$candidates"
+  run_case "$name" "$design" "$grid" "$candidates" "$seeds"
   rows+=("$row")
 done
 
