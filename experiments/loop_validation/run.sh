@@ -11,7 +11,7 @@
 # killed run resumes where it stopped). REPOSETWIN names the binary (default: build/...).
 #
 # The loop's settings are those of the end-to-end tests (tests/experiments/loop/loop_synth_test.cpp):
-# mu_r grid 0.1/0.2/0.35 (0.1/0.25/0.5 for the size design), three seeds, 960x720 photos with
+# mu_r grid 0.1/0.2/0.35 (0.1/0.25/0.5 for the size design), three seeds (six where a case says so), 960x720 photos with
 # two side views in the twin's own framing, one effect at most, a calibrated mu_r on the grid's
 # bound traced with the correction held inside the grid (docs/loop.md, "Synthetic end-to-end
 # tests", says why).
