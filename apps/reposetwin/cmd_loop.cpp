@@ -63,6 +63,9 @@ void add_loop_command(CLI::App& app) {
   cmd->add_option("--candidates", args->candidates,
                   "Candidate effects to try, comma separated (default: all in the registry but the "
                   "opt-in grain_shape)");
+  cmd->add_option("--refit", args->settings.refit,
+                  "Refit this candidate even when the trace names another or none (a hypothesis "
+                  "you bring; reported as declared, with the trace's own verdict)");
   cmd->add_option("--max-effects", args->settings.max_effects,
                   "Stop after this many effects (0: trace and rank only, no refit)")
       ->check(CLI::Range(0, 10))

@@ -93,6 +93,7 @@ void Loop::check_settings() {
                      std::to_string(s_.mu_max) + ") at least the grid's top");
   if (s_.probe_scalings < 0) throw InputError("loop: probe_scalings must be >= 0");
   if (s_.seeds.size() < 2) throw InputError("loop: at least two seeds are needed (seed noise)");
+  if (!s_.refit.empty()) check_declared_refit();
   for (const LabTest& t : data_.tests) check_mu_key(t, s_.mu_key);
   grid_ = s_.mu_grid;
   for (std::size_t i = 0; i < data_.tests.size(); ++i) {
@@ -105,6 +106,28 @@ void Loop::check_settings() {
                      "and at least one is needed");
   design_ = describe_design(static_cast<int>(cal_.size()), static_cast<int>(val_.size()));
   fit_ = design_.refit_on_all ? trace_ : cal_;
+}
+
+// A declared hypothesis (--refit) must be a candidate this run traces, with room to refit it.
+void Loop::check_declared_refit() const {
+  const CandidateEffect* found = nullptr;
+  try {
+    found = &find_effect(s_.refit);
+  } catch (const std::invalid_argument& ex) {
+    throw InputError("--refit: " + std::string(ex.what()));
+  }
+  const CandidateEffect& e = *found;
+  const bool listed =
+      std::find(s_.candidates.begin(), s_.candidates.end(), e.name) != s_.candidates.end();
+  if (s_.candidates.empty() ? e.opt_in : !listed)
+    throw InputError("--refit " + s_.refit + ": not among the candidates traced (" +
+                     (s_.candidates.empty() ? std::string("it is opt-in; name it in --candidates")
+                                            : "--candidates names others") +
+                     "); a declared hypothesis is fingerprinted like the others before its refit");
+  if (s_.max_effects < 1)
+    throw InputError("--refit " + s_.refit + " with --max-effects " +
+                     std::to_string(s_.max_effects) +
+                     ": a refit needs --max-effects of at least 1");
 }
 
 Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
@@ -251,18 +274,18 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
   // cannot tell them apart or point at the measurement (loop_joint.hpp).
   iter.decision =
       decide_trace(iter.candidates, iter.joint, *iter.offset, *iter.mu_only, s_.rule);
-  int best = -1;
-  for (std::size_t q = 0; q < iter.candidates.size(); ++q)
-    if (iter.decision.verdict == TraceVerdict::kNamed &&
-        iter.candidates[q].name == iter.decision.named)
-      best = static_cast<int>(q);
+  const RefitPick choice = pick_refit(iter.candidates, iter.decision, s_.refit, state.used);
+  iter.declared = choice.declared;
+  if (choice.declared) say("iteration " + std::to_string(it) + ": " + *choice.declared);
+  const int best = choice.index;
   if (best < 0 || it == s_.max_effects) {
     if (best >= 0) {
-      // The rule holds for a candidate, but the effect limit stops the loop before its refit
+      // A candidate is up for its refit, but the effect limit stops the loop before it
       // (--max-effects 0 traces and ranks only).
       iter.stopped = "max_effects (" + std::to_string(s_.max_effects) +
                      ") reached: " + iter.candidates[static_cast<std::size_t>(best)].name +
-                     " meets the acceptance rule but was not refitted";
+                     (choice.declared ? " was declared for refit" : " meets the acceptance rule") +
+                     " but was not refitted";
       say("iteration " + std::to_string(it) + ": " + *iter.stopped);
     } else {
       say("iteration " + std::to_string(it) + ": " + iter.decision.statement);
@@ -288,6 +311,16 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
   // c is in units of the probe the fingerprint was simulated at (scaled when the registry's
   // probe was lost in the seed noise).
   const double p1 = std::clamp(off + coef * (fp.probe - off), e.lo, e.hi);
+  if (p1 == off) {
+    // Only a declared hypothesis gets here (the rule's contenders lie in their range): its
+    // traced strength points to the far side of its off value, where the effect cannot go.
+    iter.stopped = e.name + ": its traced strength c = " + std::to_string(coef) +
+                   " of its probe puts it at or beyond its off value " + std::to_string(off) +
+                   " " + e.units + " (range " + std::to_string(e.lo) + " to " +
+                   std::to_string(e.hi) + "); nothing to refit";
+    say("iteration " + std::to_string(it) + ": " + *iter.stopped);
+    return false;
+  }
   say("iteration " + std::to_string(it) + ": " + e.name + " accepted (" +
       (sc.accepted ? sc.why : "on the joint fit") + "); linear estimate " + std::to_string(p1) +
       " " + e.units + ", simulating the grid");
@@ -322,6 +355,7 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
   c.value_se = joint.t_se * std::abs(best_trial.p - off);
   c.t_at_limit = joint.t <= 0.0 || joint.t >= s_.t_max;
   c.mu_r_se = joint.mu_se;
+  c.declared = choice.declared && iter.decision.named != e.name;
   state.model = best_trial.model;
   state.fit = joint;
   state.effects.push_back({&e, value});

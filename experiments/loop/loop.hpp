@@ -97,6 +97,9 @@ struct LoopSettings {
   double mu_max = 1.0;                     // the grid is never extended above this [-]
   int probe_scalings = 2;                  // doublings of a probe lost in the seed noise
   int max_effects = 2;                     // stop after adding this many effects
+  std::string refit;                       // a candidate refitted even when the trace names
+                                           // another or none (--refit; loop_joint.hpp's
+                                           // pick_refit); empty: the trace decides
   int max_pours = 3;                       // pours per pile when the funnel jams (new seeds)
   double t_max = 3.0;                      // largest t = (p - off) / (p1 - off) of a refit [-]
   int workers = 2;                         // concurrent simulations

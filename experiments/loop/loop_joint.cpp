@@ -312,6 +312,35 @@ TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
   return d;
 }
 
+RefitPick pick_refit(const std::vector<CandidateScore>& ranked, const TraceDecision& d,
+                     const std::string& declared, const std::set<std::string>& used) {
+  auto index_of = [&](const std::string& name) {
+    for (std::size_t q = 0; q < ranked.size(); ++q)
+      if (ranked[q].name == name) return static_cast<int>(q);
+    return -1;
+  };
+  RefitPick pick;
+  if (d.verdict == TraceVerdict::kNamed) pick.index = index_of(d.named);
+  if (declared.empty() || used.count(declared)) return pick;
+  const std::string verdict = "the trace's own verdict: " + trace_verdict_name(d.verdict) +
+                              (d.statement.empty() ? "" : " (" + d.statement + ")");
+  if (pick.index >= 0 && d.named == declared) {
+    pick.declared = declared + " was declared for refit (--refit) and the trace names it too";
+    return pick;
+  }
+  const int q = index_of(declared);
+  if (q < 0) {
+    pick.declared = declared +
+                    " was declared for refit (--refit) but has no score to refit from (see the "
+                    "unavailable candidates), so the trace decides; " + verdict;
+    return pick;
+  }
+  pick.index = q;
+  pick.declared = declared + " is refitted because it was declared (--refit), not because the "
+                  "trace names it; " + verdict;
+  return pick;
+}
+
 DesignRecord describe_design(int n_cal, int n_val) {
   if (n_cal < 1)
     throw std::invalid_argument("the loop needs at least one calibration test to fit mu_r");

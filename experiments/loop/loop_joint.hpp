@@ -49,6 +49,8 @@
 #include <Eigen/Core>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -148,6 +150,23 @@ bool accepted_jointly(const JointScore& j, const JointScore& mu_only, const Acce
 TraceDecision decide_trace(const std::vector<CandidateScore>& angle,
                            const std::vector<JointScore>& joint, const JointScore& offset,
                            const JointScore& mu_only, const AcceptanceRule& rule);
+
+/// The candidate an iteration refits. Without a declared hypothesis it is the one `d` names.
+/// A user may bring one (reposetwin loop --refit NAME): a lab that believes its rock's shape
+/// matters wants that effect refitted and its error after reported even when the trace names
+/// another or nothing. The declared candidate is then refitted once, in the first iteration
+/// where it is not yet in the model (`used`), whatever the trace decided, and `declared` says so
+/// with the trace's own verdict, which stays on record; later iterations follow the trace.
+struct RefitPick {
+  int index = -1;                       // into `ranked`; -1: nothing to refit
+  std::optional<std::string> declared;  // why the pick (or its absence) is the user's
+};
+
+/// The pick among `ranked` (the iteration's angle scores) for decision `d` and the declared
+/// hypothesis `declared` (empty: none). A declared candidate with no score (its fingerprint was
+/// lost in the seed noise or could not be simulated) leaves the trace's pick, with a statement.
+RefitPick pick_refit(const std::vector<CandidateScore>& ranked, const TraceDecision& d,
+                     const std::string& declared, const std::set<std::string>& used);
 
 /// What a design of calibration and held-out tests can decide.
 struct DesignRecord {

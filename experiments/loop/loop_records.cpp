@@ -151,7 +151,8 @@ json to_json(const ChosenEffect& c) {
             {"value", c.value},
             {"value_se", c.value_se},
             {"t_at_limit", c.t_at_limit},
-            {"mu_r_se", c.mu_r_se}});
+            {"mu_r_se", c.mu_r_se},
+            {"declared", c.declared}});
   return j;
 }
 
@@ -184,6 +185,7 @@ json to_json(const IterationRecord& it) {
   else
     j["chosen"] = nullptr;
   if (it.stopped) j["stopped"] = *it.stopped;
+  if (it.declared) j["declared"] = *it.declared;
   if (it.not_confirmed) j["not_confirmed"] = to_json(*it.not_confirmed);
   return j;
 }
@@ -253,13 +255,17 @@ json to_json(const LoopRecord& loop) {
   json verdict = json();
   json statement = json();
   if (!loop.iterations.empty()) {
+    // A confirmed refit of the user's hypothesis (--refit) is "declared": the trace did not
+    // name it, and the statement keeps the trace's own verdict.
     verdict = loop.final_model.effects.empty()
                   ? trace_verdict_name(loop.iterations.back().decision.verdict)
+              : loop.final_model.effects.back().declared
+                  ? std::string("declared")
                   : trace_verdict_name(TraceVerdict::kNamed);
     std::string text;
     for (const IterationRecord& it : loop.iterations)
       text += (text.empty() ? "" : " | ") + ("iteration " + std::to_string(it.iteration) + ": ") +
-              it.decision.statement;
+              it.decision.statement + (it.declared ? "; " + *it.declared : "");
     statement = text;
   }
   if (loop.not_traced) {
@@ -444,6 +450,8 @@ ChosenEffect chosen_effect_from_json(const json& j) {
   c.value_se = num(j, "value_se");
   c.t_at_limit = j.at("t_at_limit").get<bool>();
   c.mu_r_se = num(j, "mu_r_se");
+  // Written by a loop that knew declared hypotheses; older loop.json files have none.
+  c.declared = j.value("declared", false);
   return c;
 }
 
@@ -469,6 +477,7 @@ IterationRecord iteration_record_from_json(const json& j) {
     it.chosen = chosen_effect_from_json(chosen);
   }
   if (j.contains("stopped")) it.stopped = j.at("stopped").get<std::string>();
+  if (j.contains("declared")) it.declared = j.at("declared").get<std::string>();
   if (j.contains("not_confirmed")) it.not_confirmed = not_confirmed_from_json(j.at("not_confirmed"));
   // Written by a loop that traced jointly; older loop.json files have none of these.
   if (j.contains("channels")) {

@@ -146,6 +146,7 @@ struct ChosenEffect {
   double value = 0.0, value_se = 0.0;  // off + t (simulated_at - off), in `units`
   bool t_at_limit = false;
   double mu_r_se = 0.0;
+  bool declared = false;  // refitted as the user's hypothesis (--refit), not named by the trace
 };
 
 /// An accepted candidate whose simulated refit did not confirm it.
@@ -175,6 +176,7 @@ struct IterationRecord {
   std::optional<JointScore> mu_only;       // the mu_r correction alone, jointly
   TraceDecision decision;
   std::optional<std::string> stopped;      // an accepted candidate the effect limit stopped
+  std::optional<std::string> declared;     // the refit is the user's hypothesis (pick_refit)
   std::optional<ChosenEffect> chosen;
   std::optional<NotConfirmed> not_confirmed;
   std::optional<RefitFailed> refit_failed;

@@ -333,10 +333,11 @@ std::string effects_section(const json& loop) {
   if (loop["final"]["effects"].empty()) {
     d.set("effects", false);
   } else {
-    Table t = numeric_table({"effect", "kind", "value", "\u00b1 se", "units", "mu_r"});
+    Table t = numeric_table({"effect", "kind", "value", "\u00b1 se", "units", "mu_r", "from"});
     for (const json& c : loop["final"]["effects"])
       t.rows.push_back({{left(c["name"]), left(c["kind"]), sig3(c["value"]), sig3(c["value_se"]),
-                         left(c["units"]), sig3(c["mu_r"])}});
+                         left(c["units"]), sig3(c["mu_r"]),
+                         left(c.value("declared", false) ? "declared (--refit)" : "the trace")}});
     d.set("effects", to_data(t));
   }
   d.set("rule", loop["rule"]["text"].get<std::string>());
@@ -361,6 +362,8 @@ std::string iterations_section(const json& loop) {
     x.set("candidates", to_data(t));
     x.set("stopped", it.contains("stopped") ? mustache::data(left(it["stopped"]).text)
                                             : mustache::data(false));
+    x.set("declared", it.contains("declared") ? mustache::data(left(it["declared"]).text)
+                                              : mustache::data(false));
     // Written by a loop that traced jointly (older loop.json files have no decision).
     x.set("joint", false);
     x.set("decision", it.contains("decision") ? left(it["decision"]["statement"]).text

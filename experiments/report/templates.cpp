@@ -144,12 +144,13 @@ const char* const kLoopEffects = R"(<h2>Chosen effects</h2>
 {{/effects}}<p>Rule: {{rule}} (min_t {{min_t}}, margin {{margin}} deg).</p>
 )";
 
-// iterations: [{n, mu_r, loo, candidates: table, stopped (or false)}].
+// iterations: [{n, mu_r, loo, candidates: table, declared (or false), stopped (or false)}].
 const char* const kLoopIterations =
     R"({{#iterations}}<h3>Iteration {{n}} (mu_r {{mu_r}}; mu_r-only LOO {{loo}} deg)</h3>
 {{#candidates}}{{> table}}{{/candidates}}{{#joint}}<p>Traced jointly on {{channels}}:</p>
 {{> table}}{{/joint}}<p>Decision: {{decision}}.</p>
-{{#stopped}}<p>Stopped: {{stopped}}.</p>
+{{#declared}}<p>Declared hypothesis: {{declared}}.</p>
+{{/declared}}{{#stopped}}<p>Stopped: {{stopped}}.</p>
 {{/stopped}}{{/iterations}})";
 
 // can, cannot: {list: [..]} or false; grid, not_traced: text or false; jams: [{id, n}] or false;

@@ -180,6 +180,31 @@ TEST(BadInput, CsvWithAByteOrderMarkIsRead) {
   EXPECT_FALSE(fs::exists(out)) << r.out;
 }
 
+// A declared hypothesis must be one of the candidates the loop fingerprints, with room for its
+// refit: refused, naming the option and the value, before any pile is poured.
+TEST(BadInput, LoopRefitOfACandidateNotTracedIsRefused) {
+  const fs::path dir = fresh_dir("bad_refit");
+  const fs::path scene = tiny_scene_with(dir, "refit", "[scene]", "[scene]");
+  write_text(dir / "lab.csv", "id,role,scene,angle_deg\nt1,calibrate," + scene.filename().string() +
+                                  ",30\nt2,calibrate," + scene.filename().string() + ",31\n");
+  const fs::path out = dir / "loop";
+  const std::string cmd = "loop " + quoted(dir / "lab.csv") + " --out " + quoted(out);
+  CliResult r = run_cli(cmd + " --refit grain_shape");
+  EXPECT_EQ(r.code, 2) << r.out;
+  expect_mentions(r, {"--refit grain_shape", "opt-in", "--candidates"});
+  r = run_cli(cmd + " --candidates plate_friction,cohesion --refit grain_shape");
+  EXPECT_EQ(r.code, 2) << r.out;
+  expect_mentions(r, {"--refit grain_shape", "--candidates names others"});
+  r = run_cli(cmd + " --candidates grain_shape --refit grain_shape --max-effects 0");
+  EXPECT_EQ(r.code, 2) << r.out;
+  expect_mentions(r, {"--refit grain_shape", "--max-effects 0"});
+  r = run_cli(cmd + " --refit rounder_grains");
+  EXPECT_EQ(r.code, 2) << r.out;
+  expect_mentions(r, {"--refit", "rounder_grains", "grain_shape"});
+  EXPECT_FALSE(fs::exists(out / "loop.json"));
+  EXPECT_FALSE(fs::exists(out / "cache" / "cases")) << "a refused loop poured a pile";
+}
+
 TEST(BadInput, ThinImageIsRefusedNamingTheFile) {
   const fs::path dir = fresh_dir("bad_thin");
   ASSERT_TRUE(cv::imwrite((dir / "thin.png").string(), cv::Mat(20000, 1, CV_8UC1, cv::Scalar(255))));

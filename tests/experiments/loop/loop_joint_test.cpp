@@ -340,6 +340,46 @@ TEST(LoopJoint, AConditionPatternBeatsTheOffset) {
   EXPECT_EQ(d.named, "plate_friction");
 }
 
+TEST(LoopJoint, ADeclaredHypothesisIsRefittedWhateverTheTraceSays) {
+  const std::vector<CandidateScore> ranked = accepted({"plate_friction", "grain_shape"});
+  TraceDecision named;
+  named.verdict = TraceVerdict::kNamed;
+  named.named = "plate_friction";
+  named.statement = "plate_friction named";
+  TraceDecision offset;
+  offset.verdict = TraceVerdict::kMeasurementSuspected;
+  offset.statement = "a uniform offset of 6.5 +- 1.8 deg";
+
+  // No hypothesis: the trace decides, and names nothing when it suspects the measurement.
+  EXPECT_EQ(pick_refit(ranked, named, "", {}).index, 0);
+  EXPECT_FALSE(pick_refit(ranked, named, "", {}).declared);
+  EXPECT_EQ(pick_refit(ranked, offset, "", {}).index, -1);
+
+  // Declared: refitted whatever the trace decided, and said so with the trace's own verdict.
+  for (const TraceDecision& d : {named, offset}) {
+    const RefitPick p = pick_refit(ranked, d, "grain_shape", {});
+    EXPECT_EQ(p.index, 1);
+    ASSERT_TRUE(p.declared);
+    EXPECT_NE(p.declared->find("not because the trace names it"), std::string::npos);
+    EXPECT_NE(p.declared->find(d.statement), std::string::npos) << *p.declared;
+  }
+  const RefitPick both = pick_refit(ranked, named, "plate_friction", {});
+  EXPECT_EQ(both.index, 0);
+  ASSERT_TRUE(both.declared);
+  EXPECT_NE(both.declared->find("names it too"), std::string::npos);
+
+  // Once in the model, the later iterations follow the trace.
+  EXPECT_EQ(pick_refit(ranked, offset, "grain_shape", {"grain_shape"}).index, -1);
+  EXPECT_FALSE(pick_refit(ranked, offset, "grain_shape", {"grain_shape"}).declared);
+
+  // A declared candidate without a score (lost in the seed noise) is stated, not refitted, and
+  // does not stand in the way of the trace's own pick.
+  const RefitPick lost = pick_refit(accepted({"plate_friction"}), named, "grain_shape", {});
+  EXPECT_EQ(lost.index, 0);
+  ASSERT_TRUE(lost.declared);
+  EXPECT_NE(lost.declared->find("no score"), std::string::npos);
+}
+
 TEST(LoopJoint, TheDesignSaysWhatItCanDecide) {
   // The lab's design: one calibration test, four predicted.
   const DesignRecord lab = describe_design(1, 4);

@@ -137,6 +137,17 @@ TEST(LoopRecordsJson, EffectsAndIterationsRoundTrip) {
   with.chosen = chosen();
   expect_round_trip(with, iteration_record_from_json);
   EXPECT_TRUE(iteration_record_from_json(to_json(with)).chosen.has_value());
+  // A declared hypothesis (--refit): the iteration's statement and the effect's flag.
+  with.declared = "grain_shape is refitted because it was declared (--refit)";
+  with.chosen->declared = true;
+  expect_round_trip(with, iteration_record_from_json);
+  const IterationRecord back = iteration_record_from_json(to_json(with));
+  EXPECT_EQ(back.declared, with.declared);
+  EXPECT_TRUE(back.chosen->declared);
+  // A loop.json written before declared hypotheses reads as trace-chosen.
+  nlohmann::json old = to_json(chosen());
+  old.erase("declared");
+  EXPECT_FALSE(chosen_effect_from_json(old).declared);
 }
 
 TEST(LoopRecordsJson, FinalAndProvenanceRoundTrip) {
