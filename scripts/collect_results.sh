@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# Copies the small, committable part of a campaign, calibration or `reposetwin paper` output
-# folder into results/: every JSON, TOML, CSV and Markdown file, the page's PNG plots, and each
+# Copies the small, committable part of a campaign, calibration, `reposetwin paper` or
+# `reposetwin loop` output folder into results/: every JSON, TOML, CSV and Markdown file, the page's PNG plots, and each
 # run's scene.resolved.toml, but no snapshots, frames or checkpoints (those stay out of git).
 # Because a run counts as finished when its result.json exists, copying a collected folder back
 # (`cp -r results/paper runs/paper`) lets `reposetwin paper` resume on a new machine with only
-# the unfinished runs left to do.
+# the unfinished runs left to do. The same holds for a loop's cache (tests/experiments/loop/
+# loop_cache_test.cpp), as long as no new photograph of a collected pile is asked for (a
+# measurement candidate's probe re-photographs existing piles and needs their final.vtp).
 #
 #   scripts/collect_results.sh runs/paper results/paper
 set -euo pipefail
