@@ -160,6 +160,18 @@ TEST(LoopSynth, HiddenSmoothPlateIsFound) {
   EXPECT_EQ(loop["summary"]["rmse_calibrate_after_deg"],
             loop["summary"]["rmse_calibrate_before_deg"]);
   EXPECT_EQ(loop["simulations"]["pile_runs_started"], 0);
+  // Declaring the effect the trace names anyway (--refit plate_friction) changes nothing but the
+  // record: the same refit from the cache, named by the trace, the declaration noted.
+  LoopSettings declared = settings();
+  declared.refit = "plate_friction";
+  const nlohmann::json again =
+      run_case("plate_declared", design({{"plate_friction", 0.16}}), declared);
+  EXPECT_EQ(again["summary"]["chosen"], "plate_friction");
+  EXPECT_EQ(again["summary"]["verdict"], "named");
+  EXPECT_NE(again["iterations"][0].value("declared", "").find("names it too"), std::string::npos)
+      << again["iterations"][0].dump(1);
+  EXPECT_FALSE(again["final"]["effects"][0]["declared"].get<bool>());
+  EXPECT_EQ(again["simulations"]["pile_runs_started"], 0);
 }
 
 // The size-dependent rolling resistance is defined around the calibration tests' typical grain:
@@ -264,6 +276,29 @@ TEST(LoopSynth, AUniformMeasurementOffsetIsFlaggedNotNamed) {
         << u.dump();
   }
   EXPECT_GE(lost, 1) << loop["unavailable_candidates"].dump(1);
+
+  // A lab that believes its plate is smoother than declared brings that hypothesis
+  // (--refit plate_friction): it is refitted by simulation although the trace suspects the
+  // measurement, whose verdict stays on record; the simulations then confirm it or not.
+  LoopSettings declared = settings();
+  declared.refit = "plate_friction";
+  const nlohmann::json d = run_loop(data, (test_root() / "offset_declared").string(), declared);
+  std::cerr << "offset, plate_friction declared: " << d["summary"].dump() << "\n";
+  const nlohmann::json& first = d["iterations"].at(0);
+  EXPECT_EQ(first["decision"]["verdict"], "measurement_suspected") << first.dump(1);
+  EXPECT_NE(first.value("declared", "").find("not because the trace names it"), std::string::npos)
+      << first.dump(1);
+  const bool confirmed = !first["chosen"].is_null() && !first["chosen"].contains("refit_failed");
+  if (confirmed) {
+    EXPECT_EQ(first["chosen"]["name"], "plate_friction");
+    EXPECT_TRUE(first["chosen"]["declared"].get<bool>());
+    EXPECT_EQ(d["summary"]["verdict"], "declared");
+  } else {
+    // Not confirmed (or no trial could be measured): the refit was still simulated and stated.
+    ASSERT_TRUE(first.contains("not_confirmed") || !first["chosen"].is_null()) << first.dump(1);
+    EXPECT_EQ(d["summary"]["verdict"], "measurement_suspected");
+  }
+  EXPECT_GT(d["simulations"]["pile_runs_started"].get<int>(), 0);
 }
 
 // No hidden effect: the loop must add nothing.
