@@ -1,5 +1,5 @@
-// The loop end to end on synthetic lab datasets with an undeclared effect (issue 7): it must name
-// the hidden effect, cut the calibration RMSE by at least 70%, and name nothing on a dataset
+// The loop end to end on synthetic lab datasets with an undeclared effect: it must name the
+// hidden effect, cut the calibration RMSE by at least 70%, and name nothing on a dataset
 // without an effect. All tests share one simulation cache (keyed by the code version), so the
 // baseline grid and the fingerprints are simulated once for all datasets, whichever test runs
 // first; a test run alone still computes everything it needs.
@@ -11,20 +11,19 @@
 // cores; they run as the loop's validation experiment with the same settings
 // (experiments/loop_validation/run.sh, results/loop_validation/summary.csv).
 //
-// Design (measured 2026-11-22; docs/loop.md "Synthetic end-to-end tests"):
+// Design (docs/loop.md "Synthetic end-to-end tests"):
 //  * Scene: data/loop/small_scene.toml, 15 or 35 g of 3-4 mm spheres (piles 3-5 layers high).
-//    One photographed pile scatters by about 1.0 deg (the tiny scene's 2-3 layer piles: 4.4 deg),
-//    so with 3 lab piles per test and 3 twin seeds the residual floor after a perfect refit is
-//    1.0 sqrt(1/3 + 1/3) = 0.8 deg.
+//    One photographed pile scatters by about 1.2 deg (seed_sd_deg in
+//    results/loop_validation/plate/loop.json), so with 3 lab piles per test and 3 twin seeds the
+//    residual floor after a perfect refit is 1.2 sqrt(1/3 + 1/3) = 1.0 deg.
 //  * Conditions: mass (15, 35 g) x plate (steel, declared friction 0.5; wood, 0.25) x declared
 //    lift speed (0.03, 0.1 m/s), eight tests, one held out (data/loop/synth_plate.toml is the
 //    same design as a loop-synth file). A smooth plate changes steel more than wood, which a
 //    faster lift or cohesion (the candidates it must beat) do not.
 //  * The lab is the twin with hidden mu_r 0.25 (between grid points), other seeds, a different
 //    camera (14 instead of 12 pile radii away, three views instead of two, image noise); the
-//    twin keeps its own framing here (use_lab_cameras = false). Through the lab's cameras
-//    with two lab views the cohesion dataset was read as a uniform offset of 1.36 +- 0.44 deg
-//    (measurement_suspected) and cohesion not named; plate and lift were still named.
+//    twin keeps its own framing here (use_lab_cameras = false), since like for like through the
+//    lab's cameras is LoopCamera's test.
 
 #include "experiments/loop/loop_synth.hpp"
 
