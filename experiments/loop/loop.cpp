@@ -116,10 +116,7 @@ void Loop::check_declared_refit() const {
   } catch (const std::invalid_argument& ex) {
     throw InputError("--refit: " + std::string(ex.what()));
   }
-  const CandidateEffect& e = *found;
-  const bool listed =
-      std::find(s_.candidates.begin(), s_.candidates.end(), e.name) != s_.candidates.end();
-  if (s_.candidates.empty() ? e.opt_in : !listed)
+  if (!selected(*found))
     throw InputError("--refit " + s_.refit + ": not among the candidates traced (" +
                      (s_.candidates.empty() ? std::string("it is opt-in; name it in --candidates")
                                             : "--candidates names others") +

@@ -101,6 +101,7 @@ class Loop {
   // Stages (loop.cpp).
   void check_settings();
   void check_declared_refit() const;
+  bool selected(const CandidateEffect& e) const;
   const Surface& simulate_baseline();
   void set_seed_noise(const Surface& base);
   BaselineRecord calibrate_baseline(const Surface& base) const;

@@ -18,14 +18,18 @@ std::size_t Loop::nearest_grid_point(double mu) const {
   return node;
 }
 
+// Whether the settings trace `e`: named in them, or, when they name none, not opt-in.
+bool Loop::selected(const CandidateEffect& e) const {
+  if (s_.candidates.empty()) return !e.opt_in;
+  return std::find(s_.candidates.begin(), s_.candidates.end(), e.name) != s_.candidates.end();
+}
+
 // The registry's candidates (those named in the settings) that every test's scene can express.
 std::vector<const CandidateEffect*> Loop::available_candidates(
     std::vector<UnavailableCandidate>& unavailable) {
   std::vector<const CandidateEffect*> cands;
   for (const CandidateEffect& e : candidate_effects()) {
-    const bool named =
-        std::find(s_.candidates.begin(), s_.candidates.end(), e.name) != s_.candidates.end();
-    if (s_.candidates.empty() ? e.opt_in : !named) continue;
+    if (!selected(e)) continue;
     std::string why;
     for (const LabTest& t : data_.tests)
       if (why.empty()) {
