@@ -1,13 +1,16 @@
-// Loop::photo_pairs (loop_stages.hpp): for every test with photos, the lab's photo and one twin
-// photo of the same test, each with vision's overlay, copied into OUT/photos/<id>/ for the page.
+// Loop::photo_pairs (loop_stages.hpp): for every test, the lab's photo (when it gave one) and one
+// twin photo of the same test, each with vision's overlay, copied into OUT/photos/<id>/ for the
+// page.
 //
 // Design note. The page reads loop.json and the files it names, and never simulates, so the
 // loop keeps the pictures. The twin's is one pile the loop has already simulated: the first
 // seed's pour at the grid point nearest the final mu_r, on the surface that weighs most in the
 // final model (the baseline, or an effect's refit trial), so the pile run is found in the cache
-// and only its photograph is new (one photo job per test, with the photos and overlays kept; a
-// dataset without photos costs nothing). It is photographed as every twin pile is (the lab's
-// cameras when it gave them), and the view shown is the one through the lab photo's camera.
+// and only its photograph is new (one photo job per test, with the photos and overlays kept). It
+// is photographed as every twin pile is (the lab's cameras when it gave them), and the view shown
+// is the one through the lab photo's camera. A test with a typed angle still gets the twin's
+// photo: it is what the twin's angle was read from (on the paper's Table 1, the flat top that
+// keeps the sphere piles' atan(2H/D) low), and a reader checks a measurement by looking at it.
 #include <cmath>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
@@ -75,22 +78,35 @@ PhotoView lab_view(const LabTest& test, const std::string& data_file, const fs::
                            last_error + ")");
 }
 
-// The twin's view through camera `camera` (or the first measured one), copied into `dir`;
-// none when no view of the photograph was measured.
+// The twin's view through camera `camera` (or the first measured one), copied into `dir`; none,
+// with `why` set, when no view of the photograph was measured or its files are gone (a cache
+// carried to another machine by scripts/collect_results.sh keeps result.json, not the PNGs).
 std::optional<PhotoView> twin_view(const SimOutcome& o, std::size_t camera, const fs::path& out,
-                                   const fs::path& rel) {
-  if (!o.views.is_array()) return std::nullopt;
+                                   const fs::path& rel, std::string& why) {
   const json* pick = nullptr;
-  for (std::size_t k = 0; k < o.views.size(); ++k) {
-    const json& v = o.views[k];
-    if (!v.contains("overlay")) continue;
-    if (pick == nullptr || k == camera) pick = &v;
-    if (k == camera) break;
+  if (o.views.is_array())
+    for (std::size_t k = 0; k < o.views.size(); ++k) {
+      const json& v = o.views[k];
+      if (!v.contains("overlay")) continue;
+      if (pick == nullptr || k == camera) pick = &v;
+      if (k == camera) break;
+    }
+  if (pick == nullptr) {
+    why = o.no_pile.empty() ? "the twin's pile was not photographed (" + o.sim_dir + ")"
+                            : "no view of the twin's photograph could be measured: " + o.no_pile;
+    return std::nullopt;
   }
-  if (pick == nullptr) return std::nullopt;
   const fs::path dir(o.image_dir);
   const fs::path photo = dir / pick->at("photo").get<std::string>();
   const fs::path overlay = dir / pick->at("overlay").get<std::string>();
+  for (const fs::path& f : {photo, overlay})
+    if (!fs::is_regular_file(f)) {
+      why = "the twin's photograph is recorded in the cache but " + f.filename().string() +
+            " is not there (a cache collected without images); delete the cache's cases/" +
+            (dir.parent_path().filename() / dir.filename()).string() +
+            " and run the loop again to photograph it anew";
+      return std::nullopt;
+    }
   fs::copy_file(photo, out / rel / "twin.png", fs::copy_options::overwrite_existing);
   fs::copy_file(overlay, out / rel / "twin.measured.png", fs::copy_options::overwrite_existing);
   const cv::Mat img = cv::imread(overlay.string(), cv::IMREAD_UNCHANGED);
@@ -116,12 +132,12 @@ std::vector<PhotoPair> Loop::photo_pairs(const LoopState& state) {
   image.keep_overlays = true;
   for (std::size_t i = 0; i < data_.tests.size(); ++i) {
     const LabTest& test = data_.tests[i];
-    if (test.photos.empty()) continue;
     const fs::path rel = fs::path("photos") / test.id;
     fs::create_directories(fs::path(out_) / rel);
     PhotoPair& p = pairs.emplace_back();
     p.id = test.id;
-    p.lab = lab_view(test, data_.file, out_, rel, cameras.emplace_back());
+    cameras.push_back(0);
+    if (!test.photos.empty()) p.lab = lab_view(test, data_.file, out_, rel, cameras.back());
     const Curve& c = surf.curve.at(i);
     const std::size_t j = nearest(c.mu, state.fit.mu);
     p.mu_r = c.mu[j];
@@ -137,11 +153,9 @@ std::vector<PhotoPair> Loop::photo_pairs(const LoopState& state) {
   const std::vector<SimOutcome> out = cache_.run(requests);
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     const fs::path rel = fs::path("photos") / pairs[k].id;
-    pairs[k].twin = twin_view(out[k], cameras[k], out_, rel);
-    if (!pairs[k].twin)
-      pairs[k].note = out[k].no_pile.empty()
-                          ? "the twin's pile was not photographed (" + out[k].sim_dir + ")"
-                          : "no view of the twin's photograph could be measured: " + out[k].no_pile;
+    pairs[k].twin = twin_view(out[k], cameras[k], out_, rel, pairs[k].note);
+    if (!pairs[k].twin)  // not a stale one of an earlier run beside the note
+      for (const char* f : {"twin.png", "twin.measured.png"}) fs::remove(fs::path(out_) / rel / f);
   }
   return pairs;
 }

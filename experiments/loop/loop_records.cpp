@@ -231,8 +231,12 @@ json to_json(const PhotoView& v) {
 json to_json(const PhotoPair& p) {
   json effects = json::object();
   for (const auto& [name, value] : p.effects) effects[name] = value;
-  return {{"id", p.id},     {"lab", to_json(p.lab)}, {"twin", p.twin ? to_json(*p.twin) : json()},
-          {"mu_r", p.mu_r}, {"seed", p.seed},        {"effects", effects},
+  return {{"id", p.id},
+          {"lab", p.lab ? to_json(*p.lab) : json()},
+          {"twin", p.twin ? to_json(*p.twin) : json()},
+          {"mu_r", p.mu_r},
+          {"seed", p.seed},
+          {"effects", effects},
           {"note", p.note}};
 }
 
@@ -538,7 +542,7 @@ PhotoView photo_view_from_json(const json& j) {
 PhotoPair photo_pair_from_json(const json& j) {
   PhotoPair p;
   p.id = j.at("id").get<std::string>();
-  p.lab = photo_view_from_json(j.at("lab"));
+  if (!j.at("lab").is_null()) p.lab = photo_view_from_json(j["lab"]);
   if (!j.at("twin").is_null()) p.twin = photo_view_from_json(j["twin"]);
   p.mu_r = num(j, "mu_r");
   p.seed = j.at("seed").get<std::uint64_t>();

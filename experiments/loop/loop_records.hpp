@@ -223,9 +223,10 @@ struct PhotoView {
 /// A test's lab photo beside one twin photo of the same test (the first measured view of the
 /// first seed's pile at the grid point nearest the final mu_r, on the simulated surface that
 /// weighs most in the final model, photographed through the lab's cameras when it gave them).
+/// A test the lab gave no photo of (a typed angle) has the twin's photo alone.
 struct PhotoPair {
-  std::string id;  // the test
-  PhotoView lab;
+  std::string id;                 // the test
+  std::optional<PhotoView> lab;   // absent: the lab gave no photo of this test
   std::optional<PhotoView> twin;  // absent: no twin view could be measured (`note` says why)
   double mu_r = 0.0;              // grid point of the twin pile [-]
   std::uint64_t seed = 0;         // its pour's seed
@@ -247,7 +248,7 @@ struct LoopRecord {
   FinalRecord final_model;
   SimulationCounts simulations;
   LoopProvenance provenance;
-  std::vector<PhotoPair> photo_pairs;  // tests with photos only; empty without photos
+  std::vector<PhotoPair> photo_pairs;  // one per test
 };
 
 nlohmann::json to_json(const ResidualRow& r);

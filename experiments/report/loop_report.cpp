@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -82,8 +83,33 @@ json numeric_conditions(const json& test) {
   return c;
 }
 
+// The conditions every test has at one value, as "name value": a residual plot against one is a
+// single column of points that tells nothing, so the page names them instead of plotting them.
+std::map<std::string, std::string> constant_conditions(const json& tests) {
+  std::map<std::string, std::set<std::string>> values;
+  std::map<std::string, std::size_t> count;
+  for (const json& t : tests) {
+    const json numbers = numeric_conditions(t);
+    for (const auto& [k, v] : numbers.items()) {
+      values[k].insert(sig3(v));
+      ++count[k];
+    }
+    const json words = t.value("text_conditions", json::object());
+    for (const auto& [k, v] : words.items()) {
+      if (k.rfind("set:sample.psd", 0) == 0) continue;  // shown on the PSD's own plot
+      values[k].insert(v.get<std::string>());
+      ++count[k];
+    }
+  }
+  std::map<std::string, std::string> constant;
+  for (const auto& [k, v] : values)
+    if (v.size() == 1 && count[k] == tests.size()) constant[k] = *v.begin();
+  return constant;
+}
+
 // Every plot: each numeric condition on its axis, each text condition (a plate material) as
-// categories, and the size distribution as categories of its own when the tests differ in it.
+// categories, and the size distribution as categories of its own when the tests differ in it;
+// none against a condition every test has at one value (constant_conditions).
 std::vector<ResidualPlot> residual_plots(const json& loop) {
   const json& tests = loop.at("tests");
   const json& before = loop.at("baseline").at("residuals");
@@ -114,13 +140,15 @@ std::vector<ResidualPlot> residual_plots(const json& loop) {
     p.points.resize(p.series.size());
     return p;
   };
+  const std::map<std::string, std::string> constant = constant_conditions(tests);
   std::set<std::string> numeric, text;
   for (const json& t : tests) {
     const json numbers = numeric_conditions(t);
-    for (const auto& [k, v] : numbers.items()) numeric.insert(k);
+    for (const auto& [k, v] : numbers.items())
+      if (!constant.count(k)) numeric.insert(k);
     const json words = t.value("text_conditions", json::object());
     for (const auto& [k, v] : words.items())
-      if (k.rfind("set:sample.psd", 0) != 0) text.insert(k);  // shown on the PSD's own plot
+      if (k.rfind("set:sample.psd", 0) != 0 && !constant.count(k)) text.insert(k);
   }
   std::vector<ResidualPlot> plots;
   for (const std::string& c : numeric) {
@@ -221,6 +249,12 @@ std::optional<Figure> draw(const ResidualPlot& p, const fs::path& dir) {
 }
 
 std::vector<Figure> residual_figures(const json& loop, const fs::path& dir) {
+  // The folder's residual plots are this page's own: an earlier rendering's (against a condition
+  // since found to be the same on every test) would otherwise stay beside the new ones.
+  std::vector<fs::path> old;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().filename().string().rfind("residual_", 0) == 0) old.push_back(e.path());
+  for (const fs::path& f : old) fs::remove(f);
   std::vector<Figure> figures;
   for (const ResidualPlot& p : residual_plots(loop))
     if (std::optional<Figure> f = draw(p, dir)) figures.push_back(*f);
@@ -244,16 +278,17 @@ Cell file_cell(const fs::path& dir, const std::string& rel) {
   return c;
 }
 
-// Per test with photos, the lab's overlay beside the twin's at one mm per page pixel (CSS
-// width from each image's own scale), and the files with their scales. An overlay missing from
-// `dir` is not drawn; its numbers stay in the table.
+// Per test, the lab's overlay beside the twin's at one mm per page pixel (CSS width from each
+// image's own scale), and the files with their scales; the twin's alone where the lab gave no
+// photo. An overlay missing from `dir` is not drawn; its numbers stay in the table.
 std::string photos_section(const json& loop, const fs::path& dir) {
   const json pairs = loop.value("photo_pairs", json::array());
   if (pairs.empty()) return "";
   mustache::data list(mustache::data::type::list);
   for (const json& p : pairs) {
-    std::vector<std::pair<std::string, const json*>> views = {{"lab", &p.at("lab")}};
-    if (!p.at("twin").is_null()) views.emplace_back("twin", &p.at("twin"));
+    std::vector<std::pair<std::string, const json*>> views;
+    for (const char* who : {"lab", "twin"})
+      if (!p.at(who).is_null()) views.emplace_back(who, &p.at(who));
     std::vector<ScaledImage> images;
     for (const auto& view : views)
       images.push_back(
@@ -286,8 +321,13 @@ std::string photos_section(const json& loop, const fs::path& dir) {
     }
     mustache::data x;
     x.set("id", left(p["id"]).text);
-    x.set("scale", views.size() > 1 ? "Both at " + sig3(common) + " mm per page pixel."
-                                    : "At " + sig3(common) + " mm per page pixel.");
+    std::string scale = views.size() > 1 ? "Both at " + sig3(common) + " mm per page pixel."
+                        : views.empty()  ? std::string()
+                                         : "At " + sig3(common) + " mm per page pixel.";
+    if (p.at("lab").is_null())
+      scale += std::string(scale.empty() ? "" : " ") +
+               "The lab gave no photo of this test (a typed angle).";
+    x.set("scale", scale);
     x.set("any_figures", !figures.empty());
     x.set("figures", to_data(figures));
     std::string note = p.value("note", std::string());
@@ -463,7 +503,13 @@ std::string residuals_section(const json& loop, const fs::path& plot_dir) {
     }
     t.rows.push_back(row);
   }
+  std::string same;
+  for (const auto& [k, v] : constant_conditions(tests))
+    same += std::string(same.empty() ? "" : ", ") + k + " " + v;
   mustache::data d;
+  d.set(
+      "constant",
+      text_or_false(same.empty() ? same : "The same on every test, so not plotted: " + same + "."));
   d.set("plots", to_data(residual_figures(loop, plot_dir)));
   d.set("residuals", to_data(t));
   return render(templates::kLoopResiduals, d);

@@ -166,13 +166,14 @@ const char* const kLoopNotes =
 <ul>{{#list}}<li>{{name}}: {{why}}</li>{{/list}}</ul>
 {{/unavailable}})";
 
-// plots: figures; residuals: table.
+// plots: figures; constant: a sentence (or false); residuals: table.
 const char* const kLoopResiduals = R"(<h2>Residuals</h2>
-{{#plots}}{{> figure}}{{/plots}}{{#residuals}}{{> table}}{{/residuals}})";
+{{#plots}}{{> figure}}{{/plots}}{{#constant}}<p>{{constant}}</p>
+{{/constant}}{{#residuals}}{{> table}}{{/residuals}})";
 
 // pairs: [{id, scale, figures, note (or false), files: table}].
 const char* const kLoopPhotos = R"(<h2>Lab and twin, like for like</h2>
-<p>Per test with photos: the lab's photo and one twin photo of the same test, each with vision's measurement drawn on it (the H and D lines, the toe line, the apex), shown at one scale, so a pile of one size is one size in both. The twin's is the first seed's pile at the grid point nearest the final mu_r, with the effects of the model's main simulated surface.</p>
+<p>Per test: the lab's photo and one twin photo of the same test, each with vision's measurement drawn on it (the H and D lines, the toe line, the apex), shown at one scale, so a pile of one size is one size in both; where the lab gave no photo, the twin's alone. The twin's is the first seed's pile at the grid point nearest the final mu_r, with the effects of the model's main simulated surface.</p>
 {{#pairs}}<h3>{{id}}</h3>
 <p>{{scale}}</p>
 {{#any_figures}}<div class='beside'>{{#figures}}{{> figure}}{{/figures}}</div>

@@ -1,8 +1,9 @@
-// The loop keeps, for each test with photos, the lab's photo and one twin photo of the same test
-// with both overlays, for the page: on the tiny scene, a lab photo with a camera sidecar (a cone
-// of spheres photographed by hand) gets a twin photo through that camera, at its scale and
-// resolution, copied into OUT/photos/<id>/ and named in loop.json; a test without photos gets
-// none, and the pair costs one photograph job and no pile run (the pile is the baseline's).
+// The loop keeps, for each test, the lab's photo and one twin photo of the same test with both
+// overlays, for the page: on the tiny scene, a lab photo with a camera sidecar (a cone of
+// spheres photographed by hand) gets a twin photo through that camera, at its scale and
+// resolution, copied into OUT/photos/<id>/ and named in loop.json; a test with a typed angle
+// gets the twin's photo alone (through the twin's own framing). Each costs one photograph job
+// and no pile run (the pile is the baseline's).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -68,9 +69,16 @@ TEST(LoopPhotos, LoopJsonNamesTheLabAndTwinPhotosOfEachTestWithPhotos) {
   const fs::path out = dir / "loop";
   const json loop = run_loop(data, out.string(), s);
 
-  ASSERT_EQ(loop.at("photo_pairs").size(), 1u) << "only the test with photos has a pair";
+  ASSERT_EQ(loop.at("photo_pairs").size(), 2u) << "one per test";
   const json& p = loop["photo_pairs"][0];
   EXPECT_EQ(p["id"], "pic");
+  const json& typed = loop["photo_pairs"][1];
+  EXPECT_EQ(typed["id"], "typed");
+  EXPECT_TRUE(typed["lab"].is_null()) << "the lab gave no photo of this test";
+  ASSERT_FALSE(typed["twin"].is_null()) << typed.dump();
+  EXPECT_TRUE(fs::exists(out / typed["twin"]["overlay"].get<std::string>()));
+  EXPECT_NE(typed["twin"]["width_px"], 640)
+      << "the twin's own framing, not the other test's lab camera";
   ASSERT_FALSE(p["twin"].is_null()) << p.dump();
   for (const char* who : {"lab", "twin"})
     for (const char* f : {"photo", "overlay"}) {
@@ -92,13 +100,14 @@ TEST(LoopPhotos, LoopJsonNamesTheLabAndTwinPhotosOfEachTestWithPhotos) {
   EXPECT_TRUE(p["mu_r"] == 0.1 || p["mu_r"] == 0.3) << p["mu_r"];
   EXPECT_EQ(p["seed"].get<std::uint64_t>() % kRepourSeedStride, 1u);
   // 2 tests x 2 grid points x 2 seeds photographed (the test with a lab camera through it, the
-  // other through the twin's own), and one photo for the page; the piles are shared.
+  // other through the twin's own), and one photo a test for the page; the piles are shared.
   EXPECT_EQ(loop["simulations"]["pile_runs_started"].get<int>(), 4);
-  EXPECT_EQ(loop["simulations"]["photos_started"].get<int>(), 9);
+  EXPECT_EQ(loop["simulations"]["photos_started"].get<int>(), 10);
   // The page places both overlays.
   const std::string html = read_file((out / "index.html").string());
   EXPECT_NE(html.find("src='photos/pic/lab.measured.png'"), std::string::npos);
   EXPECT_NE(html.find("src='photos/pic/twin.measured.png'"), std::string::npos);
+  EXPECT_NE(html.find("src='photos/typed/twin.measured.png'"), std::string::npos);
   // And opens in a copied folder: every image and link relative and present, no machine path.
   for (const report::PageProblem& q : report::page_problems(out / "index.html"))
     ADD_FAILURE() << report::to_string(q.kind) << ": " << q.what;
@@ -109,6 +118,19 @@ TEST(LoopPhotos, LoopJsonNamesTheLabAndTwinPhotosOfEachTestWithPhotos) {
   EXPECT_EQ(again["simulations"]["pile_runs_started"].get<int>(), 0);
   EXPECT_EQ(again["simulations"]["photos_started"].get<int>(), 0);
   EXPECT_EQ(again["photo_pairs"][0]["twin"], p["twin"]);
+
+  // A cache carried to another machine keeps the photograph's result.json, not its PNGs
+  // (scripts/collect_results.sh): the loop still finishes, and the page says why that twin
+  // photo is missing and how to make it again.
+  fs::remove(typed["twin"]["source"].get<std::string>());
+  const json carried = run_loop(data, out.string(), s);
+  EXPECT_EQ(carried["simulations"]["photos_started"].get<int>(), 0);
+  EXPECT_EQ(carried["photo_pairs"][0]["twin"], p["twin"]);
+  EXPECT_TRUE(carried["photo_pairs"][1]["twin"].is_null());
+  EXPECT_NE(
+      carried["photo_pairs"][1]["note"].get<std::string>().find("a cache collected without images"),
+      std::string::npos)
+      << carried["photo_pairs"][1].dump();
   std::printf("lab %.4f mm/px, twin %.4f mm/px at mu_r %.2f seed %llu; lab %.2f deg, twin %.2f\n",
               lab_mm, twin_mm, p["mu_r"].get<double>(),
               static_cast<unsigned long long>(p["seed"].get<std::uint64_t>()),

@@ -52,7 +52,8 @@ void expect_round_trip(const T& x, F from) {
   EXPECT_EQ(to_json(from(json::parse(text))).dump(), text);
 }
 
-// A photo pair with both views and one whose twin view is missing (null, with its note).
+// A photo pair with both views, one whose twin view is missing (null, with its note), and one
+// the lab gave no photo of (null).
 TEST(LoopRecordsJson, PhotoPairsRoundTrip) {
   const PhotoView lab{
       "photos/a/lab.jpg", "photos/a/lab.measured.png", "/lab/a.jpg", 0.2, 400, 300, 31.5};
@@ -64,6 +65,9 @@ TEST(LoopRecordsJson, PhotoPairsRoundTrip) {
   expect_round_trip(both, photo_pair_from_json);
   const PhotoPair one{"b", lab, std::nullopt, 0.3, 7, {}, "no view could be measured"};
   expect_round_trip(one, photo_pair_from_json);
+  const PhotoPair twin_alone{"c", std::nullopt, twin, 0.3, 7, {}, ""};  // a typed angle
+  expect_round_trip(twin_alone, photo_pair_from_json);
+  EXPECT_FALSE(photo_pair_from_json(to_json(twin_alone)).lab);
   EXPECT_TRUE(to_json(one).at("twin").is_null());
   EXPECT_EQ(photo_pair_from_json(to_json(both)).twin->mm_per_px, 0.125);
 }

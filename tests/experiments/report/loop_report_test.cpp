@@ -165,7 +165,7 @@ int img_width(const std::string& html, const std::string& src) {
 // 0.1 mm/px (96 mm) at the coarser scale, 0.2 mm per page px (0.2 x 400 / 560 and 0.1 x 960 /
 // 560 are finer): 400 and 480 px, in the ratio 96 / 80 of their fields; both overlays and both
 // plain photos are linked. A test whose twin view could not be measured shows its lab photo
-// and the reason.
+// and the reason; a test the lab gave no photo of shows the twin's alone.
 TEST(ReportLoop, LabAndTwinPhotosSideBySideAtOneScale) {
   const fs::path out = fs::temp_directory_path() / "reposetwin_loop_report_photos_test";
   fs::remove_all(out);
@@ -201,7 +201,14 @@ TEST(ReportLoop, LabAndTwinPhotosSideBySideAtOneScale) {
                           {"mu_r", 0.15},
                           {"seed", 1001},
                           {"effects", json::object()},
-                          {"note", "no view of the twin's photograph could be measured"}}};
+                          {"note", "no view of the twin's photograph could be measured"}},
+                         {{"id", "t3"},
+                          {"lab", nullptr},
+                          {"twin", view("twin", 960, 720, 0.1)},
+                          {"mu_r", 0.15},
+                          {"seed", 1001},
+                          {"effects", json::object()},
+                          {"note", ""}}};
   write_loop_html(loop, out.string());
   const std::string html = read_file((out / "index.html").string());
   const int lab = img_width(html, "photos/t1/lab.measured.png");
@@ -215,6 +222,17 @@ TEST(ReportLoop, LabAndTwinPhotosSideBySideAtOneScale) {
                         "href='photos/t1/twin.png'", "mu_r 0.15, seed 1001, plate_friction 0.4",
                         "<h3>t2</h3>", "no view of the twin&apos;s photograph could be measured"})
     EXPECT_NE(html.find(s), std::string::npos) << s;
+  // A test with a typed angle: the twin's photo alone, at its own scale (960 px x 0.1 mm into
+  // the 560 px column), and the page says the lab gave none.
+  const std::size_t t3 = html.find("<h3>t3</h3>");
+  ASSERT_NE(t3, std::string::npos);
+  const std::string alone = html.substr(t3);
+  EXPECT_EQ(img_width(alone, "photos/t1/twin.measured.png"), 560);
+  EXPECT_EQ(alone.find("lab.measured.png"), std::string::npos);
+  EXPECT_NE(alone.find("At 0.171 mm per page pixel. The lab gave no photo of this test (a typed "
+                       "angle)."),
+            std::string::npos)
+      << alone.substr(0, 400);
   // Without photo pairs (an older loop.json, or data without photos) there is no such section.
   write_loop_html(small_loop(false), out.string());
   EXPECT_EQ(read_file((out / "index.html").string()).find("like for like"), std::string::npos);
@@ -234,7 +252,8 @@ TEST(ReportLoop, LabAndTwinPhotosSideBySideAtOneScale) {
 
 // A text condition gets a plot with one category per value, and tests of different size
 // distributions (a size band, a sieve-table file) get a PSD plot of their own and one series
-// per distribution on every numeric condition's plot, each point in its own series.
+// per distribution on every numeric condition's plot, each point in its own series; a condition
+// every test shares at one value gets a sentence, not a plot.
 TEST(ReportLoop, TextConditionsAndThePsdGetTheirOwnPlotsAndSeries) {
   const fs::path out = fs::temp_directory_path() / "reposetwin_loop_report_conditions_test";
   fs::remove_all(out);
@@ -246,23 +265,26 @@ TEST(ReportLoop, TextConditionsAndThePsdGetTheirOwnPlotsAndSeries) {
       {{"id", "t1"},
        {"role", "calibrate"},
        {"angle_deg", 35},
-       {"conditions", {{"mass_kg", 0.5}, {"d_min_mm", 3}, {"d_max_mm", 4}}},
-       {"text_conditions", {{"plate", "wood"}}}},
+       {"conditions", {{"mass_kg", 0.5}, {"d_min_mm", 3}, {"d_max_mm", 4}, {"W_mm", 40}}},
+       {"text_conditions", {{"plate", "wood"}, {"funnel", "steel"}}}},
       {{"id", "t2"},
        {"role", "calibrate"},
        {"angle_deg", 35},
-       {"conditions", {{"mass_kg", 0.5}, {"d_min_mm", 2}, {"d_max_mm", 4}}},
-       {"text_conditions", {{"plate", "steel"}}}},
+       {"conditions", {{"mass_kg", 0.5}, {"d_min_mm", 2}, {"d_max_mm", 4}, {"W_mm", 40}}},
+       {"text_conditions", {{"plate", "steel"}, {"funnel", "steel"}}}},
       {{"id", "t3"},
        {"role", "validate"},
        {"angle_deg", 35},
-       {"conditions", {{"mass_kg", 1.0}}},
+       {"conditions", {{"mass_kg", 1.0}, {"W_mm", 40}}},
        {"camera_height_m", 0.05},
-       {"text_conditions", {{"plate", "wood"}, {"set:sample.psd_file", "psd/fine.toml"}}}}};
+       {"text_conditions",
+        {{"plate", "wood"}, {"funnel", "steel"}, {"set:sample.psd_file", "psd/fine.toml"}}}}};
   loop["baseline"]["residuals"] = {r1, r2, r3};
   loop["final"]["residuals"] = {r1, r2, r3};
-  write_loop_html(loop, out.string());
   const fs::path plots = out / "plots";
+  fs::create_directories(plots);  // an earlier rendering's plot against W_mm
+  write_file_atomic((plots / "residual_W_mm.dat").string(), "# stale\n");
+  write_loop_html(loop, out.string());
   // The plate: categories steel (0) and wood (1); t1 and t3 on wood, t2 on steel.
   const std::string plate_gp = read_file((plots / "residual_plate.gp").string());
   EXPECT_NE(plate_gp.find("set xtics ('steel' 0, 'wood' 1)"), std::string::npos) << plate_gp;
@@ -288,6 +310,14 @@ TEST(ReportLoop, TextConditionsAndThePsdGetTheirOwnPlotsAndSeries) {
   const std::string mass_gp = read_file((plots / "residual_mass_kg.gp").string());
   for (const char* t : {"index 0", "index 2", "t 'before, PSD 3-4 mm'", "t 'after, PSD fine.toml'"})
     EXPECT_NE(mass_gp.find(t), std::string::npos) << t << mass_gp;
+  // A condition every test has at one value (the outlet, the funnel) is a single column of
+  // points: named on the page, not plotted (an earlier rendering's plot is gone). The camera
+  // height, declared by t3 alone, is plotted.
+  EXPECT_FALSE(fs::exists(plots / "residual_W_mm.dat"));
+  EXPECT_FALSE(fs::exists(plots / "residual_funnel.dat"));
+  EXPECT_NE(read_file((out / "index.html").string())
+                .find("The same on every test, so not plotted: W_mm 40, funnel steel."),
+            std::string::npos);
   if (fs::exists(plots / "residual_plate.png")) {  // gnuplot is optional
     const std::string html = read_file((out / "index.html").string());
     for (const char* s :
