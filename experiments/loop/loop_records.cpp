@@ -254,22 +254,36 @@ json to_json(const LoopRecord& loop) {
   };
   const double all_before = all_rmse(loop.baseline.residuals);
   const double all_after = all_rmse(loop.final_model.residuals);
-  // An effect chosen makes the verdict "named"; otherwise it is the last iteration's. The
-  // statement gives every iteration's decision in order.
+  // An effect chosen makes the verdict "named"; otherwise it is the last iteration's: the
+  // trace's, or "not_confirmed" / "refit_failed" when the trace named a candidate (or the user
+  // declared one) that the simulated refit then did not bear out. The statement gives every
+  // iteration's decision and the fate of its refit in order.
   json verdict = json();
   json statement = json();
   if (!loop.iterations.empty()) {
+    const IterationRecord& last = loop.iterations.back();
     // A confirmed refit of the user's hypothesis (--refit) is "declared": the trace did not
     // name it, and the statement keeps the trace's own verdict.
-    verdict = loop.final_model.effects.empty()
-                  ? trace_verdict_name(loop.iterations.back().decision.verdict)
-              : loop.final_model.effects.back().declared
-                  ? std::string("declared")
-                  : trace_verdict_name(TraceVerdict::kNamed);
+    if (!loop.final_model.effects.empty())
+      verdict = loop.final_model.effects.back().declared ? "declared"
+                                                         : trace_verdict_name(TraceVerdict::kNamed);
+    else if (last.not_confirmed)
+      verdict = "not_confirmed";
+    else if (last.refit_failed)
+      verdict = "refit_failed";
+    else
+      verdict = trace_verdict_name(last.decision.verdict);
     std::string text;
-    for (const IterationRecord& it : loop.iterations)
+    for (const IterationRecord& it : loop.iterations) {
       text += (text.empty() ? "" : " | ") + ("iteration " + std::to_string(it.iteration) + ": ") +
               it.decision.statement + (it.declared ? "; " + *it.declared : "");
+      if (it.not_confirmed)
+        text += "; " + it.not_confirmed->refit.name +
+                " not confirmed by the simulated refit: " + it.not_confirmed->reason;
+      if (it.refit_failed)
+        text += "; " + it.refit_failed->name +
+                "'s refit could not be simulated: " + it.refit_failed->refit_failed;
+    }
     statement = text;
   }
   if (loop.not_traced) {

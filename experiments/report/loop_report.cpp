@@ -368,8 +368,37 @@ std::string error_section(const json& loop) {
   return render(templates::kLoopError, d);
 }
 
+// Why no effect was chosen, from the last iteration (older loop.json files have no decision).
+std::string no_effect_reason(const json& loop) {
+  const json its = loop.value("iterations", json::array());
+  if (loop.contains("not_traced") && !loop["not_traced"].is_null())
+    return "nothing was traced (the notes below say why).";
+  if (its.empty()) return "nothing was traced.";
+  const json& last = its.back();
+  const json chosen = last.value("chosen", json());
+  if (last.contains("not_confirmed"))
+    return last["not_confirmed"]["name"].get<std::string>() +
+           " was refitted by simulation, and the simulations did not confirm it (iteration " +
+           last["iteration"].dump() + ").";
+  if (chosen.is_object() && chosen.contains("refit_failed"))
+    return chosen["name"].get<std::string>() + "'s refit could not be simulated (iteration " +
+           last["iteration"].dump() + ").";
+  if (last.contains("stopped")) return last["stopped"].get<std::string>() + ".";
+  const std::string v = last.contains("decision")
+                            ? last["decision"].value("verdict", std::string("nothing"))
+                            : std::string("nothing");
+  if (v == "measurement_suspected")
+    return "the trace suspects a measurement or declared-condition error on every test and "
+           "names no physical effect (the decision below).";
+  if (v == "indistinguishable")
+    return "the candidates that meet the rule explain the residual alike and none is named (the "
+           "decision below).";
+  return "no candidate beat the seed noise.";
+}
+
 std::string effects_section(const json& loop) {
   mustache::data d;
+  d.set("none", no_effect_reason(loop));
   if (loop["final"]["effects"].empty()) {
     d.set("effects", false);
   } else {
@@ -384,6 +413,46 @@ std::string effects_section(const json& loop) {
   d.set("min_t", sig3(loop["rule"]["min_t"]));
   d.set("margin", sig3(loop["rule"]["loo_margin_deg"]));
   return render(templates::kLoopEffects, d);
+}
+
+// What became of an iteration's refit by simulation (loop.hpp's design note): its trials and
+// the effect chosen, or why the simulations did not confirm it, or why none could be simulated.
+// False when nothing was refitted (nothing named, or the effect limit stopped the loop).
+mustache::data refit_data(const json& it) {
+  const json chosen = it.value("chosen", json());
+  const json* r = it.contains("not_confirmed") ? &it["not_confirmed"]
+                  : chosen.is_object()         ? &chosen
+                                               : nullptr;
+  if (r == nullptr) return mustache::data(false);
+  const std::string name = (*r)["name"].get<std::string>();
+  mustache::data d;
+  d.set("trials", false);
+  if (r->contains("refit_failed")) {
+    d.set("text", "Refit: " + name + " (linear estimate " + sig3((*r)["linear_estimate"]) +
+                      ") could not be simulated: " + (*r)["refit_failed"].get<std::string>() +
+                      ". Nothing chosen.");
+    return d;
+  }
+  Table t = numeric_table(
+      {"simulated at", "response (probe = 1)", "t", "mu_r", "RMSE of the refit [deg]"});
+  for (const json& tr : r->value("trials", json::array()))
+    t.rows.push_back({{sig3(tr["simulated_at"]), sig3(tr["response_fraction"]), sig3(tr["t"]),
+                       sig3(tr["mu_r"]), sig3(tr["rmse_calibrate_deg"])}});
+  std::string text = "Refit by simulation: " + name + ", linear estimate " +
+                     sig3((*r)["linear_estimate"]) + ", simulated on the whole grid";
+  if (it.contains("not_confirmed")) {
+    text += "; not confirmed: " + (*r)["reason"].get<std::string>() + ". Nothing chosen.";
+  } else {
+    const std::string units = (*r)["units"].get<std::string>();
+    text += "; confirmed: " + name + " " + sig3((*r)["value"]) + " \u00b1 " +
+            sig3((*r)["value_se"]) + (units == "-" ? "" : " " + units) + " at mu_r " +
+            sig3((*r)["mu_r"]) + ".";
+  }
+  const std::string notes = r->value("refit_notes", std::string());
+  if (!notes.empty()) text += " Notes: " + notes;
+  d.set("text", text);
+  if (!t.rows.empty()) d.set("trials", to_data(t));
+  return d;
 }
 
 std::string iterations_section(const json& loop) {
@@ -424,6 +493,7 @@ std::string iterations_section(const json& loop) {
       jd.set("channels", channels);
       x.set("joint", jd);
     }
+    x.set("refit", refit_data(it));
     list.push_back(x);
   }
   mustache::data d;

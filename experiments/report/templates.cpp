@@ -138,20 +138,22 @@ const char* const kLoopError = R"(<h2>Error before and after</h2>
 {{#errors}}{{> table}}{{/errors}}<p>Baseline mu_r = {{mu_r}} &plusmn; {{mu_r_se}}; seed spread of one pile {{seed_sd}} deg.</p>
 )";
 
-// effects: table or false; rule, min_t, margin.
+// effects: table or false; none: why no effect was chosen; rule, min_t, margin.
 const char* const kLoopEffects = R"(<h2>Chosen effects</h2>
-{{#effects}}{{> table}}{{/effects}}{{^effects}}<p>None: no candidate beat the seed noise.</p>
+{{#effects}}{{> table}}{{/effects}}{{^effects}}<p>None: {{none}}</p>
 {{/effects}}<p>Rule: {{rule}} (min_t {{min_t}}, margin {{margin}} deg).</p>
 )";
 
-// iterations: [{n, mu_r, loo, candidates: table, declared (or false), stopped (or false)}].
+// iterations: [{n, mu_r, loo, candidates: table, declared (or false), stopped (or false),
+// refit: {text, trials: table or false} or false}].
 const char* const kLoopIterations =
     R"({{#iterations}}<h3>Iteration {{n}} (mu_r {{mu_r}}; mu_r-only LOO {{loo}} deg)</h3>
 {{#candidates}}{{> table}}{{/candidates}}{{#joint}}<p>Traced jointly on {{channels}}:</p>
 {{> table}}{{/joint}}<p>Decision: {{decision}}.</p>
 {{#declared}}<p>Declared hypothesis: {{declared}}.</p>
 {{/declared}}{{#stopped}}<p>Stopped: {{stopped}}.</p>
-{{/stopped}}{{/iterations}})";
+{{/stopped}}{{#refit}}<p>{{text}}</p>
+{{#trials}}{{> table}}{{/trials}}{{/refit}}{{/iterations}})";
 
 // can, cannot: {list: [..]} or false; grid, not_traced: text or false; jams: [{id, n}] or false;
 // unavailable: [{name, why}] or false.

@@ -112,5 +112,30 @@ TEST(LoopRecords, SummaryComparesTheBaselineAndFinalModels) {
   EXPECT_FALSE(j["provenance"].contains("run"));
 }
 
+// No effect chosen: the verdict is the last iteration's trace, unless the simulations did not
+// bear its refit out, and the statement says so (a trace that named plate_friction is not the
+// end of the story when the refit was then not confirmed).
+TEST(LoopRecords, SummarySaysWhenTheSimulatedRefitDidNotConfirm) {
+  LoopRecord loop;
+  IterationRecord it;
+  it.decision.verdict = TraceVerdict::kNamed;
+  it.decision.statement = "named plate_friction";
+  loop.iterations = {it};
+  EXPECT_EQ(to_json(loop)["summary"]["verdict"], "named");
+  loop.iterations[0].not_confirmed =
+      NotConfirmed{{"plate_friction", 0.67, 0.67, 1.6, 0.47, {}, ""}, 1.59, "RMSE 2.55 to 1.59"};
+  nlohmann::json s = to_json(loop)["summary"];
+  EXPECT_EQ(s["verdict"], "not_confirmed");
+  EXPECT_EQ(s["statement"],
+            "iteration 0: named plate_friction; plate_friction not confirmed by "
+            "the simulated refit: RMSE 2.55 to 1.59");
+  loop.iterations[0].not_confirmed.reset();
+  loop.iterations[0].refit_failed = RefitFailed{"plate_friction", "at 0.67: no pile; ", 0.67};
+  s = to_json(loop)["summary"];
+  EXPECT_EQ(s["verdict"], "refit_failed");
+  EXPECT_NE(s["statement"].get<std::string>().find("could not be simulated: at 0.67: no pile"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace reposetwin::experiments

@@ -295,7 +295,9 @@ TEST(LoopSynth, AUniformMeasurementOffsetIsFlaggedNotNamed) {
   } else {
     // Not confirmed (or no trial could be measured): the refit was still simulated and stated.
     ASSERT_TRUE(first.contains("not_confirmed") || !first["chosen"].is_null()) << first.dump(1);
-    EXPECT_EQ(d["summary"]["verdict"], "measurement_suspected");
+    EXPECT_TRUE(d["summary"]["verdict"] == "not_confirmed" ||
+                d["summary"]["verdict"] == "refit_failed")
+        << d["summary"].dump();
   }
   // Simulated on the whole grid (from the cache when the suite ran before with this code).
   const nlohmann::json& refit = confirmed ? first["chosen"] : first.value("not_confirmed", first["chosen"]);

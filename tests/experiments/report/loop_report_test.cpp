@@ -82,8 +82,82 @@ TEST(ReportLoop, PageShowsEverySectionAndTest) {
   }
 
   write_loop_html(small_loop(false), out.string());
-  EXPECT_NE(read_file((out / "index.html").string()).find("None: no candidate beat the seed noise."),
+  EXPECT_NE(read_file((out / "index.html").string()).find("None: no candidate left."),
             std::string::npos);
+}
+
+// With no effect chosen the page says why, from the last iteration, and an iteration whose
+// candidate was refitted by simulation shows its trials and the outcome: confirmed (the value),
+// not confirmed (the reason), or not simulated at all (the failures).
+TEST(ReportLoop, SaysWhyNoEffectWasChosenAndWhatTheRefitSimulated) {
+  const fs::path out = fs::temp_directory_path() / "reposetwin_loop_report_refit_test";
+  fs::remove_all(out);
+  auto page = [&](const json& loop) {
+    write_loop_html(loop, out.string());
+    return read_file((out / "index.html").string());
+  };
+  json loop = small_loop(false);
+  json& it = loop["iterations"][0];
+  it.erase("stopped");
+  it["decision"] = {{"statement", "no candidate meets the acceptance rule"},
+                    {"verdict", "nothing"}};
+  EXPECT_NE(page(loop).find("None: no candidate beat the seed noise."), std::string::npos);
+  it["decision"]["verdict"] = "measurement_suspected";
+  EXPECT_NE(page(loop).find("None: the trace suspects a measurement or declared-condition error"),
+            std::string::npos);
+  it["decision"]["verdict"] = "indistinguishable";
+  EXPECT_NE(page(loop).find("explain the residual alike and none is named"), std::string::npos);
+
+  // Named, refitted, and not borne out by the simulations: never "no candidate beat the noise".
+  const json trial = {{"simulated_at", 0.671},
+                      {"response_fraction", -0.0684},
+                      {"t", 1.57},
+                      {"mu_r", 0.471},
+                      {"rmse_calibrate_deg", 1.594}};
+  it["decision"]["verdict"] = "named";
+  it["not_confirmed"] = {{"name", "plate_friction"},
+                         {"linear_estimate", 0.671},
+                         {"simulated_at", 0.671},
+                         {"t", 1.57},
+                         {"mu_r", 0.471},
+                         {"trials", {trial}},
+                         {"refit_notes", ""},
+                         {"rmse_calibrate_deg", 1.594},
+                         {"reason", "RMSE 2.55 to 1.59 deg, not by more than the seed noise 1.05"}};
+  std::string html = page(loop);
+  for (const char* s :
+       {"None: plate_friction was refitted by simulation, and the simulations did not confirm it "
+        "(iteration 1).",
+        "Refit by simulation: plate_friction, linear estimate 0.671, simulated on the whole grid; "
+        "not confirmed: RMSE 2.55 to 1.59 deg, not by more than the seed noise 1.05. Nothing "
+        "chosen.",
+        "<th>simulated at</th>", "<td>-0.0684</td>", "<td>1.59</td>"})
+    EXPECT_NE(html.find(s), std::string::npos) << s;
+  EXPECT_EQ(html.find("no candidate beat the seed noise"), std::string::npos);
+
+  it.erase("not_confirmed");
+  it["chosen"] = {{"name", "plate_friction"},
+                  {"refit_failed", "at 0.67: test s4 formed no pile; "},
+                  {"linear_estimate", 0.671}};
+  html = page(loop);
+  for (const char* s :
+       {"None: plate_friction&apos;s refit could not be simulated (iteration 1).",
+        "could not be simulated: at 0.67: test s4 formed no pile; . Nothing chosen."})
+    EXPECT_NE(html.find(s), std::string::npos) << s;
+
+  // Confirmed: the value with its units (none for a friction), and the trials.
+  it["chosen"] = {{"name", "cohesion"}, {"linear_estimate", 900.0}, {"trials", {trial}},
+                  {"value", 850.0},     {"value_se", 120.0},        {"units", "J/m^3"},
+                  {"mu_r", 0.2},        {"refit_notes", ""}};
+  loop["final"]["effects"] = {{{"name", "cohesion"},
+                               {"kind", "physics"},
+                               {"value", 850.0},
+                               {"value_se", 120.0},
+                               {"units", "J/m^3"},
+                               {"mu_r", 0.2}}};
+  html = page(loop);
+  EXPECT_NE(html.find("confirmed: cohesion 850 \u00b1 120 J/m^3 at mu_r 0.2."), std::string::npos);
+  EXPECT_EQ(html.find("None:"), std::string::npos);
 }
 
 // A loop that traced jointly: the design's statements, the grid, the joint table and the
