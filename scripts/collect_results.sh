@@ -6,7 +6,8 @@
 # (`cp -r results/paper runs/paper`) lets `reposetwin paper` resume on a new machine with only
 # the unfinished runs left to do. The same holds for a loop's cache (tests/experiments/loop/
 # loop_cache_test.cpp), as long as no new photograph of a collected pile is asked for (a
-# measurement candidate's probe re-photographs existing piles and needs their final.vtp).
+# measurement candidate's probe re-photographs existing piles and needs their final.vtp; a
+# twin photo for the loop's page that was not taken before is left out, with a note).
 #
 #   scripts/collect_results.sh runs/paper results/paper
 set -euo pipefail

@@ -122,6 +122,36 @@ std::optional<PhotoView> twin_view(const SimOutcome& o, std::size_t camera, cons
 
 }  // namespace
 
+// The page's photographs, one request per pair. A photograph that cannot be taken must not
+// lose the loop's finished work: a cache carried to another machine by
+// scripts/collect_results.sh has the piles' result.json but not their particles (final.vtp),
+// so a photo not taken before cannot be taken there. Then each is asked for alone (the ones
+// taken come from the cache) and a pair without one gets the reason as its note.
+std::vector<std::optional<SimOutcome>> Loop::photograph_for_page(
+    const std::vector<SimRequest>& requests, std::vector<PhotoPair>& pairs) {
+  std::vector<std::optional<SimOutcome>> out(requests.size());
+  try {
+    const std::vector<SimOutcome> all = cache_.run(requests);
+    for (std::size_t k = 0; k < all.size(); ++k) out[k] = all[k];
+    return out;
+  } catch (const std::exception&) {
+  }
+  for (std::size_t k = 0; k < requests.size(); ++k) {
+    try {
+      out[k] = cache_.run({requests[k]}).at(0);
+    } catch (const std::exception& e) {
+      const std::string what = e.what();
+      pairs[k].note =
+          what.find("final.vtp") != std::string::npos
+              ? "the twin's pile could not be photographed for the page: its particles "
+                "(final.vtp) are not in the cache, as in a cache collected by "
+                "scripts/collect_results.sh (the loop's measurements of it are unaffected)"
+              : "the twin's pile could not be photographed for the page: " + what.substr(0, 300);
+    }
+  }
+  return out;
+}
+
 std::vector<PhotoPair> Loop::photo_pairs(const LoopState& state) {
   std::vector<PhotoPair> pairs;
   std::vector<std::size_t> cameras;
@@ -150,10 +180,10 @@ std::vector<PhotoPair> Loop::photo_pairs(const LoopState& state) {
   }
   if (requests.empty()) return pairs;
   say("photographing " + std::to_string(requests.size()) + " twin pile(s) for the page");
-  const std::vector<SimOutcome> out = cache_.run(requests);
+  const std::vector<std::optional<SimOutcome>> out = photograph_for_page(requests, pairs);
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     const fs::path rel = fs::path("photos") / pairs[k].id;
-    pairs[k].twin = twin_view(out[k], cameras[k], out_, rel, pairs[k].note);
+    if (out[k]) pairs[k].twin = twin_view(*out[k], cameras[k], out_, rel, pairs[k].note);
     if (!pairs[k].twin)  // not a stale one of an earlier run beside the note
       for (const char* f : {"twin.png", "twin.measured.png"}) fs::remove(fs::path(out_) / rel / f);
   }

@@ -116,8 +116,10 @@ class Loop {
   IterationRecord trace(int it, const LoopState& state,
                         const std::vector<FingerprintRecord>& fps) const;
   FinalRecord final_record(const LoopState& state) const;
-  // The lab's photo beside a twin photo per test with photos (loop_photos.cpp).
+  // Per test, the lab's photo (when given) beside a twin photo (loop_photos.cpp).
   std::vector<PhotoPair> photo_pairs(const LoopState& state);
+  std::vector<std::optional<SimOutcome>> photograph_for_page(
+      const std::vector<SimRequest>& requests, std::vector<PhotoPair>& pairs);
   LoopProvenance provenance(const Surface& base) const;
   nlohmann::json write(const LoopRecord& rec) const;  // OUT/loop.json and OUT/index.html
 
