@@ -127,14 +127,53 @@ void Loop::check_declared_refit() const {
                      ": a refit needs --max-effects of at least 1");
 }
 
+// The tests poured together (pour_groups, loop_sim.hpp), from the jams of every surface so far.
+std::vector<std::vector<std::size_t>> Loop::pour_groups() const {
+  std::vector<int> jams(data_.tests.size(), 0);
+  for (std::size_t i = 0; i < jams.size(); ++i)
+    for (const auto& surf : surfaces_)
+      for (int c : surf->curve.at(i).clogged) jams[i] += c;
+  return experiments::pour_groups(jams);
+}
+
+// Throws when a pour repeated max_pours times formed no pile: a run that formed no pile
+// (clogged) has no angle, and averaging its 0 into the curve would be silent garbage. The
+// caller decides (the baseline stops, a refit trial steps back).
+void Loop::require_pile(std::size_t i, std::size_t j, std::size_t r, const SimOutcome& o) const {
+  if (o.pile) return;
+  throw std::runtime_error("test " + data_.tests[i].id + " formed no pile at mu_r " +
+                           std::to_string(grid_[j]) + ", seed " + std::to_string(s_.seeds[r]) +
+                           ", in " + std::to_string(s_.max_pours) + " pour(s) (last: " + o.sim_dir +
+                           (o.no_pile.empty() ? "" : "; its photographs: " + o.no_pile) +
+                           "): the loop needs a pile at every grid point");
+}
+
 Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
   const std::size_t n = data_.tests.size(), g = grid_.size(), k = s_.seeds.size();
-  std::vector<SimRequest> req;
-  for (std::size_t i = 0; i < n; ++i)
-    for (double m : grid_)
-      for (std::uint64_t seed : s_.seeds)
-        req.push_back(make_request(data_.tests[i], s_.mu_key, m, seed, effects, s_.image));
-  const std::vector<SimOutcome> out = pour(req);
+  std::vector<SimOutcome> out(n * g * k);  // by test, grid point, seed
+  const std::vector<std::vector<std::size_t>> groups = pour_groups();
+  if (groups.size() > 1) {
+    std::string first;
+    for (std::size_t i : groups[0]) first += (first.empty() ? "" : ", ") + data_.tests[i].id;
+    say("pouring " + first +
+        " first (pours jammed there before): a surface on which one forms no pile stops before "
+        "the other tests are run");
+  }
+  for (const std::vector<std::size_t>& group : groups) {
+    std::vector<SimRequest> req;
+    for (std::size_t i : group)
+      for (double m : grid_)
+        for (std::uint64_t seed : s_.seeds)
+          req.push_back(make_request(data_.tests[i], s_.mu_key, m, seed, effects, s_.image));
+    const std::vector<SimOutcome> poured = pour(req);
+    std::size_t q = 0;
+    for (std::size_t i : group)
+      for (std::size_t j = 0; j < g; ++j)
+        for (std::size_t r = 0; r < k; ++r, ++q) {
+          require_pile(i, j, r, poured[q]);
+          out[(i * g + j) * k + r] = poured[q];
+        }
+  }
   Surface surf;
   surf.effects = effects;
   surf.curve.resize(n);
@@ -149,17 +188,6 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
       int clogged = 0;
       for (std::size_t r = 0; r < k; ++r, ++q) {
         const SimOutcome& o = out[q];
-        // A run that formed no pile (clogged) has no angle; averaging its 0 into the curve would
-        // be silent garbage. A jammed pour is repeated with a new seed (pour()); one still
-        // without a pile after max_pours pours is left to the caller (the baseline stops, a
-        // refit trial steps back).
-        if (!o.pile)
-          throw std::runtime_error("test " + data_.tests[i].id + " formed no pile at mu_r " +
-                                   std::to_string(grid_[j]) + ", seed " +
-                                   std::to_string(s_.seeds[r]) + ", in " +
-                                   std::to_string(s_.max_pours) + " pour(s) (last: " + o.sim_dir +
-                                   (o.no_pile.empty() ? "" : "; its photographs: " + o.no_pile) +
-                                   "): the loop needs a pile at every grid point");
         clogged += o.clogged_pours;
         surf.raw[i][j].push_back(o);
         const double angle = twin_angle(o, s_.angle);

@@ -179,6 +179,16 @@ json photograph_pile(const std::vector<Eigen::Vector3d>& positions,
           {"variant", v.key()}};
 }
 
+std::vector<std::vector<std::size_t>> pour_groups(const std::vector<int>& jams) {
+  std::vector<std::size_t> jammed, rest;
+  for (std::size_t i = 0; i < jams.size(); ++i) (jams[i] > 0 ? jammed : rest).push_back(i);
+  if (jammed.empty() || rest.empty()) {
+    jammed.insert(jammed.end(), rest.begin(), rest.end());
+    return {jammed};
+  }
+  return {jammed, rest};
+}
+
 std::vector<SimOutcome> run_repouring(
     const std::vector<SimRequest>& requests, int max_pours,
     const std::function<std::vector<SimOutcome>(const std::vector<SimRequest>&)>& run) {

@@ -139,6 +139,14 @@ std::vector<SimOutcome> run_repouring(
     const std::vector<SimRequest>& requests, int max_pours,
     const std::function<std::vector<SimOutcome>(const std::vector<SimRequest>&)>& run);
 
+/// The order in which a surface's tests are poured, as groups poured one after the other, from
+/// each test's count of jammed pours so far (`jams`). A surface fails whole when one test forms
+/// no pile at some grid point (a refit trial then steps back), so the tests that jammed before
+/// are poured first and alone: a trial their outlet ends is known before the other tests' piles,
+/// often the costly ones, are run. One group of every test (in order) when none or all jammed.
+/// The order changes no result: each pour's seed is its own.
+std::vector<std::vector<std::size_t>> pour_groups(const std::vector<int>& jams);
+
 /// The resolved overrides of a request: the test's, then the extra ones (later keys win), as
 /// "key=value" strings in application order.
 std::vector<std::string> resolved_overrides(const SimRequest& request);

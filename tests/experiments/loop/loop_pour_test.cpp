@@ -78,5 +78,15 @@ TEST(LoopPour, APourStillJammedAfterTheLastRepeatIsReturnedWithoutAPile) {
   EXPECT_THROW(run_repouring(requests(t, {5}), 0, run), std::invalid_argument);
 }
 
+// The tests that jammed before are poured first and alone, so that a refit trial their outlet
+// ends fails before the other tests' (often costlier) piles are run; otherwise one group in order.
+TEST(LoopPour, TestsThatJammedBeforeArePouredFirst) {
+  using Groups = std::vector<std::vector<std::size_t>>;
+  EXPECT_EQ(pour_groups({0, 0, 0, 2}), (Groups{{3}, {0, 1, 2}}));
+  EXPECT_EQ(pour_groups({1, 0, 3, 0}), (Groups{{0, 2}, {1, 3}}));
+  EXPECT_EQ(pour_groups({0, 0, 0}), (Groups{{0, 1, 2}}));
+  EXPECT_EQ(pour_groups({1, 2}), (Groups{{0, 1}}));
+}
+
 }  // namespace
 }  // namespace reposetwin::experiments
