@@ -424,13 +424,15 @@ mustache::data refit_data(const json& it) {
                   : chosen.is_object()         ? &chosen
                                                : nullptr;
   if (r == nullptr) return mustache::data(false);
-  const std::string name = (*r)["name"].get<std::string>();
+  // A field an older loop.json lacks reads "?" rather than failing the page.
+  auto num = [r](const char* k) { return r->contains(k) ? sig3((*r)[k]) : std::string("?"); };
+  auto word = [r](const char* k) { return r->value(k, std::string("?")); };
+  const std::string name = word("name");
   mustache::data d;
   d.set("trials", false);
   if (r->contains("refit_failed")) {
-    d.set("text", "Refit: " + name + " (linear estimate " + sig3((*r)["linear_estimate"]) +
-                      ") could not be simulated: " + (*r)["refit_failed"].get<std::string>() +
-                      ". Nothing chosen.");
+    d.set("text", "Refit: " + name + " (linear estimate " + num("linear_estimate") +
+                      ") could not be simulated: " + word("refit_failed") + ". Nothing chosen.");
     return d;
   }
   Table t = numeric_table(
@@ -439,14 +441,13 @@ mustache::data refit_data(const json& it) {
     t.rows.push_back({{sig3(tr["simulated_at"]), sig3(tr["response_fraction"]), sig3(tr["t"]),
                        sig3(tr["mu_r"]), sig3(tr["rmse_calibrate_deg"])}});
   std::string text = "Refit by simulation: " + name + ", linear estimate " +
-                     sig3((*r)["linear_estimate"]) + ", simulated on the whole grid";
+                     num("linear_estimate") + ", simulated on the whole grid";
   if (it.contains("not_confirmed")) {
-    text += "; not confirmed: " + (*r)["reason"].get<std::string>() + ". Nothing chosen.";
+    text += "; not confirmed: " + word("reason") + ". Nothing chosen.";
   } else {
-    const std::string units = (*r)["units"].get<std::string>();
-    text += "; confirmed: " + name + " " + sig3((*r)["value"]) + " \u00b1 " +
-            sig3((*r)["value_se"]) + (units == "-" ? "" : " " + units) + " at mu_r " +
-            sig3((*r)["mu_r"]) + ".";
+    const std::string units = r->value("units", std::string("-"));
+    text += "; confirmed: " + name + " " + num("value") + " \u00b1 " + num("value_se") +
+            (units == "-" ? "" : " " + units) + " at mu_r " + num("mu_r") + ".";
   }
   const std::string notes = r->value("refit_notes", std::string());
   if (!notes.empty()) text += " Notes: " + notes;

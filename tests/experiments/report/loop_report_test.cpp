@@ -158,6 +158,9 @@ TEST(ReportLoop, SaysWhyNoEffectWasChosenAndWhatTheRefitSimulated) {
   html = page(loop);
   EXPECT_NE(html.find("confirmed: cohesion 850 \u00b1 120 J/m^3 at mu_r 0.2."), std::string::npos);
   EXPECT_EQ(html.find("None:"), std::string::npos);
+  // An older loop.json's effect without the refit's fields still makes a page.
+  it["chosen"] = {{"name", "cohesion"}};
+  EXPECT_NE(page(loop).find("Refit by simulation: cohesion, linear estimate ?"), std::string::npos);
 }
 
 // A loop that traced jointly: the design's statements, the grid, the joint table and the
