@@ -148,9 +148,11 @@ void Loop::require_pile(std::size_t i, std::size_t j, std::size_t r, const SimOu
                            "): the loop needs a pile at every grid point");
 }
 
-Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
-  const std::size_t n = data_.tests.size(), g = grid_.size(), k = s_.seeds.size();
-  std::vector<SimOutcome> out(n * g * k);  // by test, grid point, seed
+// Every test's piles at every grid point and seed (by test, grid point, seed), poured group by
+// group (pour_groups); throws at the first group with a test that formed no pile.
+std::vector<SimOutcome> Loop::pour_surface(const std::vector<EffectSetting>& effects) {
+  const std::size_t g = grid_.size(), k = s_.seeds.size();
+  std::vector<SimOutcome> out(data_.tests.size() * g * k);
   const std::vector<std::vector<std::size_t>> groups = pour_groups();
   if (groups.size() > 1) {
     std::string first;
@@ -174,6 +176,12 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
           out[(i * g + j) * k + r] = poured[q];
         }
   }
+  return out;
+}
+
+Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
+  const std::size_t n = data_.tests.size(), g = grid_.size(), k = s_.seeds.size();
+  const std::vector<SimOutcome> out = pour_surface(effects);
   Surface surf;
   surf.effects = effects;
   surf.curve.resize(n);

@@ -125,6 +125,7 @@ class Loop {
 
   // Building blocks (loop.cpp).
   Surface simulate_surface(const std::vector<EffectSetting>& effects);
+  std::vector<SimOutcome> pour_surface(const std::vector<EffectSetting>& effects);
   std::vector<std::vector<std::size_t>> pour_groups() const;
   void require_pile(std::size_t i, std::size_t j, std::size_t r, const SimOutcome& o) const;
   std::optional<FingerprintRecord> probe_candidate(const CandidateEffect& e, const Surface& base,
