@@ -10,6 +10,7 @@
 #include <limits>
 #include <set>
 
+#include "experiments/io/format.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/loop/loop_stages.hpp"
@@ -136,11 +137,15 @@ std::vector<std::vector<std::size_t>> Loop::pour_groups() const {
   return experiments::pour_groups(jams);
 }
 
-// Throws when a pour repeated max_pours times formed no pile: a run that formed no pile
-// (clogged) has no angle, and averaging its 0 into the curve would be silent garbage. The
-// caller decides (the baseline stops, a refit trial steps back).
+bool Loop::fitted(std::size_t i) const { return std::find(fit_.begin(), fit_.end(), i) != fit_.end(); }
+
+// Throws when a pour of a test some fit of mu_r uses, repeated max_pours times, formed no pile: a
+// run that formed no pile (clogged) has no angle, and averaging its 0 into the curve would be
+// silent garbage. The caller decides (the baseline stops, a refit trial steps back). A held-out
+// test's jam is not an error but its prediction (no_pile_reason): the lab poured it, and a twin
+// that jams there is a finding about the twin, which must not stop the calibration tests' fit.
 void Loop::require_pile(std::size_t i, std::size_t j, std::size_t r, const SimOutcome& o) const {
-  if (o.pile) return;
+  if (o.pile || !fitted(i)) return;
   throw std::runtime_error("test " + data_.tests[i].id + " formed no pile at mu_r " +
                            std::to_string(grid_[j]) + ", seed " + std::to_string(s_.seeds[r]) +
                            ", in " + std::to_string(s_.max_pours) + " pour(s) (last: " + o.sim_dir +
@@ -149,7 +154,7 @@ void Loop::require_pile(std::size_t i, std::size_t j, std::size_t r, const SimOu
 }
 
 // Every test's piles at every grid point and seed (by test, grid point, seed), poured group by
-// group (pour_groups); throws at the first group with a test that formed no pile.
+// group (pour_groups); throws at the first group with a fitted test that formed no pile.
 std::vector<SimOutcome> Loop::pour_surface(const std::vector<EffectSetting>& effects) {
   const std::size_t g = grid_.size(), k = s_.seeds.size();
   std::vector<SimOutcome> out(data_.tests.size() * g * k);
@@ -179,6 +184,20 @@ std::vector<SimOutcome> Loop::pour_surface(const std::vector<EffectSetting>& eff
   return out;
 }
 
+// Where a test's pours (raw[grid][seed]) formed no pile, in words; empty when all formed one.
+std::string Loop::no_pile_reason(std::size_t i,
+                                 const std::vector<std::vector<SimOutcome>>& raw) const {
+  std::string where;
+  for (std::size_t j = 0; j < raw.size(); ++j)
+    for (std::size_t r = 0; r < raw[j].size(); ++r)
+      if (!raw[j][r].pile)
+        where += (where.empty() ? "" : ", ") + ("mu_r " + significant(grid_[j], 3) + " seed " +
+                                                std::to_string(s_.seeds[r]));
+  if (where.empty()) return "";
+  return "no pile predicted: the twin's pours of test " + data_.tests[i].id + " (held out) " +
+         "formed no pile in " + std::to_string(s_.max_pours) + " pour(s) at " + where;
+}
+
 Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
   const std::size_t n = data_.tests.size(), g = grid_.size(), k = s_.seeds.size();
   const std::vector<SimOutcome> out = pour_surface(effects);
@@ -198,6 +217,11 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
         const SimOutcome& o = out[q];
         clogged += o.clogged_pours;
         surf.raw[i][j].push_back(o);
+        if (!o.pile) {  // a held-out test's jam (require_pile): no value, and no curve below
+          for (auto* v : {&a, &h, &d, &cr}) v->push_back(std::numeric_limits<double>::quiet_NaN());
+          ++clogged;
+          continue;
+        }
         const double angle = twin_angle(o, s_.angle);
         a.push_back(angle);
         h.push_back(o.height_mm);
@@ -215,7 +239,12 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
       c.crest_seeds.push_back(cr);
       c.clogged.push_back(clogged);
     }
-    c.fit = fit_monotone(obs);
+    c.no_pile = no_pile_reason(i, surf.raw[i]);
+    if (c.no_pile.empty()) {
+      c.fit = fit_monotone(obs);
+    } else {
+      say(c.no_pile);
+    }
   }
   return surf;
 }
@@ -233,7 +262,8 @@ const Surface& Loop::simulate_baseline() {
 double Loop::pooled_seed_sd(const Surface& base, int channel) const {
   double ss = 0.0;
   int dof = 0;
-  for (const Curve& c : base.curve)
+  for (const Curve& c : base.curve) {
+    if (!c.no_pile.empty()) continue;  // a held-out test the twin predicts no pile for
     for (const auto& a : channel == 0   ? c.angle_seeds
                          : channel == 1 ? c.h_seeds
                          : channel == 2 ? c.d_seeds
@@ -243,6 +273,7 @@ double Loop::pooled_seed_sd(const Surface& base, int channel) const {
       for (double x : a) ss += (x - m) * (x - m);
       dof += static_cast<int>(a.size()) - 1;
     }
+  }
   const double sd = std::sqrt(ss / std::max(1, dof));
   return sd > 0.0 ? sd : 1e-3;
 }
@@ -305,8 +336,9 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
   rank_candidates(iter.candidates);
   // The acceptance rule names contenders; the joint decision names one, or none when the data
   // cannot tell them apart or point at the measurement (loop_joint.hpp).
-  iter.decision =
-      decide_trace(iter.candidates, iter.joint, *iter.offset, *iter.mu_only, s_.rule);
+  if (iter.offset)  // else too few tests had a prediction to trace (trace's statement)
+    iter.decision =
+        decide_trace(iter.candidates, iter.joint, *iter.offset, *iter.mu_only, s_.rule);
   const RefitPick choice = pick_refit(iter.candidates, iter.decision, s_.refit, state.used);
   iter.declared = choice.declared;
   if (choice.declared) say("iteration " + std::to_string(it) + ": " + *choice.declared);
@@ -369,7 +401,7 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
   const MuFit& joint = best_trial.joint;
   RefitSummary summary{e.name, p1, best_trial.p, joint.t, joint.mu, {}, refit.notes};
   for (const Trial& tr : refit.trials)
-    summary.trials.push_back({tr.p, tr.fraction, tr.joint.t, tr.joint.mu, tr.rmse});
+    summary.trials.push_back({tr.p, tr.fraction, tr.joint.t, tr.joint.mu, tr.rmse, tr.no_pile});
   const std::string reason = unconfirmed_reason(best_trial, state);
   if (!reason.empty()) {
     iter.not_confirmed = NotConfirmed{summary, best_trial.rmse, reason};

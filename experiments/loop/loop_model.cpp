@@ -17,27 +17,49 @@ double Curve::lin(const std::vector<double>& y, double m) const {
   return y[k] + s * (y[k + 1] - y[k]);
 }
 
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+}  // namespace
+
+// A surface of weight 0 (a refit whose t came out 0) does not enter the prediction, so its jam
+// does not take the prediction away.
+std::string Model::no_pile(std::size_t i) const {
+  for (const auto& [w, surf] : terms)
+    if (w != 0.0 && !surf->curve[i].no_pile.empty()) return surf->curve[i].no_pile;
+  return "";
+}
+
 double Model::angle(std::size_t i, double m) const {
+  if (!no_pile(i).empty()) return kNaN;
   double s = 0.0;
-  for (const auto& [w, surf] : terms) s += w * surf->curve[i].at(m);
+  for (const auto& [w, surf] : terms)
+    if (w != 0.0) s += w * surf->curve[i].at(m);
   return s;
 }
 
 double Model::h(std::size_t i, double m) const {
+  if (!no_pile(i).empty()) return kNaN;
   double s = 0.0;
-  for (const auto& [w, surf] : terms) s += w * surf->curve[i].lin(surf->curve[i].h, m);
+  for (const auto& [w, surf] : terms)
+    if (w != 0.0) s += w * surf->curve[i].lin(surf->curve[i].h, m);
   return s;
 }
 
 double Model::d(std::size_t i, double m) const {
+  if (!no_pile(i).empty()) return kNaN;
   double s = 0.0;
-  for (const auto& [w, surf] : terms) s += w * surf->curve[i].lin(surf->curve[i].d, m);
+  for (const auto& [w, surf] : terms)
+    if (w != 0.0) s += w * surf->curve[i].lin(surf->curve[i].d, m);
   return s;
 }
 
 double Model::crest(std::size_t i, double m) const {
+  if (!no_pile(i).empty()) return kNaN;
   double s = 0.0;
-  for (const auto& [w, surf] : terms) s += w * surf->curve[i].lin(surf->curve[i].crest, m);
+  for (const auto& [w, surf] : terms)
+    if (w != 0.0) s += w * surf->curve[i].lin(surf->curve[i].crest, m);
   return s;
 }
 
@@ -139,6 +161,12 @@ std::vector<ResidualRow> Loop::residuals(const Model& model, double m) const {
     r.residual_deg = t.angle_deg - r.predicted_deg;
     r.sigma_deg = sigma_[i];
     r.predicted_se_deg = seed_se_;
+    r.no_pile = model.no_pile(i);
+    if (!r.no_pile.empty()) {  // NaN predictions; the lab's H, D and crest have no residual
+      r.predicted_h_mm = r.predicted_d_mm = kNaN;
+      rows.push_back(r);
+      continue;
+    }
     r.predicted_h_mm = model.h(i, m);
     r.predicted_d_mm = model.d(i, m);
     if (t.height_mm) r.residual_h_mm = *t.height_mm - r.predicted_h_mm;

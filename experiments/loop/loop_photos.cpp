@@ -126,9 +126,9 @@ std::optional<PhotoView> twin_view(const SimOutcome& o, std::size_t camera, cons
 // lose the loop's finished work: a cache carried to another machine by
 // scripts/collect_results.sh has the piles' result.json but not their particles (final.vtp),
 // so a photo not taken before cannot be taken there. Then each is asked for alone (the ones
-// taken come from the cache) and a pair without one gets the reason as its note.
+// taken come from the cache) and a request without one gets the reason in `notes`.
 std::vector<std::optional<SimOutcome>> Loop::photograph_for_page(
-    const std::vector<SimRequest>& requests, std::vector<PhotoPair>& pairs) {
+    const std::vector<SimRequest>& requests, std::vector<std::string>& notes) {
   std::vector<std::optional<SimOutcome>> out(requests.size());
   try {
     const std::vector<SimOutcome> all = cache_.run(requests);
@@ -141,7 +141,7 @@ std::vector<std::optional<SimOutcome>> Loop::photograph_for_page(
       out[k] = cache_.run({requests[k]}).at(0);
     } catch (const std::exception& e) {
       const std::string what = e.what();
-      pairs[k].note =
+      notes[k] =
           what.find("final.vtp") != std::string::npos
               ? "the twin's pile could not be photographed for the page: its particles "
                 "(final.vtp) are not in the cache, as in a cache collected by "
@@ -156,6 +156,7 @@ std::vector<PhotoPair> Loop::photo_pairs(const LoopState& state) {
   std::vector<PhotoPair> pairs;
   std::vector<std::size_t> cameras;
   std::vector<SimRequest> requests;
+  std::vector<std::size_t> asked;  // the pair of each request: a test predicted no pile has none
   const Surface& surf = heaviest(state.model);
   ImageVariant image = s_.image;
   image.keep_photos = true;
@@ -168,23 +169,32 @@ std::vector<PhotoPair> Loop::photo_pairs(const LoopState& state) {
     p.id = test.id;
     cameras.push_back(0);
     if (!test.photos.empty()) p.lab = lab_view(test, data_.file, out_, rel, cameras.back());
+    p.note = state.model.no_pile(i);
+    if (!p.note.empty()) {  // the twin's pours jammed: nothing to photograph
+      for (const char* f : {"twin.png", "twin.measured.png"}) fs::remove(fs::path(out_) / rel / f);
+      continue;
+    }
     const Curve& c = surf.curve.at(i);
     const std::size_t j = nearest(c.mu, state.fit.mu);
     p.mu_r = c.mu[j];
     p.seed = surf.raw.at(i).at(j).at(0).seed;  // the pour that made the first seed's pile
     for (const EffectSetting& e : surf.effects) p.effects.emplace_back(e.effect->name, e.value);
     requests.push_back(make_request(test, s_.mu_key, p.mu_r, p.seed, surf.effects, image));
+    asked.push_back(i);
     // The lab photo's camera picks the twin's view only when the twin photographs through the
     // lab's cameras (else its own framing's first view).
     if (requests.back().image.lab_cameras.empty()) cameras.back() = 0;
   }
   if (requests.empty()) return pairs;
   say("photographing " + std::to_string(requests.size()) + " twin pile(s) for the page");
-  const std::vector<std::optional<SimOutcome>> out = photograph_for_page(requests, pairs);
-  for (std::size_t k = 0; k < pairs.size(); ++k) {
-    const fs::path rel = fs::path("photos") / pairs[k].id;
-    if (out[k]) pairs[k].twin = twin_view(*out[k], cameras[k], out_, rel, pairs[k].note);
-    if (!pairs[k].twin)  // not a stale one of an earlier run beside the note
+  std::vector<std::string> notes(requests.size());
+  const std::vector<std::optional<SimOutcome>> out = photograph_for_page(requests, notes);
+  for (std::size_t k = 0; k < requests.size(); ++k) {
+    PhotoPair& p = pairs[asked[k]];
+    p.note = notes[k];
+    const fs::path rel = fs::path("photos") / p.id;
+    if (out[k]) p.twin = twin_view(*out[k], cameras[asked[k]], out_, rel, p.note);
+    if (!p.twin)  // not a stale one of an earlier run beside the note
       for (const char* f : {"twin.png", "twin.measured.png"}) fs::remove(fs::path(out_) / rel / f);
   }
   return pairs;

@@ -1,5 +1,6 @@
 #include "experiments/loop/loop_records.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "experiments/io/json_fields.hpp"
@@ -22,8 +23,14 @@ json to_json_array(const auto& records) {
 
 RoleRmse rmse_by_role(const std::vector<ResidualRow>& rows) {
   std::vector<double> c, v;
-  for (const ResidualRow& r : rows) (r.role == "calibrate" ? c : v).push_back(r.residual_deg);
   RoleRmse out;
+  for (const ResidualRow& r : rows) {
+    if (!r.no_pile.empty()) {
+      ++out.n_no_pile;
+      continue;
+    }
+    (r.role == "calibrate" ? c : v).push_back(r.residual_deg);
+  }
   out.calibrate_deg = rmse(c);
   if (!v.empty()) out.validate_deg = rmse(v);
   out.n_calibrate = c.size();
@@ -32,19 +39,22 @@ RoleRmse rmse_by_role(const std::vector<ResidualRow>& rows) {
 }
 
 json to_json(const ResidualRow& r) {
+  // A test predicted no pile has null predictions (NaN in the record).
+  auto value = [](double v) { return std::isfinite(v) ? json(v) : json(); };
   json j = {{"id", r.id},
             {"role", r.role},
             {"measured_deg", r.measured_deg},
-            {"predicted_deg", r.predicted_deg},
-            {"residual_deg", r.residual_deg},
+            {"predicted_deg", value(r.predicted_deg)},
+            {"residual_deg", value(r.residual_deg)},
             {"sigma_deg", r.sigma_deg},
             {"predicted_se_deg", r.predicted_se_deg},
-            {"predicted_H_mm", r.predicted_h_mm},
-            {"predicted_D_mm", r.predicted_d_mm}};
+            {"predicted_H_mm", value(r.predicted_h_mm)},
+            {"predicted_D_mm", value(r.predicted_d_mm)}};
   if (r.residual_h_mm) j["residual_H_mm"] = *r.residual_h_mm;
   if (r.residual_d_mm) j["residual_D_mm"] = *r.residual_d_mm;
   if (r.predicted_crest_mm) j["predicted_crest_mm"] = *r.predicted_crest_mm;
   if (r.residual_crest_mm) j["residual_crest_mm"] = *r.residual_crest_mm;
+  if (!r.no_pile.empty()) j["no_pile"] = r.no_pile;
   return j;
 }
 
@@ -52,6 +62,7 @@ json to_json(const RoleRmse& r) {
   return {{"calibrate_deg", r.calibrate_deg},
           {"n_calibrate", r.n_calibrate},
           {"n_validate", r.n_validate},
+          {"n_no_pile", r.n_no_pile},
           {"validate_deg", optional_number(r.validate_deg)}};
 }
 
@@ -123,7 +134,8 @@ json to_json(const RefitTrialRecord& t) {
           {"response_fraction", t.response_fraction},
           {"t", t.t},
           {"mu_r", t.mu_r},
-          {"rmse_calibrate_deg", t.rmse_calibrate_deg}};
+          {"rmse_calibrate_deg", t.rmse_calibrate_deg},
+          {"no_pile", t.no_pile}};
 }
 
 namespace {
@@ -174,6 +186,7 @@ json to_json(const IterationRecord& it) {
             {"candidates", to_json_array(it.candidates)},
             {"channels", it.channels},
             {"channels_left_out", it.channels_left_out},
+            {"tests_left_out", it.tests_left_out},
             {"joint", to_json_array(it.joint)},
             {"offset", it.offset ? to_json(*it.offset) : json()},
             {"mu_only", it.mu_only ? to_json(*it.mu_only) : json()},
@@ -249,7 +262,8 @@ json to_json(const LoopRecord& loop) {
   // RMSE is zero by construction, and the prediction residuals are what the loop traced.
   auto all_rmse = [](const std::vector<ResidualRow>& rows) {
     std::vector<double> r;
-    for (const ResidualRow& x : rows) r.push_back(x.residual_deg);
+    for (const ResidualRow& x : rows)
+      if (x.no_pile.empty()) r.push_back(x.residual_deg);
     return rmse(r);
   };
   const double all_before = all_rmse(loop.baseline.residuals);
@@ -290,6 +304,20 @@ json to_json(const LoopRecord& loop) {
     verdict = "not_traced";
     statement = *loop.not_traced;
   }
+  // A held-out test the final model predicts no pile for (its twin pours jammed) is a
+  // prediction that failed where the lab poured a pile: said in the statement, not hidden in
+  // an RMSE over fewer tests.
+  json no_pile = json::array();
+  for (const ResidualRow& r : loop.final_model.residuals)
+    if (!r.no_pile.empty()) no_pile.push_back(r.id);
+  if (!no_pile.empty()) {
+    std::string ids;
+    for (const json& id : no_pile) ids += (ids.empty() ? "" : ", ") + id.get<std::string>();
+    statement = (statement.is_string() ? statement.get<std::string>() + " | " : std::string()) +
+                "no pile predicted for " + ids +
+                " (held out): the final model's pours jammed where the lab's formed a pile; "
+                "the RMSEs leave it out";
+  }
   const json summary = {
       {"chosen", loop.final_model.effects.empty() ? json() : json(names.back())},
       {"verdict", verdict},
@@ -301,7 +329,8 @@ json to_json(const LoopRecord& loop) {
       {"rmse_calibrate_after_deg", after},
       {"rmse_validate_before_deg", optional_number(loop.baseline.rmse.validate_deg)},
       {"rmse_validate_after_deg", optional_number(loop.final_model.rmse.validate_deg)},
-      {"reduction", before > 0.0 ? 1.0 - after / before : 0.0}};
+      {"reduction", before > 0.0 ? 1.0 - after / before : 0.0},
+      {"no_pile_predicted", no_pile}};
   const json rule = {{"min_t", loop.rule.min_t},
                      {"loo_margin_deg", loop.rule.loo_margin_factor * loop.baseline.seed_se_deg},
                      {"text",
@@ -378,6 +407,7 @@ ResidualRow residual_row_from_json(const json& j) {
   r.residual_d_mm = optional_of(j, "residual_D_mm");
   r.predicted_crest_mm = optional_of(j, "predicted_crest_mm");
   r.residual_crest_mm = optional_of(j, "residual_crest_mm");
+  r.no_pile = j.value("no_pile", std::string());
   return r;
 }
 
@@ -387,6 +417,7 @@ RoleRmse role_rmse_from_json(const json& j) {
   r.validate_deg = optional_of(j, "validate_deg");
   r.n_calibrate = j.at("n_calibrate").get<std::size_t>();
   r.n_validate = j.at("n_validate").get<std::size_t>();
+  r.n_no_pile = j.value("n_no_pile", std::size_t{0});
   return r;
 }
 
@@ -453,7 +484,7 @@ UnavailableCandidate unavailable_candidate_from_json(const json& j) {
 
 RefitTrialRecord refit_trial_record_from_json(const json& j) {
   return {num(j, "simulated_at"), num(j, "response_fraction"), num(j, "t"), num(j, "mu_r"),
-          num(j, "rmse_calibrate_deg")};
+          num(j, "rmse_calibrate_deg"), j.value("no_pile", std::vector<std::string>{})};
 }
 
 ChosenEffect chosen_effect_from_json(const json& j) {
@@ -501,6 +532,7 @@ IterationRecord iteration_record_from_json(const json& j) {
   if (j.contains("channels")) {
     it.channels = j.at("channels").get<std::vector<std::string>>();
     it.channels_left_out = j.at("channels_left_out").get<std::vector<std::string>>();
+    it.tests_left_out = j.value("tests_left_out", std::vector<std::string>{});
     it.joint = array_from_json<JointScore>(j.at("joint"), joint_score_from_json);
     if (!j.at("offset").is_null()) it.offset = joint_score_from_json(j.at("offset"));
     if (!j.at("mu_only").is_null()) it.mu_only = joint_score_from_json(j.at("mu_only"));

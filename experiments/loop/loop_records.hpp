@@ -45,6 +45,9 @@ struct ResidualRow {
   std::optional<double> residual_d_mm;  // when the lab measured D [mm]
   std::optional<double> predicted_crest_mm;  // crest width, when the lab measured it [mm]
   std::optional<double> residual_crest_mm;   // [mm]
+  // Why the twin predicts no pile for this held-out test (its pours jammed); empty when it
+  // predicts one. Then the predictions and residual are NaN (null in loop.json).
+  std::string no_pile;
 };
 
 /// RMS residuals by role.
@@ -53,9 +56,10 @@ struct RoleRmse {
   std::optional<double> validate_deg;  // none without validation tests [deg]
   std::size_t n_calibrate = 0;
   std::size_t n_validate = 0;
+  std::size_t n_no_pile = 0;  // rows left out: the twin predicts no pile (ResidualRow::no_pile)
 };
 
-/// RMS residual of each role over `rows`.
+/// RMS residual of each role over `rows` that have a prediction.
 RoleRmse rmse_by_role(const std::vector<ResidualRow>& rows);
 
 /// One test's baseline response on the mu_r grid, with the seeds of the pours that made its
@@ -125,6 +129,7 @@ struct RefitTrialRecord {
   double t = 0.0;                   // joint fit's weight [-]
   double mu_r = 0.0;                // joint fit's mu_r [-]
   double rmse_calibrate_deg = 0.0;  // calibration RMSE of the refitted model [deg]
+  std::vector<std::string> no_pile;  // held-out tests whose pours all jammed at this value
 };
 
 /// What the simulated refit of an accepted candidate gave: the trial kept and all trials.
@@ -171,6 +176,7 @@ struct IterationRecord {
   std::vector<CandidateScore> candidates;  // ranked
   std::vector<std::string> channels;       // observables traced jointly
   std::vector<std::string> channels_left_out;  // and why the others were not
+  std::vector<std::string> tests_left_out;     // tests not traced: no pile predicted, and why
   std::vector<JointScore> joint;           // per candidate (matched by name)
   std::optional<JointScore> offset;        // the uniform-offset hypothesis
   std::optional<JointScore> mu_only;       // the mu_r correction alone, jointly

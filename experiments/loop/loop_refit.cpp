@@ -36,8 +36,10 @@ double Loop::calibration_rmse(const Model& model, double mu) const {
 }
 
 // One trial at p, appended to refit.trials. The value may overshoot into piles the measurement
-// cannot see (a smooth plate spreads a small sample into a monolayer): then it steps back
-// halfway towards off, twice at most. Returns false when no attempt could be simulated.
+// cannot see (a smooth plate spreads a small sample into a monolayer) or into pours a
+// calibration test's outlet jams: then it steps back halfway towards off, twice at most. A
+// held-out test that jams at p does not stop the trial: the model predicts no pile for it.
+// Returns false when no attempt could be simulated.
 bool Loop::run_trial(const CandidateEffect& e, double off, double p, const FingerprintRecord& fp,
                      double mu_node, const LoopState& state, const std::vector<int>& channels,
                      Refit& refit) {
@@ -59,6 +61,8 @@ bool Loop::run_trial(const CandidateEffect& e, double off, double p, const Finge
   Trial tr;
   tr.p = p;
   tr.surf = surfaces_.back().get();
+  for (std::size_t i = 0; i < data_.tests.size(); ++i)
+    if (!tr.surf->curve[i].no_pile.empty()) tr.no_pile.push_back(data_.tests[i].id);
   // The response in units of the fingerprint, over the refit's channels, each over its noise.
   const Model alone{{{1.0, tr.surf}}};
   double num = 0.0, den = 0.0;

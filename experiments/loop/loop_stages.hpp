@@ -36,6 +36,9 @@ struct Curve {
   std::vector<double> crest;  // crest width seed means [mm] (NaN: not recorded)
   std::vector<std::vector<double>> crest_seeds;
   std::vector<int> clogged;  // per grid point: pours that formed no pile
+  // Empty when every pour series formed a pile; else where a held-out test's pours all jammed
+  // (a prediction of no pile: the curve has no fit and the model predicts nothing for it).
+  std::string no_pile;
 
   double clamp(double m) const { return std::clamp(m, mu.front(), mu.back()); }
   /// The fitted angle at mu_r m (clamped to the grid) [deg].
@@ -51,9 +54,13 @@ struct Surface {
   std::vector<std::vector<std::vector<SimOutcome>>> raw;  // [test][grid][seed]
 };
 
-/// The current model: a mixture of simulated surfaces (loop.hpp's design note).
+/// The current model: a mixture of simulated surfaces (loop.hpp's design note). A test one of
+/// its weighted surfaces formed no pile for has no prediction: every value is NaN for it.
 struct Model {
   std::vector<std::pair<double, const Surface*>> terms;  // weight, surface
+  /// Why the model predicts no pile for `test` (the first weighted surface's reason); empty
+  /// when it predicts one.
+  std::string no_pile(std::size_t test) const;
   double angle(std::size_t test, double mu) const;       // [deg]
   double h(std::size_t test, double mu) const;           // [mm]
   double d(std::size_t test, double mu) const;           // [mm]
@@ -79,6 +86,7 @@ struct Trial {
   MuFit joint;
   double rmse = 0.0;  // calibration RMSE of the refitted model [deg]
   Model model;        // the model with this trial mixed in
+  std::vector<std::string> no_pile;  // held-out tests that formed no pile at p
 };
 
 /// The refit of one accepted candidate: its trials and the failures on the way.
@@ -119,13 +127,17 @@ class Loop {
   // Per test, the lab's photo (when given) beside a twin photo (loop_photos.cpp).
   std::vector<PhotoPair> photo_pairs(const LoopState& state);
   std::vector<std::optional<SimOutcome>> photograph_for_page(
-      const std::vector<SimRequest>& requests, std::vector<PhotoPair>& pairs);
+      const std::vector<SimRequest>& requests, std::vector<std::string>& notes);
   LoopProvenance provenance(const Surface& base) const;
   nlohmann::json write(const LoopRecord& rec) const;  // OUT/loop.json and OUT/index.html
 
   // Building blocks (loop.cpp).
   Surface simulate_surface(const std::vector<EffectSetting>& effects);
   std::vector<SimOutcome> pour_surface(const std::vector<EffectSetting>& effects);
+  std::string no_pile_reason(std::size_t i, const std::vector<std::vector<SimOutcome>>& raw) const;
+  bool fitted(std::size_t i) const;  // a test some fit of mu_r uses (it must form piles)
+  // The tests the model predicts a pile for, of the traced ones; the others into left_out.
+  std::vector<std::size_t> traced(const Model& model, std::vector<std::string>& left_out) const;
   std::vector<std::vector<std::size_t>> pour_groups() const;
   void require_pile(std::size_t i, std::size_t j, std::size_t r, const SimOutcome& o) const;
   std::optional<FingerprintRecord> probe_candidate(const CandidateEffect& e, const Surface& base,
@@ -134,7 +146,8 @@ class Loop {
   FingerprintRecord fingerprint(const CandidateEffect& e, double probe, const Surface& base,
                                 std::size_t node, const std::vector<SimOutcome>& on) const;
   std::string untraceable(const FingerprintRecord& f) const;
-  JointProblem joint_problem(const LoopState& state, std::vector<std::string>& left_out) const;
+  JointProblem joint_problem(const LoopState& state, const std::vector<std::size_t>& tests,
+                             std::vector<std::string>& left_out) const;
   double mu_slope(const LoopState& state, std::size_t i, int channel) const;
   double pooled_seed_sd(const Surface& base, int channel) const;
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "experiments/io/format.hpp"
 #include "experiments/loop/loop_stages.hpp"
@@ -131,7 +132,8 @@ std::optional<FingerprintRecord> Loop::probe_candidate(
     // pour's seed if the first one jammed), so a measurement effect re-photographs that pile.
     std::vector<SimRequest> req;
     for (std::size_t i = 0; i < data_.tests.size(); ++i)
-      for (const SimOutcome& o : base.raw[i][node])
+      if (base.curve[i].no_pile.empty())  // a held-out test the twin predicts no pile for
+        for (const SimOutcome& o : base.raw[i][node])
         req.push_back(
             make_request(data_.tests[i], s_.mu_key, grid_[node], o.seed, {{&e, probe}}, s_.image));
     std::vector<SimOutcome> got;
@@ -162,12 +164,19 @@ std::optional<FingerprintRecord> Loop::probe_candidate(
 }
 
 // The mean paired change of every test's angle, H and D, from `on` (test-major, seeds in the
-// baseline's order) against the baseline's piles at the grid point.
+// baseline's order) against the baseline's piles at the grid point; NaN for a test the baseline
+// predicts no pile for (not poured, not traced).
 FingerprintRecord Loop::fingerprint(const CandidateEffect& e, double probe, const Surface& base,
                                     std::size_t node, const std::vector<SimOutcome>& on) const {
   FingerprintRecord f{e.name, probe, grid_[node], {}, {}, {}, {}, {}, {}};
   std::size_t q = 0;
   for (std::size_t i = 0; i < data_.tests.size(); ++i) {
+    if (!base.curve[i].no_pile.empty()) {
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      for (auto* v : {&f.angle_deg, &f.angle_se_deg, &f.h_mm, &f.d_mm}) v->push_back(nan);
+      if (crest_measured_) f.crest_mm.push_back(nan);
+      continue;
+    }
     std::vector<double> da, dh, dd, dc;
     for (std::size_t r = 0; r < s_.seeds.size(); ++r, ++q) {
       const SimOutcome& off = base.raw[i][node][r];
@@ -189,14 +198,17 @@ FingerprintRecord Loop::fingerprint(const CandidateEffect& e, double probe, cons
   return f;
 }
 
-// Why a fingerprint cannot be traced (empty: it can), over the traced tests.
+// Why a fingerprint cannot be traced (empty: it can), over the traced tests that have one.
 std::string Loop::untraceable(const FingerprintRecord& f) const {
+  std::vector<std::size_t> tests;
+  for (std::size_t i : trace_)
+    if (std::isfinite(f.angle_deg[i])) tests.push_back(i);
   // An effect that moves the angle by less than the seed noise of a predicted angle at its
   // probe cannot be traced: any residual would need an absurd strength (a lens whose
   // distortion shifts the angle by 0.01 deg "explains" 5 deg with k1 = 100).
   double ms = 0.0;
-  for (std::size_t i : trace_) ms += f.angle_deg[i] * f.angle_deg[i];
-  const double rms = std::sqrt(ms / static_cast<double>(trace_.size()));
+  for (std::size_t i : tests) ms += f.angle_deg[i] * f.angle_deg[i];
+  const double rms = std::sqrt(ms / static_cast<double>(tests.size()));
   char why[240];
   if (rms < seed_se_) {
     std::snprintf(why, sizeof why,
@@ -212,8 +224,8 @@ std::string Loop::untraceable(const FingerprintRecord& f) const {
   // squared standard error of the per-test means, n traced tests) is about chi^2(n); the
   // fingerprint must exceed its 95% point (Wilson-Hilferty).
   double se2 = 0.0;
-  for (std::size_t i : trace_) se2 += f.angle_se_deg[i] * f.angle_se_deg[i];
-  const double n = static_cast<double>(trace_.size());
+  for (std::size_t i : tests) se2 += f.angle_se_deg[i] * f.angle_se_deg[i];
+  const double n = static_cast<double>(tests.size());
   se2 /= n;
   const double a = 2.0 / (9.0 * n);
   const double chi2_95_per_n = std::pow(1.0 - a + 1.645 * std::sqrt(a), 3);
@@ -244,23 +256,38 @@ double Loop::mu_slope(const LoopState& state, std::size_t i, int channel) const 
   return (v(b) - v(a)) / (b - a);
 }
 
-// The observables traced jointly: the angle always; H and D when every traced test has them
-// measured; the crest width when the lab data give it on every traced test (absent from
-// every test: the problem is the one without it).
-JointProblem Loop::joint_problem(const LoopState& state, std::vector<std::string>& left_out) const {
+// The traced tests the model predicts a pile for. A held-out test whose twin pours jammed has
+// no residual to trace (its "no pile" is reported with the residuals); it is named in left_out.
+std::vector<std::size_t> Loop::traced(const Model& model, std::vector<std::string>& left_out) const {
+  std::vector<std::size_t> tests;
+  for (std::size_t i : trace_) {
+    const std::string why = model.no_pile(i);
+    if (why.empty())
+      tests.push_back(i);
+    else
+      left_out.push_back(data_.tests[i].id + ": " + why);
+  }
+  return tests;
+}
+
+// The observables traced jointly over `tests`: the angle always; H and D when every traced test
+// has them measured; the crest width when the lab data give it on every traced test (absent
+// from every test: the problem is the one without it).
+JointProblem Loop::joint_problem(const LoopState& state, const std::vector<std::size_t>& tests,
+                                 std::vector<std::string>& left_out) const {
   JointProblem p;
   p.mu_shift_lo = grid_.front() - state.fit.mu;
   p.mu_shift_hi = grid_.back() - state.fit.mu;
-  const Eigen::Index n = static_cast<Eigen::Index>(trace_.size());
+  const Eigen::Index n = static_cast<Eigen::Index>(tests.size());
   bool hd = true;
-  for (std::size_t i : trace_)
+  for (std::size_t i : tests)
     hd = hd && data_.tests[i].height_mm.has_value() && data_.tests[i].diameter_mm.has_value();
   if (!hd) left_out.push_back("H and D: not measured on every test");
   for (int c = 0; c < (hd ? 3 : 1); ++c) {
     TraceChannel ch{channel_name(c), c == 0 ? "deg" : "mm",
                     Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n)};
     for (Eigen::Index k = 0; k < n; ++k) {
-      const std::size_t i = trace_[k];
+      const std::size_t i = tests[k];
       const LabTest& t = data_.tests[i];
       const double mu = state.fit.mu;
       ch.residual[k] = c == 0   ? t.angle_deg - state.model.angle(i, mu)
@@ -277,7 +304,7 @@ JointProblem Loop::joint_problem(const LoopState& state, std::vector<std::string
   OptionalChannel crest{{channel_name(3), "mm", Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n)},
                         std::vector<bool>(static_cast<std::size_t>(n))};
   for (Eigen::Index k = 0; k < n; ++k) {
-    const std::size_t i = trace_[k];
+    const std::size_t i = tests[k];
     const LabTest& t = data_.tests[i];
     crest.measured[static_cast<std::size_t>(k)] = t.crest_mm.has_value();
     crest.channel.residual[k] = t.crest_mm ? *t.crest_mm - state.model.crest(i, state.fit.mu) : 0.0;
@@ -295,14 +322,36 @@ IterationRecord Loop::trace(int it, const LoopState& state,
   IterationRecord rec;
   rec.iteration = it;
   rec.mu_r = state.fit.mu;
-  JointProblem joint = joint_problem(state, rec.channels_left_out);
+  std::vector<std::size_t> tests;
+  // A test the baseline formed no pile for has no fingerprint either (a refit of weight 1 can
+  // give it a prediction while the baseline gives none).
+  for (std::size_t i : traced(state.model, rec.tests_left_out)) {
+    bool fingerprinted = true;
+    for (const FingerprintRecord& f : fps)
+      fingerprinted = fingerprinted && (state.used.count(f.name) || std::isfinite(f.angle_deg[i]));
+    if (fingerprinted)
+      tests.push_back(i);
+    else
+      rec.tests_left_out.push_back(data_.tests[i].id +
+                                   ": no fingerprint (the baseline formed no pile for it)");
+  }
+  // The design's own bound (describe_design): fewer tests than that leave nothing to judge a
+  // candidate by; the iteration then says so and traces nothing.
+  if (tests.size() < 4) {
+    rec.decision.statement = "nothing traced: " + std::to_string(tests.size()) +
+                             " test(s) have a prediction (the twin forms no pile for the "
+                             "others); a leave-one-out check of a mu_r correction and one effect "
+                             "needs at least 4";
+    return rec;
+  }
+  JointProblem joint = joint_problem(state, tests, rec.channels_left_out);
   // A crest fingerprint from photographs cached before the crest was recorded has no value: the
   // channel then leaves this trace rather than carry NaN into every score.
   if (joint.channels.back().name == channel_name(3))
     for (const FingerprintRecord& f : fps) {
       if (state.used.count(f.name)) continue;
       bool finite = f.crest_mm.size() == data_.tests.size();
-      for (std::size_t i : trace_) finite = finite && std::isfinite(f.crest_mm[i]);
+      for (std::size_t i : tests) finite = finite && std::isfinite(f.crest_mm[i]);
       if (finite) continue;
       joint.channels.pop_back();
       rec.channels_left_out.push_back("crest: the photographs of " + f.name +
@@ -325,7 +374,7 @@ IterationRecord Loop::trace(int it, const LoopState& state,
     for (const TraceChannel& ch : joint.channels) {
       const std::vector<double>& v = f.column(channel_index(ch.name));
       Eigen::VectorXd col(n);
-      for (Eigen::Index k = 0; k < n; ++k) col[k] = v[trace_[k]];
+      for (Eigen::Index k = 0; k < n; ++k) col[k] = v[tests[k]];
       cols.push_back(col);
     }
     rec.candidates.push_back(score_candidate(p, f.name, cols[0], rec.null, s_.rule));

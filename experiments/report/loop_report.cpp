@@ -360,6 +360,14 @@ std::string error_section(const json& loop) {
                      sig3(sum["rmse_calibrate_after_deg"])}});
   t.rows.push_back({{left("RMSE held-out tests [deg]"), sig3(sum["rmse_validate_before_deg"]),
                      sig3(sum["rmse_validate_after_deg"])}});
+  // Held-out tests whose twin pours jammed are not in the RMSE: counted here, never dropped
+  // silently (older loop.json files have no count).
+  auto no_pile = [&](const char* model) {
+    return loop.at(model).value("rmse", json::object()).value("n_no_pile", 0);
+  };
+  if (no_pile("baseline") + no_pile("final") > 0)
+    t.rows.push_back({{left("held-out tests the twin forms no pile for"),
+                       std::to_string(no_pile("baseline")), std::to_string(no_pile("final"))}});
   mustache::data d;
   d.set("errors", to_data(t));
   d.set("mu_r", sig3(loop["baseline"]["mu_r"]));
@@ -435,11 +443,25 @@ mustache::data refit_data(const json& it) {
                       ") could not be simulated: " + word("refit_failed") + ". Nothing chosen.");
     return d;
   }
-  Table t = numeric_table(
-      {"simulated at", "response (probe = 1)", "t", "mu_r", "RMSE of the refit [deg]"});
-  for (const json& tr : r->value("trials", json::array()))
-    t.rows.push_back({{sig3(tr["simulated_at"]), sig3(tr["response_fraction"]), sig3(tr["t"]),
-                       sig3(tr["mu_r"]), sig3(tr["rmse_calibrate_deg"])}});
+  const json trials = r->value("trials", json::array());
+  // A held-out test that formed no pile at a trial's value gets a column (loop_refit.cpp).
+  bool jams = false;
+  for (const json& tr : trials) jams = jams || !tr.value("no_pile", json::array()).empty();
+  std::vector<std::string> header = {"simulated at", "response (probe = 1)", "t", "mu_r",
+                                     "RMSE of the refit [deg]"};
+  if (jams) header.push_back("no pile predicted (held out)");
+  Table t = numeric_table(header);
+  for (const json& tr : trials) {
+    TableRow row{{sig3(tr["simulated_at"]), sig3(tr["response_fraction"]), sig3(tr["t"]),
+                  sig3(tr["mu_r"]), sig3(tr["rmse_calibrate_deg"])}};
+    if (jams) {
+      std::string ids;
+      for (const json& id : tr.value("no_pile", json::array()))
+        ids += (ids.empty() ? "" : ", ") + id.get<std::string>();
+      row.cells.push_back(left(ids.empty() ? "-" : ids));
+    }
+    t.rows.push_back(row);
+  }
   std::string text = "Refit by simulation: " + name + ", linear estimate " +
                      num("linear_estimate") + ", simulated on the whole grid";
   if (it.contains("not_confirmed")) {
@@ -476,8 +498,11 @@ std::string iterations_section(const json& loop) {
                                               : mustache::data(false));
     // Written by a loop that traced jointly (older loop.json files have no decision).
     x.set("joint", false);
-    x.set("decision", it.contains("decision") ? left(it["decision"]["statement"]).text
-                                              : std::string("as ranked"));
+    std::string decision = it.contains("decision") ? left(it["decision"]["statement"]).text
+                                                   : std::string("as ranked");
+    for (const json& why : it.value("tests_left_out", json::array()))
+      decision += "; not traced, " + left(why).text;
+    x.set("decision", decision);
     if (it.contains("joint") && !it["joint"].empty()) {
       Table j = numeric_table({"hypothesis", "c", "se", "|c|/se", "joint chi2", "LOO chi2",
                                "values"});
@@ -560,10 +585,13 @@ std::string residuals_section(const json& loop, const fs::path& plot_dir) {
       header.push_back(h);
   Table t = numeric_table(header);
   for (std::size_t i = 0; i < tests.size(); ++i) {
+    // A held-out test the twin's pours jammed for reads "no pile", not a number.
+    auto predicted = [](const json& r) {
+      return r.contains("no_pile") ? left("no pile") : Cell(sig3(r["predicted_deg"]));
+    };
     TableRow row{{left(tests[i]["id"]), left(tests[i]["role"]), sig3(tests[i]["angle_deg"]),
-                  sig3(before[i]["predicted_deg"]), sig3(after[i]["predicted_deg"]),
-                  sig3(before[i]["residual_deg"]), sig3(after[i]["residual_deg"]),
-                  sig3(before[i]["sigma_deg"])}};
+                  predicted(before[i]), predicted(after[i]), sig3(before[i]["residual_deg"]),
+                  sig3(after[i]["residual_deg"]), sig3(before[i]["sigma_deg"])}};
     if (crest) {
       auto cell = [](const json& j, const char* k) -> Cell {
         return j.contains(k) ? Cell(sig3(j[k])) : left("-");
@@ -583,6 +611,15 @@ std::string residuals_section(const json& loop, const fs::path& plot_dir) {
       text_or_false(same.empty() ? same : "The same on every test, so not plotted: " + same + "."));
   d.set("plots", to_data(residual_figures(loop, plot_dir)));
   d.set("residuals", to_data(t));
+  mustache::data no_pile(mustache::data::type::list);
+  for (const json* rows : {&before, &after})
+    for (const json& r : *rows)
+      if (r.contains("no_pile"))
+        no_pile.push_back(mustache::data(
+            left(std::string(rows == &before ? "Before" : "After") + ", " +
+                 r["no_pile"].get<std::string>())
+                .text));
+  d.set("no_pile", no_pile);
   return render(templates::kLoopResiduals, d);
 }
 

@@ -168,10 +168,12 @@ const char* const kLoopNotes =
 <ul>{{#list}}<li>{{name}}: {{why}}</li>{{/list}}</ul>
 {{/unavailable}})";
 
-// plots: figures; constant: a sentence (or false); residuals: table.
+// plots: figures; constant: a sentence (or false); residuals: table; no_pile: [text] (held-out
+// tests predicted no pile, with where their pours jammed).
 const char* const kLoopResiduals = R"(<h2>Residuals</h2>
 {{#plots}}{{> figure}}{{/plots}}{{#constant}}<p>{{constant}}</p>
-{{/constant}}{{#residuals}}{{> table}}{{/residuals}})";
+{{/constant}}{{#residuals}}{{> table}}{{/residuals}}{{#no_pile}}<p>{{.}}.</p>
+{{/no_pile}})";
 
 // pairs: [{id, scale, figures, note (or false), files: table}].
 const char* const kLoopPhotos = R"(<h2>Lab and twin, like for like</h2>
