@@ -121,10 +121,9 @@ struct RenderOptions {
   bool shadows = false;
   double shadow_strength = 0.75;   // fraction of the direct light a full shadow removes [-]
   double shadow_softness_m = 0.0;  // penumbra radius [m]; 0 = half the mean sphere radius
-  // Shadow map side [px]; 0: shadow_map_side()'s choice from the image (1024 px at 960 x 720,
-  // a quarter of the shadow pass). 2048 stays the default until the loop's synthetic tests,
-  // whose statistics sit close to their limits, have run on the smaller map.
-  int shadow_map_px = 2048;
+  // Shadow map side [px]; 0: shadow_map_side()'s choice from the image (1024 px at 960 x 720:
+  // a quarter of the fragments of a 2048 map, and the same measurement, tests/experiments/photos).
+  int shadow_map_px = 0;
   bool occlusion_culling = true;  // skip spheres provably hidden by others: same bytes, faster
   int supersample = 1;  // render at this many times the resolution, then average s x s blocks:
                         // anti-aliased edges like a photograph's; 1 = exact binary coverage [-]

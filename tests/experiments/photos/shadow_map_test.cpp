@@ -1,5 +1,6 @@
-// The shadow map's side can follow the image (render/scene.hpp, shadow_map_px = 0): 1024 px for
-// the loop's 960 x 720 photos instead of 2048, a quarter of the fragments in the shadow pass.
+// The shadow map's side follows the image (render/scene.hpp, shadow_map_px = 0, the default):
+// 1024 px for the loop's 960 x 720 photos instead of 2048, a quarter of the fragments in the
+// shadow pass.
 // The claim that this changes no measurement is checked against the map it replaces: the same
 // lab-look cone photographed with both maps reads the same H, D and atan(2H/D) within a small
 // part of a pixel, and the slope of the cone it was built with.
@@ -18,8 +19,7 @@ namespace {
 
 TEST(PhotoShadowMap, SideFollowsTheImageUnlessSet) {
   render::RenderOptions o;
-  EXPECT_EQ(render::shadow_map_side(o, 960, 720), 2048);  // the default, until it changes
-  o.shadow_map_px = 0;
+  EXPECT_EQ(o.shadow_map_px, 0);  // the default: chosen from the image
   EXPECT_EQ(render::shadow_map_side(o, 320, 240), 512);
   EXPECT_EQ(render::shadow_map_side(o, 960, 720), 1024);
   EXPECT_EQ(render::shadow_map_side(o, 1024, 768), 1024);
