@@ -52,10 +52,12 @@ TEST(LoopHeldOut, AHeldOutTestWhoseTwinJamsIsPredictedNoPileAndTheRefitGoesOn) {
   s.image.height_px = 480;
   s.image.side_views = 1;
   s.at_bound = GridBound::kTrace;
-  s.candidates = {"plate_friction"};
-  s.refit = "plate_friction";  // declared, so the trial is simulated whatever the trace says
+  s.candidates = {"plate_friction", "lift_speed"};
+  // Declared, so its trial is simulated whatever the trace says (here: that it cannot tell the
+  // two apart).
+  s.refit = "lift_speed";
   s.max_effects = 1;
-  s.probe_scalings = 0;
+  s.probe_scalings = 1;  // the lift's fingerprint stands out at twice its probe
   s.max_pours = 2;
   s.progress = false;
   s.page = write_loop_html;
@@ -79,17 +81,26 @@ TEST(LoopHeldOut, AHeldOutTestWhoseTwinJamsIsPredictedNoPileAndTheRefitGoesOn) {
   EXPECT_TRUE(loop["baseline"]["rmse"]["validate_deg"].is_null());
   EXPECT_TRUE(std::isfinite(loop["summary"]["rmse_all_before_deg"].get<double>()));
   // Its fingerprint is not simulated (NaN), and the trace names it as left out.
-  ASSERT_EQ(loop["fingerprints"].size(), 1u) << loop["unavailable_candidates"].dump();
-  EXPECT_TRUE(missing(loop["fingerprints"][0]["angle_deg"][4]));
-  EXPECT_TRUE(std::isfinite(loop["fingerprints"][0]["angle_deg"][0].get<double>()));
+  ASSERT_EQ(loop["fingerprints"].size(), 2u) << loop["unavailable_candidates"].dump();
+  for (const json& f : loop["fingerprints"]) {
+    EXPECT_TRUE(missing(f["angle_deg"][4])) << f.dump();
+    EXPECT_TRUE(std::isfinite(f["angle_deg"][0].get<double>())) << f.dump();
+  }
   ASSERT_FALSE(loop["iterations"].empty());
   const json& it0 = loop["iterations"][0];
   ASSERT_EQ(it0["tests_left_out"].size(), 1u) << it0.dump();
   EXPECT_EQ(it0["tests_left_out"][0].get<std::string>().rfind("narrow: no pile predicted", 0), 0u);
-  EXPECT_EQ(it0["candidates"].size(), 1u) << "four tests with a prediction are traced";
+  EXPECT_EQ(it0["candidates"].size(), 2u) << "four tests with a prediction are traced";
+  // The two move these piles alike: the trace names neither, and the lab's hypothesis decides.
+  EXPECT_EQ(it0["decision"]["verdict"], "indistinguishable") << it0["decision"].dump();
 
-  // The declared refit is simulated on the calibration tests although the held-out one jams
-  // at the trial's value too: the trial records it instead of stepping back.
+  // The declared lift speed is refitted by simulation although the trace names nothing, with
+  // the trace's verdict on record, and although the held-out test jams at the trial's value
+  // too: the trial records it instead of stepping back.
+  EXPECT_NE(it0.value("declared", "").find("not because the trace names it"), std::string::npos)
+      << it0.dump(1);
+  const std::string verdict = loop["summary"]["verdict"];
+  EXPECT_TRUE(verdict == "declared" || verdict == "not_confirmed") << loop["summary"].dump();
   const json refit = it0.contains("not_confirmed") ? it0["not_confirmed"] : it0["chosen"];
   ASSERT_TRUE(refit.is_object()) << it0.dump();
   ASSERT_FALSE(refit.contains("refit_failed")) << refit.dump();

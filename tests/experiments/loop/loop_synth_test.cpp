@@ -276,32 +276,9 @@ TEST(LoopSynth, AUniformMeasurementOffsetIsFlaggedNotNamed) {
   }
   EXPECT_GE(lost, 1) << loop["unavailable_candidates"].dump(1);
 
-  // A lab that believes its plate is smoother than declared brings that hypothesis
-  // (--refit plate_friction): it is refitted by simulation although the trace suspects the
-  // measurement, whose verdict stays on record; the simulations then confirm it or not.
-  LoopSettings declared = settings();
-  declared.refit = "plate_friction";
-  const nlohmann::json d = run_loop(data, (test_root() / "offset_declared").string(), declared);
-  std::cerr << "offset, plate_friction declared: " << d["summary"].dump() << "\n";
-  const nlohmann::json& first = d["iterations"].at(0);
-  EXPECT_EQ(first["decision"]["verdict"], "measurement_suspected") << first.dump(1);
-  EXPECT_NE(first.value("declared", "").find("not because the trace names it"), std::string::npos)
-      << first.dump(1);
-  const bool confirmed = !first["chosen"].is_null() && !first["chosen"].contains("refit_failed");
-  if (confirmed) {
-    EXPECT_EQ(first["chosen"]["name"], "plate_friction");
-    EXPECT_TRUE(first["chosen"]["declared"].get<bool>());
-    EXPECT_EQ(d["summary"]["verdict"], "declared");
-  } else {
-    // Not confirmed (or no trial could be measured): the refit was still simulated and stated.
-    ASSERT_TRUE(first.contains("not_confirmed") || !first["chosen"].is_null()) << first.dump(1);
-    EXPECT_TRUE(d["summary"]["verdict"] == "not_confirmed" ||
-                d["summary"]["verdict"] == "refit_failed")
-        << d["summary"].dump();
-  }
-  // Simulated on the whole grid (from the cache when the suite ran before with this code).
-  const nlohmann::json& refit = confirmed ? first["chosen"] : first.value("not_confirmed", first["chosen"]);
-  EXPECT_FALSE(refit.value("trials", nlohmann::json::array()).empty()) << first.dump(1);
+  // A declared hypothesis (--refit) is refitted whatever the trace decides (LoopJoint's
+  // pick_refit test), end to end on the tiny scene in LoopHeldOut: the two trials a declared
+  // plate would cost here (144 pile runs and 152 photographs) are a sixth of the suite.
 }
 
 // No hidden effect: the loop must add nothing.
