@@ -15,6 +15,14 @@ namespace reposetwin::experiments {
 /// The code version: project version plus `git describe` when the build ran.
 std::string code_version();
 
+/// A content hash of the sources a pile run's result depends on (the DEM, the pile test, the
+/// scene inputs, the run folders, the build flags; cmake/write_version.cmake): caches of pile
+/// runs are keyed by it, so a commit that leaves the engine alone finds the runs made before it.
+std::string engine_version();
+
+/// The same for a photograph of a pile and its measurement (camera, renderer, vision, photos).
+std::string imaging_version();
+
 /// UTC time now, ISO 8601 ("2026-11-22T01:02:03Z").
 std::string utc_now();
 

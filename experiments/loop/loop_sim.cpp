@@ -239,7 +239,8 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
     SimJob job{r.test->scene_path, resolved_overrides(r), r.seed};
     if (!scene_hash.count(job.scene_path))
       scene_hash[job.scene_path] = fnv1a_hex(read_file(job.scene_path));
-    const std::string name = sim_case_name(scene_hash[job.scene_path], job.sets, code_version());
+    const std::string name =
+        sim_case_name(scene_hash[job.scene_path], job.sets, engine_version());
     sim_of[i] = name + "/seed_" + std::to_string(r.seed);
     if (sim_jobs.count(sim_of[i])) continue;
     sim_jobs[sim_of[i]] = job;
@@ -285,7 +286,7 @@ std::vector<SimOutcome> SimCache::run(const std::vector<SimRequest>& requests) {
   for (std::size_t i = 0; i < requests.size(); ++i) {
     if (sim_result[sim_of[i]].at("pile").at("status") != "ok") continue;
     const ImageVariant& v = requests[i].image;
-    const std::string name = "img_" + fnv1a_hex(sim_of[i] + "\n" + v.key());
+    const std::string name = "img_" + fnv1a_hex(sim_of[i] + "\n" + v.key() + "\n" + imaging_version());
     photo_of[i] = name + "/seed_" + std::to_string(requests[i].seed);
     if (photo_jobs.count(photo_of[i])) continue;
     photo_jobs[photo_of[i]] = {(fs::path(dir_) / "cases" / sim_of[i] / "run").string(), v};

@@ -5,12 +5,14 @@
 // refits, synthetic datasets) is a pile run of one lab test's scene with a few extra overrides and
 // a seed, followed by a photograph and its vision measurement. Both steps are campaign runs
 // (run_batch) in one cache folder: a pile run is named by a hash of its scene file text, its
-// resolved overrides and the code version, and by its seed ("sim_<hash>/seed_<n>"), a
-// photograph by the pile run's hash and the image settings ("img_<hash>/seed_<n>"). A killed
-// loop therefore resumes where it stopped and nothing is ever computed twice, also across
-// datasets that share conditions (the tests share one cache); a new engine version simulates
-// afresh beside the old runs instead of reusing piles an older engine made (a change of rounding
-// alone re-draws every pile). Measurement effects (camera height, lens distortion) only add
+// resolved overrides and the engine version (engine_version(), a hash of the engine's sources),
+// and by its seed ("sim_<hash>/seed_<n>"), a photograph by the pile run's hash, the image
+// settings and the imaging version ("img_<hash>/seed_<n>"). A killed loop therefore resumes
+// where it stopped and nothing is ever computed twice, also across datasets that share
+// conditions (the tests share one cache) and across commits that leave the engine and the
+// imaging alone (the loop's logic, a report); a changed engine simulates afresh beside the old
+// runs instead of reusing piles it did not make (a change of rounding alone re-draws every
+// pile). Each run's result.json keeps the code version that made it. Measurement effects (camera height, lens distortion) only add
 // photographs of piles that already exist. All rendering and simulation happens in the pool's
 // forked workers, never in the calling process (OpenMP and OSMesa do not survive a fork).
 //
@@ -152,7 +154,7 @@ std::vector<std::vector<std::size_t>> pour_groups(const std::vector<int>& jams);
 std::vector<std::string> resolved_overrides(const SimRequest& request);
 
 /// The cache folder of a pile run: "sim_" and a hash of the scene text's hash, the resolved
-/// overrides (in order) and the code version.
+/// overrides (in order) and the engine version.
 std::string sim_case_name(const std::string& scene_hash, const std::vector<std::string>& sets,
                           const std::string& version);
 

@@ -318,6 +318,7 @@ json to_json(const RunProvenance& p) {
             {"scene_name", p.scene_name},
             {"seed", p.seed},
             {"code_version", p.code_version},
+            {"engine_version", p.engine_version},
             {"time_step_s", p.time_step_s},
             {"rayleigh_time_s", p.rayleigh_time_s},
             {"rayleigh_fraction", p.time_step_s / p.rayleigh_time_s},
@@ -342,6 +343,7 @@ RunProvenance run_provenance_from_json(const json& j) {
                                      "scene_name",
                                      "seed",
                                      "code_version",
+                                     "engine_version",
                                      "time_step_s",
                                      "rayleigh_time_s",
                                      "rayleigh_fraction",
@@ -355,6 +357,7 @@ RunProvenance run_provenance_from_json(const json& j) {
   p.scene_name = j.value("scene_name", std::string());
   p.seed = j.value("seed", std::uint64_t{0});
   p.code_version = j.value("code_version", std::string());
+  p.engine_version = j.value("engine_version", std::string());
   p.time_step_s = json_number(j, "time_step_s");
   p.rayleigh_time_s = json_number(j, "rayleigh_time_s");
   p.softened_youngs_modulus_pa = optional_field<double>(j, "softened_youngs_modulus_pa");

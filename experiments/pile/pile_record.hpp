@@ -171,6 +171,7 @@ struct RunProvenance {
   std::string scene_file, scene_name;
   std::uint64_t seed = 0;
   std::string code_version;
+  std::string engine_version;  // the engine's source hash (engine_version()); empty: older run
   double time_step_s = 0.0, rayleigh_time_s = 0.0;
   std::optional<double> softened_youngs_modulus_pa;  // absent: the material's own modulus
   double youngs_modulus_real_pa = 0.0;

@@ -159,10 +159,18 @@ class PileRunner {
                         "scene hash " +
                         ctl_.scene_hash + ", this run's is " + here +
                         "); run it again from the start with --force instead of --resume");
-    if (!ctl_.code_version.empty() && ctl_.code_version != code_version())
+    // The engine's source hash decides (another commit with the same engine continues the run
+    // to the same bits); a checkpoint written before the hash was stamped is compared by code
+    // version.
+    const bool other = !ctl_.engine_version.empty()
+                           ? ctl_.engine_version != engine_version()
+                           : !ctl_.code_version.empty() && ctl_.code_version != code_version();
+    if (other)
       throw ResumeError(out_.string() + ": the checkpoint was written by engine " +
-                        ctl_.code_version + ", this is " + code_version() +
-                        "; run it again from the start with --force instead of --resume");
+                        ctl_.code_version +
+                        (ctl_.engine_version.empty() ? "" : " (" + ctl_.engine_version + ")") +
+                        ", this is " + code_version() + " (" + engine_version() +
+                        "); run it again from the start with --force instead of --resume");
   }
 
   void build_world(bool resuming) {
@@ -227,6 +235,7 @@ class PileRunner {
     p.scene_name = scene_.name;
     p.seed = scene_.seed;
     p.code_version = code_version();
+    p.engine_version = engine_version();
     p.time_step_s = model.dt;
     p.rayleigh_time_s = model.rayleigh_time;
     if (settings_.softened_youngs_modulus > 0)
@@ -418,6 +427,7 @@ class PileRunner {
     Controller c = ctl_;
     c.wall_seconds = ctl_.wall_seconds + wall_now();
     c.code_version = code_version();
+    c.engine_version = engine_version();
     c.step = state().step;
     sim::write_checkpoint(*world_, path("checkpoint.bin").string());
     write_json_atomic(path("controller.json").string(), c.to_json());

@@ -44,6 +44,7 @@ json Controller::to_json() const {
           {"scene_fnv1a", scene_hash},
           {"templates_fnv1a", templates_hash},
           {"code_version", code_version},
+          {"engine_version", engine_version},
           {"step", step},
           {"retained", retained},
           {"retained_mass", retained_mass},
@@ -70,6 +71,7 @@ Controller Controller::from_json(const json& j) {
   // Controller files written before these stamps have none, and are not checked.
   c.scene_hash = j.value("scene_fnv1a", std::string());
   c.code_version = j.value("code_version", std::string());
+  c.engine_version = j.value("engine_version", std::string());
   c.templates_hash = j.value("templates_fnv1a", std::string());
   c.step = j.value("step", std::int64_t{-1});
   // Controller files from before the retained-material rule have none retained.

@@ -37,7 +37,8 @@ struct Controller {
   double retained_mass = 0.0;       // their mass [kg]
   std::string scene_hash;           // FNV-1a of the resolved scene the run was started from
   std::string templates_hash;       // FNV-1a of the clump templates ("" for spheres)
-  std::string code_version;         // the engine that wrote this state
+  std::string code_version;         // the code that wrote this state
+  std::string engine_version;       // its engine's source hash (engine_version())
   std::int64_t step = -1;           // the engine step of the checkpoint written with it
   RunStop stop;                     // why the run ended (when phase is kDone)
   PsdRecord psd;                    // the PSD sampling

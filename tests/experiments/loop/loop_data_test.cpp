@@ -304,9 +304,14 @@ TEST(LoopData, APileNoViewCanMeasureIsReportedNotThrown) {
 }
 
 // A pile run's cache folder changes with anything that changes the pile: the scene text, an
-// override, their order, and the engine's code version (a new version must not reuse piles an
-// older engine made); the same inputs give the same folder, so a killed loop resumes.
-TEST(LoopData, CachedPileRunsAreKeyedByCodeVersion) {
+// override, their order, and the engine version (a hash of the engine's sources: another engine
+// must not reuse piles an older one made, and a commit that leaves it alone finds them; the
+// hash itself is checked by experiments.engine_hash_follows_its_sources); the same inputs give
+// the same folder, so a killed loop resumes.
+TEST(LoopData, CachedPileRunsAreKeyedByEngineVersion) {
+  EXPECT_EQ(engine_version().rfind("engine-", 0), 0u) << engine_version();
+  EXPECT_EQ(engine_version().size(), 7u + 16u) << engine_version();
+  EXPECT_EQ(imaging_version().rfind("imaging-", 0), 0u) << imaging_version();
   const std::vector<std::string> sets = {"a.b=1", "c.d=2"};
   const std::string base = sim_case_name("0123", sets, "1.0+abc");
   EXPECT_EQ(base.rfind("sim_", 0), 0u) << base;

@@ -1,8 +1,9 @@
 // The loop end to end on synthetic lab datasets with an undeclared effect: it must name the
 // hidden effect, cut the calibration RMSE by at least 70%, and name nothing on a dataset
-// without an effect. All tests share one simulation cache (keyed by the code version), so the
-// baseline grid and the fingerprints are simulated once for all datasets, whichever test runs
-// first; a test run alone still computes everything it needs.
+// without an effect. All tests share one simulation cache (keyed by the engine's and imaging's
+// source hashes, as the loop's cache is), so the baseline grid and the fingerprints are
+// simulated once for all datasets, whichever test runs first; a test run alone still computes
+// everything it needs.
 //
 // The suite keeps the cases that share one design and one fingerprint node (the smooth plate,
 // traced from all tests and from one calibration test) and the two that must name nothing (no
@@ -43,7 +44,8 @@ const std::string kScene = std::string(REPOSETWIN_SOURCE_DIR) + "/data/loop/smal
 const std::string kSizeScene = std::string(REPOSETWIN_SOURCE_DIR) + "/data/loop/size_scene.toml";
 
 fs::path test_root() {
-  return fs::temp_directory_path() / ("reposetwin_loop_test_" + fnv1a_hex(code_version()));
+  return fs::temp_directory_path() /
+         ("reposetwin_loop_test_" + fnv1a_hex(engine_version() + imaging_version()));
 }
 
 // The lab's hidden camera and pile seeds, shared by both designs.
