@@ -398,6 +398,9 @@ std::string no_effect_reason(const json& loop) {
   if (v == "measurement_suspected")
     return "the trace suspects a measurement or declared-condition error on every test and "
            "names no physical effect (the decision below).";
+  // An iteration that could not trace (too few tests with a prediction) has no offset score.
+  if (last.contains("offset") && last["offset"].is_null() && last.contains("decision"))
+    return last["decision"].value("statement", std::string("nothing was traced")) + ".";
   if (v == "indistinguishable")
     return "the candidates that meet the rule explain the residual alike and none is named (the "
            "decision below).";

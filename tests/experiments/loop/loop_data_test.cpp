@@ -204,6 +204,7 @@ TEST(LoopHeldOut, AHeldOutTestWhoseTwinJamsIsPredictedNoPileAndTheRefitGoesOn) {
   s.probe_scalings = 1;  // the lift's fingerprint stands out at twice its probe
   s.html = true;
   s.page = write_loop_html;
+  s.cache_dir = (dir / "cache").string();
   const fs::path out = dir / "loop";
   json loop;
   ASSERT_NO_THROW(loop = run_loop(data, out.string(), s));
@@ -277,6 +278,28 @@ TEST(LoopHeldOut, AHeldOutTestWhoseTwinJamsIsPredictedNoPileAndTheRefitGoesOn) {
   EXPECT_NE(html.find("held-out tests the twin forms no pile for"), std::string::npos);
   EXPECT_EQ(html.find(">nan<"), std::string::npos);
   EXPECT_EQ(html.find("-nan"), std::string::npos);
+
+  // Without test d, three tests have a prediction: too few to judge a candidate by leave-one-out
+  // (the design's own bound is 4), so the iteration says so and traces nothing (the piles come
+  // from the cache).
+  LabData three = data;
+  three.tests.erase(three.tests.begin() + 3);
+  LoopSettings plain = s;
+  plain.refit.clear();
+  const json few = run_loop(three, (dir / "few").string(), plain);
+  ASSERT_EQ(few["iterations"].size(), 1u) << few["iterations"].dump(1);
+  const json& only = few["iterations"][0];
+  EXPECT_TRUE(only["candidates"].empty()) << only.dump(1);
+  EXPECT_EQ(only["decision"]["statement"].get<std::string>().rfind(
+                "nothing traced: 3 test(s) have a prediction", 0),
+            0u)
+      << only["decision"].dump();
+  EXPECT_EQ(only["tests_left_out"].size(), 1u);
+  EXPECT_EQ(few["summary"]["verdict"], "nothing");
+  EXPECT_EQ(few["summary"]["no_pile_predicted"], json::array({"narrow"}));
+  // The page's "None:" gives that reason, not "no candidate beat the seed noise".
+  const std::string page = read_file((dir / "few" / "index.html").string());
+  EXPECT_NE(page.find("None: nothing traced: 3 test(s) have a prediction"), std::string::npos);
 }
 
 // A scatter of small spheres on the plate (what a jammed outlet lets through) is too low for any
