@@ -31,36 +31,31 @@ std::string Model::no_pile(std::size_t i) const {
   return "";
 }
 
-double Model::angle(std::size_t i, double m) const {
+// The weighted sum of `of(curve)` over the surfaces that enter the prediction, or NaN when one
+// of them formed no pile for test i.
+template <class Of>
+double Model::mix(std::size_t i, Of of) const {
   if (!no_pile(i).empty()) return kNaN;
   double s = 0.0;
   for (const auto& [w, surf] : terms)
-    if (w != 0.0) s += w * surf->curve[i].at(m);
+    if (w != 0.0) s += w * of(surf->curve[i]);
   return s;
+}
+
+double Model::angle(std::size_t i, double m) const {
+  return mix(i, [m](const Curve& c) { return c.at(m); });
 }
 
 double Model::h(std::size_t i, double m) const {
-  if (!no_pile(i).empty()) return kNaN;
-  double s = 0.0;
-  for (const auto& [w, surf] : terms)
-    if (w != 0.0) s += w * surf->curve[i].lin(surf->curve[i].h, m);
-  return s;
+  return mix(i, [m](const Curve& c) { return c.lin(c.h, m); });
 }
 
 double Model::d(std::size_t i, double m) const {
-  if (!no_pile(i).empty()) return kNaN;
-  double s = 0.0;
-  for (const auto& [w, surf] : terms)
-    if (w != 0.0) s += w * surf->curve[i].lin(surf->curve[i].d, m);
-  return s;
+  return mix(i, [m](const Curve& c) { return c.lin(c.d, m); });
 }
 
 double Model::crest(std::size_t i, double m) const {
-  if (!no_pile(i).empty()) return kNaN;
-  double s = 0.0;
-  for (const auto& [w, surf] : terms)
-    if (w != 0.0) s += w * surf->curve[i].lin(surf->curve[i].crest, m);
-  return s;
+  return mix(i, [m](const Curve& c) { return c.lin(c.crest, m); });
 }
 
 double Model::value(std::size_t i, double m, int channel) const {

@@ -67,6 +67,10 @@ struct Model {
   double crest(std::size_t test, double mu) const;       // crest width [mm]
   /// Channel 0 angle, 1 H, 2 D, 3 crest.
   double value(std::size_t test, double mu, int channel) const;
+
+ private:
+  template <class Of>
+  double mix(std::size_t test, Of of) const;
 };
 
 /// What the iterations change: the model, its fit and the effects in it.

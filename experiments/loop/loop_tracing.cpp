@@ -134,8 +134,8 @@ std::optional<FingerprintRecord> Loop::probe_candidate(
     for (std::size_t i = 0; i < data_.tests.size(); ++i)
       if (base.curve[i].no_pile.empty())  // a held-out test the twin predicts no pile for
         for (const SimOutcome& o : base.raw[i][node])
-        req.push_back(
-            make_request(data_.tests[i], s_.mu_key, grid_[node], o.seed, {{&e, probe}}, s_.image));
+          req.push_back(make_request(data_.tests[i], s_.mu_key, grid_[node], o.seed,
+                                     {{&e, probe}}, s_.image));
     std::vector<SimOutcome> got;
     try {
       got = pour(req);
