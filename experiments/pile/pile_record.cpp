@@ -387,13 +387,14 @@ ParticleCounts particle_counts_from_json(const json& j) {
 json to_json(const RunPerformance& p) {
   return {{"steps", p.steps},
           {"wall_s", p.wall_s},
+          {"cpu_s", p.cpu_s},
           {"particle_steps_per_s", p.particle_steps_per_s},
           {"neighbor_builds", p.neighbor_builds},
           {"max_overlap_ratio_seen", p.max_overlap_ratio_seen}};
 }
 
 RunPerformance run_performance_from_json(const json& j) {
-  return {j.value("steps", std::int64_t{0}), json_number(j, "wall_s"),
+  return {j.value("steps", std::int64_t{0}), json_number(j, "wall_s"), json_number(j, "cpu_s"),
           json_number(j, "particle_steps_per_s"), j.value("neighbor_builds", std::int64_t{0}),
           json_number(j, "max_overlap_ratio_seen")};
 }

@@ -159,6 +159,7 @@ struct ProcedureRecord {
 struct RunPerformance {
   std::int64_t steps = 0;
   double wall_s = 0.0;  // all sessions of the run [s]
+  double cpu_s = 0.0;   // the process's CPU time (every thread) over all sessions [s]
   double particle_steps_per_s = 0.0;
   std::int64_t neighbor_builds = 0;
   double max_overlap_ratio_seen = 0.0;  // largest overlap / smaller radius at any check [-]

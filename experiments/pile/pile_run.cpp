@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -46,6 +47,14 @@ PileSpheres spheres_of(const sim::State& st) {
   return s;
 }
 
+// CPU time of this process, every thread [s]: what a run costs, apart from the machine's load
+// (its wall time is not, on shared cores).
+double process_cpu_s() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
 std::string eta_text(double seconds) {
   if (!std::isfinite(seconds) || seconds < 0) return "?";
   std::ostringstream os;
@@ -64,7 +73,8 @@ std::string eta_text(double seconds) {
 class PileRunner {
  public:
   PileRunner(const SceneConfig& scene, const RunOptions& opt)
-      : scene_(scene), opt_(opt), out_(opt.out_dir), wall0_(std::chrono::steady_clock::now()) {}
+      : scene_(scene), opt_(opt), out_(opt.out_dir), wall0_(std::chrono::steady_clock::now()),
+        cpu0_(process_cpu_s()) {}
 
   std::optional<PileRun> run() {
     prepare_folder();
@@ -87,6 +97,7 @@ class PileRunner {
   double wall_now() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
   }
+  double cpu_now() const { return process_cpu_s() - cpu0_; }
   const sim::State& state() const { return world_->state(); }
   void event(const std::string& what) { ctl_.events.push_back(run_event(state().time, what)); }
   void end(StopReason reason, const std::string& detail) {
@@ -426,6 +437,7 @@ class PileRunner {
   void save_checkpoint() {
     Controller c = ctl_;
     c.wall_seconds = ctl_.wall_seconds + wall_now();
+    c.cpu_seconds = ctl_.cpu_seconds + cpu_now();
     c.code_version = code_version();
     c.engine_version = engine_version();
     c.step = state().step;
@@ -507,7 +519,7 @@ class PileRunner {
                    pc.clog_window,    pc.max_retained_fraction, ctl_.ke_threshold, c.kind,
                    c.bottom_diameter, c.top_diameter,           c.height,          ctl_.events};
     r.performance = {
-        st.step, wall_total,
+        st.step, wall_total, ctl_.cpu_seconds + cpu_now(),
         static_cast<double>(st.step) *
             static_cast<double>(r.shape ? r.shape->components_initial : n0_) /
             std::max(wall_total, 1e-9),
@@ -525,6 +537,7 @@ class PileRunner {
   const RunOptions& opt_;
   const fs::path out_;
   const std::chrono::steady_clock::time_point wall0_;
+  const double cpu0_;  // the process's CPU time when this session of the run began [s]
   int material_ = 0;
   Controller ctl_;
   PileSample sample_;  // the sample as drawn (a fresh run; a resumed one of clumps)

@@ -38,6 +38,7 @@ json Controller::to_json() const {
           {"r_min", r_min},
           {"r_max", r_max},
           {"wall_seconds", wall_seconds},
+          {"cpu_seconds", cpu_seconds},
           {"max_overlap_seen", max_overlap_seen},
           {"stop_reason", phase == Phase::kDone ? stop_reason_text(stop) : ""},
           {"stop_detail", stop.detail},
@@ -65,6 +66,7 @@ Controller Controller::from_json(const json& j) {
   c.r_min = j.at("r_min");
   c.r_max = j.at("r_max");
   c.wall_seconds = j.at("wall_seconds");
+  c.cpu_seconds = j.value("cpu_seconds", 0.0);  // absent in checkpoints older than the field
   c.max_overlap_seen = j.at("max_overlap_seen");
   if (!j.at("stop_reason").get<std::string>().empty())
     c.stop = stop_from_json({{"reason", j.at("stop_reason")}, {"detail", j.at("stop_detail")}});

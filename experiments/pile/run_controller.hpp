@@ -32,6 +32,7 @@ struct Controller {
   double ke_threshold = 0.0;        // KE per particle below which the pile is settled [J]
   double r_min = 0.0, r_max = 0.0;  // particle radii the model was built for [m]
   double wall_seconds = 0.0;        // wall time of earlier sessions of this run [s]
+  double cpu_seconds = 0.0;         // CPU time of earlier sessions of this run [s]
   double max_overlap_seen = 0.0;    // largest overlap / smaller radius at any check [-]
   std::int64_t retained = 0;        // particles left in the container and lifted away with it
   double retained_mass = 0.0;       // their mass [kg]
