@@ -89,9 +89,57 @@ sim::ClumpShape generate_shape(TableReader& t, GrainShape& g) {
   return shape;
 }
 
+// The blocky family of the design note, in units of I: a box L x I x S (L = elongation, I = 1,
+// S = 1 / flatness) filled by a grid of equal spheres whose outer ones touch its faces, so the
+// box's edges and corners are rounded with the spheres' radius r = (1 - angularity) S / 2. Along
+// each axis the centres are evenly spaced with neighbours at most 1.8 r apart (they overlap by at
+// least a tenth of a diameter: one rigid, connected body with no hole between faces), which is
+// the fewest spheres that do it: angularity 0 on a 1.2 x 1 x 0.85 box is 4 spheres, 0.25 is 8.
+sim::ClumpShape blocky_shape(TableReader& t, GrainShape& g) {
+  g.elongation = t.number("elongation", 1.0);
+  g.flatness = t.number("flatness", 1.0);
+  g.angularity = t.number("angularity", 0.0);
+  for (const char* key : {"elongation", "flatness"}) {
+    const double v = std::string(key) == "elongation" ? g.elongation : g.flatness;
+    if (!(v >= 1.0) || !std::isfinite(v) || v > 10.0)
+      t.fail(key, "= " + num(v) + " must lie in [1, 10] (a ratio of the longer extent to the "
+                                  "shorter)");
+  }
+  if (!(g.angularity >= 0.0 && g.angularity < 1.0))
+    t.fail("angularity", "= " + num(g.angularity) +
+                             " must lie in [0, 1) (0: edges rounded with half the shortest "
+                             "extent; towards 1: sharper edges, more spheres)");
+  const std::array<double, 3> extent = {g.elongation, 1.0, 1.0 / g.flatness};
+  const double r = 0.5 * (1.0 - g.angularity) * extent[2];
+  std::array<int, 3> count{};
+  int total = 1;
+  for (std::size_t a = 0; a < 3; ++a) {
+    const double span = std::max(0.0, extent[a] - 2.0 * r);
+    count[a] = 1 + static_cast<int>(std::ceil(span / (1.8 * r) - 1e-9));
+    total *= count[a];
+  }
+  if (total > 64)
+    t.fail("angularity", "= " + num(g.angularity) + " needs " + std::to_string(total) +
+                             " spheres for this box (at most 64): lower it");
+  g.spheres = total;
+  sim::ClumpShape shape;
+  shape.name = g.name;
+  auto at = [&](std::size_t a, int i) {
+    const double half = 0.5 * extent[a] - r;
+    return count[a] == 1 ? 0.0 : -half + 2.0 * half * i / (count[a] - 1);
+  };
+  for (int i = 0; i < count[0]; ++i)
+    for (int j = 0; j < count[1]; ++j)
+      for (int k = 0; k < count[2]; ++k) {
+        shape.offsets.emplace_back(at(0, i), at(1, j), at(2, k));
+        shape.radii.push_back(r);
+      }
+  return shape;
+}
+
 GrainShape read_shape(TableReader t, const std::string& key, std::size_t index, bool single) {
   t.known_keys({"name", "kind", "mass_fraction", "offsets", "radii", "elongation", "flatness",
-                "roundness", "spheres"});
+                "roundness", "spheres", "angularity"});
   GrainShape g;
   g.key = key;
   g.name = t.string("name", "shape " + std::to_string(index));
@@ -106,15 +154,17 @@ GrainShape read_shape(TableReader t, const std::string& key, std::size_t index, 
     shape = read_template(t, g.name);
   } else if (g.kind == "generated") {
     shape = generate_shape(t, g);
+  } else if (g.kind == "blocky") {
+    shape = blocky_shape(t, g);
   } else {
-    t.fail("kind", "= \"" + g.kind + "\" must be \"template\" or \"generated\"");
+    t.fail("kind", "= \"" + g.kind + "\" must be \"template\", \"generated\" or \"blocky\"");
   }
   t.finish();
   sim::ClumpTemplate raw;
   try {
     raw = sim::make_clump_template(shape, kMass);
   } catch (const std::invalid_argument& e) {
-    t.fail(g.kind == "template" ? "offsets" : "spheres",
+    t.fail(g.kind == "template" ? "offsets" : g.kind == "blocky" ? "angularity" : "spheres",
            std::string("does not make one rigid body: ") + e.what());
   }
   const PrincipalExtents e = principal_extents(raw);

@@ -7,6 +7,14 @@
 //                       multi-sphere templates, in any unit: the template is scaled so that
 //                       its sieve size (below) is 1, so a template given in units of the
 //                       grain's sieve size is used as written;
+//   kind = "blocky"     a box of extents L x I x S with rounded edges, for angular, blocky
+//                       rock: `elongation` L/I and `flatness` I/S as below and `angularity`
+//                       in [0, 1), 1 - (edge radius) / (S/2); built of a grid of equal spheres
+//                       (io/grain_shape.cpp says how many). Waste rock is mostly
+//                       sub-angular, sub-discoidal and sub-prismoidal blocks (Nunoo et al. 2009,
+//                       SME preprint 09-018, Questa mine rock piles; Linero et al. 2020, Slope
+//                       Stability 2020: 667-676, slabs to sub-equant blocks of coarse mine waste);
+//                       measure L, I, S on a few dozen of your grains and give their ratios;
 //   kind = "generated"  a family with four parameters a user can reason about: `elongation`
 //                       L/I >= 1 and `flatness` I/S >= 1 (Zingg's ratios of the principal
 //                       extents), `spheres` (components) and `roundness` in (0, 1], the radius
@@ -48,10 +56,11 @@ namespace reposetwin::experiments {
 struct GrainShape {
   std::string key;               // where it is in the scene: "sample.shape", "sample.shapes[k]"
   std::string name;              // as given, or "shape <k>"
-  std::string kind;              // "template" or "generated"
+  std::string kind;              // "template", "generated" or "blocky"
   double mass_fraction = 1.0;    // share of the sample's mass [-]
   // The generated family's nominal parameters (kind "generated"; 1 for a template).
   double elongation = 1.0, flatness = 1.0, roundness = 1.0;  // [-]
+  double angularity = 0.0;  // kind "blocky": 1 - edge radius / (S/2), in [0, 1) [-]
   int spheres = 1;                                           // components [-]
   sim::ClumpTemplate unit;       // principal frame, sieve size 1 (lengths in sieve sizes)
   double longest = 1.0, intermediate = 1.0, shortest = 1.0;  // L, I (= 1), S [sieve sizes]

@@ -80,8 +80,9 @@ std::vector<SceneKey> one_shape_keys(const std::string& table,
       {t + "name", "string", q("shape <k>") + " (k from 0)", "-",
        "the shape's name in results and messages"},
       {t + "kind", "string", "required", "-",
-       "\"template\" (offsets and radii as given) or \"generated\" (elongation, flatness, "
-       "spheres, roundness)"},
+       "\"template\" (offsets and radii as given), \"generated\" (rods and slabs: elongation, "
+       "flatness, spheres, roundness) or \"blocky\" (rounded boxes: elongation, flatness, "
+       "angularity)"},
       {t + "mass_fraction", "number", mass_fraction_default, "-",
        "share of the sample's mass drawn as this shape, in [0, 1]; the shapes' shares sum to 1"},
       {t + "offsets", "array of [x, y, z]", "required (template)", "any length",
@@ -89,14 +90,18 @@ std::vector<SceneKey> one_shape_keys(const std::string& table,
       {t + "radii", "array of numbers", "required (template)", "as offsets",
        "component radii, > 0, one per offset; the components must make one connected body"},
       {t + "elongation", "number", n(g.elongation), "-",
-       "generated: L/I, longest over intermediate principal extent, >= 1"},
+       "generated, blocky: L/I, longest over intermediate principal extent, >= 1"},
       {t + "flatness", "number", n(g.flatness), "-",
-       "generated: I/S, intermediate over shortest extent, >= 1 (> 1: two rows of spheres)"},
+       "generated, blocky: I/S, intermediate over shortest extent, >= 1 (generated: > 1 makes "
+       "two rows of spheres)"},
       {t + "spheres", "integer", "required (generated)", "-",
        "generated: component spheres, 1 to 64 (even for flatness > 1; 2 per row at least for "
        "elongation > 1)"},
       {t + "roundness", "number", n(g.roundness), "-",
        "generated: end radius / thickest radius, in (0, 1] (1: capsule; smaller: tapered ends)"},
+      {t + "angularity", "number", n(g.angularity), "-",
+       "blocky: 1 - edge radius / (S/2), in [0, 1) (0: edges rounded with half the shortest "
+       "extent; higher: sharper edges, built of more spheres)"},
   };
 }
 

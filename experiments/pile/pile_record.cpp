@@ -417,6 +417,7 @@ json to_json(const ShapeRecord& s) {
                       {"elongation", g.elongation},
                       {"flatness", g.flatness},
                       {"roundness", g.roundness},
+                      {"angularity", g.angularity},
                       {"measured_elongation", g.measured_elongation},
                       {"measured_flatness", g.measured_flatness},
                       {"volume_per_cube", g.volume_per_cube},
@@ -444,6 +445,7 @@ ShapeRecord shape_record_from_json(const json& j) {
     r.elongation = json_number(g, "elongation", 1.0);
     r.flatness = json_number(g, "flatness", 1.0);
     r.roundness = json_number(g, "roundness", 1.0);
+    r.angularity = json_number(g, "angularity", 0.0);
     r.measured_elongation = json_number(g, "measured_elongation", 1.0);
     r.measured_flatness = json_number(g, "measured_flatness", 1.0);
     r.volume_per_cube = json_number(g, "volume_per_cube");

@@ -186,12 +186,13 @@ RunProvenance run_provenance_from_json(const nlohmann::json& j);
 
 /// One grain shape of a clump sample as drawn (io/grain_shape.hpp).
 struct GrainShapeRecord {
-  std::string name, kind;              // kind: "template" or "generated"
+  std::string name, kind;              // kind: "template", "generated" or "blocky"
   double target_mass_fraction = 0.0;   // as declared [-]
   double drawn_mass_fraction = 0.0;    // of the drawn sample [-]
   std::int64_t count = 0;              // grains drawn
   int components = 0;                  // spheres per grain
   double elongation = 1.0, flatness = 1.0, roundness = 1.0;  // nominal (generated) [-]
+  double angularity = 0.0;                                     // nominal (blocky) [-]
   double measured_elongation = 1.0, measured_flatness = 1.0; // L/I, I/S of the body built [-]
   double volume_per_cube = 0.0;        // volume / sieve size^3 of the union of its spheres [-]
   double outlet_diameter = 0.0;        // smallest round outlet it passes lengthwise, in sieve

@@ -171,6 +171,7 @@ ShapeRecord shape_record(const SceneConfig& scene, const PileSample& sample, con
     gr.elongation = g.elongation;
     gr.flatness = g.flatness;
     gr.roundness = g.roundness;
+    gr.angularity = g.angularity;
     gr.measured_elongation = g.longest / g.intermediate;
     gr.measured_flatness = g.intermediate / g.shortest;
     gr.volume_per_cube = g.volume_per_cube();

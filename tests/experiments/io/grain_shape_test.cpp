@@ -197,6 +197,79 @@ mass_fraction = 0.4
                {"sample.shape", "0.5", "sum to 0.5"});
 }
 
+// The blocky family: a rounded box L x I x S of equal spheres. Two closed forms: angularity 0
+// on a cube is one sphere of diameter 1 (volume pi/6), and on a 1.5 x 1 x 1 box it is two
+// spheres of radius 1/2 whose centres are 0.5 apart (a lens of two caps subtracted:
+// V = 2 (4/3) pi r^3 - pi (4r + d)(2r - d)^2 / 12).
+TEST(GrainShape, BlockyAtAngularityZeroIsSpheresOfHalfTheShortestExtent) {
+  const SceneConfig one = parse("[sample.shape]\nkind = \"blocky\"\n");
+  ASSERT_EQ(one.shapes[0].unit.size(), 1u);
+  EXPECT_NEAR(one.shapes[0].volume_per_cube(), std::numbers::pi / 6.0, 1e-6);
+  const SceneConfig two = parse("[sample.shape]\nkind = \"blocky\"\nelongation = 1.5\n");
+  const GrainShape& g = two.shapes[0];
+  ASSERT_EQ(g.unit.size(), 2u);
+  const double r = 0.5, d = 0.5;
+  const double lens = std::numbers::pi * (4 * r + d) * (2 * r - d) * (2 * r - d) / 12.0;
+  EXPECT_NEAR(g.volume_per_cube(), 2.0 * 4.0 / 3.0 * std::numbers::pi * r * r * r - lens, 1e-5);
+  EXPECT_NEAR(g.longest, 1.5, 1e-12);
+  EXPECT_NEAR(g.shortest, 1.0, 1e-12);
+}
+
+// A sharp box at waste rock's ratios has the asked extents, its edge radius
+// (1 - angularity) S / 2, a volume inside the box and inside the Minkowski rounded box its
+// spheres' centres span (inner box a x b x c swept by a ball of radius r:
+// abc + 2r(ab + bc + ca) + pi r^2 (a + b + c) + 4/3 pi r^3), and it fills more of the box as it
+// grows sharper.
+TEST(GrainShape, ABlockyBoxHasTheAskedRatiosAndSharpensWithAngularity) {
+  auto box = [](double angularity) {
+    return parse("[sample.shape]\nkind = \"blocky\"\nelongation = 1.4\nflatness = 1.6\n"
+                 "angularity = " + std::to_string(angularity) + "\n").shapes[0];
+  };
+  const double L = 1.4, S = 1.0 / 1.6;
+  double last = 0.0;
+  for (double ang : {0.0, 0.25, 0.5}) {
+    const GrainShape g = box(ang);
+    EXPECT_EQ(g.kind, "blocky");
+    EXPECT_NEAR(g.longest, L, 1e-9) << ang;
+    EXPECT_NEAR(g.intermediate, 1.0, 1e-12) << ang;
+    EXPECT_NEAR(g.shortest, S, 1e-9) << ang;
+    const double r = 0.5 * (1.0 - ang) * S;
+    for (double ri : g.unit.radii) EXPECT_NEAR(ri, r, 1e-9) << ang;
+    const double a = L - 2 * r, b = 1.0 - 2 * r, c = S - 2 * r;
+    const double rounded = a * b * c + 2 * r * (a * b + b * c + c * a) +
+                           std::numbers::pi * r * r * (a + b + c) +
+                           4.0 / 3.0 * std::numbers::pi * r * r * r;
+    EXPECT_LT(g.volume_per_cube(), rounded) << ang;
+    EXPECT_LE(rounded, L * S + 1e-12) << ang;
+    EXPECT_GT(g.volume_per_cube(), last) << ang;
+    last = g.volume_per_cube();
+  }
+  // The study's boxes (experiments/studies/pile_top_s4.toml): 8 corner spheres at 0.25, and
+  // the prism 1.5 x 1 x 0.8 of 3 x 2 x 2.
+  EXPECT_EQ(parse("[sample.shape]\nkind = \"blocky\"\nelongation = 1.2\nflatness = " +
+                  std::to_string(1.0 / 0.85) + "\nangularity = 0.2470588235\n")
+                .shapes[0].unit.size(), 8u);
+  EXPECT_EQ(parse("[sample.shape]\nkind = \"blocky\"\nelongation = 1.5\nflatness = 1.25\n"
+                  "angularity = 0.25\n").shapes[0].unit.size(), 12u);
+}
+
+TEST(GrainShape, BadBlockyNamesFileKeyAndValue) {
+  expect_error("[sample.shape]\nkind = \"blocky\"\nangularity = 1.0\n",
+               {"sample.shape.angularity", "= 1", "[0, 1)"});
+  expect_error("[sample.shape]\nkind = \"blocky\"\nangularity = -0.1\n",
+               {"sample.shape.angularity", "= -0.1"});
+  expect_error("[sample.shape]\nkind = \"blocky\"\nangularity = nan\n",
+               {"sample.shape.angularity", "nan"});
+  expect_error("[sample.shape]\nkind = \"blocky\"\nelongation = 0.7\n",
+               {"sample.shape.elongation", "= 0.7"});
+  expect_error("[sample.shape]\nkind = \"blocky\"\nflatness = inf\n",
+               {"sample.shape.flatness", "inf"});
+  expect_error("[sample.shape]\nkind = \"blocky\"\nelongation = 3\nflatness = 2\n"
+               "angularity = 0.9\n",
+               {"sample.shape.angularity", "= 0.9", "at most 64"});
+  expect_error("[sample.shape]\nkind = \"blocky\"\nspheres = 4\n", {"sample.shape.spheres"});
+}
+
 // An L of three spheres is wider across its long axis than its intermediate extent: a funnel
 // that passes its sieve size d_max but not its cross-section refuses it, while spheres of the
 // same PSD pass the same funnel.
