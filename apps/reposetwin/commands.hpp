@@ -19,5 +19,7 @@ void add_measure_command(CLI::App& app);
 void add_loop_command(CLI::App& app);  // loop and loop-synth
 void add_keys_command(CLI::App& app);
 void add_paper_command(CLI::App& app);  // the paper's index: run, list, page
+void add_export_command(CLI::App& app);
+void add_measure_particles_command(CLI::App& app);
 
 }  // namespace reposetwin::cli

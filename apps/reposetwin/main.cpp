@@ -47,6 +47,8 @@ int main(int argc, char** argv) {
   reposetwin::cli::add_loop_command(app);
   reposetwin::cli::add_keys_command(app);
   reposetwin::cli::add_paper_command(app);
+  reposetwin::cli::add_export_command(app);
+  reposetwin::cli::add_measure_particles_command(app);
   if (argc > 1 && argv[1][0] != '-') {
     if (const std::string msg = unknown_command(app, argv[1]); !msg.empty()) {
       std::cerr << msg << "\n";

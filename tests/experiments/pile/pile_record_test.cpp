@@ -89,7 +89,7 @@ PileRun sample_run() {
                  0.12,
                  {run_event(0.0, "filled", 321), run_event(0.4, "lift started"),
                   run_event(1.0, "resumed", std::nullopt, "v2")}};
-  r.performance = {123456, 12.5, 3.2e6, 17, 0.031};
+  r.performance = {123456, 12.5, 11.75, 3.2e6, 17, 0.031};
   return r;
 }
 

@@ -1,0 +1,101 @@
+// `export`: the calibrated scene as a LIGGGHTS deck; `measure-particles`: another engine's
+// grains measured by the twin's pile measure (experiments/export/).
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "apps/reposetwin/commands.hpp"
+#include "experiments/export/liggghts_deck.hpp"
+#include "experiments/export/particle_dump.hpp"
+#include "experiments/io/input_error.hpp"
+#include "experiments/io/provenance.hpp"
+#include "experiments/io/scene_overrides.hpp"
+#include "sim/pile_geometry.hpp"
+
+namespace reposetwin::cli {
+namespace fs = std::filesystem;
+
+void add_export_command(CLI::App& app) {
+  struct Args {
+    std::string scene, out;
+    std::vector<std::string> sets;
+    std::uint64_t seed = 1;
+    bool force = false;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "export", "Write a scene (a calibrated material) as a LIGGGHTS 3.8 input deck: in.pile, "
+                "container.stl and README.md (what is carried, and mu_r in other conventions)");
+  cmd->add_option("scene", a->scene, "Scene file")->required();
+  cmd->add_option("--out,-o", a->out, "Folder for the deck")->required();
+  cmd->add_option("--set", a->sets, "Override a scene key: dotted.key=value (repeatable)");
+  cmd->add_option("--seed", a->seed, "Seed of LIGGGHTS' random streams")->capture_default_str();
+  cmd->add_flag("--force", a->force, "Replace a deck already in --out");
+  cmd->callback([a]() {
+    const experiments::SceneConfig scene = experiments::load_scene(a->scene, a->sets);
+    experiments::LiggghtsDeckSettings s;
+    s.seed = a->seed;
+    const experiments::LiggghtsDeck deck = experiments::liggghts_deck(scene, s);
+    const fs::path out(a->out);
+    if (fs::exists(out / "in.pile") && !a->force)
+      throw experiments::InputError(a->out + ": holds a deck already (in.pile); --force replaces it");
+    std::error_code ec;
+    fs::create_directories(out, ec);
+    if (ec) throw experiments::InputError(a->out + ": cannot create the folder: " + ec.message());
+    experiments::write_file_atomic((out / "in.pile").string(), deck.input);
+    experiments::write_file_atomic((out / "container.stl").string(), deck.funnel_stl);
+    experiments::write_file_atomic((out / "README.md").string(), deck.notes);
+    std::cout << "LIGGGHTS deck of " << scene.name << " in " << a->out
+              << ": run `liggghts -in in.pile` there (mpirun -np N for more cores)\n";
+  });
+}
+
+void add_measure_particles_command(CLI::App& app) {
+  struct Args {
+    std::string dump, scene;
+    std::vector<std::string> sets;
+    bool json = false;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "measure-particles",
+      "Measure a pile from another engine's grains (a LAMMPS/LIGGGHTS dump custom with x y z "
+      "radius) with the twin's particle measure: H, D, atan(2H/D)");
+  cmd->add_option("dump", a->dump, "Dump file (the last snapshot is measured)")->required();
+  cmd->add_option("--scene", a->scene, "Scene whose [measure] settings apply")->required();
+  cmd->add_option("--set", a->sets, "Override a scene key (repeatable)");
+  cmd->add_flag("--json", a->json, "Print the measurement as JSON");
+  cmd->callback([a]() {
+    const experiments::SceneConfig scene = experiments::load_scene(a->scene, a->sets);
+    const experiments::ParticleDump d = experiments::read_particle_dump(a->dump);
+    const sim::PileGeometry g = sim::measure_pile(d.x, d.radius, scene.pile);
+    const double deg = 180.0 / 3.14159265358979323846;
+    if (a->json) {
+      std::cout << nlohmann::json{{"dump", a->dump},
+                                  {"timestep", d.timestep},
+                                  {"particles", d.x.size()},
+                                  {"status", sim::to_string(g.status)},
+                                  {"height_m", g.height},
+                                  {"base_diameter_m", g.base_diameter},
+                                  {"theta_hd_deg", g.theta_hd * deg},
+                                  {"slice_angle_mean_deg", g.slice_angle_mean * deg},
+                                  {"pile_count", g.pile_count}}
+                       .dump(2)
+                << "\n";
+      return;
+    }
+    if (g.status == sim::PileStatus::kNoPile) {
+      std::cout << "no pile: no grain of " << a->dump << " touches the plate\n";
+      set_exit_code(7);
+      return;
+    }
+    std::printf("particle atan(2H/D) %.2f deg; H %.1f mm, D %.1f mm; %zu of %zu grains in the "
+                "pile; slice angle %.2f deg\n",
+                g.theta_hd * deg, 1e3 * g.height, 1e3 * g.base_diameter, g.pile_count,
+                d.x.size(), g.slice_angle_mean * deg);
+  });
+}
+
+}  // namespace reposetwin::cli

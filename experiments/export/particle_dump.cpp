@@ -1,0 +1,78 @@
+#include "experiments/export/particle_dump.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "experiments/io/input_error.hpp"
+
+namespace reposetwin::experiments {
+
+ParticleDump read_particle_dump(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw InputError(path + ": cannot open the dump file");
+  ParticleDump last;
+  bool any = false;
+  std::string line;
+  long long n_line = 0;
+  auto bad = [&](const std::string& what) {
+    throw InputError(path + ":" + std::to_string(n_line) + ": " + what);
+  };
+  while (std::getline(f, line)) {
+    ++n_line;
+    if (line.rfind("ITEM: TIMESTEP", 0) == 0) {
+      ParticleDump snap;
+      std::string v, count;
+      ++n_line;
+      if (!std::getline(f, v)) bad("a TIMESTEP without its value");
+      snap.timestep = std::atoll(v.c_str());
+      long long n = -1;
+      int ix = -1, iy = -1, iz = -1, ir = -1, columns = 0;
+      while (std::getline(f, line)) {
+        ++n_line;
+        if (line.rfind("ITEM: NUMBER OF ATOMS", 0) == 0) {
+          ++n_line;
+          if (!std::getline(f, count)) bad("NUMBER OF ATOMS without its value");
+          n = std::atoll(count.c_str());
+          if (n < 0 || n > 100'000'000) bad("NUMBER OF ATOMS = " + count + " is not a count");
+        } else if (line.rfind("ITEM: ATOMS", 0) == 0) {
+          std::istringstream names(line.substr(11));
+          std::string name;
+          for (int k = 0; names >> name; ++k, ++columns) {
+            if (name == "x") ix = k;
+            if (name == "y") iy = k;
+            if (name == "z") iz = k;
+            if (name == "radius") ir = k;
+          }
+          break;
+        }
+      }
+      if (n < 0) bad("a snapshot without NUMBER OF ATOMS");
+      if (ix < 0 || iy < 0 || iz < 0 || ir < 0)
+        bad("the ATOMS line must name the columns x, y, z and radius (dump custom ... x y z "
+            "radius)");
+      snap.x.reserve(static_cast<std::size_t>(n));
+      for (long long i = 0; i < n; ++i) {
+        ++n_line;
+        if (!std::getline(f, line)) bad("the snapshot ends after " + std::to_string(i) + " of " +
+                                        std::to_string(n) + " atoms");
+        std::istringstream row(line);
+        std::vector<double> v(static_cast<std::size_t>(columns));
+        for (double& c : v)
+          if (!(row >> c)) bad("a row with fewer than " + std::to_string(columns) + " numbers");
+        for (int k : {ix, iy, iz, ir})
+          if (!std::isfinite(v[static_cast<std::size_t>(k)])) bad("a number that is not finite");
+        if (!(v[static_cast<std::size_t>(ir)] > 0)) bad("a radius that is not positive");
+        snap.x.emplace_back(v[static_cast<std::size_t>(ix)], v[static_cast<std::size_t>(iy)],
+                            v[static_cast<std::size_t>(iz)]);
+        snap.radius.push_back(v[static_cast<std::size_t>(ir)]);
+      }
+      last = std::move(snap);
+      any = true;
+    }
+  }
+  if (!any) throw InputError(path + ": no snapshot (ITEM: TIMESTEP) in the dump file");
+  return last;
+}
+
+}  // namespace reposetwin::experiments
