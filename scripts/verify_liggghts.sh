@@ -67,7 +67,7 @@ mpi=(mpirun -np "${np}")
 [[ "$(id -u)" -eq 0 ]] && mpi+=(--allow-run-as-root)
 mpi+=(--oversubscribe)
 
-mkdir -p "${out}"
+mkdir -p "${out}/ours" "${out}/liggghts"
 echo "scene ${scene}; overrides: ${sets[*]}"
 echo "seed,engine,status,H_mm,D_mm,theta_hd_deg,particles,wall_s" > "${out}/summary.csv"
 IFS=, read -r -a seed_list <<< "${seeds}"
@@ -79,6 +79,10 @@ for s in "${seed_list[@]}"; do
       --yes --quiet --force > "${ours}.log" 2>&1 || true
     echo "$(date +%s.%N) - ${t0}" | bc > "${ours}.wall"
   fi
+  if [[ ! -f "${ours}/result.json" ]]; then
+    echo "verify_liggghts.sh: the twin's run of seed ${s} wrote no result: ${ours}.log" >&2
+    exit 1
+  fi
   jq -r --arg s "${s}" --arg w "$(cat "${ours}.wall" 2>/dev/null || echo 0)" \
     '.result as $r | [$s, "reposetwin", $r.pile.status, $r.pile.height_m * 1000,
       $r.pile.base_diameter_m * 1000, $r.pile.theta_hd_deg, $r.particles.initial, ($w | tonumber)]
@@ -88,7 +92,8 @@ for s in "${seed_list[@]}"; do
   if [[ ! -f "${lig}/final.dump" ]]; then
     "${bin}" export "${scene}" --out "${lig}" --seed "${s}" "${sets[@]}" --force
     t0=$(date +%s.%N)
-    (cd "${lig}" && "${mpi[@]}" liggghts -in in.pile > liggghts.log 2>&1)
+    (cd "${lig}" && "${mpi[@]}" liggghts -in in.pile > liggghts.log 2>&1) ||
+      { echo "verify_liggghts.sh: LIGGGHTS failed on seed ${s}: ${lig}/liggghts.log" >&2; exit 1; }
     echo "$(date +%s.%N) - ${t0}" | bc > "${lig}.wall"
   fi
   "${bin}" measure-particles "${lig}/final.dump" --scene "${scene}" "${sets[@]}" --json |

@@ -1,6 +1,7 @@
 #include "experiments/export/particle_dump.hpp"
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -56,10 +57,15 @@ ParticleDump read_particle_dump(const std::string& path) {
         ++n_line;
         if (!std::getline(f, line)) bad("the snapshot ends after " + std::to_string(i) + " of " +
                                         std::to_string(n) + " atoms");
+        // strtod, not >>: a "nan" or "inf" is read as what it is, then refused by name.
         std::istringstream row(line);
         std::vector<double> v(static_cast<std::size_t>(columns));
-        for (double& c : v)
-          if (!(row >> c)) bad("a row with fewer than " + std::to_string(columns) + " numbers");
+        std::string token;
+        for (double& c : v) {
+          char* end = nullptr;
+          if (!(row >> token) || (c = std::strtod(token.c_str(), &end), *end != '\0'))
+            bad("a row with fewer than " + std::to_string(columns) + " numbers");
+        }
         for (int k : {ix, iy, iz, ir})
           if (!std::isfinite(v[static_cast<std::size_t>(k)])) bad("a number that is not finite");
         if (!(v[static_cast<std::size_t>(ir)] > 0)) bad("a radius that is not positive");
