@@ -70,7 +70,9 @@ INSTANTIATE_TEST_SUITE_P(
                       Row{"container.height_m=inf", "container.height_m"},
                       Row{"procedure.lattice_gap=1e6", "procedure.lattice_gap"},
                       Row{"numerics.threads=100000", "numerics.threads"},
-                      Row{"measure.slice_azimuths=1000000000", "measure.slice_azimuths"}));
+                      Row{"measure.slice_azimuths=1000000000", "measure.slice_azimuths"},
+                      Row{"sample.shape={kind='generated', elongation=1e9, spheres=4}",
+                          "sample.shape.elongation"}));
 
 // Every plan a scene that is read can make is finite and bounded: the time step from the
 // materials, the steps up to the time limit. A stiffness at the limit still reads.
