@@ -68,14 +68,19 @@ vision::ScaleSpec resolve_scale(const std::string& image, const std::optional<do
   return s;
 }
 
+// Encoded in memory and published atomically: a full disk is an error naming the path, and never
+// leaves half an image.
 void write_overlay(const std::string& path, const cv::Mat& img) {
+  std::vector<unsigned char> bytes;
   bool ok = false;
   try {
-    ok = cv::imwrite(path, img);
+    const std::string ext = fs::path(path).extension().string();
+    ok = cv::imencode(ext.empty() ? ".png" : ext, img, bytes);
   } catch (const cv::Exception& e) {
-    throw std::runtime_error(path + ": cannot write the overlay image (" + e.what() + ")");
+    throw std::runtime_error(path + ": cannot encode the overlay image (" + e.what() + ")");
   }
-  if (!ok) throw std::runtime_error(path + ": cannot write the overlay image");
+  if (!ok) throw std::runtime_error(path + ": cannot encode the overlay image");
+  experiments::write_file_atomic(path, std::string(bytes.begin(), bytes.end()));
 }
 
 void run_measure(const MeasureOptions& o) {
