@@ -3,12 +3,14 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace reposetwin::camera {
 namespace {
@@ -280,7 +282,50 @@ Camera from_json(const nlohmann::json& j, const std::string& where) {
   return cam;
 }
 
-Camera read_sidecar(const std::string& path) {
+namespace {
+
+// A sidecar's top-level keys: the camera and what a render writes beside it.
+const std::set<std::string> kSidecarKeys = {"camera",          "view",  "image",
+                                            "mm_per_px_at_axis", "scale_point_m",
+                                            "scale_reference", "look",  "provenance"};
+// The largest radial distortion coefficient a sidecar may declare: a real lens's k1 is within
+// +-0.5 (the loop's synthetic lenses are held there too); 1e6 is a typo, not a lens.
+constexpr double kMaxDistortion = 1.0;
+
+// Every value the projection uses must be in the file: a missing focal length or intrinsics
+// block would otherwise take a default camera's and measure a wrong H without a word. The
+// distortion (k1, k2: none) and the principal point (cx_px, cy_px: the image centre) have
+// neutral defaults and may be left out.
+void require_complete(const nlohmann::json& cam, const std::string& where) {
+  if (!cam.is_object()) fail(where, "", "must be a JSON object");
+  auto need = [&](const nlohmann::json& j, const std::string& block, const char* key) {
+    if (!j.is_object() || !j.contains(key))
+      fail(where, block + key,
+           "is missing (a sidecar gives every value its projection uses: projection, "
+           "intrinsics.width_px, height_px, focal_length_mm and sensor_width_mm, or "
+           "ortho_width_m, extrinsics.position, look_at, up)");
+  };
+  need(cam, "", "projection");
+  need(cam, "", "intrinsics");
+  need(cam, "", "extrinsics");
+  const nlohmann::json& in = cam["intrinsics"];
+  need(in, "intrinsics.", "width_px");
+  need(in, "intrinsics.", "height_px");
+  if (cam["projection"] == "orthographic") {
+    need(in, "intrinsics.", "ortho_width_m");
+  } else {
+    need(in, "intrinsics.", "focal_length_mm");
+    need(in, "intrinsics.", "sensor_width_mm");
+  }
+  for (const char* key : {"position", "look_at", "up"}) need(cam["extrinsics"], "extrinsics.", key);
+}
+
+}  // namespace
+
+Camera read_sidecar(const std::string& path, SidecarView expect) {
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    throw std::invalid_argument(path + ": camera sidecar is not a regular file");
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path + ": cannot open camera sidecar");
   nlohmann::json j;
@@ -291,7 +336,32 @@ Camera read_sidecar(const std::string& path) {
   }
   if (!j.is_object() || !j.contains("camera"))
     throw std::invalid_argument(path + ": field \"camera\" is missing");
-  return from_json(j["camera"], path + ": camera");
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (!kSidecarKeys.count(it.key()))
+      throw std::invalid_argument(path + ": field \"" + it.key() +
+                                  "\" is not a sidecar field (known: camera, view, image, "
+                                  "mm_per_px_at_axis, scale_point_m, scale_reference, look, "
+                                  "provenance)");
+  if (j.contains("view")) {
+    const nlohmann::json& v = j["view"];
+    if (v != "side" && v != "top")
+      throw std::invalid_argument(path + ": view must be \"side\" or \"top\", got " + v.dump());
+    const char* wanted = expect == SidecarView::kSide ? "side"
+                         : expect == SidecarView::kTop ? "top"
+                                                       : nullptr;
+    if (wanted && v != wanted)
+      throw std::invalid_argument(path + ": view = " + v.dump() + ", but it is given for a " +
+                                  wanted + " image; give the " + wanted + " view's sidecar");
+  }
+  require_complete(j["camera"], path + ": camera");
+  Camera cam = from_json(j["camera"], path + ": camera");
+  for (const auto& [name, k] : {std::pair{"intrinsics.k1", cam.intrinsics.k1},
+                                std::pair{"intrinsics.k2", cam.intrinsics.k2}})
+    if (!(std::abs(k) <= kMaxDistortion))
+      fail(path + ": camera", name,
+           "= " + str(k) + " must be within +-" + str(kMaxDistortion) +
+               " (a real lens's radial distortion is within +-0.5)");
+  return cam;
 }
 
 }  // namespace reposetwin::camera

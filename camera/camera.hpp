@@ -106,7 +106,14 @@ nlohmann::json to_json(const Camera& cam);
 /// Parses a camera from JSON, rejecting unknown keys; errors name `where` and the field.
 Camera from_json(const nlohmann::json& j, const std::string& where = "camera");
 
-/// Reads a render's sidecar JSON (its "camera" object) from a file.
-Camera read_sidecar(const std::string& path);
+/// Which image a sidecar is read for: its "view", when it states one, must match.
+enum class SidecarView { kAny, kSide, kTop };
+
+/// Reads a render's or the lab's sidecar JSON (its "camera" object) from a file. Strict: every
+/// value the projection uses is required (the distortion and the principal point default to
+/// none and the image centre), an unknown top-level field, an absurd distortion (|k| > 1) and a
+/// "view" other than `expect` are refused. Throws std::invalid_argument naming the file and the
+/// field.
+Camera read_sidecar(const std::string& path, SidecarView expect = SidecarView::kAny);
 
 }  // namespace reposetwin::camera

@@ -1,19 +1,24 @@
 #include "sim/checkpoint.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
 #include <type_traits>
+#include <vector>
 
 namespace reposetwin::sim {
 namespace {
 
-// Format 3 adds the clumps: the particles' clump fields and the bodies. Formats 1 and 2 (spheres
-// only; format 1 with per-pair overlaps, now derived by World::diagnose) are still read.
-constexpr char kMagic[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '3'};
+// Format 4 ends with a checksum of every byte before it; format 3 added the clumps (the particles'
+// clump fields and the bodies). Formats 1 to 3 (1 and 2 spheres only; 1 with per-pair overlaps,
+// now derived by World::diagnose) are still read, without a checksum to verify.
+constexpr char kMagic[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '4'};
+constexpr char kMagicFormat3[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '3'};
 constexpr char kMagicFormat2[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '2'};
 constexpr char kMagicFormat1[8] = {'R', 'T', 'W', 'C', 'K', 'P', 'T', '1'};
 
@@ -40,32 +45,60 @@ constexpr bool kPacked<std::array<T, N>> = kPacked<T> && sizeof(std::array<T, N>
 constexpr std::size_t kWallRecordBytes = 56;
 constexpr std::size_t kWallReserved = kWallRecordBytes - 2 * sizeof(Vec3) - sizeof(bool);
 
+// FNV-1a (64 bit) of a file's bytes, fed as they pass: a flipped or zeroed byte anywhere (a bad
+// disk block, a partial copy, a hand edit) changes it, so a damaged checkpoint is refused rather
+// than resumed into a different result. It guards against accidents, not against forgery.
+class Checksum {
+ public:
+  void add(const char* data, std::size_t n) {
+    for (std::size_t k = 0; k < n; ++k) {
+      h_ ^= static_cast<unsigned char>(data[k]);
+      h_ *= 0x100000001b3ULL;
+    }
+  }
+  std::uint64_t value() const { return h_; }
+
+ private:
+  std::uint64_t h_ = 0xcbf29ce484222325ULL;
+};
+
 class Writer {
  public:
   explicit Writer(std::ofstream& out) : out_(out) {}
   template <class T>
   void pod(const T& v) {
     static_assert(kPacked<T>, "a type with padding bytes: write its fields");
-    out_.write(reinterpret_cast<const char*>(&v), sizeof(T));
+    bytes(reinterpret_cast<const char*>(&v), sizeof(T));
   }
   template <class T, class A>
   void vec(const std::vector<T, A>& v) {
     static_assert(kPacked<T>, "a type with padding bytes: write its fields");
     count(v);
-    out_.write(reinterpret_cast<const char*>(v.data()),
-               static_cast<std::streamsize>(v.size() * sizeof(T)));
+    bytes(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+  }
+  void bytes(const char* data, std::size_t n) {
+    sum_.add(data, n);
+    out_.write(data, static_cast<std::streamsize>(n));
+  }
+  /// The checksum of every byte written so far, appended (not itself summed).
+  void checksum() {
+    const std::uint64_t h = sum_.value();
+    out_.write(reinterpret_cast<const char*>(&h), sizeof h);
   }
   template <class T, class A>
   void count(const std::vector<T, A>& v) {
     pod<std::uint64_t>(v.size());
   }
   /// Zero bytes where the format keeps room.
-  void reserved(std::size_t bytes) {
-    for (std::size_t k = 0; k < bytes; ++k) out_.put('\0');
+  void reserved(std::size_t n) {
+    const std::array<char, 64> zeros{};
+    for (std::size_t k = 0; k < n; k += zeros.size())
+      bytes(zeros.data(), std::min(zeros.size(), n - k));
   }
 
  private:
   std::ofstream& out_;
+  Checksum sum_;
 };
 
 class Reader {
@@ -79,14 +112,16 @@ class Reader {
       if (byte > 1) fail("has a flag that is neither 0 nor 1");
       v = byte == 1;
     } else {
-      in_.read(reinterpret_cast<char*>(&v), sizeof(T));
-      check();
+      bytes(reinterpret_cast<char*>(&v), sizeof(T));
     }
   }
   template <class T, class A>
   void vec(std::vector<T, A>& v) {
     count(v);
-    in_.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(T)));
+    bytes(reinterpret_cast<char*>(v.data()), v.size() * sizeof(T));
+  }
+  void bytes(char* data, std::size_t n) {
+    in_.read(data, static_cast<std::streamsize>(n));
     check();
   }
   /// Reads an array's length and resizes `v` to it.
@@ -98,9 +133,10 @@ class Reader {
     v.resize(n);
   }
   /// Skips bytes the format keeps room in; their contents do not matter.
-  void reserved(std::size_t bytes) {
-    in_.ignore(static_cast<std::streamsize>(bytes));
-    check();
+  void reserved(std::size_t n) {
+    std::array<char, 64> skip{};
+    for (std::size_t k = 0; k < n; k += skip.size())
+      bytes(skip.data(), std::min(skip.size(), n - k));
   }
   [[noreturn]] void fail(const std::string& what) {
     throw std::runtime_error(path_ + ": checkpoint " + what);
@@ -113,6 +149,27 @@ class Reader {
   std::ifstream& in_;
   std::string path_;
 };
+
+// Whether the checksum at the end of a format-4 file matches the bytes before it. Checked before
+// a single value is parsed, so a damaged array length never sizes an allocation.
+bool checksum_matches(std::ifstream& in) {
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < static_cast<std::streamoff>(sizeof(kMagic) + sizeof(std::uint64_t))) return false;
+  in.seekg(0);
+  Checksum sum;
+  std::vector<char> buf(std::size_t{1} << 20);
+  for (std::streamoff left = size - static_cast<std::streamoff>(sizeof(std::uint64_t)); left > 0;) {
+    const auto n = static_cast<std::streamsize>(
+        std::min<std::streamoff>(left, static_cast<std::streamoff>(buf.size())));
+    if (!in.read(buf.data(), n)) return false;
+    sum.add(buf.data(), static_cast<std::size_t>(n));
+    left -= n;
+  }
+  std::uint64_t stored = 0;
+  if (!in.read(reinterpret_cast<char*>(&stored), sizeof stored)) return false;
+  return stored == sum.value();
+}
 
 /// The walls' states, one fixed-size record each (see kWallRecordBytes).
 template <class Archive, class WallsT>
@@ -169,13 +226,19 @@ void write_checkpoint(const World& world, const std::string& path) {
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) throw std::runtime_error(path + ": cannot write checkpoint");
-    out.write(kMagic, sizeof kMagic);
     Writer w(out);
+    w.bytes(kMagic, sizeof kMagic);
     w.pod(world.model().dt);
     w.pod<std::uint64_t>(world.model().walls.size());
-    transfer_state(w, s, 3);
+    transfer_state(w, s, 4);
+    w.checksum();
     out.flush();
-    if (!out) throw std::runtime_error(path + ": checkpoint write failed");
+    if (!out) {
+      out.close();
+      std::error_code ignored;
+      std::filesystem::remove(tmp, ignored);  // a full disk must not leave half a file behind
+      throw std::runtime_error(path + ": checkpoint write failed (disk full or not writable)");
+    }
   }
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);
@@ -186,14 +249,22 @@ void read_checkpoint(World& world, const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot open checkpoint");
   char magic[8];
-  in.read(magic, sizeof magic);
   Reader r(in, path);
+  in.read(magic, sizeof magic);
   if (!in) r.fail("is not a ReposeTwin checkpoint");
   int format = 0;
-  if (std::memcmp(magic, kMagic, sizeof kMagic) == 0) format = 3;
+  if (std::memcmp(magic, kMagic, sizeof kMagic) == 0) format = 4;
+  if (std::memcmp(magic, kMagicFormat3, sizeof kMagicFormat3) == 0) format = 3;
   if (std::memcmp(magic, kMagicFormat2, sizeof kMagicFormat2) == 0) format = 2;
   if (std::memcmp(magic, kMagicFormat1, sizeof kMagicFormat1) == 0) format = 1;
   if (format == 0) r.fail("is not a ReposeTwin checkpoint");
+  if (format >= 4) {
+    if (!checksum_matches(in))
+      r.fail("is damaged (its checksum does not match its contents); it cannot be resumed. "
+             "Run again from the start with --force");
+    in.clear();
+    in.seekg(sizeof magic);
+  }
   double dt = 0.0;
   r.pod(dt);
   if (dt != world.model().dt) r.fail("was made with another time step");
@@ -202,6 +273,7 @@ void read_checkpoint(World& world, const std::string& path) {
   if (nwalls != world.model().walls.size()) r.fail("was made with another number of walls");
   State s;
   transfer_state(r, s, format);
+  if (format >= 4) r.reserved(sizeof(std::uint64_t));  // the checksum, verified above
   if (in.peek() != std::ifstream::traits_type::eof()) r.fail("has data after its end");
   const std::size_t n = s.particles.x.size();
   if (format < 3) {  // spheres only

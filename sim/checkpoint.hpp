@@ -6,7 +6,9 @@
 // as it is, so the resumed run rebuilds it at exactly the same steps as an uninterrupted one.
 // Every byte of a file is a value's (a struct with padding is written field by field), so one
 // state always writes one file and checkpoints can be compared byte for byte.
-// Files are written to a temporary name and renamed into place (never half a checkpoint).
+// Files are written to a temporary name and renamed into place (never half a checkpoint), and end
+// with a checksum of every byte before it, verified before anything is parsed: a damaged file
+// (a flipped byte, a partial copy) is refused, never resumed into a different result.
 #pragma once
 
 #include <string>
@@ -19,8 +21,8 @@ namespace reposetwin::sim {
 void write_checkpoint(const World& world, const std::string& path);
 
 /// Replaces the world's state by the checkpoint's. Throws std::runtime_error naming the path if
-/// the file is unreadable, truncated, of another format, or made with another time step or
-/// wall count.
+/// the file is unreadable, truncated, damaged (its checksum), of another format, or made with
+/// another time step or wall count.
 void read_checkpoint(World& world, const std::string& path);
 
 }  // namespace reposetwin::sim

@@ -4,6 +4,7 @@
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include "sim/particles.hpp"
 
@@ -124,12 +125,22 @@ void Model::finalize(double rmin, double rmax) {
   if (!(rmax >= rmin)) bad("particle radius (largest)", rmax, "must not be below the smallest");
   r_min = rmin;
   r_max = rmax;
-  // The stiffest, lightest material sets the Rayleigh time of the smallest particle.
+  // The stiffest, lightest material in use (a particle's or a wall's) sets the Rayleigh time of
+  // the smallest particle.
+  std::vector<char> in_use(static_cast<std::size_t>(n), particle_materials.empty() ? 1 : 0);
+  for (const int m : particle_materials) {
+    if (m < 0 || m >= n) bad("particle_materials", m, "is not a material index");
+    in_use[static_cast<std::size_t>(m)] = 1;
+  }
+  for (const WallSpec& ws : walls) in_use[static_cast<std::size_t>(ws.material)] = 1;
   rayleigh_time = 0.0;
+  bool first = true;
   for (int m = 0; m < n; ++m) {
+    if (!in_use[static_cast<std::size_t>(m)]) continue;
     const double t = sim::rayleigh_time(rmin, materials[m].density, youngs_modulus_used(m),
                                         materials[m].poisson_ratio);
-    if (m == 0 || t < rayleigh_time) rayleigh_time = t;
+    if (first || t < rayleigh_time) rayleigh_time = t;
+    first = false;
   }
   if (!(settings.max_rayleigh_fraction > 0.0))
     bad("settings.max_rayleigh_fraction", settings.max_rayleigh_fraction, "must be positive");

@@ -93,6 +93,9 @@ struct Model {
   std::vector<PairParams> pairs;  // n x n, row-major, symmetric
   std::vector<WallSpec> walls;
   std::vector<ClumpTemplate> clumps;  // clump templates (add_clump_template), in the body frame
+  // The materials particles may be made of; empty: every material. With the walls' materials
+  // they set the time step, so a declared material nothing is made of changes nothing.
+  std::vector<int> particle_materials;
   Settings settings;
 
   // Derived by finalize():

@@ -84,9 +84,9 @@ std::string to_string(ScaleSource source) {
   return "unknown";
 }
 
-ScaleSpec scale_from_sidecar(const std::string& path) {
+ScaleSpec scale_from_sidecar(const std::string& path, camera::SidecarView view) {
   ScaleSpec s;
-  s.camera = camera::read_sidecar(path);
+  s.camera = camera::read_sidecar(path, view);
   std::ifstream in(path);
   const nlohmann::json j = nlohmann::json::parse(in);  // read_sidecar has checked it parses
   if (j.contains("mm_per_px_at_axis") && !j["mm_per_px_at_axis"].is_null()) {

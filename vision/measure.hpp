@@ -71,7 +71,8 @@ struct ScaleSpec {
 
 /// Reads a render's sidecar JSON: its "camera" (camera::read_sidecar) and, when present,
 /// "mm_per_px_at_axis". Throws std::invalid_argument naming the path and field.
-ScaleSpec scale_from_sidecar(const std::string& path);
+ScaleSpec scale_from_sidecar(const std::string& path,
+                             camera::SidecarView view = camera::SidecarView::kAny);
 
 /// Thrown by measure_side when the photo's own pose contradicts its declared camera
 /// (ScaleSpec::check_pose): the photo could be read, but the camera it was declared with is

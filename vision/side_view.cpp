@@ -21,11 +21,14 @@ void check_settings(const SideSettings& s, const std::string& where) {
     throw std::invalid_argument(where + ": side settings " + field + " " + rule + ", got " +
                                 str(v));
   };
-  if (!(s.flank_band_low >= 0.0 && s.flank_band_low < s.flank_band_high &&
-        s.flank_band_high <= 1.0))
-    bad("flank_band_low/high", s.flank_band_low, "must satisfy 0 <= low < high <= 1");
-  if (!(s.toe_band_low >= 0.0 && s.toe_band_low < s.toe_band_high && s.toe_band_high <= 1.0))
-    bad("toe_band_low/high", s.toe_band_low, "must satisfy 0 <= low < high <= 1");
+  auto band = [&](const std::string& name, double low, double high) {
+    if (!(low >= 0.0 && low < high && high <= 1.0))
+      throw std::invalid_argument(where + ": side settings " + name + "_low = " + str(low) +
+                                  ", " + name + "_high = " + str(high) +
+                                  " must satisfy 0 <= low < high <= 1");
+  };
+  band("flank_band", s.flank_band_low, s.flank_band_high);
+  band("toe_band", s.toe_band_low, s.toe_band_high);
   if (s.edge_window_px < 1 || s.edge_window_px > 50)
     bad("edge_window_px", s.edge_window_px, "must be 1..50");
   if (s.morph_radius_px < 0 || s.morph_radius_px > 50)

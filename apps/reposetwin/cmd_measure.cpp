@@ -49,7 +49,8 @@ std::string overlay_next_to(const std::string& image) {
 
 // The scale of one image: explicit option, else its sidecar, else the marker in the image.
 vision::ScaleSpec resolve_scale(const std::string& image, const std::optional<double>& mm_per_px,
-                                const std::string& camera_sidecar, bool marker_only) {
+                                const std::string& camera_sidecar, bool marker_only,
+                                camera::SidecarView view) {
   if (marker_only) return vision::ScaleSpec{};
   if (mm_per_px) {
     vision::ScaleSpec s;
@@ -58,30 +59,37 @@ vision::ScaleSpec resolve_scale(const std::string& image, const std::optional<do
     s.note = "--mm-per-px";
     return s;
   }
-  if (!camera_sidecar.empty()) return vision::scale_from_sidecar(camera_sidecar);
+  if (!camera_sidecar.empty()) return vision::scale_from_sidecar(camera_sidecar, view);
   const std::string auto_sidecar = sidecar_next_to(image);
   std::error_code ec;
-  if (fs::is_regular_file(auto_sidecar, ec)) return vision::scale_from_sidecar(auto_sidecar);
+  if (fs::is_regular_file(auto_sidecar, ec)) return vision::scale_from_sidecar(auto_sidecar, view);
   vision::ScaleSpec s;
   s.note = "no sidecar (" + auto_sidecar + " not found); scale marker searched in the image";
   return s;
 }
 
+// Encoded in memory and published atomically: a full disk is an error naming the path, and never
+// leaves half an image.
 void write_overlay(const std::string& path, const cv::Mat& img) {
+  std::vector<unsigned char> bytes;
   bool ok = false;
   try {
-    ok = cv::imwrite(path, img);
+    const std::string ext = fs::path(path).extension().string();
+    ok = cv::imencode(ext.empty() ? ".png" : ext, img, bytes);
   } catch (const cv::Exception& e) {
-    throw std::runtime_error(path + ": cannot write the overlay image (" + e.what() + ")");
+    throw std::runtime_error(path + ": cannot encode the overlay image (" + e.what() + ")");
   }
-  if (!ok) throw std::runtime_error(path + ": cannot write the overlay image");
+  if (!ok) throw std::runtime_error(path + ": cannot encode the overlay image");
+  experiments::write_file_atomic(path, std::string(bytes.begin(), bytes.end()));
 }
 
 void run_measure(const MeasureOptions& o) {
-  if (o.cameras.size() > 1 + o.more_sides.size())
+  // One camera per side image, in order: with fewer, the images after them would silently take
+  // another scale (their own sidecar, or the scale bar).
+  if (!o.cameras.empty() && o.cameras.size() != 1 + o.more_sides.size())
     throw std::invalid_argument("--camera: " + std::to_string(o.cameras.size()) +
-                                " sidecars given for " + std::to_string(1 + o.more_sides.size()) +
-                                " side images");
+                                " sidecar(s) given for " + std::to_string(1 + o.more_sides.size()) +
+                                " side images; give one --camera per side image, in order");
   vision::SideSettings settings;
   if (!o.roi.empty()) {
     if (o.roi.size() != 4 || o.roi[2] <= 0 || o.roi[3] <= 0)
@@ -93,6 +101,13 @@ void run_measure(const MeasureOptions& o) {
       throw std::invalid_argument("--flank-band must be two fractions of H, e.g. 0.2,0.8");
     settings.flank_band_low = o.flank_band[0];
     settings.flank_band_high = o.flank_band[1];
+    if (!(settings.flank_band_low >= 0 && settings.flank_band_low < settings.flank_band_high &&
+          settings.flank_band_high <= 1)) {
+      std::ostringstream os;
+      os << "--flank-band " << o.flank_band[0] << "," << o.flank_band[1]
+         << ": must be low,high fractions of H with 0 <= low < high <= 1";
+      throw std::invalid_argument(os.str());
+    }
   }
 
   // Measure everything first: nothing is printed or written unless every image succeeds.
@@ -103,7 +118,8 @@ void run_measure(const MeasureOptions& o) {
   for (size_t i = 0; i < sides.size(); ++i) {
     const cv::Mat img = vision::load_image(sides[i]);
     const vision::ScaleSpec scale =
-        resolve_scale(sides[i], o.mm_per_px, i < o.cameras.size() ? o.cameras[i] : "", o.marker);
+        resolve_scale(sides[i], o.mm_per_px, i < o.cameras.size() ? o.cameras[i] : "", o.marker,
+                      camera::SidecarView::kSide);
     views.push_back(vision::measure_side(img, scale, settings, sides[i]));
     if (!o.no_overlay) overlays.push_back(vision::draw_side_overlay(img, views.back()));
   }
@@ -111,7 +127,8 @@ void run_measure(const MeasureOptions& o) {
   cv::Mat top_overlay;
   if (!o.top.empty()) {
     const cv::Mat img = vision::load_image(o.top);
-    vision::ScaleSpec scale = resolve_scale(o.top, o.top_mm_per_px, o.top_camera, o.marker);
+    vision::ScaleSpec scale =
+        resolve_scale(o.top, o.top_mm_per_px, o.top_camera, o.marker, camera::SidecarView::kTop);
     // The crest stands at the pile's height: its width is read on that plane.
     scale.crest_height_m = vision::combine_sides(views).height_m.mean;
     top = vision::measure_top(img, scale, {}, o.top);

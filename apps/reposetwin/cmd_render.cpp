@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
+#include "apps/reposetwin/validators.hpp"
 #include "camera/camera.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/photos/pile_images.hpp"
@@ -24,12 +25,21 @@ void add_render_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "render", "Photograph a finished run's pile (side views and top view) and measure the images");
   cmd->add_option("run_dir", args->run_dir, "Run folder written by `reposetwin run`")->required();
+  // Bounds that keep a typo from rendering for hours or allocating gigabytes: a few views
+  // measure the angle (the lab takes four), and a frame above 16k pixels a side is no camera's.
   cmd->add_option("--views", args->images.side_views, "Side views over 180 degrees")
-      ->capture_default_str();
-  cmd->add_option("--width", args->images.width_px, "Image width [px]")->capture_default_str();
-  cmd->add_option("--height", args->images.height_px, "Image height [px]")->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
+  cmd->add_option("--width", args->images.width_px, "Image width [px]")
+      ->capture_default_str()
+      ->check(CLI::Range(64, 16384));
+  cmd->add_option("--height", args->images.height_px, "Image height [px]")
+      ->capture_default_str()
+      ->check(CLI::Range(64, 16384));
   cmd->add_option("--camera-height", args->images.camera_height_m,
-                  "Side camera height above the plate [m]")->capture_default_str();
+                  "Side camera height above the plate [m]")
+      ->capture_default_str()
+      ->check(number_in(0.0, 10.0));
   cmd->add_flag("!--no-top", args->images.top_view, "Skip the top view");
   cmd->add_option("--frame", args->frames,
                   "Also photograph these snapshots of the series (e.g. frames/frame_00004.vtp)");

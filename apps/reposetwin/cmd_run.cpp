@@ -15,6 +15,7 @@
 #include "experiments/io/scene_overrides.hpp"
 #include "experiments/photos/pile_images.hpp"
 #include "experiments/pile/pile_run.hpp"
+#include "experiments/pile/run_folder.hpp"
 #include "experiments/pile/run_plan.hpp"
 #include "experiments/report/run_summary.hpp"
 
@@ -112,6 +113,7 @@ void add_run_command(CLI::App& app) {
   cmd->callback([args]() {
     const auto t0 = std::chrono::steady_clock::now();
     const experiments::SceneConfig scene = experiments::load_scene(args->scene, args->sets);
+    experiments::check_run_folder(args->run.out_dir, args->run.resume, args->run.force);
     if (!accept_plan(*args, scene)) {
       set_exit_code(6);
       return;

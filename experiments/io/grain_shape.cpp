@@ -73,6 +73,13 @@ sim::ClumpShape generate_shape(TableReader& t, GrainShape& g) {
   if (per_row == 1 && g.elongation > 1.0)
     t.fail("spheres", "= " + std::to_string(n) + " (one per row) cannot make an elongation of " +
                           num(g.elongation) + "; use at least " + std::to_string(2 * rows));
+  // In one row, neighbours stand (L - 2 roundness r) / (n - 1) apart with radii at most r:
+  // farther than 2 r, the grain is in pieces, and the elongation is the key to blame.
+  if (rows == 1 && per_row > 1 && g.elongation > per_row - 1 + g.roundness)
+    t.fail("elongation", "= " + num(g.elongation) + " with spheres = " + std::to_string(n) +
+                             " leaves gaps between the spheres (the grain would fall in pieces); "
+                             "use at most " + num(per_row - 1 + g.roundness) +
+                             " or more spheres");
   g.spheres = static_cast<int>(n);
   const double r = 0.5, length = g.elongation * g.flatness;
   const double row_y = 0.5 * (g.flatness - 1.0);

@@ -80,9 +80,12 @@ void write_file_atomic(const std::string& path, const std::string& text) {
 FolderLock::FolderLock(const std::string& dir, const std::string& name, const std::string& what) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir + ": cannot make the folder (" + ec.message() + ")");
   const std::string p = (std::filesystem::path(dir) / name).string();
   fd_ = ::open(p.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd_ < 0) throw std::runtime_error(p + ": cannot open the lock file");
+  if (fd_ < 0)
+    throw std::runtime_error(p + ": cannot open the lock file (" + std::strerror(errno) +
+                             "); is " + dir + " a folder this process may write?");
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     ::close(fd_);
     fd_ = -1;
@@ -99,17 +102,30 @@ void write_json_atomic(const std::string& path, const nlohmann::json& j) {
   write_file_atomic(path, j.dump(2) + "\n");
 }
 
-std::string read_file(const std::string& path) {
+std::string read_file(const std::string& path, std::uintmax_t max_bytes) {
   // A directory opens as an empty stream on Linux: read as "", it would surface later as a
-  // missing table or column instead of the real mistake.
+  // missing table or column instead of the real mistake. A FIFO blocks the open until someone
+  // writes, and a device (/dev/zero) never ends: only a regular file of a bounded size is read.
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
+  const std::filesystem::file_status st = std::filesystem::status(path, ec);
+  if (std::filesystem::is_directory(st))
     throw std::runtime_error(path + ": is a directory, not a file");
+  if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
+    throw std::runtime_error(path + ": is not a regular file (a pipe, socket or device)");
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (!ec && size > max_bytes)
+    throw std::runtime_error(path + ": is " + std::to_string(size) + " bytes, above the " +
+                             std::to_string(max_bytes) + " this file may have");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot open");
-  std::ostringstream os;
-  os << in.rdbuf();
-  return os.str();
+  std::string text;
+  text.resize(static_cast<std::size_t>(ec ? 0 : size));
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (in.gcount() == static_cast<std::streamsize>(size) &&
+      in.peek() != std::ifstream::traits_type::eof())
+    throw std::runtime_error(path + ": grew while it was read");
+  return text;
 }
 
 }  // namespace reposetwin::experiments

@@ -5,6 +5,7 @@
 // and renamed into place, so a reader sees either the old file or the whole new one.
 #pragma once
 
+#include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -57,7 +58,11 @@ class FolderLock {
   int fd_ = -1;
 };
 
-/// Reads a whole text file; throws std::runtime_error naming the path if it cannot.
-std::string read_file(const std::string& path);
+/// The largest file read_file() reads unless told otherwise [bytes].
+inline constexpr std::uintmax_t kMaxReadBytes = std::uintmax_t{1} << 30;
+
+/// Reads a whole regular file of at most `max_bytes`; throws std::runtime_error naming the path
+/// if it cannot, or if it is a directory, a pipe or a device, or larger.
+std::string read_file(const std::string& path, std::uintmax_t max_bytes = kMaxReadBytes);
 
 }  // namespace reposetwin::experiments

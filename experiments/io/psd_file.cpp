@@ -1,6 +1,7 @@
 #include "experiments/io/psd_file.hpp"
 
 #include <array>
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
@@ -59,6 +60,7 @@ bool read_number(const toml::table& t, const std::string& key, const std::string
     bad(locate(source, where, key, node), show(*node) + " must be a number");
   }
   out = *node->value<double>();
+  if (!std::isfinite(out)) bad(locate(source, where, key, node), show(*node) + " must be finite");
   return true;
 }
 
@@ -78,6 +80,10 @@ std::vector<double> read_numbers(const toml::table& t, const std::string& key,
     if (!item.is_number()) {
       bad(locate(source, where, key + "[" + std::to_string(i) + "]", &item),
           show(item) + " must be a number");
+    }
+    if (!std::isfinite(*item.value<double>())) {
+      bad(locate(source, where, key + "[" + std::to_string(i) + "]", &item),
+          show(item) + " must be finite");
     }
     values.push_back(*item.value<double>());
   }

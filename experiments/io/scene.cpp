@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <utility>
 
@@ -12,14 +13,32 @@
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/toml_reader.hpp"
 #include "experiments/io/toml_tables.hpp"
+#include "sim/psd.hpp"
 
 namespace reposetwin::experiments {
 namespace {
 
-// Limits beyond which a value is a typo, not an experiment.
-constexpr double kMinGrains = 10.0;    // grains of the largest size in a sample [-]
-constexpr double kMaxLiftSpeed = 1.0;  // [m/s]
-constexpr double kMaxGravity = 100.0;  // [m/s^2]
+// Limits beyond which a value is a typo, not an experiment. Each is far outside any laboratory
+// pile test, so it refuses only values that would otherwise run for ever, overflow a count or
+// quietly stand for something else.
+constexpr double kMinGrains = 10.0;       // grains of the largest size in a sample [-]
+constexpr double kMaxLiftSpeed = 1.0;     // [m/s]
+constexpr double kMaxGravity = 100.0;     // [m/s^2]
+constexpr double kMinDensity = 1.0;       // below a gas's: no grain [kg/m^3]
+constexpr double kMaxDensity = 1e5;       // osmium is 2.26e4 [kg/m^3]
+constexpr double kMaxModulus = 1e13;      // diamond is 1.2e12 [Pa]
+constexpr double kMaxFriction = 10.0;     // sliding and rolling coefficients [-]
+constexpr double kMaxSettleSpeed = 1.0;   // a grain this fast has not settled [m/s]
+constexpr double kMaxLatticeGap = 1.0;    // fill spacing twice d_max [-]
+constexpr double kMaxContainerSize = 10.0;  // diameters, height, gap [m]
+constexpr double kMaxMaxTime = 1e5;       // simulated seconds (a day is 8.6e4) [s]
+constexpr int kMaxThreads = 4096;
+constexpr int kMaxSectors = 360;
+constexpr int kMaxSliceAzimuths = 3600;
+// Derived from several keys: what a run would do, bounded before it starts.
+constexpr double kMaxSteps = 1e11;   // max_time / dt: 1e11 steps of one grain are days [-]
+constexpr double kMaxFrames = 1e4;   // max_time / frame_interval: .vtp frame sets written [-]
+constexpr double kMaxParticles = 1e10;  // no machine holds more; the plan's limit is far lower [-]
 
 std::string num(double v) { return significant(v); }
 
@@ -29,9 +48,12 @@ sim::Material read_material(TableReader t, const std::string& name) {
   m.density = t.number("density_kg_m3", m.density);
   m.youngs_modulus = t.number("youngs_modulus_pa", m.youngs_modulus);
   m.poisson_ratio = t.number("poisson_ratio", m.poisson_ratio);
-  if (!(m.density > 0)) t.fail("density_kg_m3", "= " + num(m.density) + " must be positive");
-  if (!(m.youngs_modulus > 0))
-    t.fail("youngs_modulus_pa", "= " + num(m.youngs_modulus) + " must be positive");
+  if (!(m.density >= kMinDensity && m.density <= kMaxDensity))
+    t.fail("density_kg_m3", "= " + num(m.density) + " must be in [" + num(kMinDensity) + ", " +
+                                num(kMaxDensity) + "] kg/m^3 (rock is about 2700)");
+  if (!(m.youngs_modulus > 0 && m.youngs_modulus <= kMaxModulus))
+    t.fail("youngs_modulus_pa", "= " + num(m.youngs_modulus) + " must be in (0, " +
+                                    num(kMaxModulus) + "] Pa (rock is about 5e10)");
   if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5))
     t.fail("poisson_ratio", "= " + num(m.poisson_ratio) + " must lie in (-1, 0.5)");
   t.finish();
@@ -71,13 +93,34 @@ sim::PairParams read_contact(TableReader t) {
                                                num(p.rolling_size_exponent) + " is not 0");
   if (!(p.restitution > 0 && p.restitution <= 1))
     t.fail("restitution", "= " + num(p.restitution) + " must lie in (0, 1]");
-  if (!(p.friction >= 0)) t.fail("friction", "= " + num(p.friction) + " must not be negative");
-  if (!(p.rolling_friction >= 0))
-    t.fail("rolling_friction", "= " + num(p.rolling_friction) + " must not be negative");
+  if (!(p.friction >= 0 && p.friction <= kMaxFriction))
+    t.fail("friction", "= " + num(p.friction) + " must be in [0, " + num(kMaxFriction) + "]");
+  if (!(p.rolling_friction >= 0 && p.rolling_friction <= kMaxFriction))
+    t.fail("rolling_friction",
+           "= " + num(p.rolling_friction) + " must be in [0, " + num(kMaxFriction) + "]");
   if (!(p.rolling_damping >= 0))
     t.fail("rolling_damping", "= " + num(p.rolling_damping) + " must not be negative");
   t.finish();
   return p;
+}
+
+/// The two materials a [contacts] key "a-b" names. A material's own name may hold a dash
+/// ("ro-ck"), so every split is tried: exactly one must name two declared materials.
+std::optional<std::pair<std::string, std::string>> contact_materials(
+    const std::string& key, const std::vector<sim::Material>& materials) {
+  auto declared = [&](const std::string& name) {
+    return std::any_of(materials.begin(), materials.end(),
+                       [&](const sim::Material& m) { return m.name == name; });
+  };
+  std::optional<std::pair<std::string, std::string>> found;
+  for (std::size_t dash = key.find('-'); dash != std::string::npos;
+       dash = key.find('-', dash + 1)) {
+    const std::string a = key.substr(0, dash), b = key.substr(dash + 1);
+    if (!declared(a) || !declared(b)) continue;
+    if (found) return std::nullopt;  // two readings: neither is taken
+    found = {a, b};
+  }
+  return found;
 }
 
 /// The scene as read, with the optional contact effects written out in every [contacts.a-b]
@@ -102,10 +145,10 @@ std::string resolved_text(const toml::table& doc, const SceneConfig& s,
   if (toml::table* contacts = out["contacts"].as_table()) {
     for (auto& [key, node] : *contacts) {
       toml::table* t = node.as_table();
-      const std::string name(key.str());
-      const auto dash = name.find('-');
-      const auto it = s.contacts.find({name.substr(0, dash), name.substr(dash + 1)});
-      if (!t || it == s.contacts.end()) continue;
+      const auto pair = contact_materials(std::string(key.str()), s.materials);
+      if (!t || !pair) continue;
+      const auto it = s.contacts.find(*pair);
+      if (it == s.contacts.end()) continue;
       const sim::PairParams& p = it->second;
       t->insert_or_assign("cohesion_energy_density", p.cohesion_energy_density);
       t->insert_or_assign("rolling_size_exponent", p.rolling_size_exponent);
@@ -127,6 +170,12 @@ double container_volume(const ContainerConfig& c) {
 void read_scene_head(TableReader t, SceneConfig& s) {
   s.name = t.string("name");
   s.description = t.string("description", "");
+  // The name titles pages and progress lines: a control character (a NUL) would cut or garble it.
+  for (const char c : s.name)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      t.fail("name", "holds a control character (code " +
+                         std::to_string(static_cast<int>(static_cast<unsigned char>(c))) +
+                         "); a name is printable text");
   const std::int64_t seed = t.integer("seed", 1);
   if (seed < 0) t.fail("seed", "= " + std::to_string(seed) + " must not be negative");
   s.seed = static_cast<std::uint64_t>(seed);
@@ -181,7 +230,15 @@ void read_sample(TableReader t, SceneConfig& s, const toml::table& doc,
   try {
     resolved = sim::resolve_psd(s.psd.spec);
   } catch (const std::invalid_argument& e) {
-    throw InputError(file + ": sample.psd: " + e.what());
+    // A cut-off outside the table is the cut-off key's fault when the scene set it.
+    const std::string what = e.what();
+    for (const char* key : {"d_min_mm", "d_max_mm"}) {
+      const std::string name = std::string(key).substr(0, 5);  // "d_min", "d_max"
+      if (t.has(key) && what.find(name + " =") != std::string::npos)
+        throw InputError(file + ": " + t.where(key) + " = " + num(t.number(key)) + ": " + what,
+                         t.where(key));
+    }
+    throw InputError(file + ": sample.psd: " + what);
   }
   // A sample of a few grains is no pile, and the sampler could only round it up to one grain
   // many times its mass.
@@ -196,11 +253,14 @@ void read_sample(TableReader t, SceneConfig& s, const toml::table& doc,
 // [contacts]: one table per pair of declared materials, "a-b" (both orders set).
 void read_contacts(TableReader t, SceneConfig& s) {
   for (const std::string& key : t.keys()) {
-    const auto dash = key.find('-');
-    if (dash == std::string::npos) t.fail(key, "must name two materials as \"a-b\"");
-    const std::string a = key.substr(0, dash), b = key.substr(dash + 1);
-    material_index(s, a, t.where(key));
-    material_index(s, b, t.where(key));
+    const auto pair = contact_materials(key, s.materials);
+    if (!pair) {
+      std::string names;
+      for (const sim::Material& m : s.materials) names += (names.empty() ? "" : ", ") + m.name;
+      t.fail(key, "must name two materials of [materials] as \"a-b\", in one way only "
+                  "(materials: " + names + ")");
+    }
+    const auto& [a, b] = *pair;
     const sim::PairParams p = read_contact(*t.table(key));
     s.contacts[{a, b}] = p;
     s.contacts[{b, a}] = p;
@@ -221,12 +281,17 @@ void read_container(TableReader t, SceneConfig& s, const std::string& file) {
   if (c.kind == "funnel") c.top_diameter = t.number("top_diameter_m", c.top_diameter);
   c.height = t.number("height_m", c.height);
   c.gap = t.number("gap_m", c.gap);
-  if (!(c.bottom_diameter > 0))
-    t.fail("bottom_diameter_m", "= " + num(c.bottom_diameter) + " must be positive");
+  const std::string most = num(kMaxContainerSize) + "] m";
+  if (!(c.bottom_diameter > 0 && c.bottom_diameter <= kMaxContainerSize))
+    t.fail("bottom_diameter_m", "= " + num(c.bottom_diameter) + " must be in (0, " + most);
   if (!(c.top_diameter >= c.bottom_diameter))
     t.fail("top_diameter_m", "= " + num(c.top_diameter) + " must not be below the outlet");
-  if (!(c.height > 0)) t.fail("height_m", "= " + num(c.height) + " must be positive");
-  if (!(c.gap >= 0)) t.fail("gap_m", "= " + num(c.gap) + " must not be negative");
+  if (!(c.top_diameter <= kMaxContainerSize))
+    t.fail("top_diameter_m", "= " + num(c.top_diameter) + " must be at most " + most);
+  if (!(c.height > 0 && c.height <= kMaxContainerSize))
+    t.fail("height_m", "= " + num(c.height) + " must be in (0, " + most);
+  if (!(c.gap >= 0 && c.gap <= kMaxContainerSize))
+    t.fail("gap_m", "= " + num(c.gap) + " must be in [0, " + most);
   t.finish();
   const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
   if (psd.d_max >= c.bottom_diameter) {
@@ -279,15 +344,22 @@ void read_procedure(TableReader t, ProcedureConfig& p) {
   if (!(p.lift_speed > 0 && p.lift_speed <= kMaxLiftSpeed))
     t.fail("lift_speed_m_s", "= " + num(p.lift_speed) + " m/s must be in (0, " +
                                  num(kMaxLiftSpeed) + "] (the lab lifts at 0.01)");
-  if (!(p.settle_speed > 0))
-    t.fail("settle_speed_m_s", "= " + num(p.settle_speed) + " must be positive");
-  if (!(p.max_time > 0)) t.fail("max_time_s", "= " + num(p.max_time) + " must be positive");
+  if (!(p.settle_speed > 0 && p.settle_speed <= kMaxSettleSpeed))
+    t.fail("settle_speed_m_s", "= " + num(p.settle_speed) + " m/s must be in (0, " +
+                                   num(kMaxSettleSpeed) + "]");
+  if (!(p.fill_settle_max > 0))
+    t.fail("fill_settle_max_s", "= " + num(p.fill_settle_max) + " must be positive");
+  if (!(p.final_settle_max > 0))
+    t.fail("final_settle_max_s", "= " + num(p.final_settle_max) + " must be positive");
+  if (!(p.max_time > 0 && p.max_time <= kMaxMaxTime))
+    t.fail("max_time_s", "= " + num(p.max_time) + " s must be in (0, " + num(kMaxMaxTime) + "]");
   if (!(p.clog_window > 0))
     t.fail("clog_window_s", "= " + num(p.clog_window) + " must be positive");
   if (!(p.max_retained_fraction >= 0 && p.max_retained_fraction < 1))
     t.fail("max_retained_fraction", "= " + num(p.max_retained_fraction) + " must be in [0, 1)");
-  if (!(p.lattice_gap >= 0))
-    t.fail("lattice_gap", "= " + num(p.lattice_gap) + " must not be negative");
+  if (!(p.lattice_gap >= 0 && p.lattice_gap <= kMaxLatticeGap))
+    t.fail("lattice_gap", "= " + num(p.lattice_gap) + " must be in [0, " + num(kMaxLatticeGap) +
+                              "] (fill spacing d_max (1 + this))");
   t.finish();
 }
 
@@ -297,7 +369,11 @@ void read_numerics(TableReader t, sim::Settings& n) {
   n.time_step = t.number("time_step_s", n.time_step);
   n.softened_youngs_modulus = t.number("softened_youngs_modulus_pa", n.softened_youngs_modulus);
   n.skin = t.number("skin_m", n.skin);
-  n.threads = static_cast<int>(t.integer("threads", n.threads));
+  const std::int64_t threads = t.integer("threads", n.threads);
+  if (threads < 0 || threads > kMaxThreads)
+    t.fail("threads", "= " + std::to_string(threads) + " must be in [0, " +
+                          std::to_string(kMaxThreads) + "]");
+  n.threads = static_cast<int>(threads);
   n.gravity.z() = -t.number("gravity_m_s2", -n.gravity.z());
   n.max_overlap_ratio = t.number("max_overlap_ratio", n.max_overlap_ratio);
   n.initial_overlap_tolerance = t.number("initial_overlap_tolerance", n.initial_overlap_tolerance);
@@ -321,10 +397,10 @@ void read_numerics(TableReader t, sim::Settings& n) {
     t.fail("escape_distance_m", "= " + num(n.escape_distance) + " must be positive");
   if (!(n.skin >= 0 && std::isfinite(n.skin)))
     t.fail("skin_m", "= " + num(n.skin) + " must not be negative");
-  if (n.softened_youngs_modulus < 0)
-    t.fail("softened_youngs_modulus_pa",
-           "= " + num(n.softened_youngs_modulus) + " must not be negative");
-  if (n.threads < 0) t.fail("threads", "= " + std::to_string(n.threads) + " must not be negative");
+  if (!(n.softened_youngs_modulus >= 0 && n.softened_youngs_modulus <= kMaxModulus))
+    t.fail("softened_youngs_modulus_pa", "= " + num(n.softened_youngs_modulus) +
+                                             " must be in [0, " + num(kMaxModulus) +
+                                             "] Pa (0: each material's own)");
   t.finish();
 }
 
@@ -338,21 +414,86 @@ void read_output(TableReader t, OutputConfig& o) {
     t.fail("frame_interval_s", "= " + num(o.frame_interval) + " must not be negative");
   if (!(o.checkpoint_interval > 0))
     t.fail("checkpoint_interval_s", "= " + num(o.checkpoint_interval) + " must be positive");
+  if (o.progress_interval < 0)
+    t.fail("progress_interval_s", "= " + num(o.progress_interval) + " must not be negative");
   t.finish();
 }
 
 // [measure]: the particle measurement of the pile.
 void read_measure(TableReader t, sim::PileGeometrySettings& m) {
-  m.slice_azimuths = static_cast<int>(t.integer("slice_azimuths", m.slice_azimuths));
+  // Counts are checked as read (64-bit), before they narrow to int.
+  auto count = [&t](const char* key, int fallback, int lo, int hi) {
+    const std::int64_t v = t.integer(key, fallback);
+    if (v < lo || v > hi)
+      t.fail(key, "= " + std::to_string(v) + " must be at least " + std::to_string(lo) +
+                      " and at most " + std::to_string(hi));
+    return static_cast<int>(v);
+  };
+  m.slice_azimuths = count("slice_azimuths", m.slice_azimuths, 8, kMaxSliceAzimuths);
   m.flank_low = t.number("flank_low", m.flank_low);
   m.flank_high = t.number("flank_high", m.flank_high);
-  m.sectors = static_cast<int>(t.integer("sectors", m.sectors));
-  if (m.sectors < 4) t.fail("sectors", "= " + std::to_string(m.sectors) + " must be at least 4");
-  if (m.slice_azimuths < 8)
-    t.fail("slice_azimuths", "= " + std::to_string(m.slice_azimuths) + " must be at least 8");
+  m.sectors = count("sectors", m.sectors, 4, kMaxSectors);
   if (!(m.flank_low >= 0 && m.flank_low < m.flank_high && m.flank_high <= 1))
-    t.fail("flank_low", "/ flank_high must satisfy 0 <= low < high <= 1");
+    t.fail("flank_low", "= " + num(m.flank_low) + " / measure.flank_high = " + num(m.flank_high) +
+                            " must satisfy 0 <= flank_low < flank_high <= 1");
   t.finish();
+}
+
+// What the scene makes a run do, bounded before it starts: the steps up to the time limit and the
+// frames written, each from several keys, so the message names them all.
+void check_run_bounds(const SceneConfig& s, double dt) {
+  const std::string dt_keys = s.settings.time_step > 0
+                                  ? "numerics.time_step_s"
+                                  : "numerics.rayleigh_fraction, the stiffness (numerics."
+                                    "softened_youngs_modulus_pa or materials' youngs_modulus_pa)"
+                                    " and density";
+  if (!(dt > 0 && std::isfinite(dt)))
+    throw InputError(s.file + ": the time step from " + dt_keys + " is " + num(dt) +
+                         " s; it must be positive and finite",
+                     "numerics.time_step_s");
+  const double steps = s.procedure.max_time / dt;
+  if (!(steps <= kMaxSteps))
+    throw InputError(s.file + ": procedure.max_time_s = " + num(s.procedure.max_time) +
+                         " s at a time step of " + num(dt) + " s (from " + dt_keys + ") is " +
+                         num(steps) + " steps, above the limit of " + num(kMaxSteps) +
+                         "; lower the stiffness or procedure.max_time_s",
+                     "procedure.max_time_s");
+  const double density = s.materials[material_index(s, s.sample_material, "")].density;
+  const double count = sim::expected_particle_count(s.psd.spec, s.mass, density);
+  if (!(count <= kMaxParticles))
+    throw InputError(s.file + ": sample.mass_kg = " + num(s.mass) + " kg down to the cut-off " +
+                         "sample.d_min_mm = " + num(1e3 * sim::resolve_psd(s.psd.spec).d_min) +
+                         " mm is about " + num(count) + " particles, above the limit of " +
+                         num(kMaxParticles) + "; raise sample.d_min_mm or lower sample.mass_kg",
+                     "sample.d_min_mm");
+  const double every = s.output.frame_interval;
+  if (every > 0 && !(s.procedure.max_time / every <= kMaxFrames))
+    throw InputError(s.file + ": output.frame_interval_s = " + num(every) + " s writes up to " +
+                         num(s.procedure.max_time / std::max(every, dt)) +
+                         " frames (each two or more .vtp files) in procedure.max_time_s = " +
+                         num(s.procedure.max_time) + " s, above the limit of " + num(kMaxFrames) +
+                         "; raise it to at least " + num(s.procedure.max_time / kMaxFrames) +
+                         " s, lower max_time_s, or set 0 for the final state only",
+                     "output.frame_interval_s");
+}
+
+// The engine's name of a setting and the scene key a user wrote for it: the engine checks the
+// time step against the stability limit, which needs the particle size, so that error is the
+// engine's and is told in the scene's words.
+constexpr std::pair<const char*, const char*> kEngineKeys[] = {
+    {"settings.time_step", "numerics.time_step_s"},
+    {"settings.softened_youngs_modulus", "numerics.softened_youngs_modulus_pa"},
+    {"settings.rayleigh_fraction", "numerics.rayleigh_fraction"},
+    {"settings.skin", "numerics.skin_m"},
+};
+
+InputError engine_error(const std::string& file, const std::string& what) {
+  for (const auto& [engine, scene] : kEngineKeys) {
+    const std::string e(engine);
+    if (what.compare(0, e.size(), e) == 0 && what.size() > e.size() && what[e.size()] == ' ')
+      return InputError(file + ": " + scene + what.substr(e.size()), scene);
+  }
+  return InputError(file + ": " + what);
 }
 
 }  // namespace
@@ -385,7 +526,7 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file) {
   {  // Validate the numerics now (time step against the stability limit, pair parameters).
     const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
     const auto [r_min, r_max] = grain_radius_range(s, psd.d_min, psd.d_max);
-    build_model(s, r_min, r_max);
+    check_run_bounds(s, build_model(s, r_min, r_max).dt);
   }
   s.resolved_toml = resolved_text(doc, s, dir);
   return s;
@@ -442,10 +583,13 @@ sim::Model build_model(const SceneConfig& scene, double r_min, double r_max) {
   c.r_bottom = 0.5 * scene.container.bottom_diameter;
   c.r_top = 0.5 * scene.container.top_diameter;
   m.walls.push_back(c);
+  // The time step comes from what is simulated: the grains' material and the walls' (an unused
+  // material in [materials] changes nothing).
+  m.particle_materials = {material_index(scene, scene.sample_material, "sample.material")};
   try {
     m.finalize(r_min, r_max);
   } catch (const std::invalid_argument& e) {
-    throw InputError(scene.file + ": " + e.what());
+    throw engine_error(scene.file, e.what());
   }
   return m;
 }

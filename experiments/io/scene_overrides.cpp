@@ -15,7 +15,10 @@ struct SceneDoc::Tree {
 
 SceneDoc::SceneDoc(const std::string& path)
     : file_(path.empty() ? "<embedded>" : path), tree_(std::make_unique<Tree>()) {
-  tree_->doc = parse_toml(path.empty() ? embedded_quick_scene() : read_file(path), file_);
+  // A scene is a page of text; a cap keeps a wrong file (a log, an image) from filling memory.
+  constexpr std::uintmax_t kMaxSceneBytes = std::uintmax_t{16} << 20;
+  tree_->doc =
+      parse_toml(path.empty() ? embedded_quick_scene() : read_file(path, kMaxSceneBytes), file_);
 }
 
 SceneDoc::SceneDoc(const std::string& path, std::span<const Override> overrides,
@@ -92,9 +95,10 @@ SceneConfig SceneDoc::config_after_command_line() const {
       };
       return !k.empty() && (k == set_key || under(k, set_key) || under(set_key, k));
     };
-    for (const std::string& text : sets_)
-      if (related(parse_override(text, "--set").key))
-        throw InputError(std::string(e.what()) + " (set by --set " + text + ")", e.key());
+    // The last --set of a key is the one whose value was read.
+    for (auto it = sets_.rbegin(); it != sets_.rend(); ++it)
+      if (related(parse_override(*it, "--set").key))
+        throw InputError(std::string(e.what()) + " (set by --set " + *it + ")", e.key());
     throw;
   }
 }

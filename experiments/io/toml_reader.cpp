@@ -1,6 +1,7 @@
 #include "experiments/io/toml_reader.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <vector>
 
@@ -61,7 +62,11 @@ const toml::node* TableReader::get(const std::string& key) {
 double TableReader::number(const std::string& key, double fallback) {
   const toml::node* n = get(key);
   if (!n) return fallback;
-  if (auto v = n->value<double>(); v && (n->is_floating_point() || n->is_integer())) return *v;
+  if (auto v = n->value<double>(); v && (n->is_floating_point() || n->is_integer())) {
+    // TOML has inf and nan; no key of ours means either, and a nan passes every `<` check.
+    if (!std::isfinite(*v)) fail(key, "= " + show_node(*n) + " must be a finite number");
+    return *v;
+  }
   fail(key, "must be a number, got " + show_node(*n));
 }
 
@@ -107,6 +112,9 @@ std::vector<double> TableReader::numbers(const std::string& key) {
     auto v = item.value<double>();
     if (!v || !(item.is_floating_point() || item.is_integer()))
       fail(key + "[" + std::to_string(i) + "]", "must be a number, got " + show_node(item));
+    if (!std::isfinite(*v))
+      fail(key + "[" + std::to_string(i) + "]",
+           "= " + show_node(item) + " must be a finite number");
     out.push_back(*v);
   }
   return out;

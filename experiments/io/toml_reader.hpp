@@ -2,7 +2,9 @@
 //
 // Every scene and campaign file is read through TableReader: each key is read with its type
 // checked, and finish() rejects any key that was not read, so a typo is an error rather than a
-// silently ignored setting. Every message names the file, the dotted key and the value.
+// silently ignored setting. Every message names the file, the dotted key and the value. Numbers
+// are finite: TOML's inf and nan mean nothing in any of our files, and a nan slips through every
+// range check written as a comparison.
 #pragma once
 
 #include <toml++/toml.h>
@@ -23,6 +25,7 @@ class TableReader {
   TableReader(const toml::table& table, std::string file, std::string path = "");
 
   bool has(const std::string& key) const;
+  /// A number (an integer reads as one); inf and nan are refused, naming the key.
   double number(const std::string& key, double fallback);
   double number(const std::string& key);  // required
   std::int64_t integer(const std::string& key, std::int64_t fallback);

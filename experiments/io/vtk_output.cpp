@@ -53,17 +53,18 @@ constexpr PointArray kPointArrays[] = {
      }},
 };
 
+// VTK's file writer does not report a short write (a full disk leaves a truncated file and
+// Write() == 1), so the XML is made in memory and published by write_file_atomic, which checks
+// every write, syncs and renames: a reader sees the old file or the whole new one.
 void write_poly(const std::string& path, vtkPolyData* poly, const char* what) {
-  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
-  const std::string tmp = path + ".tmp.vtp";
   vtkNew<vtkXMLPolyDataWriter> writer;
-  writer->SetFileName(tmp.c_str());
+  writer->WriteToOutputStringOn();
   writer->SetInputData(poly);
   writer->SetDataModeToAppended();
   writer->EncodeAppendedDataOff();
   if (writer->Write() != 1)
     throw std::runtime_error(path + ": VTK could not write the " + std::string(what));
-  std::filesystem::rename(tmp, path);
+  write_file_atomic(path, writer->GetOutputString());
 }
 
 void add_field(vtkFieldData* fd, const char* name, std::initializer_list<double> values) {

@@ -18,6 +18,7 @@
 #include "experiments/io/vtk_output.hpp"
 #include "experiments/pile/pile_sample.hpp"
 #include "experiments/pile/run_controller.hpp"
+#include "experiments/pile/run_folder.hpp"
 #include "experiments/pile/stop_hint.hpp"
 #include "sim/checkpoint.hpp"
 #include "sim/psd.hpp"
@@ -119,13 +120,7 @@ class PileRunner {
   // A fresh run whose inputs have passed every check: with force, no stale result may look
   // like this run's; the resolved scene is the folder's first file.
   void start_clean_folder() {
-    if (opt_.force) {
-      for (const char* f : {"result.json", "final.vtp", "checkpoint.bin", "controller.json",
-                            "series.pvd", "scene.resolved.toml"})
-        fs::remove(path(f));
-      fs::remove_all(path("frames"));
-      fs::remove_all(path("images"));
-    }
+    if (opt_.force) remove_run_files(out_);  // a user's own files beside them stay
     fs::create_directories(path("frames"));
     write_file_atomic(path("scene.resolved.toml").string(), scene_.resolved_toml);
   }

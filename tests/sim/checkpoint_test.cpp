@@ -123,6 +123,14 @@ void write_file(const std::string& path, const std::string& bytes) {
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 }
 
+// The same bytes as a format-3 file (no checksum): how a file made before the checksum reads,
+// and how a byte can be edited here without the checksum refusing the whole file.
+std::string as_format3(std::string bytes) {
+  bytes[7] = '3';
+  bytes.resize(bytes.size() - sizeof(std::uint64_t));
+  return bytes;
+}
+
 TEST(Checkpoint, WallRecordsKeepTheirLayoutAndIgnoreTheirReservedBytes) {
   const std::string path = temp_path("walls.bin");
   const World w = moved_pour();
@@ -143,7 +151,7 @@ TEST(Checkpoint, WallRecordsKeepTheirLayoutAndIgnoreTheirReservedBytes) {
     garbage.replace(r + kFields, kRecord - kFields, "ed) thr");
   }
   // Files whose reserved bytes hold garbage (written from the struct's memory) read the same.
-  write_file(path, garbage);
+  write_file(path, as_format3(garbage));
   World resumed = testing::funnel_pour(0);
   read_checkpoint(resumed, path);
   expect_same_walls(resumed.state(), w.state());
@@ -151,13 +159,23 @@ TEST(Checkpoint, WallRecordsKeepTheirLayoutAndIgnoreTheirReservedBytes) {
   // A flag byte that is no bool is refused, naming the file.
   std::string bad = reference;
   bad[at + 2 * sizeof(Vec3)] = 2;  // the first wall's flag
-  write_file(path, bad);
+  write_file(path, as_format3(bad));
   try {
     read_checkpoint(resumed, path);
     ADD_FAILURE() << "a flag of 2 was accepted";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("neither 0 nor 1"), std::string::npos) << e.what();
+  }
+  // In a current file any changed byte, reserved or not, fails the checksum.
+  for (const std::string& changed : {garbage, bad}) {
+    write_file(path, changed);
+    try {
+      read_checkpoint(resumed, path);
+      ADD_FAILURE() << "a changed file was accepted";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("checksum"), std::string::npos) << e.what();
+    }
   }
   std::filesystem::remove(path);
 }

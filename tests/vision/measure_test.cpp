@@ -146,7 +146,7 @@ TEST(MeasureSide, SidecarGivesCameraAndScale) {
   EXPECT_DOUBLE_EQ(spec.marker.band_mm, 12.0);
   {
     std::ofstream out(path);
-    out << R"({"camera": {"projection": "perspective"}, "mm_per_px_at_axis": -1})";
+    out << nlohmann::json{{"camera", camera::to_json(cam)}, {"mm_per_px_at_axis", -1}}.dump();
   }
   try {
     scale_from_sidecar(path);

@@ -99,6 +99,35 @@ TEST(PileRunSafety, ACheckpointAndAControllerFromDifferentStepsAreRefused) {
   EXPECT_NE(what.find(step_of(early)), std::string::npos) << what;
 }
 
+// A checkpoint damaged on disk (two bytes flipped, in the header's neighbourhood or in the
+// particle arrays) is refused on resume, naming the file, and never resumed into another result;
+// the undamaged file still resumes.
+TEST(PileRunSafety, ACorruptedCheckpointIsRefused) {
+  const Folder f = folder("corrupt");
+  RunOptions opt = options(f);
+  const SceneConfig scene = load_scene(f.scene);
+  opt.stop_after_steps = 1000;
+  ASSERT_FALSE(run_pile_test(scene, opt).has_value());
+  const fs::path ckpt = fs::path(opt.out_dir) / "checkpoint.bin";
+  const std::string good = read_file(ckpt.string());
+  ASSERT_GT(good.size(), 1002u);
+  opt.stop_after_steps = 0;
+  opt.resume = true;
+  for (const std::size_t at : {std::size_t{48}, std::size_t{1000}}) {
+    SCOPED_TRACE(at);
+    std::string bad = good;
+    bad[at] = static_cast<char>(bad[at] ^ 0x5a);
+    bad[at + 1] = static_cast<char>(bad[at + 1] ^ 0x01);
+    write_file_atomic(ckpt.string(), bad);
+    const std::string what = message_of([&] { run_pile_test(scene, opt); });
+    EXPECT_NE(what.find(ckpt.string()), std::string::npos) << what;
+    EXPECT_NE(what.find("checksum"), std::string::npos) << what;
+    EXPECT_FALSE(fs::exists(fs::path(opt.out_dir) / "result.json"));
+  }
+  write_file_atomic(ckpt.string(), good);
+  EXPECT_TRUE(run_pile_test(scene, opt).has_value());
+}
+
 TEST(PileRunSafety, ForceDeletesNothingWhenTheNewInputsFail) {
   const Folder good = folder("force");
   RunOptions opt = options(good);

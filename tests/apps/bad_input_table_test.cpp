@@ -1,0 +1,254 @@
+// Issue 41's hostile-user cases as one table, run through the built `reposetwin`: each row is a
+// command on the tiny scene (or an image and its sidecar), the exit code it must end with, the
+// words its message must hold (the key as the user wrote it, the value) and the words it must not
+// (a key it once blamed wrongly). Every row is refused before anything runs, so nothing is
+// simulated and the table takes seconds. The cases a table cannot hold (a FIFO, a corrupted
+// checkpoint, a rerun into a folder) follow it as tests of their own.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <vector>
+
+#include "tests/apps/cli_support.hpp"
+#include "tests/support/tiny_scene.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+using reposetwin::test_support::CliResult;
+using reposetwin::test_support::fresh_dir;
+using reposetwin::test_support::quoted;
+using reposetwin::test_support::run_cli;
+using reposetwin::test_support::write_text;
+
+struct Case {
+  std::string item;              // the issue's item and case, for the failure message
+  std::string scene_from, scene_to;  // a replacement in the tiny scene ("" : none)
+  std::string args;              // after `run SCENE --out OUT --no-images`
+  int code;                      // the exit code
+  std::vector<std::string> must;      // in the message
+  std::vector<std::string> must_not;  // not in it
+};
+
+// `reposetwin run` cases: the tiny scene, edited or given --set values.
+const std::vector<Case> kRunCases = {
+    // 1. Unbounded plans.
+    {"1 E=1e200 by --set", "", "", "--set numerics.softened_youngs_modulus_pa=1e200", 2,
+     {"numerics.softened_youngs_modulus_pa", "1e+200", "--set"}, {"steps"}},
+    {"1 E=1e300 in the scene", "softened_youngs_modulus_pa = 5e6",
+     "softened_youngs_modulus_pa = 1e300", "", 2,
+     {"numerics.softened_youngs_modulus_pa", "1e+300"}, {}},
+    {"1 E=inf", "", "", "--set numerics.softened_youngs_modulus_pa=inf", 2,
+     {"numerics.softened_youngs_modulus_pa", "inf", "finite"}, {"finalised"}},
+    // 2. Non-finite and out-of-range values.
+    {"2 E=nan", "", "", "--set numerics.softened_youngs_modulus_pa=nan", 2,
+     {"numerics.softened_youngs_modulus_pa", "nan"}, {}},
+    {"2 time_step nan", "", "", "--set numerics.time_step_s=nan", 2,
+     {"numerics.time_step_s", "nan"}, {}},
+    {"2 fill_settle_max -1", "", "", "--set procedure.fill_settle_max_s=-1.0", 2,
+     {"procedure.fill_settle_max_s", "-1"}, {}},
+    {"2 settle_speed inf", "", "", "--set procedure.settle_speed_m_s=inf", 2,
+     {"procedure.settle_speed_m_s", "inf"}, {}},
+    {"2 final_settle_max inf", "", "", "--set procedure.final_settle_max_s=inf", 2,
+     {"procedure.final_settle_max_s", "inf"}, {}},
+    {"2 frame_interval nan", "", "", "--set output.frame_interval_s=nan", 2,
+     {"output.frame_interval_s", "nan"}, {}},
+    {"2 progress_interval -1", "", "", "--set output.progress_interval_s=-1.0", 2,
+     {"output.progress_interval_s", "-1"}, {}},
+    {"2 progress_interval nan", "", "", "--set output.progress_interval_s=nan", 2,
+     {"output.progress_interval_s", "nan"}, {}},
+    {"2 checkpoint_interval inf", "", "", "--set output.checkpoint_interval_s=inf", 2,
+     {"output.checkpoint_interval_s", "inf"}, {}},
+    {"2 youngs_modulus inf", "", "", "--set materials.rock.youngs_modulus_pa=inf", 2,
+     {"materials.rock.youngs_modulus_pa", "inf"}, {}},
+    {"2 friction inf", "", "", "--set contacts.rock-rock.friction=inf", 2,
+     {"contacts.rock-rock.friction", "inf"}, {}},
+    {"2 NUL in scene.name", "name = \"tiny\"", "name = \"ti\\u0000ny\"", "", 2,
+     {"scene.name", "control character"}, {}},
+    {"2 frame_interval 1e-9", "", "", "--set output.frame_interval_s=1e-9", 2,
+     {"output.frame_interval_s", "1e-09", "frames"}, {}},
+    // 5 is a test of its own (an unused material changes nothing; nothing is refused).
+    // 8. Messages that blamed the wrong key.
+    {"8 density inf", "", "", "--set materials.rock.density_kg_m3=inf", 2,
+     {"materials.rock.density_kg_m3", "inf"}, {"mass_kg"}},
+    {"8 density 1e300", "", "", "--set materials.rock.density_kg_m3=1e300", 2,
+     {"materials.rock.density_kg_m3", "1e+300"}, {"mass_kg"}},
+    {"8 density 1e-300", "", "", "--set materials.rock.density_kg_m3=1e-300", 2,
+     {"materials.rock.density_kg_m3", "1e-300"}, {"mass_kg"}},
+    {"8 container height inf", "", "", "--set container.height_m=inf", 2,
+     {"container.height_m", "inf"}, {"escape_distance"}},
+    {"8 top diameter inf", "", "", "--set container.top_diameter_m=inf", 2,
+     {"container.top_diameter_m", "inf"}, {"runaway"}},
+    {"8 lattice gap 1e6", "", "", "--set procedure.lattice_gap=1e6", 2,
+     {"procedure.lattice_gap", "1e+06"}, {"runaway"}},
+    {"8 time step above the stability limit", "", "", "--set numerics.time_step_s=0.01", 2,
+     {"numerics.time_step_s", "0.01", "stability"}, {"settings."}},
+    {"8 two --set of one key", "", "",
+     "--set contacts.rock-rock.friction=0.4 --set contacts.rock-rock.friction=-1.0", 2,
+     {"contacts.rock-rock.friction", "--set contacts.rock-rock.friction=-1.0"},
+     {"friction=0.4)"}},
+    {"8 flank band values", "", "", "--set measure.flank_low=0.9 --set measure.flank_high=0.1", 2,
+     {"measure.flank_low", "0.9", "flank_high", "0.1"}, {}},
+    // 9 (output folders) follows the table.
+};
+
+// The tiny scene with `from` replaced by `to`, as DIR/NAME.toml.
+fs::path scene_file(const fs::path& dir, const Case& c) {
+  std::string text = reposetwin::test_support::kTinyScene;
+  if (!c.scene_from.empty()) {
+    const std::size_t at = text.find(c.scene_from);
+    EXPECT_NE(at, std::string::npos) << c.scene_from;
+    if (at != std::string::npos) text.replace(at, c.scene_from.size(), c.scene_to);
+  }
+  const fs::path p = dir / "scene.toml";
+  write_text(p, text);
+  return p;
+}
+
+void expect_message(const CliResult& r, const std::vector<std::string>& must,
+                    const std::vector<std::string>& must_not) {
+  for (const std::string& m : must)
+    EXPECT_NE(r.out.find(m), std::string::npos) << "no \"" << m << "\" in: " << r.out;
+  for (const std::string& m : must_not)
+    EXPECT_EQ(r.out.find(m), std::string::npos) << "\"" << m << "\" in: " << r.out;
+}
+
+TEST(BadInputTable, EveryRunCaseIsRefusedNamingItsKey) {
+  const fs::path dir = fresh_dir("table_run");
+  for (const Case& c : kRunCases) {
+    SCOPED_TRACE(c.item);
+    const fs::path scene = scene_file(dir, c);
+    const fs::path out = dir / "run";
+    const CliResult r =
+        run_cli("run " + quoted(scene) + " --out " + quoted(out) + " --no-images " + c.args);
+    EXPECT_EQ(r.code, c.code) << r.out;
+    expect_message(r, c.must, c.must_not);
+    EXPECT_FALSE(fs::exists(out)) << "a refused run wrote " << out;
+  }
+}
+
+// `reposetwin measure` on a side image with a sidecar of its camera: the sidecar is complete or
+// refused, missing fields named.
+struct SidecarCase {
+  std::string item;
+  std::string from, to;  // a replacement in the complete sidecar
+  std::string args;      // extra arguments (after the image and --camera)
+  std::vector<std::string> must;
+};
+
+const std::string kSidecar = R"({"view": "side",
+ "camera": {"projection": "perspective",
+  "intrinsics": {"width_px": 64, "height_px": 48, "focal_length_mm": 50.0,
+                 "sensor_width_mm": 36.0, "k1": 0.0},
+  "extrinsics": {"position": [0, -1, 0.05], "look_at": [0, 0, 0.05], "up": [0, 0, 1]}}})";
+
+const std::vector<SidecarCase> kSidecarCases = {
+    {"6 no focal_length_mm", "\"focal_length_mm\": 50.0,", "", "",
+     {"cam.json", "intrinsics.focal_length_mm", "missing"}},
+    {"6 no intrinsics",
+     R"("intrinsics": {"width_px": 64, "height_px": 48, "focal_length_mm": 50.0,
+                 "sensor_width_mm": 36.0, "k1": 0.0},)",
+     "", "", {"cam.json", "intrinsics", "missing"}},
+    {"6 k1 1e6", "\"k1\": 0.0", "\"k1\": 1e6", "", {"cam.json", "k1", "1e+06"}},
+    {"6 unknown field", "{\"view\"", "{\"lens_notes\": 1, \"view\"", "",
+     {"cam.json", "lens_notes", "not a sidecar field"}},
+    {"6 view top on a side image", "\"view\": \"side\"", "\"view\": \"top\"", "",
+     {"cam.json", "view", "top", "side image"}},
+    {"6 two side images, one --camera", "", "", "--side SIDE2",
+     {"--camera", "1 sidecar", "2 side images"}},
+    {"8 flank band values", "", "", "--flank-band 0.9,0.1", {"--flank-band", "0.9", "0.1"}},
+};
+
+TEST(BadInputTable, EverySidecarCaseIsRefusedNamingItsField) {
+  const fs::path dir = fresh_dir("table_sidecar");
+  const fs::path image = dir / "side.png", image2 = dir / "side2.png";
+  ASSERT_TRUE(cv::imwrite(image.string(), cv::Mat(48, 64, CV_8UC1, cv::Scalar(255))));
+  ASSERT_TRUE(cv::imwrite(image2.string(), cv::Mat(48, 64, CV_8UC1, cv::Scalar(255))));
+  for (const SidecarCase& c : kSidecarCases) {
+    SCOPED_TRACE(c.item);
+    std::string text = kSidecar;
+    if (!c.from.empty()) {
+      const std::size_t at = text.find(c.from);
+      ASSERT_NE(at, std::string::npos) << c.from;
+      text.replace(at, c.from.size(), c.to);
+    }
+    write_text(dir / "cam.json", text);
+    std::string args = c.args;
+    if (const std::size_t at = args.find("SIDE2"); at != std::string::npos)
+      args.replace(at, 5, quoted(image2));
+    const CliResult r = run_cli("measure " + quoted(image) + " --no-overlay --camera " +
+                                quoted(dir / "cam.json") + " " + args);
+    EXPECT_EQ(r.code, 2) << r.out;
+    expect_message(r, c.must, {});
+  }
+}
+
+// 1. Files that never end or never open: refused by kind, at once, naming the file.
+TEST(BadInputTable, AFifoOrADeviceAsTheSceneIsRefusedAtOnce) {
+  const fs::path dir = fresh_dir("table_fifo");
+  const fs::path fifo = dir / "scene.toml";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  for (const std::string& scene : {fifo.string(), std::string("/dev/zero")}) {
+    SCOPED_TRACE(scene);
+    const CliResult r = run_cli("run " + quoted(fs::path(scene)) + " --out " +
+                                quoted(dir / "run") + " --no-images");
+    EXPECT_EQ(r.code, 2) << r.out;
+    expect_message(r, {scene, "not a regular file"}, {"bad_alloc"});
+    EXPECT_FALSE(fs::exists(dir / "run"));
+  }
+}
+
+// 1. Render views are bounded before anything is rendered.
+TEST(BadInputTable, TooManyRenderViewsAreRefused) {
+  const fs::path dir = fresh_dir("table_views");
+  const CliResult r = run_cli("render " + quoted(dir) + " --views 100000");
+  EXPECT_NE(r.code, 0) << r.out;
+  expect_message(r, {"--views", "100000"}, {});
+}
+
+// 9. Output folders: a file, a folder under a file, a folder that is not a run, a killed run's
+// folder. Each is refused before the run writes anything, saying what to pass.
+TEST(BadInputTable, OutputFoldersAreCheckedBeforeTheRun) {
+  const fs::path dir = fresh_dir("table_out");
+  const fs::path scene = dir / "scene.toml";
+  write_text(scene, reposetwin::test_support::kTinyScene);
+  const auto run = [&](const fs::path& out, const std::string& extra) {
+    return run_cli("run " + quoted(scene) + " --out " + quoted(out) + " --no-images " + extra);
+  };
+  CliResult r = run_cli("run " + quoted(scene) + " --out '' --no-images");
+  EXPECT_EQ(r.code, 2) << r.out;
+  expect_message(r, {"--out is empty"}, {"filesystem"});
+  write_text(dir / "a_file", "x");
+  r = run(dir / "a_file", "");
+  EXPECT_EQ(r.code, 2) << r.out;
+  expect_message(r, {"a_file", "names a file"}, {"lock file"});
+  r = run(dir / "a_file" / "run", "");
+  EXPECT_EQ(r.code, 2) << r.out;
+  expect_message(r, {"a_file", "is a file, not a folder"}, {"lock file"});
+
+  // A folder of the user's own: refused, and nothing in it touched.
+  const fs::path mine = dir / "mine";
+  write_text(mine / "summary.html", "my page");
+  write_text(mine / "notes.txt", "my notes");
+  r = run(mine, "");
+  EXPECT_EQ(r.code, 2) << r.out;
+  expect_message(r, {"mine", "not a run folder", "--force"}, {});
+  EXPECT_EQ(reposetwin::test_support::read_text(mine / "summary.html"), "my page");
+  EXPECT_FALSE(fs::exists(mine / ".run.lock"));
+
+  // A killed run's folder (its checkpoint and controller, no result): --resume or --force.
+  const fs::path killed = dir / "killed";
+  write_text(killed / "scene.resolved.toml", "");
+  write_text(killed / "checkpoint.bin", "");
+  write_text(killed / "controller.json", "{}");
+  r = run(killed, "");
+  EXPECT_EQ(r.code, 2) << r.out;
+  expect_message(r, {"killed", "interrupted", "--resume", "--force"}, {});
+  EXPECT_TRUE(fs::exists(killed / "checkpoint.bin"));
+}
+
+}  // namespace
