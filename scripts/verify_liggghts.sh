@@ -75,7 +75,9 @@ for s in "${seed_list[@]}"; do
   ours="${out}/ours/seed_${s}"
   if [[ ! -f "${ours}/result.json" ]]; then
     t0=$(date +%s.%N)
-    "${bin}" run "${scene}" --out "${ours}" --set "scene.seed=${s}" "${sets[@]}" --no-images \
+    # One thread that sleeps while it waits: on shared cores a spinning second thread
+    # starves its partner (bench/compare_liggghts.sh, --wait yield).
+    OMP_NUM_THREADS=1 OMP_WAIT_POLICY=passive "${bin}" run "${scene}" --out "${ours}" --set "scene.seed=${s}" "${sets[@]}" --no-images \
       --yes --quiet --force > "${ours}.log" 2>&1 || true
     echo "$(date +%s.%N) - ${t0}" | bc > "${ours}.wall"
   fi
