@@ -167,7 +167,7 @@ void run_measure(const MeasureOptions& o) {
   j["top"] = top ? vision::to_json(*top) : nlohmann::json(nullptr);
   j["overlays"] = overlay_paths;
   std::cout << j.dump(2) << "\n";
-  set_exit_code(0);
+  set_exit_code(ExitCode::kOk);
 }
 
 }  // namespace

@@ -16,6 +16,7 @@
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/loop/loop.hpp"
+#include "experiments/pile/headline.hpp"
 #include "experiments/pile/pile_record.hpp"
 #include "experiments/report/calibration_section.hpp"
 #include "experiments/report/format.hpp"
@@ -84,16 +85,12 @@ void add_result(FolderResults& f, const std::string& case_name, const json& over
   c.stops.push_back(reason);
   c.run_dirs.push_back(run_dir);
   c.provenance = r.at("provenance");
-  // A run stopped by a physics failure (overlap, NaN, escape) has no valid pile, and a clogged
-  // outlet (a jam) none at all: such runs are listed with their reason, and their angles never
-  // enter a mean or a count of results.
+  // A run without a headline (a physics stop, a jam, a time limit before the pile settled, no
+  // pile: pile/headline.hpp) is listed with its reason, and its angles never enter a mean or a
+  // count of results.
   const json& pile = r.at("pile");
-  if (stop_from_json(r.at("stop")).is_physics()) {
-    ++c.without_pile["physics_stop"];
-    return;
-  }
-  if (pile.value("status", std::string()) == "no pile") {
-    ++c.without_pile["jam"];
+  if (const auto none = no_headline(stop_from_json(r.at("stop")), pile_measure_from_json(pile))) {
+    ++c.without_pile[no_headline_word(none->reason)];
     return;
   }
   c.particle_deg.push_back(pile.value("theta_hd_deg", 0.0));
