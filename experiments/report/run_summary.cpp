@@ -5,6 +5,7 @@
 
 #include "experiments/io/format.hpp"
 #include "experiments/io/provenance.hpp"
+#include "experiments/pile/representativeness.hpp"
 #include "experiments/pile/run_plan.hpp"
 #include "experiments/report/format.hpp"
 #include "experiments/report/html.hpp"
@@ -211,6 +212,28 @@ std::string headline_section(const PileRun& run, const RunSummary& s,
   return render(templates::kRunHeadline, d);
 }
 
+// The run's representativeness (pile/representativeness.hpp): the height rule on the measured
+// pile when there is one.
+Representativeness run_representativeness(const PileRun& run, const SceneConfig& scene) {
+  const bool measured = !run.pile.clogged && !run.pile.not_measured &&
+                        run.pile.status != sim::PileStatus::kNoPile;
+  return measured ? representativeness(scene, run.pile.height_m) : representativeness(scene);
+}
+
+std::string representativeness_section(const Representativeness& r) {
+  mustache::data list(mustache::data::type::list);
+  for (const std::string& w : r.warning_list()) {
+    mustache::data item;
+    item.set("text", w);
+    list.push_back(item);
+  }
+  mustache::data d;
+  d.set("warnings", list);
+  d.set("rules", to_json(r)["rules"].get<std::string>());
+  d.set("ok", r.warning_list().empty());
+  return render(templates::kRunRepresentativeness, d);
+}
+
 }  // namespace
 
 std::string run_summary_html(const PileRun& run, const SceneConfig& scene,
@@ -218,7 +241,8 @@ std::string run_summary_html(const PileRun& run, const SceneConfig& scene,
   const Page page{
       "ReposeTwin run: " + scene.name,
       "ReposeTwin run: " + scene.name,
-      {headline_section(run, s, in), photos_section(in),
+      {headline_section(run, s, in),
+       representativeness_section(run_representativeness(run, scene)), photos_section(in),
        measures_section(run, s.headline, in.images),
        inputs_section(run, scene, in), provenance_section(run, in)}};
   return render_page(page);
@@ -241,6 +265,7 @@ RunSummary finish_run(const PileRun& run, const SceneConfig& scene, const RunSum
   const fs::path result = dir / "result.json";
   json r = json::parse(read_file(result.string()));
   r.update(s.headline ? to_json(*s.headline) : to_json(*s.no_headline));
+  r["representativeness"] = to_json(run_representativeness(run, scene));
   if (in.images && s.headline)
     r["image"] = {
         {"theta_deg", (*in.images)["theta_deg"]}, {"theta_sd_deg", (*in.images)["theta_sd_deg"]},

@@ -127,6 +127,15 @@ measures below are of that state, not of a settled pile.</p>
 </div>
 )";
 
+// warnings: [{text}]; ok: whether none applies; rules: the rules in a sentence.
+const char* const kRunRepresentativeness = R"(<h2>Is this pile representative of the lab's test?</h2>
+{{#ok}}<p>Yes, by the rules below.</p>
+{{/ok}}{{^ok}}<ul class='note'>
+{{#warnings}}<li>{{text}}.</li>
+{{/warnings}}</ul>
+{{/ok}}<p>Rules: {{rules}}. The numbers are in <code>result.json</code>'s <code>representativeness</code>.</p>
+)";
+
 // photos: figures (side overlays, then the top overlay); none: why there are no photos, or false.
 const char* const kRunPhotos = R"(<h2>The twin's photographs, measured</h2>
 {{#photos}}{{> figure}}{{/photos}}{{#none}}<p>{{none}}</p>
