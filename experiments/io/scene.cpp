@@ -92,11 +92,8 @@ std::string resolved_text(const toml::table& doc, const SceneConfig& s,
   if (toml::table* sample = out["sample"].as_table()) {
     if (const auto file = (*sample)["psd_file"].value<std::string>()) {
       const std::filesystem::path p = dir / *file;
-      const toml::table psd_doc = parse_toml(read_file(p.string()), p.string());
-      if (const toml::table* psd = psd_doc["psd"].as_table()) {
-        sample->insert_or_assign("psd", *psd);
-        sample->erase("psd_file");
-      }
+      sample->insert_or_assign("psd", psd_table_of_file(p.string()));
+      sample->erase("psd_file");
     }
   }
   if (toml::table* contacts = out["contacts"].as_table()) {
