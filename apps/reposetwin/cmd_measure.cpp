@@ -210,7 +210,8 @@ void add_measure_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "measure",
       "Measure a pile from images like the lab does: H, D, theta = atan(2H/D), flank angles. "
-      "Prints one line (JSON with --json) and writes an annotated overlay per image. Scale: --mm-per-px, "
+      "Prints one line (JSON with --json) and writes an annotated overlay per image. Scale: "
+      "--mm-per-px, "
       "--camera SIDECAR.json, or --marker; by default NAME.json next to the image if present, "
       "else the scale bar found in the image.");
   cmd->add_option("side", opts->side, "Side-view image of the pile (PNG, JPEG, ...)")

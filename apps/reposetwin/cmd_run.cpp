@@ -115,8 +115,9 @@ void add_run_command(CLI::App& app) {
   cmd->add_flag("--resume", args->run.resume, "Continue from the run folder's checkpoint");
   cmd->add_flag("--quiet,-q", args->quiet, "No plan or progress lines");
   cmd->add_flag("--json", args->json, "Also print result.json on stdout (before the last line)");
-  cmd->add_flag("--no-images", args->no_images,
-                "No photographs: faster; the headline is then the particle atan(2H/D), and says so");
+  cmd->add_flag(
+      "--no-images", args->no_images,
+      "No photographs: faster; the headline is then the particle atan(2H/D), and says so");
   cmd->add_flag("--yes,-y", args->yes,
                 "Start even when the plan is above the limits (--max-particles, --max-hours)");
   cmd->add_option("--max-particles", args->plan.max_particles,

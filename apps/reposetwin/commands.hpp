@@ -10,13 +10,13 @@ namespace reposetwin::cli {
 /// README's table and in `reposetwin --help` (exit_code_help()).
 enum class ExitCode : int {
   kOk = 0,
-  kError = 2,            // bad input or another error; nothing was run
-  kPhysicsStop = 3,      // run: the engine stopped the run
-  kSomeFailed = 4,       // campaign: some cases failed or gave no angle; paper: some items
-  kUnreachable = 5,      // calibrate: the target angle cannot be reached
-  kPlanRefused = 6,      // run: the plan is above the limits and was not confirmed
-  kNoPile = 7,           // run: no settled pile to measure (time limit, not settled, jam, none)
-  kNoPhotographs = 8,    // run: the photographs could not be written or measured
+  kError = 2,          // bad input or another error; nothing was run
+  kPhysicsStop = 3,    // run: the engine stopped the run
+  kSomeFailed = 4,     // campaign: some cases failed or gave no angle; paper: some items
+  kUnreachable = 5,    // calibrate: the target angle cannot be reached
+  kPlanRefused = 6,    // run: the plan is above the limits and was not confirmed
+  kNoPile = 7,         // run: no settled pile to measure (time limit, not settled, jam, none)
+  kNoPhotographs = 8,  // run: the photographs could not be written or measured
 };
 
 /// Exit code set by the subcommand that ran (0 = success).

@@ -77,8 +77,11 @@ json run_timestep_study(const std::string& scene_path, const std::string& out_di
     mean /= a.size();
     for (double x : a) sd += (x - mean) * (x - mean);
     sd = a.size() > 1 ? std::sqrt(sd / (a.size() - 1)) : 0.0;
-    points.push_back({{"case", name}, {"time_step_s", dt_of[name]}, {"angle_mean_deg", mean},
-                      {"angle_sd_deg", sd}, {"runs", a.size()},
+    points.push_back({{"case", name},
+                      {"time_step_s", dt_of[name]},
+                      {"angle_mean_deg", mean},
+                      {"angle_sd_deg", sd},
+                      {"runs", a.size()},
                       {"without_angle", without_angle[name]}});
     dt_angle.emplace_back(dt_of[name], mean);
   }

@@ -155,8 +155,9 @@ std::string case_outcome(const json& j) {
 double case_angle_deg(const json& j, AngleMeasure measure) {
   const CaseResult r = case_result_from_json(j);
   if (const auto none = no_headline(r.stop, r.pile))
-    throw std::runtime_error("the run has no angle (" + std::string(no_headline_word(none->reason)) +
-                             ": " + none->message + "); " + r.run_dir);
+    throw std::runtime_error("the run has no angle (" +
+                             std::string(no_headline_word(none->reason)) + ": " + none->message +
+                             "); " + r.run_dir);
   switch (measure) {
     case AngleMeasure::kImage:
       return r.image ? r.image->theta_deg : r.pile.theta_hd_deg;

@@ -114,10 +114,11 @@ std::vector<Override> read_overrides(TableReader& t) {
     // beside the campaign file, wherever the scene is.
     const auto path = v.value<std::string>();
     if (k.str() == "sample.psd_file" && path && fs::path(*path).is_relative())
-      set_override(out, string_override(std::string(k.str()),
-                                        fs::absolute(fs::path(t.file()).parent_path() / *path)
-                                            .lexically_normal()
-                                            .string()));
+      set_override(
+          out,
+          string_override(
+              std::string(k.str()),
+              fs::absolute(fs::path(t.file()).parent_path() / *path).lexically_normal().string()));
     else
       set_override(out, override_of(std::string(k.str()), v));
   }

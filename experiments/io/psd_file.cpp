@@ -121,7 +121,8 @@ std::string trimmed(const std::string& s) {
 PsdFile read_psd_csv(const std::string& path) {
   const CsvTable csv = read_csv_file(path);
   const std::string at = path + ":" + std::to_string(csv.header_line);
-  if (csv.header.empty()) bad(path, "is empty; a sieve sheet's header is " + std::string(kCsvHeader));
+  if (csv.header.empty())
+    bad(path, "is empty; a sieve sheet's header is " + std::string(kCsvHeader));
   int sieve = -1, passing = -1;
   for (std::size_t i = 0; i < csv.header.size(); ++i) {
     const std::string name = trimmed(csv.header[i]);

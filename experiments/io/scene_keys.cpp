@@ -297,7 +297,8 @@ std::string scene_keys_markdown() {
       "any key. Without `[sample.shape]` or `[[sample.shapes]]` every grain is a sphere; with "
       "one, every grain is a rigid clump of spheres (the k-th of a mix is overridden as "
       "`--set sample.shapes.<k>.elongation=2`). " +
-      std::string(kRelativePathRule) + "\n\n"
+      std::string(kRelativePathRule) +
+      "\n\n"
       "| key | type | default | unit | meaning |\n|---|---|---|---|---|\n";
   for (const SceneKey& k : scene_keys())
     t += "| `" + k.key + "` | " + k.type + " | " + cell(k.default_text) + " | " + k.unit + " | " +

@@ -1,5 +1,7 @@
 #include "experiments/photos/photographs.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
@@ -11,7 +13,6 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
-#include <unistd.h>
 
 #include "experiments/io/input_error.hpp"
 #include "render/output.hpp"
@@ -140,15 +141,15 @@ std::vector<camera::Camera> side_cameras(const render::Scene& scene, const Photo
 // This thread's renderer, kept for the thread's life: creating the GL context, compiling the
 // shaders and llvmpipe's compile of them at the first draw cost about 0.3 s, more than
 // photographing a small pile, and a loop photographs thousands (on threads, loop_sim.cpp). A
-// reused renderer gives the same bytes as a fresh one (tests/render: SameInputRendersBitIdentically).
-// One per thread, never handed to another: a context left current in a thread that makes another
-// one current is released there, under the other thread's feet.
-// A process forked after it rendered cannot render: llvmpipe's rasteriser threads are
-// process-wide and do not exist in the child, where any new context waits on them forever. So a
-// child asking for a renderer gets an error, not a hang; callers photograph on threads, or in
-// children of a process that has not rendered (the campaign's pool).
-// An overlay PNG: a file that cannot be written (a full disk, a read-only folder) is an error
-// naming it and the reason, never a photograph silently missing.
+// reused renderer gives the same bytes as a fresh one (tests/render:
+// SameInputRendersBitIdentically). One per thread, never handed to another: a context left current
+// in a thread that makes another one current is released there, under the other thread's feet. A
+// process forked after it rendered cannot render: llvmpipe's rasteriser threads are process-wide
+// and do not exist in the child, where any new context waits on them forever. So a child asking for
+// a renderer gets an error, not a hang; callers photograph on threads, or in children of a process
+// that has not rendered (the campaign's pool). An overlay PNG: a file that cannot be written (a
+// full disk, a read-only folder) is an error naming it and the reason, never a photograph silently
+// missing.
 void write_overlay(const std::string& path, const cv::Mat& image) {
   errno = 0;
   bool ok = false;

@@ -80,7 +80,8 @@ std::optional<NoHeadline> no_headline(const RunStop& stop, const PileMeasure& pi
   if (pile.status == sim::PileStatus::kNoFlanks)
     return NoHeadline{NoHeadlineReason::kNoPile,
                       "formed no measurable pile: no flank had enough surface grains for a fit "
-                      "(" + std::to_string(pile.pile_count) + " grains in the pile)"};
+                      "(" +
+                          std::to_string(pile.pile_count) + " grains in the pile)"};
   return std::nullopt;
 }
 

@@ -54,12 +54,12 @@ Headline headline_from_particles(const PileMeasure& pile);
 
 /// Why a run has no headline angle.
 enum class NoHeadlineReason {
-  kTimeLimit,     // procedure.max_time_s stopped the run before its pile settled
-  kNotSettled,    // the last settling reached procedure.final_settle_max_s still moving
-  kJammed,        // grains arched in the outlet: no pile
-  kNoPile,        // the run ended with no measurable pile (none on the plate, or no flanks)
-  kPhysicsStop,   // the engine stopped the run (NaN, runaway overlap, an escaped particle)
-  kPhotographs,   // photographs were asked for and could not be written or measured
+  kTimeLimit,    // procedure.max_time_s stopped the run before its pile settled
+  kNotSettled,   // the last settling reached procedure.final_settle_max_s still moving
+  kJammed,       // grains arched in the outlet: no pile
+  kNoPile,       // the run ended with no measurable pile (none on the plate, or no flanks)
+  kPhysicsStop,  // the engine stopped the run (NaN, runaway overlap, an escaped particle)
+  kPhotographs,  // photographs were asked for and could not be written or measured
   kCount
 };
 

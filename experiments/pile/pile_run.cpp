@@ -331,9 +331,9 @@ class PileRunner {
         break;
     }
     if (ctl_.phase != Phase::kDone && state().time > scene_.procedure.max_time)
-      end(StopReason::kTimeLimit, "procedure.max_time_s = " +
-                                      significant(scene_.procedure.max_time) +
-                                      " s reached while " + phase_doing(ctl_.phase));
+      end(StopReason::kTimeLimit,
+          "procedure.max_time_s = " + significant(scene_.procedure.max_time) + " s reached while " +
+              phase_doing(ctl_.phase));
     return true;
   }
 

@@ -35,9 +35,10 @@ void check_height(Representativeness& r) {
          fmt("%.1f", *r.measured_height_m / r.d_max_m) + " d_max), predicted ";
   else
     w += "predicted H = ";
-  w += fmt("%.0f", 1e3 * r.height_lo_m) + "-" + fmt("%.0f", 1e3 * r.height_hi_m) + " mm (a cone of the simulated mass at " +
-       fmt("%.0f", k.angle_lo_deg) + "-" + fmt("%.0f", k.angle_hi_deg) + " deg), against " +
-       fmt("%g", k.min_height_over_d_max) + " d_max = " + fmt("%.0f", 1e3 * limit) +
+  w += fmt("%.0f", 1e3 * r.height_lo_m) + "-" + fmt("%.0f", 1e3 * r.height_hi_m) +
+       " mm (a cone of the simulated mass at " + fmt("%.0f", k.angle_lo_deg) + "-" +
+       fmt("%.0f", k.angle_hi_deg) + " deg), against " + fmt("%g", k.min_height_over_d_max) +
+       " d_max = " + fmt("%.0f", 1e3 * limit) +
        " mm; an angle from a pile a few grains high is not the material's. Raise sample.mass_kg "
        "(H grows as its cube root) or simulate smaller grains";
   r.warnings[at(RepresentativenessCheck::kPileHeight)] = w;
@@ -89,8 +90,8 @@ Representativeness representativeness(const SceneConfig& scene,
         fmt("%.0f", 100.0 * r.not_simulated_fraction) +
         "% of the sieve sheet's mass is not simulated (" + fmt("%.0f", 100.0 * r.fines_fraction) +
         "% finer than d_min = " + fmt("%.3g", 1e3 * psd.d_min) + " mm, " +
-        fmt("%.0f", 100.0 * r.scalped_fraction) + "% above d_max = " +
-        fmt("%.3g", 1e3 * psd.d_max) + " mm), above " +
+        fmt("%.0f", 100.0 * r.scalped_fraction) +
+        "% above d_max = " + fmt("%.3g", 1e3 * psd.d_max) + " mm), above " +
         fmt("%.0f", 100.0 * rules.max_not_simulated) +
         "%: the pile is of the simulated sizes only. Lower sample.d_min_mm to simulate more of "
         "the fines (the particle count grows about as d_min^-3)";
@@ -130,14 +131,13 @@ nlohmann::json to_json(const Representativeness& r) {
       {"outlet_over_d_max", r.outlet_over_d_max},
       {"min_outlet_over_d_max", k.min_outlet_over_d_max},
       {"warnings", warnings},
-      {"rules",
-       "H below " + fmt("%g", k.min_height_over_d_max) +
-           " d_max (H predicted as the cone of the simulated mass at solid fraction " +
-           fmt("%g", k.solid_fraction) + " and " + fmt("%g", k.angle_lo_deg) + "-" +
-           fmt("%g", k.angle_hi_deg) + " deg, and measured); more than " +
-           fmt("%g", 100.0 * k.max_not_simulated) +
-           "% of the sieve sheet's mass outside the simulated sizes; W / d_max below " +
-           fmt("%g", k.min_outlet_over_d_max) + " (the paper's Fig. 10)"}};
+      {"rules", "H below " + fmt("%g", k.min_height_over_d_max) +
+                    " d_max (H predicted as the cone of the simulated mass at solid fraction " +
+                    fmt("%g", k.solid_fraction) + " and " + fmt("%g", k.angle_lo_deg) + "-" +
+                    fmt("%g", k.angle_hi_deg) + " deg, and measured); more than " +
+                    fmt("%g", 100.0 * k.max_not_simulated) +
+                    "% of the sieve sheet's mass outside the simulated sizes; W / d_max below " +
+                    fmt("%g", k.min_outlet_over_d_max) + " (the paper's Fig. 10)"}};
   if (r.measured_height_m) j["measured_height_m"] = *r.measured_height_m;
   return j;
 }

@@ -43,15 +43,15 @@ inline constexpr std::size_t kRepresentativenessChecks =
 
 /// The numbers the rules read, from the scene (and, after the run, the pile).
 struct Representativeness {
-  double d_max_m = 0.0;                  // the largest simulated size [m]
-  double height_lo_m = 0.0;              // predicted H at angle_lo_deg [m]
-  double height_hi_m = 0.0;              // predicted H at angle_hi_deg [m]
+  double d_max_m = 0.0;                     // the largest simulated size [m]
+  double height_lo_m = 0.0;                 // predicted H at angle_lo_deg [m]
+  double height_hi_m = 0.0;                 // predicted H at angle_hi_deg [m]
   std::optional<double> measured_height_m;  // the run's particle H [m], after the run
-  double not_simulated_fraction = 0.0;   // of the sieve sheet's mass [-]
-  double fines_fraction = 0.0;           // finer than d_min, of the scalped sample [-]
-  double scalped_fraction = 0.0;         // above d_max, of the sheet [-]
-  double outlet_m = 0.0;                 // W [m]
-  double outlet_over_d_max = 0.0;        // W / d_max [-]
+  double not_simulated_fraction = 0.0;      // of the sieve sheet's mass [-]
+  double fines_fraction = 0.0;              // finer than d_min, of the scalped sample [-]
+  double scalped_fraction = 0.0;            // above d_max, of the sheet [-]
+  double outlet_m = 0.0;                    // W [m]
+  double outlet_over_d_max = 0.0;           // W / d_max [-]
   RepresentativenessRules rules;
   /// Per check: the warning's sentence, or empty when the rule holds.
   std::array<std::string, kRepresentativenessChecks> warnings{};

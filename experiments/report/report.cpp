@@ -526,9 +526,10 @@ std::string calibration_line(const json& c) {
   std::string line = "calibrated mu_r " + fixed_or_dash(c["mu_r"], 3);
   if (c.contains("mu_r_interval") && c["mu_r_interval"].size() == 2)
     line += " (" + fixed(100.0 * c.value("interval_level", 0.95), 0) + "% interval " +
-            fixed_or_dash(c["mu_r_interval"][0], 3) + "-" + fixed_or_dash(c["mu_r_interval"][1], 3) + ")";
-  return line + " for the target " + fixed_or_dash(target.value("angle_deg", json()), 2) + " deg, " +
-         std::to_string(c.value("simulations", 0)) + " simulations";
+            fixed_or_dash(c["mu_r_interval"][0], 3) + "-" +
+            fixed_or_dash(c["mu_r_interval"][1], 3) + ")";
+  return line + " for the target " + fixed_or_dash(target.value("angle_deg", json()), 2) +
+         " deg, " + std::to_string(c.value("simulations", 0)) + " simulations";
 }
 
 std::string cases_line(const json& cases) {
@@ -547,9 +548,10 @@ std::string cases_line(const json& cases) {
     const bool images = c.value("image_runs", 0) > 0;
     line = c.value("case", std::string()) + ": angle of repose " +
            fixed_or_dash(c[images ? "image_theta_mean_deg" : "particle_theta_mean_deg"], 2) +
-           (piles > 1 ? " \u00b1 " + fixed_or_dash(c[images ? "image_theta_sd_deg"
-                                                        : "particle_theta_sd_deg"], 2)
-                      : std::string()) +
+           (piles > 1
+                ? " \u00b1 " +
+                      fixed_or_dash(c[images ? "image_theta_sd_deg" : "particle_theta_sd_deg"], 2)
+                : std::string()) +
            " deg (" + (images ? "image" : "particle") + " atan(2H/D), " + std::to_string(piles) +
            (piles == 1 ? " run)" : " runs)");
   } else {

@@ -186,8 +186,7 @@ std::string provenance_section(const PileRun& run, const RunSummaryInputs& in) {
   return table_section("Provenance", std::move(rows));
 }
 
-std::string headline_section(const PileRun& run, const RunSummary& s,
-                             const RunSummaryInputs& in) {
+std::string headline_section(const PileRun& run, const RunSummary& s, const RunSummaryInputs& in) {
   mustache::data d;
   if (!s.headline) {
     const NoHeadline& n = *s.no_headline;
@@ -215,8 +214,8 @@ std::string headline_section(const PileRun& run, const RunSummary& s,
 // The run's representativeness (pile/representativeness.hpp): the height rule on the measured
 // pile when there is one.
 Representativeness run_representativeness(const PileRun& run, const SceneConfig& scene) {
-  const bool measured = !run.pile.clogged && !run.pile.not_measured &&
-                        run.pile.status != sim::PileStatus::kNoPile;
+  const bool measured =
+      !run.pile.clogged && !run.pile.not_measured && run.pile.status != sim::PileStatus::kNoPile;
   return measured ? representativeness(scene, run.pile.height_m) : representativeness(scene);
 }
 
@@ -241,9 +240,8 @@ std::string run_summary_html(const PileRun& run, const SceneConfig& scene,
   const Page page{
       "ReposeTwin run: " + scene.name,
       "ReposeTwin run: " + scene.name,
-      {headline_section(run, s, in),
-       representativeness_section(run_representativeness(run, scene)), photos_section(in),
-       measures_section(run, s.headline, in.images),
+      {headline_section(run, s, in), representativeness_section(run_representativeness(run, scene)),
+       photos_section(in), measures_section(run, s.headline, in.images),
        inputs_section(run, scene, in), provenance_section(run, in)}};
   return render_page(page);
 }

@@ -128,7 +128,8 @@ measures below are of that state, not of a settled pile.</p>
 )";
 
 // warnings: [{text}]; ok: whether none applies; rules: the rules in a sentence.
-const char* const kRunRepresentativeness = R"(<h2>Is this pile representative of the lab's test?</h2>
+const char* const kRunRepresentativeness =
+    R"(<h2>Is this pile representative of the lab's test?</h2>
 {{#ok}}<p>Yes, by the rules below.</p>
 {{/ok}}{{^ok}}<ul class='note'>
 {{#warnings}}<li>{{text}}.</li>

@@ -50,14 +50,13 @@ TEST(OneLine, RunMeasureAndReportEachPrintOneHeadlineLineAndJsonOnlyWhenAsked) {
   // measure: one line on stdout (the overlay beside the image), the JSON only with --json.
   const fs::path side = run / "images" / "side_az000.png";
   ASSERT_TRUE(fs::exists(side));
-  const std::string measure = "measure " + quoted(side) + " --overlay " +
-                              quoted(dir / "m.png") + " ";
+  const std::string measure =
+      "measure " + quoted(side) + " --overlay " + quoted(dir / "m.png") + " ";
   const CliResult m = run_cli(measure);
   ASSERT_EQ(m.code, 0) << m.out;
   ASSERT_EQ(lines(m.out), 1) << m.out;
   EXPECT_EQ(answer(m.out)[0].rfind("angle of repose ", 0), 0u) << m.out;
-  EXPECT_NE(m.out.find("(image atan(2H/D), 1 side view, perspective corrected)"),
-            std::string::npos)
+  EXPECT_NE(m.out.find("(image atan(2H/D), 1 side view, perspective corrected)"), std::string::npos)
       << m.out;
   EXPECT_NE(m.out.find("overlay " + (dir / "m.png").string()), std::string::npos) << m.out;
   // --json: the record alone (its warnings inside it), so a script can parse it.
@@ -66,10 +65,10 @@ TEST(OneLine, RunMeasureAndReportEachPrintOneHeadlineLineAndJsonOnlyWhenAsked) {
   const nlohmann::json mjson = nlohmann::json::parse(mj.out);
   EXPECT_EQ(mjson["views"], 1);
   EXPECT_NE(m.out.find([&] {
-              char buf[32];
-              std::snprintf(buf, sizeof buf, "%.2f", mjson["theta_deg"].get<double>());
-              return std::string(buf);
-            }()),
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.2f", mjson["theta_deg"].get<double>());
+    return std::string(buf);
+  }()),
             std::string::npos);
 
   // report: the run's angle and the page, one line; the summary as JSON only with --json.

@@ -58,8 +58,8 @@ TEST(PsdSheet, ACsvSheetReadsAsTheSameTableInToml) {
   EXPECT_EQ(csv.name, "rock");
   EXPECT_NE(csv.provenance.find("lab sheet 12"), std::string::npos) << csv.provenance;
   // Columns in the other order read the same.
-  const PsdFile swapped =
-      read_psd_file(write(d / "swapped.CSV", "passing_percent,sieve_mm\n10,0.5\n30,1\n60,2\n100,4\n"));
+  const PsdFile swapped = read_psd_file(
+      write(d / "swapped.CSV", "passing_percent,sieve_mm\n10,0.5\n30,1\n60,2\n100,4\n"));
   EXPECT_EQ(swapped.spec.table.size, toml.spec.table.size);
   EXPECT_EQ(swapped.spec.table.passing, toml.spec.table.passing);
 }
@@ -141,14 +141,15 @@ TEST(PsdSheet, ACampaignOverridePathIsRelativeToTheCampaignFile) {
   write(d / "scenes" / "base.csv", "sieve_mm,passing_percent\n3.0,0\n3.5,50\n4.0,100\n");
   write(d / "scenes" / "s.toml", text);
   write(d / "study" / "lab.csv", "sieve_mm,passing_percent\n3.0,0\n3.2,70\n4.0,100\n");
-  const std::string campaign = write(
-      d / "study" / "c.toml",
-      "name = \"sheets\"\nscene = \"../scenes/s.toml\"\nseeds = [1]\n"
-      "[[case]]\nname = \"lab\"\noverrides = { \"sample.psd_file\" = \"lab.csv\" }\n");
+  const std::string campaign =
+      write(d / "study" / "c.toml",
+            "name = \"sheets\"\nscene = \"../scenes/s.toml\"\nseeds = [1]\n"
+            "[[case]]\nname = \"lab\"\noverrides = { \"sample.psd_file\" = \"lab.csv\" }\n");
   const Campaign c = read_campaign_file(campaign);
   ASSERT_EQ(c.runs.size(), 1u);
   const SceneConfig s = build_case_scene(c.runs[0]).config();
-  EXPECT_EQ(fs::path(s.psd.source).lexically_normal(), (d / "study" / "lab.csv").lexically_normal());
+  EXPECT_EQ(fs::path(s.psd.source).lexically_normal(),
+            (d / "study" / "lab.csv").lexically_normal());
   EXPECT_DOUBLE_EQ(s.psd.spec.table.passing[1], 70.0);
 }
 

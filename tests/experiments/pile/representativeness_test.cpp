@@ -75,9 +75,9 @@ TEST(Representativeness, HeightRuleHoldsForAHighEnoughPile) {
 
 TEST(Representativeness, OutletBelowThePapersThresholdWarns) {
   // W / d_max = 15 / 4 = 3.75 is at the threshold (no warning), 14 / 4 = 3.5 below it.
-  EXPECT_FALSE(warns(representativeness(tiny_with("bottom_diameter_m = 0.02",
-                                                  "bottom_diameter_m = 0.015")),
-                     RepresentativenessCheck::kOutletWidth));
+  EXPECT_FALSE(
+      warns(representativeness(tiny_with("bottom_diameter_m = 0.02", "bottom_diameter_m = 0.015")),
+            RepresentativenessCheck::kOutletWidth));
   const Representativeness r =
       representativeness(tiny_with("bottom_diameter_m = 0.02", "bottom_diameter_m = 0.014"));
   ASSERT_TRUE(warns(r, RepresentativenessCheck::kOutletWidth));
@@ -88,13 +88,12 @@ TEST(Representativeness, OutletBelowThePapersThresholdWarns) {
 TEST(Representativeness, MassNotSimulatedCountsFinesAndScalping) {
   // Sheet 1-4 mm, 50% passing 3 mm: d_min = 3 mm leaves out half the mass; d_max = 3.5 mm
   // scalps the 25% above it, and of the 75% kept two thirds are finer than 3 mm: 1 - 0.75 / 3.
-  const SceneConfig fines = tiny_with("sieve_mm = [3.0, 3.5, 4.0]",
-                                      "d_min_mm = 3.0\nsieve_mm = [1.0, 3.0, 4.0]");
+  const SceneConfig fines =
+      tiny_with("sieve_mm = [3.0, 3.5, 4.0]", "d_min_mm = 3.0\nsieve_mm = [1.0, 3.0, 4.0]");
   const Representativeness r = representativeness(fines);
   EXPECT_NEAR(r.not_simulated_fraction, 0.5, 1e-9);
   ASSERT_TRUE(warns(r, RepresentativenessCheck::kMassNotSimulated));
-  EXPECT_NE(r.warnings[1].find("50% of the sieve sheet's mass is not simulated"),
-            std::string::npos)
+  EXPECT_NE(r.warnings[1].find("50% of the sieve sheet's mass is not simulated"), std::string::npos)
       << r.warnings[1];
   const SceneConfig both = tiny_with("sieve_mm = [3.0, 3.5, 4.0]",
                                      "d_min_mm = 3.0\nd_max_mm = 3.5\nsieve_mm = [1.0, 3.0, 4.0]");
@@ -105,8 +104,7 @@ TEST(Representativeness, MassNotSimulatedCountsFinesAndScalping) {
 }
 
 TEST(Representativeness, ThePlanPrintsEachWarningAndTheResultKeepsThem) {
-  const SceneConfig scene =
-      tiny_with("bottom_diameter_m = 0.02", "bottom_diameter_m = 0.014");
+  const SceneConfig scene = tiny_with("bottom_diameter_m = 0.02", "bottom_diameter_m = 0.014");
   const RunPlan plan = plan_run(scene, 1);
   const std::string text = plan_text(plan);
   EXPECT_NE(text.find("plan: warning: the pile is low"), std::string::npos) << text;
