@@ -3,6 +3,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -27,13 +29,16 @@ void write_bytes_atomic(const std::string& path, const char* data, std::size_t s
       target.parent_path() / (target.filename().string() + ".tmp." + std::to_string(::getpid()));
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error(path + ": cannot open " + tmp.string() + " for writing");
+    if (!out)
+      throw std::runtime_error(path + ": cannot open " + tmp.string() + " for writing (" +
+                               std::strerror(errno) + ")");
     out.write(data, static_cast<std::streamsize>(size));
     out.flush();
     if (!out) {
+      const int saved = errno;  // a full disk: ENOSPC
       out.close();
       fs::remove(tmp, ec);
-      throw std::runtime_error(path + ": write failed");
+      throw std::runtime_error(path + ": write failed (" + std::strerror(saved) + ")");
     }
   }
   fs::rename(tmp, target, ec);

@@ -78,7 +78,11 @@ void add_campaign_command(CLI::App& app) {
                                 {"ran", s.ran}}
                      .dump(2)
               << "\n";
-    set_exit_code(s.failed > 0 ? 4 : 0);
+    // A run that gave no angle (jammed, not settled, time limit, no pile, physics stop) counts
+    // as failed here: the campaign did not get what it asked for.
+    int without_angle = 0;
+    for (const auto& [reason, n] : s.without_pile) without_angle += n;
+    set_exit_code(s.failed + without_angle > 0 ? ExitCode::kSomeFailed : ExitCode::kOk);
   });
 }
 
@@ -134,7 +138,7 @@ void add_calibrate_command(CLI::App& app) {
     if (!o.reached) {  // cannot reach: exit code 5
       std::cerr << "reposetwin calibrate: " << cal.value("message", "")
                 << (c.predictions.empty() ? "" : "; no predictions run") << "\n";
-      set_exit_code(5);
+      set_exit_code(ExitCode::kUnreachable);
       return;
     }
     if (!o.predictions) return;

@@ -88,7 +88,7 @@ void add_measure_particles_command(CLI::App& app) {
     }
     if (g.status == sim::PileStatus::kNoPile) {
       std::cout << "no pile: no grain of " << a->dump << " touches the plate\n";
-      set_exit_code(7);
+      set_exit_code(ExitCode::kNoPile);
       return;
     }
     std::printf("particle atan(2H/D) %.2f deg; H %.1f mm, D %.1f mm; %zu of %zu grains in the "

@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "apps/reposetwin/commands.hpp"
+#include "experiments/io/psd_file.hpp"
 #include "experiments/io/scene_keys.hpp"
 
 namespace reposetwin::cli {
@@ -19,6 +20,7 @@ void add_keys_command(CLI::App& app) {
     for (const experiments::SceneKey& k : experiments::scene_keys())
       std::cout << k.key << "  (" << k.type << ", default " << k.default_text
                 << (k.unit == "-" ? "" : ", " + k.unit) << ")\n    " << k.meaning << "\n";
+    std::cout << "\nPaths: " << experiments::kRelativePathRule << "\n";
   });
 }
 

@@ -146,7 +146,7 @@ void add_loop_command(CLI::App& app) {
     const nlohmann::json loop = experiments::run_loop(data, args->out, s);
     std::cout << loop["summary"].dump(2) << "\n";
     std::cout << "report: " << args->out << "/index.html, " << args->out << "/loop.json\n";
-    set_exit_code(0);
+    set_exit_code(ExitCode::kOk);
   });
 
   struct SynthArgs {
@@ -169,7 +169,7 @@ void add_loop_command(CLI::App& app) {
     experiments::SimCache cache(sargs->cache.empty() ? sargs->out + "/.hidden_cache" : sargs->cache,
                                 {sargs->workers, true});
     std::cout << experiments::make_synthetic_dataset(d, sargs->out, cache) << "\n";
-    set_exit_code(0);
+    set_exit_code(ExitCode::kOk);
   });
 }
 

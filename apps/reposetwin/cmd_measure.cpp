@@ -1,5 +1,6 @@
 // `reposetwin measure`: the lab's photo measurement (theta = atan(2H/D)) on one or more side
-// images and an optional top image, printed as JSON, with an annotated overlay per image.
+// images and an optional top image, printed as one line (the whole record as JSON with --json),
+// with an annotated overlay per image.
 // Thin: all measuring is vision/; this file only resolves files, scales and outputs.
 #include <filesystem>
 #include <iostream>
@@ -36,6 +37,7 @@ struct MeasureOptions {
   bool no_overlay = false;
   std::vector<int> roi;
   std::vector<double> flank_band;
+  bool json = false;
 };
 
 std::string sidecar_next_to(const std::string& image) {
@@ -81,6 +83,30 @@ void write_overlay(const std::string& path, const cv::Mat& img) {
   }
   if (!ok) throw std::runtime_error(path + ": cannot encode the overlay image");
   experiments::write_file_atomic(path, std::string(bytes.begin(), bytes.end()));
+}
+
+// "angle of repose 25.65 ± 0.40 deg (image atan(2H/D), 1 side view, perspective corrected); H
+// 9.2 mm, D 38.1 mm; flank 31.20 deg; overlay side.measured.png": the measurement in one line.
+std::string measure_line(const vision::SideSummary& s, const std::string& projection,
+                         const std::vector<std::string>& overlays) {
+  const auto fixed = [](double v, int digits) {
+    std::ostringstream os;
+    os.setf(std::ios::fixed);
+    os.precision(digits);
+    os << v;
+    return os.str();
+  };
+  std::string line = "angle of repose " + fixed(s.theta_deg.mean, 2) + " \u00b1 " +
+                     fixed(s.theta_deg.sigma_mean, 2) + " deg (image atan(2H/D), " +
+                     std::to_string(s.views) + (s.views == 1 ? " side view, " : " side views, ") +
+                     projection + "); H " + fixed(1e3 * s.height_m.mean, 1) + " mm, D " +
+                     fixed(1e3 * s.diameter_m.mean, 1) + " mm; flank " +
+                     fixed(s.flank_deg.mean, 2) + " deg";
+  if (!overlays.empty()) {
+    line += overlays.size() == 1 ? "; overlay" : "; overlays";
+    for (const std::string& p : overlays) line += " " + p;
+  }
+  return line;
 }
 
 void run_measure(const MeasureOptions& o) {
@@ -183,8 +209,15 @@ void run_measure(const MeasureOptions& o) {
   for (const auto& v : views) j["side"].push_back(vision::to_json(v));
   j["top"] = top ? vision::to_json(*top) : nlohmann::json(nullptr);
   j["overlays"] = overlay_paths;
-  std::cout << j.dump(2) << "\n";
-  set_exit_code(0);
+  // One line for a person (warnings on stderr, never lost), or the whole record for a script.
+  if (o.json) {
+    std::cout << j.dump(2) << "\n";
+  } else {
+    for (const std::string& w : warnings) std::cerr << "reposetwin: warning: " << w << "\n";
+    std::cout << measure_line(summary, j["projection"].get<std::string>(), overlay_paths)
+              << std::endl;
+  }
+  set_exit_code(ExitCode::kOk);
 }
 
 }  // namespace
@@ -194,7 +227,8 @@ void add_measure_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "measure",
       "Measure a pile from images like the lab does: H, D, theta = atan(2H/D), flank angles. "
-      "Prints JSON on stdout and writes an annotated overlay per image. Scale: --mm-per-px, "
+      "Prints one line (JSON with --json) and writes an annotated overlay per image. Scale: "
+      "--mm-per-px, "
       "--camera SIDECAR.json, or --marker; by default NAME.json next to the image if present, "
       "else the scale bar found in the image.");
   cmd->add_option("side", opts->side, "Side-view image of the pile (PNG, JPEG, ...)")
@@ -233,6 +267,8 @@ void add_measure_command(CLI::App& app) {
                   "Flank fit band as fractions of H (default 0.2,0.8)")
       ->delimiter(',')
       ->expected(2);
+  cmd->add_flag("--json", opts->json,
+                "Print the whole measurement as JSON on stdout instead of the one line");
   cmd->callback([opts]() { run_measure(*opts); });
 }
 

@@ -99,7 +99,7 @@ void add_paper_command(CLI::App& app) {
     const nlohmann::json l =
         experiments::run_paper(index, a->out, experiments::pile_case_fn(cs), rs, opt);
     print_listing(l);
-    if (l.value("failed_items_this_call", 0) > 0) set_exit_code(4);
+    if (l.value("failed_items_this_call", 0) > 0) set_exit_code(ExitCode::kSomeFailed);
   });
 }
 

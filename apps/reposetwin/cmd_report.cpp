@@ -9,12 +9,25 @@
 
 namespace reposetwin::cli {
 
+namespace {
+
+// What `report` prints: one line for a person, or the summary as JSON for a script.
+void print(const nlohmann::json& summary, const std::string& page, bool json) {
+  if (json)
+    std::cout << summary.dump(2) << "\n";
+  else
+    std::cout << experiments::report_line(summary, page) << std::endl;
+}
+
+}  // namespace
+
 void add_report_command(CLI::App& app) {
   struct Args {
     std::vector<std::string> dirs;
     std::string out;
     experiments::ReportSettings settings;
     bool force = false;
+    bool json = false;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
@@ -35,6 +48,8 @@ void add_report_command(CLI::App& app) {
                   "Folder of the paper's CSVs (default: data/paper found upwards from the "
                   "calibration's campaign file, then from the working folder)");
   cmd->add_flag("--force", a->force, "Rebuild a report that is already there");
+  cmd->add_flag("--json", a->json,
+                "Print the report's summary as JSON on stdout instead of the one line");
   cmd->callback([a]() {
     namespace fs = std::filesystem;
     std::string out = a->out;
@@ -49,7 +64,7 @@ void add_report_command(CLI::App& app) {
                                       ": a report is already there; pass --force to rebuild it");
     if (a->dirs.size() == 1 && out.empty()) {
       const nlohmann::json s = experiments::build_report(a->dirs[0], a->settings);
-      std::cout << s.dump(2) << "\n" << experiments::report_page(a->dirs[0]) << "\n";
+      print(s, experiments::report_page(a->dirs[0]), a->json);
       return;
     }
     if (out.empty()) {  // the folders' common parent
@@ -67,7 +82,7 @@ void add_report_command(CLI::App& app) {
                                       "--force to rebuild it");
     }
     const nlohmann::json s = experiments::build_report(a->dirs, out, a->settings);
-    std::cout << s.dump(2) << "\n" << out << "/report/index.html\n";
+    print(s, out + "/report/index.html", a->json);
   });
 }
 

@@ -59,24 +59,42 @@ bool accept_plan(const RunArgs& a, const experiments::SceneConfig& scene) {
   return false;
 }
 
-// The run's photographs from its final state in memory, measured; nullopt (and why) when there
-// are none.
+// The run's photographs from its final state in memory, measured; nullopt when there are none:
+// `note` says why (--no-images, no pile), and `error` names the file and the reason when they
+// were asked for and could not be written or measured (then the run has no headline).
 std::optional<nlohmann::json> photographs(const RunArgs& a, const experiments::PileRun& run,
-                                          std::string& why) {
+                                          std::string& note, std::string& error) {
   if (a.no_images) {
-    why = "--no-images";
+    note = "--no-images";
     return std::nullopt;
   }
-  if (!run.pile_ok()) {
-    why = "the run formed no measurable pile";
+  if (experiments::no_headline(run.stop, run.pile)) {
+    note = "the run ended with no settled pile to photograph";
     return std::nullopt;
   }
   try {
-    return experiments::render_and_measure_run(run, a.run.out_dir, experiments::ImageSettings{});
+    nlohmann::json m =
+        experiments::render_and_measure_run(run, a.run.out_dir, experiments::ImageSettings{});
+    if (!m.contains("theta_deg") || !m["theta_deg"].is_number())
+      throw std::runtime_error(a.run.out_dir + "/images: vision measured no side view");
+    return m;
   } catch (const std::exception& e) {
-    why = std::string("the photographs could not be measured: ") + e.what();
-    std::cerr << "reposetwin: warning: " << why << "\n";
+    error = e.what();
+    note = "the photographs could not be taken: " + error;
     return std::nullopt;
+  }
+}
+
+// The exit code of a finished run: 0 with a headline, else its reason's.
+ExitCode run_exit_code(const experiments::RunSummary& s) {
+  if (s.headline) return ExitCode::kOk;
+  switch (s.no_headline->reason) {
+    case experiments::NoHeadlineReason::kPhysicsStop:
+      return ExitCode::kPhysicsStop;
+    case experiments::NoHeadlineReason::kPhotographs:
+      return ExitCode::kNoPhotographs;
+    default:
+      return ExitCode::kNoPile;
   }
 }
 
@@ -98,8 +116,9 @@ void add_run_command(CLI::App& app) {
   cmd->add_flag("--resume", args->run.resume, "Continue from the run folder's checkpoint");
   cmd->add_flag("--quiet,-q", args->quiet, "No plan or progress lines");
   cmd->add_flag("--json", args->json, "Also print result.json on stdout (before the last line)");
-  cmd->add_flag("--no-images", args->no_images,
-                "No photographs: faster; the headline falls back to the particle atan(2H/D)");
+  cmd->add_flag(
+      "--no-images", args->no_images,
+      "No photographs: faster; the headline is then the particle atan(2H/D), and says so");
   cmd->add_flag("--yes,-y", args->yes,
                 "Start even when the plan is above the limits (--max-particles, --max-hours)");
   cmd->add_option("--max-particles", args->plan.max_particles,
@@ -115,7 +134,7 @@ void add_run_command(CLI::App& app) {
     const experiments::SceneConfig scene = experiments::load_scene(args->scene, args->sets);
     experiments::check_run_folder(args->run.out_dir, args->run.resume, args->run.force);
     if (!accept_plan(*args, scene)) {
-      set_exit_code(6);
+      set_exit_code(ExitCode::kPlanRefused);
       return;
     }
     args->run.progress = !args->quiet;
@@ -127,16 +146,20 @@ void add_run_command(CLI::App& app) {
     experiments::RunSummaryInputs in;
     in.run_dir = args->run.out_dir;
     in.overrides = args->sets;
-    in.images = photographs(*args, *run, in.images_note);
+    in.images = photographs(*args, *run, in.images_note, in.images_error);
     in.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const experiments::RunSummary summary = experiments::finish_run(*run, scene, in);
     if (args->json) std::cout << experiments::read_file(args->run.out_dir + "/result.json") << "\n";
     std::cout << experiments::headline_line(*run, summary, in.wall_s) << std::endl;
-    if (run->stop.is_physics()) {
-      std::cerr << "run stopped (" << experiments::stop_reason_text(run->stop)
-                << "): " << run->stop.detail << "\n" << run->stop.likely_cause << "\n";
+    if (summary.no_headline) {
+      const experiments::NoHeadline& n = *summary.no_headline;
+      std::cerr << "reposetwin: no angle of repose: " << n.message << "\n";
+      if (run->stop.is_physics() && !run->stop.likely_cause.empty())
+        std::cerr << run->stop.likely_cause << "\n";
+      else
+        std::cerr << "try: " << experiments::no_headline_advice(n.reason) << "\n";
     }
-    set_exit_code(run->stop.is_physics() ? 3 : 0);
+    set_exit_code(run_exit_code(summary));
   });
 }
 

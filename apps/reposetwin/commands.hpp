@@ -2,12 +2,30 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <string>
 
 namespace reposetwin::cli {
 
+/// The exit codes of `reposetwin` besides CLI11's own (100-127), each documented in the
+/// README's table and in `reposetwin --help` (exit_code_help()).
+enum class ExitCode : int {
+  kOk = 0,
+  kError = 2,          // bad input or another error; nothing was run
+  kPhysicsStop = 3,    // run: the engine stopped the run
+  kSomeFailed = 4,     // campaign: some cases failed or gave no angle; paper: some items
+  kUnreachable = 5,    // calibrate: the target angle cannot be reached
+  kPlanRefused = 6,    // run: the plan is above the limits and was not confirmed
+  kNoPile = 7,         // run, measure-particles: no settled pile to measure (time limit, not
+                       // settled, jam, none)
+  kNoPhotographs = 8,  // run: the photographs could not be written or measured
+};
+
 /// Exit code set by the subcommand that ran (0 = success).
 int exit_code();
-void set_exit_code(int code);
+void set_exit_code(ExitCode code);
+
+/// Every exit code with its meaning, one per line, as `reposetwin --help` ends.
+std::string exit_code_help();
 
 void add_run_command(CLI::App& app);
 void add_render_command(CLI::App& app);

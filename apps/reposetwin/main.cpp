@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
   CLI::App app{"ReposeTwin: a DEM digital twin of the angle-of-repose pile test"};
   app.set_version_flag("--version", reposetwin::experiments::code_version());
   app.require_subcommand(1);
+  app.footer(reposetwin::cli::exit_code_help());
   // Subcommand registry: one line per command.
   reposetwin::cli::add_run_command(app);
   reposetwin::cli::add_render_command(app);
@@ -61,7 +62,7 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const std::exception& e) {
     std::cerr << "reposetwin: error: " << e.what() << "\n";
-    return 2;
+    return static_cast<int>(reposetwin::cli::ExitCode::kError);
   }
   return reposetwin::cli::exit_code();
 }

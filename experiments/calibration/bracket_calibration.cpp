@@ -60,6 +60,7 @@ std::vector<PourPoint> points_of(const std::vector<Pour>& pours) {
     if (p.outcome == PourOutcome::kPile) ++q.piles;
     if (p.outcome == PourOutcome::kJam) ++q.jams;
     if (p.outcome == PourOutcome::kPhysicsStop) ++q.physics_stops;
+    if (p.outcome == PourOutcome::kNotSettled) ++q.unsettled;
   }
   std::vector<PourPoint> out;
   for (const auto& [mu, q] : by_mu) out.push_back(q);
@@ -265,14 +266,16 @@ void finish(BracketCalibration& c, const Target& target, const BracketSettings& 
   c.result.status = status;
   if (!c.result.mu_r) c.result.message.clear();  // the note says why there is no mu_r
   c.result.simulations = static_cast<int>(c.pours.size());
-  int jams = 0, stops = 0;
+  int jams = 0, stops = 0, unsettled = 0;
   for (const PourPoint& q : c.points) {
     jams += q.jams;
     stops += q.physics_stops;
+    unsettled += q.unsettled;
   }
   std::string m = c.result.message.empty() ? std::string() : c.result.message + "; ";
   m += note.empty() ? std::string() : note + "; ";
   m += std::to_string(c.pours.size()) + " pile runs (" + std::to_string(jams) + " jammed, " +
+       (unsettled > 0 ? std::to_string(unsettled) + " not settled, " : std::string()) +
        std::to_string(stops) + " stopped by the engine)";
   if (c.bracketed)
     m += "; mu_r uncertainty " + num(c.mu_r_uncertainty) + " (seed spread " + num(c.mu_r_seed_se) +
@@ -291,6 +294,8 @@ std::string to_string(PourOutcome outcome) {
       return "jam";
     case PourOutcome::kPhysicsStop:
       return "physics_stop";
+    case PourOutcome::kNotSettled:
+      return "not_settled";
   }
   return "unknown";
 }
@@ -366,6 +371,7 @@ nlohmann::json to_json(const BracketCalibration& c, const BracketSettings& s) {
                       {"piles", q.piles},
                       {"jams", q.jams},
                       {"physics_stops", q.physics_stops},
+                      {"not_settled", q.unsettled},
                       {"jam_rate", q.jam_rate()},
                       {"in_fit", q.piles > 0 && q.jam_rate() <= s.max_jam_rate}});
   const auto finite_or_null = [](double x) {

@@ -26,8 +26,9 @@
 //    point is the crossing, or a tolerance into the bracket from a point already run there.
 //  * Jams: a pour whose outlet arched (no pile) has no angle. It is counted in its point's jam
 //    rate, never averaged in; a point where more than max_jam_rate of the pours jam is beyond the
-//    usable range (the jam rate rises with mu_r), and the search stays below it. A physics stop is
-//    listed the same way, as its own reason.
+//    usable range (the jam rate rises with mu_r), and the search stays below it. A physics stop and
+//    a run that a time limit stopped before its pile settled are listed the same way, each as
+//    its own reason, and never give an angle.
 //  * Measured on the synthetic curve of the tests (a saturating angle(mu_r), slope about 28 deg
 //    per unit mu_r at the root, seed offsets of 0.3 deg and 0.15 deg run-to-run noise): the
 //    calibration ends in 6 runs with |mu_r - truth| below the 0.02 tolerance (see the test).
@@ -51,9 +52,10 @@ enum class PourOutcome {
   kPile,         // a pile formed: angle_deg is its angle
   kJam,          // the outlet arched or the particles lodged: no pile, no angle
   kPhysicsStop,  // the engine stopped the run (overlap, NaN, escape): no angle
+  kNotSettled,   // a time limit stopped the run before its pile settled: no angle
 };
 
-/// The outcome as a word for files ("pile", "jam", "physics_stop").
+/// The outcome as a word for files ("pile", "jam", "physics_stop", "not_settled").
 std::string to_string(PourOutcome outcome);
 
 /// One pour: where it ran and what it gave.
@@ -72,6 +74,7 @@ struct PourPoint {
   int piles = 0;          // runs that formed a pile
   int jams = 0;           // runs that jammed (no pile)
   int physics_stops = 0;  // runs the engine stopped
+  int unsettled = 0;      // runs a time limit stopped before the pile settled
   double jam_rate() const { return pours > 0 ? static_cast<double>(jams) / pours : 0.0; }
 };
 

@@ -13,6 +13,7 @@
 #include "experiments/calibration/calibration.hpp"
 #include "experiments/campaign/case_runner.hpp"
 #include "experiments/io/provenance.hpp"
+#include "experiments/pile/headline.hpp"
 #include "sim/contact.hpp"
 
 namespace reposetwin::experiments {
@@ -276,19 +277,29 @@ nlohmann::json merge_with_earlier(const fs::path& file, double mu,
 }
 
 // A calibration run's result as the bracketing driver sees it: a pile with its angle, a jam (the
-// outlet arched: no pile), or a physics stop; the last two never give an angle.
+// outlet arched, or no pile), a physics stop, or a run a time limit stopped before its pile
+// settled; only the first gives an angle (pile/headline.hpp's no_headline decides).
 Pour pour_of(const nlohmann::json& run, const AngleFn& angle_of) {
   const nlohmann::json& res = run.contains("result") ? run.at("result") : run;
   Pour p;
   const CaseResult r = case_result_from_json(res);
-  if (r.stop.is_physics()) {
-    p.outcome = PourOutcome::kPhysicsStop;
-    p.detail = stop_reason_text(r.stop) + ": " + r.stop.detail;
-  } else if (case_made_no_pile(res)) {
-    p.outcome = PourOutcome::kJam;
-    p.detail = r.stop.detail.empty() ? std::string("no pile") : r.stop.detail;
-  } else {
+  const std::optional<NoHeadline> none = no_headline(r.stop, r.pile);
+  if (!none) {
     p.angle_deg = angle_of(run);
+    return p;
+  }
+  p.detail = none->message;
+  switch (none->reason) {
+    case NoHeadlineReason::kPhysicsStop:
+      p.outcome = PourOutcome::kPhysicsStop;
+      break;
+    case NoHeadlineReason::kTimeLimit:
+    case NoHeadlineReason::kNotSettled:
+      p.outcome = PourOutcome::kNotSettled;
+      break;
+    default:
+      p.outcome = PourOutcome::kJam;
+      break;
   }
   return p;
 }
@@ -418,7 +429,12 @@ AngleFn calibration_angle(AngleMeasure measure) {
   // into a mu_r point it would drag the fit down, so the sequential calibration stops on it.
   return [measure](const nlohmann::json& r) {
     const nlohmann::json& res = r.contains("result") ? r.at("result") : r;
-    if (case_made_no_pile(res))
+    const CaseResult c = case_result_from_json(res);
+    const std::optional<NoHeadline> none = no_headline(c.stop, c.pile);
+    if (none && none->reason != NoHeadlineReason::kJammed)
+      throw std::runtime_error("a calibration run has no angle (" + none->message +
+                               "): it cannot enter the fit; " + no_headline_advice(none->reason));
+    if (none)
       throw std::runtime_error(
           "a calibration run clogged the outlet (" +
           res.value("stop", nlohmann::json::object()).value("detail", std::string("lodged")) +
@@ -432,7 +448,9 @@ AngleFn calibration_angle(AngleMeasure measure) {
 
 AngleFn prediction_angle(AngleMeasure measure) {
   return [measure](const nlohmann::json& r) {
-    if (case_made_no_pile(r)) return std::numeric_limits<double>::quiet_NaN();
+    const nlohmann::json& res = r.contains("result") ? r.at("result") : r;
+    const CaseResult c = case_result_from_json(res);
+    if (no_headline(c.stop, c.pile)) return std::numeric_limits<double>::quiet_NaN();
     return case_angle_deg(r, measure);
   };
 }

@@ -52,13 +52,22 @@ json run_timestep_study(const std::string& scene_path, const std::string& out_di
   cs.images = s.images;
   run_campaign(campaign, out_dir, pile_case_fn(cs), s.runner);
 
+  // A run without a headline (not settled, jammed, ...) has no angle: it is counted by its
+  // reason beside the point, never averaged in.
   std::map<std::string, std::vector<double>> angles;
+  std::map<std::string, std::map<std::string, int>> without_angle;
   std::map<std::string, double> dt_of;
   for (const CaseSpec& run : campaign.runs) {
     const auto r = read_run_result(out_dir, run);
     if (!r) continue;
-    angles[run.case_name].push_back(case_angle_deg(*r, s.images ? AngleMeasure::kImage : AngleMeasure::kParticles));
     dt_of[run.case_name] = r->at("result").at("provenance").at("time_step_s");
+    const std::string outcome = case_outcome(r->at("result"));
+    if (outcome != "pile") {
+      ++without_angle[run.case_name][outcome];
+      continue;
+    }
+    angles[run.case_name].push_back(
+        case_angle_deg(*r, s.images ? AngleMeasure::kImage : AngleMeasure::kParticles));
   }
   json points = json::array();
   std::vector<std::pair<double, double>> dt_angle;
@@ -68,8 +77,12 @@ json run_timestep_study(const std::string& scene_path, const std::string& out_di
     mean /= a.size();
     for (double x : a) sd += (x - mean) * (x - mean);
     sd = a.size() > 1 ? std::sqrt(sd / (a.size() - 1)) : 0.0;
-    points.push_back({{"case", name}, {"time_step_s", dt_of[name]}, {"angle_mean_deg", mean},
-                      {"angle_sd_deg", sd}, {"runs", a.size()}});
+    points.push_back({{"case", name},
+                      {"time_step_s", dt_of[name]},
+                      {"angle_mean_deg", mean},
+                      {"angle_sd_deg", sd},
+                      {"runs", a.size()},
+                      {"without_angle", without_angle[name]}});
     dt_angle.emplace_back(dt_of[name], mean);
   }
   std::sort(points.begin(), points.end(),

@@ -388,8 +388,15 @@ CampaignSummary run_impl(const Campaign& campaign, const std::string& out_dir_st
   if (!writes_manifest) {
     say("this rank's " + std::to_string(summary.ran) + " run(s) done; rank 0 writes the manifest");
   } else {
-    say(std::to_string(summary.finished) + " finished, " + std::to_string(summary.failed) +
-        " failed, " + std::to_string(counts["pending"].get<int>()) + " pending of " +
+    // A finished run without an angle (jammed, not settled, ...) is a failure to the user,
+    // named by its reason.
+    std::string without;
+    for (const auto& [reason, n] : summary.without_pile)
+      without += (without.empty() ? "" : ", ") + std::to_string(n) + " " + reason;
+    say(std::to_string(summary.finished) + " finished" +
+        (without.empty() ? std::string() : " (without an angle: " + without + ")") + ", " +
+        std::to_string(summary.failed) + " failed, " +
+        std::to_string(counts["pending"].get<int>()) + " pending of " +
         std::to_string(summary.total));
   }
   return summary;

@@ -25,8 +25,11 @@ json to_json(const CaseResult& r) {
                     {"height_m", r.image->height_m},   {"diameter_m", r.image->diameter_m},
                     {"flank_deg", r.image->flank_deg}, {"images", r.image->images}};
   if (r.shape) out["shape"] = to_json(*r.shape);
-  // The one headline angle, named as in a run's result.json (pile/headline.hpp).
-  if (!r.pile.clogged && !r.pile.not_measured && r.pile.status != sim::PileStatus::kNoPile) {
+  // The one headline angle, named as in a run's result.json (pile/headline.hpp), or null and
+  // why there is none.
+  if (const auto none = no_headline(r.stop, r.pile)) {
+    out.update(to_json(*none));
+  } else {
     Headline h = headline_from_particles(r.pile);
     if (r.image)
       h = {r.image->theta_deg, r.image->theta_sd_deg, r.image->height_m, r.image->diameter_m, 0,
@@ -97,7 +100,9 @@ CaseFn pile_case_fn(const CaseRunSettings& settings) {
     const std::optional<PileRun> run = run_pile_test_or_continue(scene, opt);
     if (!run) throw std::logic_error(opt.out_dir + ": a case run has no stop limit, yet stopped");
     CaseResult r = case_result_of(*run);
-    if (settings.images && run->pile_ok())
+    // A run without a headline (not settled, jammed, ...) has nothing the photographs could
+    // give an angle of.
+    if (settings.images && !no_headline(run->stop, run->pile))
       r.image = case_images_of(render_and_measure_run(*run, opt.out_dir, settings.image));
     return to_json(r);
   };
@@ -136,23 +141,23 @@ void check_pile_cases(const Campaign& campaign) {
 }
 
 bool case_made_no_pile(const json& r) {
-  const PileMeasure pile = case_result_from_json(r).pile;
-  return pile.status == sim::PileStatus::kNoPile && !pile.not_measured;
+  const CaseResult c = case_result_from_json(r);
+  const auto none = no_headline(c.stop, c.pile);
+  return none && none->reason == NoHeadlineReason::kJammed;
 }
 
 std::string case_outcome(const json& j) {
   const CaseResult r = case_result_from_json(j);
-  if (r.stop.is_physics()) return "physics_stop";
-  if (r.pile.status == sim::PileStatus::kNoPile) return "jam";
-  return "pile";
+  const auto none = no_headline(r.stop, r.pile);
+  return none ? no_headline_word(none->reason) : "pile";
 }
 
 double case_angle_deg(const json& j, AngleMeasure measure) {
   const CaseResult r = case_result_from_json(j);
-  if (r.stop.is_physics())
-    throw std::runtime_error("the run stopped on a physics failure (" + stop_reason_text(r.stop) +
-                             ": " + r.stop.detail + "), so it has no angle; " + r.run_dir);
-  if (r.pile.status == sim::PileStatus::kNoPile) return 0.0;  // a clogged outlet
+  if (const auto none = no_headline(r.stop, r.pile))
+    throw std::runtime_error("the run has no angle (" +
+                             std::string(no_headline_word(none->reason)) + ": " + none->message +
+                             "); " + r.run_dir);
   switch (measure) {
     case AngleMeasure::kImage:
       return r.image ? r.image->theta_deg : r.pile.theta_hd_deg;

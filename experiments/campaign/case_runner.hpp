@@ -62,18 +62,19 @@ CaseFn pile_case_fn(const CaseRunSettings& settings);
 /// each override applies to its scene file, since a campaign is not always over pile scenes.
 void check_pile_cases(const Campaign& campaign);
 
-/// True when the case made no pile (a clogged outlet: every particle lodged in the container).
+/// True when the case jammed: grains arched in the outlet and no pile formed.
 bool case_made_no_pile(const nlohmann::json& case_result);
 
-/// What a finished case gave, for a campaign's counts: "pile" when it formed a pile whose
-/// angles count, else the reason it did not: "jam" (the outlet clogged: no pile) or
-/// "physics_stop" (the engine stopped the run: overlap, NaN, escape).
+/// What a finished case gave, for a campaign's counts: "pile" when it has a headline angle, else
+/// the reason it has none (no_headline_word: "jam", "time_limit", "not_settled", "no_pile",
+/// "physics_stop"). Only "pile" counts as an angle.
 std::string case_outcome(const nlohmann::json& case_result);
 
-/// The angle `measure` of a finished case [deg]; 0 for "no pile". kImage falls back to atan(2H/D)
-/// from particle positions when the run was not photographed (--no-images); kImageFlank needs the
-/// photographs and throws without them. Throws if the run stopped on a physics failure (overlap,
-/// NaN, escape): such a run has no angle.
+/// The angle `measure` of a finished case [deg]. kImage falls back to atan(2H/D) from particle
+/// positions when the run was not photographed (--no-images); kImageFlank needs the photographs
+/// and throws without them. Throws std::runtime_error, naming the reason, for a case without a
+/// headline (case_outcome not "pile": jammed, not settled, time limit, no pile, physics stop):
+/// such a run has no angle.
 double case_angle_deg(const nlohmann::json& case_result,
                       AngleMeasure measure = AngleMeasure::kImage);
 

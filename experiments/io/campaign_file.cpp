@@ -110,7 +110,17 @@ std::vector<Override> read_overrides(TableReader& t) {
   std::vector<Override> out;
   for (const auto& [k, v] : flat) {
     split_dotted_key(k.str(), t.file() + ": key '" + key + "'");
-    set_override(out, override_of(std::string(k.str()), v));
+    // A path written in a file is relative to that file: a sieve sheet named here is found
+    // beside the campaign file, wherever the scene is.
+    const auto path = v.value<std::string>();
+    if (k.str() == "sample.psd_file" && path && fs::path(*path).is_relative())
+      set_override(
+          out,
+          string_override(
+              std::string(k.str()),
+              fs::absolute(fs::path(t.file()).parent_path() / *path).lexically_normal().string()));
+    else
+      set_override(out, override_of(std::string(k.str()), v));
   }
   return out;
 }

@@ -1,15 +1,25 @@
 #include "experiments/io/psd_file.hpp"
 
 #include <array>
+#include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
 #include <vector>
 
+#include "experiments/io/csv.hpp"
 #include "experiments/io/toml_tables.hpp"
 
 namespace reposetwin::experiments {
+
+bool is_csv_sheet(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".csv";
+}
+
 namespace {
 
 constexpr std::array<std::string_view, 9> kKeys = {
@@ -90,6 +100,81 @@ std::vector<double> read_numbers(const toml::table& t, const std::string& key,
   return values;
 }
 
+// The table and the cuts are checked by the engine's own rules; `table_at` and `cuts_at` name
+// where they were written (keys or columns) in its messages.
+void check_psd(const PsdFile& f, const std::string& table_at, const std::string& cuts_at) {
+  try {
+    sim::validate_sieve_table(f.spec.table);
+  } catch (const std::invalid_argument& e) {
+    bad(table_at, e.what());
+  }
+  try {
+    sim::resolve_psd(f.spec);
+  } catch (const std::invalid_argument& e) {
+    bad(cuts_at, e.what());
+  }
+}
+
+std::string trimmed(const std::string& s) {
+  const auto first = s.find_first_not_of(" \t");
+  if (first == std::string::npos) return "";
+  return s.substr(first, s.find_last_not_of(" \t") - first + 1);
+}
+
+// A sieve sheet as CSV (psd_file.hpp's second form): the header names the two columns, each
+// row one sieve.
+PsdFile read_psd_csv(const std::string& path) {
+  const CsvTable csv = read_csv_file(path);
+  const std::string at = path + ":" + std::to_string(csv.header_line);
+  if (csv.header.empty())
+    bad(path, "is empty; a sieve sheet's header is " + std::string(kCsvHeader));
+  int sieve = -1, passing = -1;
+  for (std::size_t i = 0; i < csv.header.size(); ++i) {
+    const std::string name = trimmed(csv.header[i]);
+    int* column = name == "sieve_mm" ? &sieve : name == "passing_percent" ? &passing : nullptr;
+    if (column == nullptr)
+      bad(at, "column " + std::to_string(i + 1) + " \"" + name +
+                  "\" is not a sieve-sheet column; the header must be " + kCsvHeader +
+                  " (sieve opening in mm, cumulative percent passing by mass)");
+    if (*column >= 0) bad(at, "column \"" + name + "\" is named twice");
+    *column = static_cast<int>(i);
+  }
+  if (sieve < 0 || passing < 0)
+    bad(at, std::string("the header lacks \"") + (sieve < 0 ? "sieve_mm" : "passing_percent") +
+                "\"; it must be " + kCsvHeader);
+  PsdFile f;
+  f.source = path;
+  f.name = std::filesystem::path(path).stem().string();
+  f.provenance = "sieve sheet " + path;
+  for (const std::string& c : csv.comments)
+    f.provenance += (f.provenance.empty() ? "" : "; ") + trimmed(c);
+  for (const CsvRecord& row : csv.rows) {
+    const std::string line = path + ":" + std::to_string(row.line);
+    if (row.fields.size() != csv.header.size())
+      bad(line, std::to_string(row.fields.size()) + " fields, the header has " +
+                    std::to_string(csv.header.size()));
+    const auto number = [&](int column, const char* name) {
+      const std::string text = trimmed(row.fields[static_cast<std::size_t>(column)]);
+      std::size_t used = 0;
+      double v = 0.0;
+      try {
+        v = std::stod(text, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (text.empty() || used != text.size() || !std::isfinite(v))
+        bad(line, std::string(name) + " = \"" + text + "\" is not a number");
+      return v;
+    };
+    f.spec.table.size.push_back(1e-3 * number(sieve, "sieve_mm"));
+    f.spec.table.passing.push_back(number(passing, "passing_percent"));
+  }
+  if (csv.rows.empty()) bad(path, "has a header and no sieves");
+  check_psd(f, path + ": columns sieve_mm / passing_percent",
+            path + ": the sheet's sizes against the scene's sample.d_min_mm / d_max_mm");
+  return f;
+}
+
 }  // namespace
 
 PsdFile parse_psd_table(const toml::table& t, const std::string& source, const std::string& where) {
@@ -145,21 +230,29 @@ PsdFile parse_psd_table(const toml::table& t, const std::string& source, const s
     }
   }
 
-  // The table and the cuts are checked by the engine's own rules; name the keys they concern.
-  try {
-    sim::validate_sieve_table(f.spec.table);
-  } catch (const std::invalid_argument& e) {
-    bad(locate(source, where, "sieve_mm / passing_percent", nullptr), e.what());
-  }
-  try {
-    sim::resolve_psd(f.spec);
-  } catch (const std::invalid_argument& e) {
-    bad(locate(source, where, "d_max_mm / d_min_mm / interval_sd_fraction", nullptr), e.what());
-  }
+  check_psd(f, locate(source, where, "sieve_mm / passing_percent", nullptr),
+            locate(source, where, "d_max_mm / d_min_mm / interval_sd_fraction", nullptr));
   return f;
 }
 
+toml::table psd_table_of_file(const std::string& path) {
+  if (!is_csv_sheet(path)) {
+    const PsdFile checked = read_psd_file(path);  // the same errors as the run's reader
+    (void)checked;
+    return *toml::parse_file(path)["psd"].as_table();
+  }
+  const PsdFile f = read_psd_csv(path);
+  toml::array sieve, passing;
+  for (double d : f.spec.table.size) sieve.push_back(1e3 * d);
+  for (double p : f.spec.table.passing) passing.push_back(p);
+  return toml::table{{"name", f.name},
+                     {"provenance", f.provenance},
+                     {"sieve_mm", std::move(sieve)},
+                     {"passing_percent", std::move(passing)}};
+}
+
 PsdFile read_psd_file(const std::string& path) {
+  if (is_csv_sheet(path)) return read_psd_csv(path);
   toml::table root;
   try {
     root = toml::parse_file(path);

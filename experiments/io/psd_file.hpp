@@ -1,4 +1,4 @@
-// Sieve-table files: a PSD as a user copies it from a lab sheet, in TOML.
+// Sieve-table files: a PSD as a user copies it from a lab sheet, in TOML or as a CSV sheet.
 //
 // Design note. The engine never sees TOML (sim::PsdSpec is plain), so this is the one place that
 // turns a [psd] table into a spec, whether it is a file of its own (data/psd/*.toml) or a table
@@ -18,6 +18,15 @@
 //   d_min_mm = 1.0                # optional lower cut-off [mm]; default the smallest sieve
 //   fines = "renormalise"         # optional: "renormalise" (default) or "drop"
 //   interval_sd_fraction = 0.1667 # optional: sd of the clipped normal / interval width
+//
+// A file whose name ends in .csv is a sieve sheet as a spreadsheet exports it, read by the same
+// reader into the same spec and checked by the same rules: lines starting with '#' are notes
+// (kept as the table's provenance), the header is exactly the two columns
+//   sieve_mm,passing_percent
+// (in either order; any other column is refused, naming it), and each row is one sieve: its
+// opening [mm] and the cumulative percent passing by mass. The cuts (d_min, d_max) and the fines
+// policy of a CSV sheet are the scene's (sample.d_min_mm, sample.d_max_mm); its name is the
+// file's stem.
 #pragma once
 
 #include <string>
@@ -35,9 +44,22 @@ struct PsdFile {
   sim::PsdSpec spec;       // sizes in metres
 };
 
-/// Reads a file whose only top-level table is [psd]. Throws std::runtime_error naming the file
-/// (and line) for a missing file or a TOML syntax error, and std::invalid_argument naming the
-/// file, the field and the value for bad content.
+/// The one rule for relative paths, as the README, `reposetwin keys` and docs/scene.md state it.
+inline constexpr const char* kRelativePathRule =
+    "A relative path written in a file (sample.psd_file in a scene, a campaign's scene, "
+    "overrides and target_photos) is relative to that file's folder; a path typed on the command "
+    "line, --set included, is relative to the working folder.";
+
+/// The header of a CSV sieve sheet.
+inline constexpr const char* kCsvHeader = "sieve_mm,passing_percent";
+
+/// Whether `path` is read as a CSV sieve sheet (its extension is .csv, any case).
+bool is_csv_sheet(const std::string& path);
+
+/// Reads a sieve-table file: a CSV sieve sheet (is_csv_sheet), or TOML whose only top-level
+/// table is [psd]. Throws std::runtime_error naming the file (and line) for a missing file or a
+/// TOML syntax error, and std::invalid_argument (InputError for a CSV sheet) naming the file,
+/// the line, the field or column and the value for bad content.
 PsdFile read_psd_file(const std::string& path);
 
 }  // namespace reposetwin::experiments

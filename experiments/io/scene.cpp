@@ -135,11 +135,8 @@ std::string resolved_text(const toml::table& doc, const SceneConfig& s,
   if (toml::table* sample = out["sample"].as_table()) {
     if (const auto file = (*sample)["psd_file"].value<std::string>()) {
       const std::filesystem::path p = dir / *file;
-      const toml::table psd_doc = parse_toml(read_file(p.string()), p.string());
-      if (const toml::table* psd = psd_doc["psd"].as_table()) {
-        sample->insert_or_assign("psd", *psd);
-        sample->erase("psd_file");
-      }
+      sample->insert_or_assign("psd", psd_table_of_file(p.string()));
+      sample->erase("psd_file");
     }
   }
   if (toml::table* contacts = out["contacts"].as_table()) {
@@ -385,9 +382,11 @@ void read_numerics(TableReader t, sim::Settings& n) {
                                     num(n.max_rayleigh_fraction) +
                                     "]: above it the explicit integration is unstable");
   const double g = -n.gravity.z();
-  if (!(std::isfinite(g) && std::abs(g) <= kMaxGravity))
-    t.fail("gravity_m_s2", "= " + num(g) + " must be finite and at most " + num(kMaxGravity) +
-                               " m/s^2 in size (the lab's is 9.81)");
+  // A pile forms only under gravity pulling the grains onto the plate: without it (0, or
+  // upward) there is no pile physics and no angle to report.
+  if (!(std::isfinite(g) && g > 0 && g <= kMaxGravity))
+    t.fail("gravity_m_s2", "= " + num(g) + " must be positive (downward) and at most " +
+                               num(kMaxGravity) + " m/s^2 (the lab's is 9.81)");
   if (!(n.initial_overlap_tolerance >= 0 && std::isfinite(n.initial_overlap_tolerance)))
     t.fail("initial_overlap_tolerance",
            "= " + num(n.initial_overlap_tolerance) + " must not be negative");

@@ -46,7 +46,9 @@ std::vector<SceneKey> sample_keys() {
       {"sample.mass_kg", "number", "required", "kg", "mass of the (scalped) sample poured"},
       {"sample.material", "string", q(scene.sample_material), "-", "the sample's material"},
       {"sample.psd_file", "string", "-", "-",
-       "sieve-table file with a [psd] table, relative to the scene (or inline [sample.psd])"},
+       "sieve-table file: TOML with a [psd] table, or a CSV sieve sheet with the header "
+       "sieve_mm,passing_percent; relative to the scene file's folder (typed with --set: to the "
+       "working folder); or an inline [sample.psd]"},
       {"sample.psd", "table", "-", "-", "inline sieve table (or sample.psd_file), keys below"},
       {"sample.psd.name", "string", q(""), "-", "name of the grading"},
       {"sample.psd.provenance", "string", q(""), "-", "where the sieve table comes from"},
@@ -199,7 +201,8 @@ std::vector<SceneKey> numerics_keys() {
        "Verlet skin; 0 = a quarter of the smallest diameter"},
       {"numerics.threads", "integer", std::to_string(s.threads), "-",
        "OpenMP threads; 0 = OpenMP's default (run --threads overrides)"},
-      {"numerics.gravity_m_s2", "number", n(-s.gravity.z()), "m/s^2", "gravity, downward"},
+      {"numerics.gravity_m_s2", "number", n(-s.gravity.z()), "m/s^2",
+       "gravity, downward (> 0: no pile forms without it)"},
       {"numerics.max_overlap_ratio", "number", n(s.max_overlap_ratio), "-",
        "overlap / smaller radius above this stops the run (blow-up guard)"},
       {"numerics.initial_overlap_tolerance", "number", n(s.initial_overlap_tolerance), "-",
@@ -298,7 +301,9 @@ std::string scene_keys_markdown() {
       "`[numerics]`, `[output]` and `[measure]` are optional; `--set key=value` overrides "
       "any key. Without `[sample.shape]` or `[[sample.shapes]]` every grain is a sphere; with "
       "one, every grain is a rigid clump of spheres (the k-th of a mix is overridden as "
-      "`--set sample.shapes.<k>.elongation=2`).\n\n"
+      "`--set sample.shapes.<k>.elongation=2`). " +
+      std::string(kRelativePathRule) +
+      "\n\n"
       "| key | type | default | unit | meaning |\n|---|---|---|---|---|\n";
   for (const SceneKey& k : scene_keys())
     t += "| `" + k.key + "` | " + k.type + " | " + cell(k.default_text) + " | " + k.unit + " | " +

@@ -21,4 +21,9 @@ SceneConfig parse_scene_table(const toml::table& doc, const std::string& file);
 PsdFile parse_psd_table(const toml::table& table, const std::string& source,
                         const std::string& where = "psd");
 
+/// The [psd] table of a sieve-table file as TOML, for the resolved scene a run folder keeps: the
+/// file's own table, or a CSV sheet's columns, name and notes written as one. Throws as
+/// read_psd_file does.
+toml::table psd_table_of_file(const std::string& path);
+
 }  // namespace reposetwin::experiments

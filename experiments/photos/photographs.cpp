@@ -1,15 +1,18 @@
 #include "experiments/photos/photographs.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <atomic>
+#include <cstring>
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
-#include <unistd.h>
 
 #include "experiments/io/input_error.hpp"
 #include "render/output.hpp"
@@ -138,13 +141,28 @@ std::vector<camera::Camera> side_cameras(const render::Scene& scene, const Photo
 // This thread's renderer, kept for the thread's life: creating the GL context, compiling the
 // shaders and llvmpipe's compile of them at the first draw cost about 0.3 s, more than
 // photographing a small pile, and a loop photographs thousands (on threads, loop_sim.cpp). A
-// reused renderer gives the same bytes as a fresh one (tests/render: SameInputRendersBitIdentically).
-// One per thread, never handed to another: a context left current in a thread that makes another
-// one current is released there, under the other thread's feet.
-// A process forked after it rendered cannot render: llvmpipe's rasteriser threads are
-// process-wide and do not exist in the child, where any new context waits on them forever. So a
-// child asking for a renderer gets an error, not a hang; callers photograph on threads, or in
-// children of a process that has not rendered (the campaign's pool).
+// reused renderer gives the same bytes as a fresh one (tests/render:
+// SameInputRendersBitIdentically). One per thread, never handed to another: a context left current
+// in a thread that makes another one current is released there, under the other thread's feet. A
+// process forked after it rendered cannot render: llvmpipe's rasteriser threads are process-wide
+// and do not exist in the child, where any new context waits on them forever. So a child asking for
+// a renderer gets an error, not a hang; callers photograph on threads, or in children of a process
+// that has not rendered (the campaign's pool). An overlay PNG: a file that cannot be written (a
+// full disk, a read-only folder) is an error naming it and the reason, never a photograph silently
+// missing.
+void write_overlay(const std::string& path, const cv::Mat& image) {
+  errno = 0;
+  bool ok = false;
+  try {
+    ok = cv::imwrite(path, image);
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error(path + ": cannot write the overlay (" + e.what() + ")");
+  }
+  if (!ok)
+    throw std::runtime_error(path + ": cannot write the overlay (" +
+                             (errno ? std::strerror(errno) : "the image writer failed") + ")");
+}
+
 render::Renderer& thread_renderer() {
   static std::atomic<pid_t> rendering_process{0};
   pid_t first = 0;
@@ -208,13 +226,13 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
     try {
       view.measured = vision::measure_side_camera(image, declared, {}, base + ".png");
       measured.push_back(*view.measured);
-      if (s.write_overlays)
-        cv::imwrite(base + ".measured.png",
-                    stamp_warning(vision::draw_side_overlay(image, *view.measured), s.warning));
     } catch (const std::exception& e) {
       if (s.views_must_measure) throw;
       view.error = e.what();  // one view of a small pile may defeat vision; the others count
     }
+    if (view.measured && s.write_overlays)
+      write_overlay(base + ".measured.png",
+                    stamp_warning(vision::draw_side_overlay(image, *view.measured), s.warning));
     photos.sides.push_back(std::move(view));
   }
   if (!measured.empty()) photos.summary = vision::combine_sides(measured);
@@ -232,14 +250,14 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
     spec.camera = cam;
     if (photos.summary) spec.crest_height_m = photos.summary->height_m.mean;
     photos.top = vision::measure_top(image, spec, {}, base + ".png");
-    if (s.write_overlays)
-      cv::imwrite(base + ".measured.png",
-                  stamp_warning(vision::draw_top_overlay(image, *photos.top), s.warning));
   } catch (const std::exception& e) {
     // The footprint is a secondary quantity (the angle comes from the side views): a top view
     // that cannot be measured (a thin, patchy pile) is reported, not fatal.
     photos.top_error = e.what();
   }
+  if (photos.top && s.write_overlays)
+    write_overlay(base + ".measured.png",
+                  stamp_warning(vision::draw_top_overlay(image, *photos.top), s.warning));
   return photos;
 }
 

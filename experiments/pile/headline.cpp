@@ -33,6 +33,87 @@ Headline headline_from_particles(const PileMeasure& pile) {
   return h;
 }
 
+const char* no_headline_word(NoHeadlineReason r) {
+  switch (r) {
+    case NoHeadlineReason::kTimeLimit:
+      return "time_limit";
+    case NoHeadlineReason::kNotSettled:
+      return "not_settled";
+    case NoHeadlineReason::kJammed:
+      return "jam";
+    case NoHeadlineReason::kNoPile:
+      return "no_pile";
+    case NoHeadlineReason::kPhysicsStop:
+      return "physics_stop";
+    case NoHeadlineReason::kPhotographs:
+      return "photographs";
+    case NoHeadlineReason::kCount:
+      break;
+  }
+  throw std::logic_error("no_headline_word: unknown reason");
+}
+
+std::optional<NoHeadline> no_headline(const RunStop& stop, const PileMeasure& pile) {
+  const auto with = [&stop](const std::string& what) {
+    return stop.detail.empty() ? what : what + ": " + stop.detail;
+  };
+  switch (stop.reason) {
+    case StopReason::kPhysics:
+      return NoHeadline{NoHeadlineReason::kPhysicsStop,
+                        with("the engine stopped the run (" + stop_reason_text(stop) + ")")};
+    case StopReason::kTimeLimit:
+      return NoHeadline{NoHeadlineReason::kTimeLimit,
+                        with("stopped by the time limit before the pile settled")};
+    case StopReason::kSettleTimeLimit:
+      return NoHeadline{NoHeadlineReason::kNotSettled, with("the pile did not settle")};
+    case StopReason::kClogged:
+      return NoHeadline{NoHeadlineReason::kJammed, with("jammed: the outlet clogged")};
+    case StopReason::kSettled:
+      break;
+  }
+  if (pile.clogged)
+    return NoHeadline{NoHeadlineReason::kJammed, "jammed: the outlet clogged: " + pile.detail};
+  if (pile.not_measured || pile.status == sim::PileStatus::kNoPile)
+    return NoHeadline{NoHeadlineReason::kNoPile,
+                      "formed no pile: no grain rests on the plate" +
+                          (pile.detail.empty() ? std::string() : " (" + pile.detail + ")")};
+  if (pile.status == sim::PileStatus::kNoFlanks)
+    return NoHeadline{NoHeadlineReason::kNoPile,
+                      "formed no measurable pile: no flank had enough surface grains for a fit "
+                      "(" +
+                          std::to_string(pile.pile_count) + " grains in the pile)"};
+  return std::nullopt;
+}
+
+std::string no_headline_advice(NoHeadlineReason r) {
+  switch (r) {
+    case NoHeadlineReason::kTimeLimit:
+      return "raise procedure.max_time_s, or shorten the run (a smaller sample.mass_kg, a faster "
+             "procedure.lift_speed_m_s)";
+    case NoHeadlineReason::kNotSettled:
+      return "raise procedure.final_settle_max_s, or settle to a looser procedure.settle_speed_m_s";
+    case NoHeadlineReason::kJammed:
+      return "widen the outlet (container.bottom_diameter_m; below 3.75 d_max the paper's "
+             "Fig. 10 funnel jams), or lower the rolling friction or cohesion that arches it";
+    case NoHeadlineReason::kNoPile:
+      return "use a larger sample.mass_kg, or smaller grains (sample.psd), so the pile is "
+             "several grains high";
+    case NoHeadlineReason::kPhysicsStop:
+      return "see the likely cause printed with the stop";
+    case NoHeadlineReason::kPhotographs:
+      return "free the disk or make the run folder's images/ writable, then run again with "
+             "--force";
+    case NoHeadlineReason::kCount:
+      break;
+  }
+  throw std::logic_error("no_headline_advice: unknown reason");
+}
+
+json to_json(const NoHeadline& n) {
+  return {{"headline_angle_deg", nullptr},
+          {"no_headline", {{"reason", no_headline_word(n.reason)}, {"message", n.message}}}};
+}
+
 json to_json(const Headline& h) {
   return {{"headline_angle_deg", h.angle_deg}, {"headline_angle_sd_deg", h.angle_sd_deg},
           {"headline_height_m", h.height_m},   {"headline_diameter_m", h.diameter_m},

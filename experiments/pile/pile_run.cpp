@@ -12,6 +12,7 @@
 #include <memory>
 #include <sstream>
 
+#include "experiments/io/format.hpp"
 #include "experiments/io/hash.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
@@ -54,6 +55,21 @@ double process_cpu_s() {
   timespec t{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+// The phase as the time-limit message says it ("while filling").
+const char* phase_doing(Phase p) {
+  switch (p) {
+    case Phase::kFill:
+      return "filling";
+    case Phase::kLift:
+      return "lifting";
+    case Phase::kSettle:
+      return "settling";
+    case Phase::kDone:
+      break;
+  }
+  return "finishing";
 }
 
 std::string eta_text(double seconds) {
@@ -322,7 +338,8 @@ class PileRunner {
     }
     if (ctl_.phase != Phase::kDone && state().time > scene_.procedure.max_time)
       end(StopReason::kTimeLimit,
-          std::string("phase ") + phase_name(ctl_.phase) + " at the time limit");
+          "procedure.max_time_s = " + significant(scene_.procedure.max_time) + " s reached while " +
+              phase_doing(ctl_.phase));
     return true;
   }
 
@@ -378,8 +395,10 @@ class PileRunner {
       ctl_.inside_last = inside;
       ctl_.inside_changed = t;
     } else if (flow_stopped) {
-      end(StopReason::kClogged, "no pile: " + std::to_string(inside) +
-                                    (scene_.shapes.empty() ? " particles lodged" : " clumps lodged"));
+      end(StopReason::kClogged,
+          std::to_string(inside) + (scene_.shapes.empty() ? " particles" : " clumps") +
+              " lodged in the container, their count unchanged for procedure.clog_window_s = " +
+              significant(pc.clog_window) + " s");
     }
   }
 
@@ -398,7 +417,11 @@ class PileRunner {
     if (ke < ctl_.ke_threshold && in_phase > 0.1)
       end(StopReason::kSettled, "kinetic energy per particle below the threshold");
     else if (in_phase > scene_.procedure.final_settle_max)
-      end(StopReason::kSettleTimeLimit, "kinetic energy per particle still above the threshold");
+      end(StopReason::kSettleTimeLimit,
+          "procedure.final_settle_max_s = " + significant(scene_.procedure.final_settle_max) +
+              " s reached with the kinetic energy per particle still above the threshold of "
+              "procedure.settle_speed_m_s = " +
+              significant(scene_.procedure.settle_speed) + " m/s");
   }
 
   void report_progress(double wall) {

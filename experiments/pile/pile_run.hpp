@@ -10,8 +10,8 @@
 //           most max_retained_fraction of the sample inside (cohesive grains stuck to the wall),
 //           that material stays in the container and is lifted away with it (removed from the
 //           run, counted in the result as retained_in_container), and the pile settles; with
-//           more, particles have arched in the outlet and the run ends with "no pile: N
-//           particles lodged" and an angle of 0;
+//           more, particles have arched in the outlet and the run ends jammed, with no pile
+//           and no headline angle (pile/headline.hpp);
 //   settle  the container is gone; the pile settles until the energy threshold again;
 //   done    the pile is measured from the particle positions (sim/pile_geometry).
 // The run stops by itself and records why. Everything needed to resume (the engine checkpoint

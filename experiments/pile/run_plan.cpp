@@ -77,6 +77,7 @@ RunPlan plan_run(const SceneConfig& scene, int threads, const PlanSettings& sett
   p.particle_steps_per_s = settings.particle_steps_per_s_per_thread * p.threads;
   p.wall_s =
       static_cast<double>(p.steps) * static_cast<double>(p.particles) / p.particle_steps_per_s;
+  p.representative = representativeness(scene);
   return p;
 }
 
@@ -92,7 +93,7 @@ std::string plan_text(const RunPlan& p, const PlanSettings& s) {
        fmt("%.2g", p.particle_steps_per_s) + " particle-steps/s (" +
        fmt("%.2g", s.particle_steps_per_s_per_thread) + " per thread, measured on whole pile " +
        "runs, x " + std::to_string(p.threads) + " thread(s))\n";
-  return t;
+  return t + representativeness_text(p.representative);
 }
 
 std::string plan_refusal(const RunPlan& p, const PlanSettings& s) {

@@ -10,12 +10,15 @@
 // setting whose default was measured on whole pile runs on the development machine; the
 // simulated time is a rough estimate (within about 30% of the shipped funnel scenes' runs).
 // plan_refusal() says why a plan is above the limits (a setting each) and which key shrinks it.
+// The plan also says when the pile will not be representative of the lab's test (too low for its
+// grains, most of the sieve sheet not simulated, an outlet that jams): representativeness.hpp.
 #pragma once
 
 #include <cstdint>
 #include <string>
 
 #include "experiments/io/scene.hpp"
+#include "experiments/pile/representativeness.hpp"
 
 namespace reposetwin::experiments {
 
@@ -41,12 +44,14 @@ struct RunPlan {
   int threads = 1;                        // threads the rate is scaled by [-]
   double particle_steps_per_s = 0.0;      // the rate assumed (per thread x threads) [1/s]
   double wall_s = 0.0;                    // estimated wall time [s]
+  Representativeness representative;      // pile height, mass not simulated, outlet width
 };
 
 /// The plan of `scene` run with `threads` threads. Throws InputError as the scene's checks do.
 RunPlan plan_run(const SceneConfig& scene, int threads, const PlanSettings& settings = {});
 
-/// The plan as a few lines for a person (each ending in a newline).
+/// The plan as a few lines for a person (each ending in a newline), with a warning line for each
+/// representativeness rule the scene breaks (pile/representativeness.hpp).
 std::string plan_text(const RunPlan& plan, const PlanSettings& settings = {});
 
 /// Empty when the plan is within the settings' limits; otherwise why not, naming the limit, the

@@ -16,6 +16,7 @@
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/loop/loop.hpp"
+#include "experiments/pile/headline.hpp"
 #include "experiments/pile/pile_record.hpp"
 #include "experiments/report/calibration_section.hpp"
 #include "experiments/report/format.hpp"
@@ -84,16 +85,12 @@ void add_result(FolderResults& f, const std::string& case_name, const json& over
   c.stops.push_back(reason);
   c.run_dirs.push_back(run_dir);
   c.provenance = r.at("provenance");
-  // A run stopped by a physics failure (overlap, NaN, escape) has no valid pile, and a clogged
-  // outlet (a jam) none at all: such runs are listed with their reason, and their angles never
-  // enter a mean or a count of results.
+  // A run without a headline (a physics stop, a jam, a time limit before the pile settled, no
+  // pile: pile/headline.hpp) is listed with its reason, and its angles never enter a mean or a
+  // count of results.
   const json& pile = r.at("pile");
-  if (stop_from_json(r.at("stop")).is_physics()) {
-    ++c.without_pile["physics_stop"];
-    return;
-  }
-  if (pile.value("status", std::string()) == "no pile") {
-    ++c.without_pile["jam"];
+  if (const auto none = no_headline(stop_from_json(r.at("stop")), pile_measure_from_json(pile))) {
+    ++c.without_pile[no_headline_word(none->reason)];
     return;
   }
   c.particle_deg.push_back(pile.value("theta_hd_deg", 0.0));
@@ -174,6 +171,7 @@ json case_summary(const FolderResults& f) {
                                 {"runs", c.run_dirs.size()},
                                 {"piles", static_cast<int>(c.run_dirs.size()) - without},
                                 {"without_pile", c.without_pile},
+                                {"image_runs", s.image.n},
                                 {"image_theta_mean_deg", s.image.mean},
                                 {"image_theta_sd_deg", s.image.sd},
                                 {"image_flank_mean_deg", s.flank.n ? json(s.flank.mean) : json()},
@@ -509,6 +507,76 @@ bool is_loop_dir(const fs::path& d) {
 }
 
 }  // namespace
+
+namespace {
+
+// "jam 2, not_settled 1": the runs without an angle by reason.
+std::string reasons_of(const json& without) {
+  std::string t;
+  for (const auto& [reason, n] : without.items())
+    t += (t.empty() ? "" : ", ") + std::to_string(n.get<int>()) + " " + reason;
+  return t;
+}
+
+std::string calibration_line(const json& c) {
+  const json target = c.value("target", json::object());
+  if (!c.contains("mu_r") || !c["mu_r"].is_number())
+    return "no calibrated mu_r (" + c.value("status", std::string("?")) +
+           "): " + c.value("message", std::string());
+  std::string line = "calibrated mu_r " + fixed_or_dash(c["mu_r"], 3);
+  if (c.contains("mu_r_interval") && c["mu_r_interval"].size() == 2)
+    line += " (" + fixed(100.0 * c.value("interval_level", 0.95), 0) + "% interval " +
+            fixed_or_dash(c["mu_r_interval"][0], 3) + "-" +
+            fixed_or_dash(c["mu_r_interval"][1], 3) + ")";
+  return line + " for the target " + fixed_or_dash(target.value("angle_deg", json()), 2) +
+         " deg, " + std::to_string(c.value("simulations", 0)) + " simulations";
+}
+
+std::string cases_line(const json& cases) {
+  int runs = 0, piles = 0;
+  json without = json::object();
+  for (const json& c : cases) {
+    runs += c.value("runs", 0);
+    piles += c.value("piles", 0);
+    const json by_reason = c.value("without_pile", json::object());
+    for (const auto& [reason, n] : by_reason.items())
+      without[reason] = without.value(reason, 0) + n.get<int>();
+  }
+  std::string line;
+  if (cases.size() == 1 && piles > 0) {
+    const json& c = cases[0];
+    const bool images = c.value("image_runs", 0) > 0;
+    line = c.value("case", std::string()) + ": angle of repose " +
+           fixed_or_dash(c[images ? "image_theta_mean_deg" : "particle_theta_mean_deg"], 2) +
+           (piles > 1
+                ? " \u00b1 " +
+                      fixed_or_dash(c[images ? "image_theta_sd_deg" : "particle_theta_sd_deg"], 2)
+                : std::string()) +
+           " deg (" + (images ? "image" : "particle") + " atan(2H/D), " + std::to_string(piles) +
+           (piles == 1 ? " run)" : " runs)");
+  } else {
+    line = std::to_string(cases.size()) + (cases.size() == 1 ? " case, " : " cases, ") +
+           std::to_string(runs) + (runs == 1 ? " run, " : " runs, ") + std::to_string(piles) +
+           " with an angle";
+  }
+  if (!without.empty()) line += "; without an angle: " + reasons_of(without);
+  return line;
+}
+
+}  // namespace
+
+std::string report_line(const json& summary, const std::string& page) {
+  std::string what;
+  if (summary.contains("calibration") && summary["calibration"].is_object())
+    what = calibration_line(summary["calibration"]);
+  else if (summary.contains("cases") && !summary["cases"].empty())
+    what = cases_line(summary["cases"]);
+  else if (summary.contains("folders"))
+    what = std::to_string(summary["folders"].size()) + " folders, each with its own report";
+  else
+    what = summary.value("title", std::string("report"));
+  return what + "; report " + page;
+}
 
 std::string report_page(const std::string& dir) {
   return ((is_loop_dir(dir) ? fs::path(dir) : fs::path(dir) / "report") / "index.html").string();

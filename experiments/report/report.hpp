@@ -42,6 +42,11 @@ struct ReportSettings {
 /// the folder holds no run, campaign or calibration results.
 nlohmann::json build_report(const std::string& dir, const ReportSettings& settings = {});
 
+/// The one line `reposetwin report` prints: the calibrated mu_r and its interval (or why there is
+/// none), else a run's or a case's angle (or the counts of a campaign's cases and the runs
+/// without an angle by reason), then "; report PAGE". `summary` is what build_report returned.
+std::string report_line(const nlohmann::json& summary, const std::string& page);
+
 /// Where build_report(dir) writes its page: DIR/index.html for a loop folder (loop.json and no
 /// other results; the page the loop itself writes), DIR/report/index.html otherwise.
 std::string report_page(const std::string& dir);

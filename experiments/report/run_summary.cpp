@@ -5,6 +5,7 @@
 
 #include "experiments/io/format.hpp"
 #include "experiments/io/provenance.hpp"
+#include "experiments/pile/representativeness.hpp"
 #include "experiments/pile/run_plan.hpp"
 #include "experiments/report/format.hpp"
 #include "experiments/report/html.hpp"
@@ -185,59 +186,94 @@ std::string provenance_section(const PileRun& run, const RunSummaryInputs& in) {
   return table_section("Provenance", std::move(rows));
 }
 
-std::string headline_section(const PileRun& run, const std::optional<Headline>& h,
-                             const RunSummaryInputs& in) {
+std::string headline_section(const PileRun& run, const RunSummary& s, const RunSummaryInputs& in) {
   mustache::data d;
-  d.set("angle", h ? fixed(h->angle_deg) : std::string("no pile"));
-  d.set("sd", h && h->from_images ? mustache::data(fixed(h->angle_sd_deg)) : mustache::data(false));
-  d.set("measure", h ? h->measure : std::string("-"));
-  d.set("views", h && h->views > 0 ? mustache::data(std::to_string(h->views) + " side views")
-                                   : mustache::data(false));
-  d.set("H_mm", h ? mm(h->height_m) : std::string("-"));
-  d.set("D_mm", h ? mm(h->diameter_m) : std::string("-"));
+  if (!s.headline) {
+    const NoHeadline& n = *s.no_headline;
+    d.set("reason", n.message);
+    d.set("advice", no_headline_advice(n.reason));
+    d.set("particles", std::to_string(run.particles.final));
+    return render(templates::kRunNoHeadline, d);
+  }
+  const Headline& h = *s.headline;
+  d.set("angle", fixed(h.angle_deg));
+  d.set("sd", h.from_images ? mustache::data(fixed(h.angle_sd_deg)) : mustache::data(false));
+  d.set("measure", h.measure);
+  d.set("views", h.views > 0 ? mustache::data(std::to_string(h.views) + " side views")
+                             : mustache::data(false));
+  d.set("H_mm", mm(h.height_m));
+  d.set("D_mm", mm(h.diameter_m));
   d.set("particles", std::to_string(run.particles.final));
-  d.set("note", text_or_false(h && !h->from_images ? "No photographs (" + in.images_note +
-                                                         "): the headline is the particle "
-                                                         "atan(2H/D), not the lab's measure."
-                                                   : std::string()));
-  d.set("stop", text_or_false(run.stop.reason == StopReason::kSettled
-                                  ? std::string()
-                                  : stop_reason_text(run.stop) + " " + run.stop.detail));
+  d.set("note", text_or_false(!h.from_images ? "No photographs (" + in.images_note +
+                                                   "): the headline is the particle "
+                                                   "atan(2H/D), not the lab's measure."
+                                             : std::string()));
   return render(templates::kRunHeadline, d);
+}
+
+// The run's representativeness (pile/representativeness.hpp): the height rule on the measured
+// pile when there is one.
+Representativeness run_representativeness(const PileRun& run, const SceneConfig& scene) {
+  const bool measured =
+      !run.pile.clogged && !run.pile.not_measured && run.pile.status != sim::PileStatus::kNoPile;
+  return measured ? representativeness(scene, run.pile.height_m) : representativeness(scene);
+}
+
+std::string representativeness_section(const Representativeness& r) {
+  mustache::data list(mustache::data::type::list);
+  for (const std::string& w : r.warning_list()) {
+    mustache::data item;
+    item.set("text", w);
+    list.push_back(item);
+  }
+  mustache::data d;
+  d.set("warnings", list);
+  d.set("rules", to_json(r)["rules"].get<std::string>());
+  d.set("ok", r.warning_list().empty());
+  return render(templates::kRunRepresentativeness, d);
 }
 
 }  // namespace
 
 std::string run_summary_html(const PileRun& run, const SceneConfig& scene,
-                             const RunSummaryInputs& in, const std::optional<Headline>& h) {
+                             const RunSummaryInputs& in, const RunSummary& s) {
   const Page page{
       "ReposeTwin run: " + scene.name,
       "ReposeTwin run: " + scene.name,
-      {headline_section(run, h, in), photos_section(in), measures_section(run, h, in.images),
+      {headline_section(run, s, in), representativeness_section(run_representativeness(run, scene)),
+       photos_section(in), measures_section(run, s.headline, in.images),
        inputs_section(run, scene, in), provenance_section(run, in)}};
   return render_page(page);
 }
 
-RunSummary finish_run(const PileRun& run, const SceneConfig& scene, const RunSummaryInputs& in) {
+RunSummary run_headline(const PileRun& run, const RunSummaryInputs& in) {
   RunSummary s;
-  const bool pile =
-      !run.pile.clogged && !run.pile.not_measured && run.pile.status != sim::PileStatus::kNoPile;
-  if (pile)
+  s.no_headline = no_headline(run.stop, run.pile);
+  if (!s.no_headline && !in.images_error.empty())
+    s.no_headline = NoHeadline{NoHeadlineReason::kPhotographs,
+                               "the photographs could not be taken: " + in.images_error};
+  if (!s.no_headline)
     s.headline = in.images ? headline_from_images(*in.images) : headline_from_particles(run.pile);
+  return s;
+}
+
+RunSummary finish_run(const PileRun& run, const SceneConfig& scene, const RunSummaryInputs& in) {
+  RunSummary s = run_headline(run, in);
   const fs::path dir(in.run_dir);
   const fs::path result = dir / "result.json";
   json r = json::parse(read_file(result.string()));
-  if (s.headline) r.update(to_json(*s.headline));
-  if (in.images)
+  r.update(s.headline ? to_json(*s.headline) : to_json(*s.no_headline));
+  r["representativeness"] = to_json(run_representativeness(run, scene));
+  if (in.images && s.headline)
     r["image"] = {
         {"theta_deg", (*in.images)["theta_deg"]}, {"theta_sd_deg", (*in.images)["theta_sd_deg"]},
         {"height_m", (*in.images)["height_m"]},   {"diameter_m", (*in.images)["diameter_m"]},
         {"flank_deg", (*in.images)["flank_deg"]}, {"images", "images"}};
-  if (in.images && in.images->contains("crest_width_m"))
+  if (in.images && s.headline && in.images->contains("crest_width_m"))
     r["image"]["crest_width_m"] = (*in.images)["crest_width_m"];
   write_json_atomic(result.string(), r);
   s.page = (dir / "summary.html").string();
-  write_file_atomic(s.page, run_summary_html(run, scene, in, s.headline));
+  write_file_atomic(s.page, run_summary_html(run, scene, in, s));
   return s;
 }
 
@@ -248,11 +284,10 @@ std::string headline_line(const PileRun& run, const RunSummary& s, double wall_s
     line = "angle of repose " + fixed(h.angle_deg) +
            (h.from_images ? " \u00b1 " + fixed(h.angle_sd_deg) : std::string()) + " deg (" +
            (h.from_images ? "image atan(2H/D), " + std::to_string(h.views) + " side views"
-                          : "particle atan(2H/D): no photographs") +
+                          : "particle atan(2H/D): no photographs, --no-images") +
            "); H " + mm(h.height_m) + " mm, D " + mm(h.diameter_m) + " mm";
   } else {
-    line = "no pile (" + stop_reason_text(run.stop) + (run.stop.detail.empty() ? "" : ": ") +
-           run.stop.detail + ")";
+    line = "no angle of repose: " + s.no_headline->message;
   }
   return line + "; " + std::to_string(run.particles.final) + " particles; wall " +
          duration_text(wall_s) + "; report " + s.page;

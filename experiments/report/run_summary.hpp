@@ -26,24 +26,33 @@ struct RunSummaryInputs {
   std::string run_dir;
   std::vector<std::string> overrides;    // the --set arguments as given
   std::optional<nlohmann::json> images;  // images/measurement.json; absent: no photographs
-  std::string images_note;               // why there are none (--no-images, vision failed)
+  std::string images_note;               // why there are none ("--no-images", "no pile")
+  std::string images_error;  // photographs were asked for and could not be written or measured:
+                             // the path and the reason; non-empty means no headline
   double wall_s = 0.0;                   // the command's wall time, photographs included [s]
 };
 
 /// What finish_run() made.
 struct RunSummary {
-  std::optional<Headline> headline;  // absent when the run formed no pile
-  std::string page;                  // RUN_DIR/summary.html
+  std::optional<Headline> headline;       // absent when the run has none: then no_headline
+  std::optional<NoHeadline> no_headline;  // why there is no headline angle
+  std::string page;                       // RUN_DIR/summary.html
 };
 
-/// Adds the headline to RUN_DIR/result.json and writes RUN_DIR/summary.html.
+/// The headline of a run (from its photographs, or its particles when none were asked for), or
+/// why it has none (pile/headline.hpp).
+RunSummary run_headline(const PileRun& run, const RunSummaryInputs& in);
+
+/// Adds the headline (or headline_angle_deg = null and no_headline) to RUN_DIR/result.json and
+/// writes RUN_DIR/summary.html.
 RunSummary finish_run(const PileRun& run, const SceneConfig& scene, const RunSummaryInputs& in);
 
 /// The summary page's HTML (finish_run writes it).
 std::string run_summary_html(const PileRun& run, const SceneConfig& scene,
-                             const RunSummaryInputs& in, const std::optional<Headline>& h);
+                             const RunSummaryInputs& in, const RunSummary& s);
 
-/// The run's last line on stdout: headline angle, H, D, particle count, wall time, the page.
+/// The run's last line on stdout: headline angle, H, D, particle count, wall time, the page;
+/// without a headline "no angle of repose: " and the reason instead of the angle.
 std::string headline_line(const PileRun& run, const RunSummary& s, double wall_s);
 
 }  // namespace reposetwin::experiments

@@ -109,14 +109,32 @@ const char* const kFolders = R"(<h2>Folders</h2>
 {{/folders}}</ul>
 )";
 
-// angle, sd (or false), measure, H_mm, D_mm, particles, views, note (or false), stop (or false).
+// angle, sd (or false), measure, H_mm, D_mm, particles, views, note (or false).
 const char* const kRunHeadline = R"(<div class='headline'>
 <p class='angle'>{{angle}}{{#sd}} &plusmn; {{sd}}{{/sd}}&deg;</p>
 <p><b>Angle of repose</b> <code>headline_angle_deg</code> = {{measure}}{{#views}} (mean of {{views}}, &plusmn; their spread){{/views}}.
 H = {{H_mm}} mm, D = {{D_mm}} mm, {{particles}} particles.</p>
 {{#note}}<p class='note'>{{note}}</p>
-{{/note}}{{#stop}}<p class='note'>Run stopped: {{stop}}.</p>
-{{/stop}}</div>
+{{/note}}</div>
+)";
+
+// reason: why there is no headline; advice: what to change; particles.
+const char* const kRunNoHeadline = R"(<div class='headline'>
+<p class='angle'>No angle of repose</p>
+<p><code>headline_angle_deg</code> is null: {{reason}}.</p>
+<p>What to try: {{advice}}. {{particles}} particles in the run's world at its end; the other
+measures below are of that state, not of a settled pile.</p>
+</div>
+)";
+
+// warnings: [{text}]; ok: whether none applies; rules: the rules in a sentence.
+const char* const kRunRepresentativeness =
+    R"(<h2>Is this pile representative of the lab's test?</h2>
+{{#ok}}<p>Yes, by the rules below.</p>
+{{/ok}}{{^ok}}<ul class='note'>
+{{#warnings}}<li>{{text}}.</li>
+{{/warnings}}</ul>
+{{/ok}}<p>Rules: {{rules}}. The numbers are in <code>result.json</code>'s <code>representativeness</code>.</p>
 )";
 
 // photos: figures (side overlays, then the top overlay); none: why there are no photos, or false.

@@ -29,6 +29,8 @@ extern const char* const kFolders;
 
 // Sections of a run's one-page summary (run_summary.hpp).
 extern const char* const kRunHeadline;
+extern const char* const kRunNoHeadline;
+extern const char* const kRunRepresentativeness;
 extern const char* const kRunPhotos;
 extern const char* const kRunTable;
 

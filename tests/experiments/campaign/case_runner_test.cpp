@@ -1,5 +1,6 @@
-// The angle a calibration takes from one run: the image angle, the particle angle, 0 for "no
-// pile", and never an angle from a run that a physics failure stopped. And a campaign's pile run
+// The angle a calibration takes from one run: the image angle, the particle angle, and never an
+// angle from a run without a headline (a jam, a time limit, an unsettled pile, a physics stop),
+// which a campaign counts by its reason. And a campaign's pile run
 // interrupted mid-way (machine lost) continues from its checkpoint to the uninterrupted result.
 #include <gtest/gtest.h>
 
@@ -25,25 +26,37 @@ nlohmann::json run_result(const std::string& reason, const std::string& pile_sta
             {"run_dir", "cases/x/seed_2/run"}}}};
 }
 
-TEST(CaseAngle, ImageFirstThenParticlesAndZeroForNoPile) {
+TEST(CaseAngle, ImageFirstThenParticles) {
   EXPECT_DOUBLE_EQ(case_angle_deg(run_result("settled", "ok")), 24.25);
   EXPECT_DOUBLE_EQ(case_angle_deg(run_result("settled", "ok"), AngleMeasure::kParticles), 27.5);
-  EXPECT_DOUBLE_EQ(case_angle_deg(run_result("clogged", "no pile")), 0.0);
   EXPECT_TRUE(case_made_no_pile(run_result("clogged", "no pile")));
   EXPECT_TRUE(case_made_no_pile(run_result("clogged", "no pile")["result"]));
   EXPECT_FALSE(case_made_no_pile(run_result("settled", "ok")));
+  EXPECT_EQ(case_outcome(run_result("settled", "ok")["result"]), "pile");
 }
 
-TEST(CaseAngle, EachMeasureReadsItsOwnField) {
-  const nlohmann::json r = run_result("settled", "ok");
-  EXPECT_DOUBLE_EQ(case_angle_deg(r, AngleMeasure::kImageFlank), 29.5);
-  EXPECT_DOUBLE_EQ(case_angle_deg(r, AngleMeasure::kSlice), 31.75);
-  EXPECT_DOUBLE_EQ(case_angle_deg(run_result("clogged", "no pile"), AngleMeasure::kSlice), 0.0);
-  // Without photographs the flank angle does not exist; it is never replaced by another angle.
-  nlohmann::json bare = r;
-  bare["result"].erase("image");
-  EXPECT_DOUBLE_EQ(case_angle_deg(bare, AngleMeasure::kImage), 27.5);
-  EXPECT_THROW(case_angle_deg(bare, AngleMeasure::kImageFlank), std::runtime_error);
+// Every run without a headline gives no angle under any measure, and its outcome names why.
+TEST(CaseAngle, ARunWithoutAHeadlineHasNoAngleAndCountsByItsReason) {
+  const std::pair<const char*, const char*> cases[] = {{"clogged", "jam"},
+                                                       {"time limit", "time_limit"},
+                                                       {"settle time limit", "not_settled"},
+                                                       {"physics: nan", "physics_stop"}};
+  for (const auto& [stop, outcome] : cases) {
+    const nlohmann::json r = run_result(stop, stop == std::string("clogged") ? "no pile" : "ok");
+    EXPECT_EQ(case_outcome(r["result"]), outcome) << stop;
+    for (AngleMeasure m : {AngleMeasure::kImage, AngleMeasure::kParticles, AngleMeasure::kSlice})
+      EXPECT_THROW(case_angle_deg(r, m), std::runtime_error) << stop;
+  }
+  EXPECT_EQ(case_outcome(run_result("settled", "no flanks")["result"]), "no_pile");
+  EXPECT_EQ(case_outcome(run_result("settled", "no pile")["result"]), "no_pile");
+  // A case result written for a run that settled carries its headline; one that did not, null.
+  CaseResult unsettled;
+  unsettled.stop = {StopReason::kSettleTimeLimit, sim::Status::kOk, "still moving", ""};
+  unsettled.pile.status = sim::PileStatus::kOk;
+  unsettled.pile.theta_hd_deg = 30.0;
+  const nlohmann::json j = to_json(unsettled);
+  EXPECT_TRUE(j["headline_angle_deg"].is_null());
+  EXPECT_EQ(j["no_headline"]["reason"], "not_settled");
 }
 
 TEST(CaseAngle, MeasureNamesRoundTripAndAnUnknownNameIsRejected) {

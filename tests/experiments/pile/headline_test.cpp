@@ -41,6 +41,46 @@ TEST(Headline, WithoutImagesItIsTheParticleAngleAndSaysSo) {
   EXPECT_NE(h.measure.find("--no-images"), std::string::npos);
 }
 
+// Only a settled, measured pile has a headline; every other end says why, in its own words.
+TEST(Headline, NoHeadlineWithoutASettledMeasuredPile) {
+  PileMeasure ok;
+  ok.status = sim::PileStatus::kOk;
+  RunStop settled;
+  EXPECT_FALSE(no_headline(settled, ok));
+  const RunStop time_limit{StopReason::kTimeLimit, sim::Status::kOk,
+                           "procedure.max_time_s = 0.3 s reached while filling", ""};
+  const RunStop unsettled{StopReason::kSettleTimeLimit, sim::Status::kOk, "still moving", ""};
+  const RunStop jam{StopReason::kClogged, sim::Status::kOk, "12 particles lodged", ""};
+  const RunStop nan{StopReason::kPhysics, sim::Status::kNan, "particle 3", ""};
+  const struct {
+    RunStop stop;
+    PileMeasure pile;
+    NoHeadlineReason reason;
+    const char* word;
+    const char* says;
+  } cases[] = {
+      {time_limit, ok, NoHeadlineReason::kTimeLimit, "time_limit", "while filling"},
+      {unsettled, ok, NoHeadlineReason::kNotSettled, "not_settled", "did not settle"},
+      {jam, clogged_pile(12, "12 particles lodged"), NoHeadlineReason::kJammed, "jam", "jammed"},
+      {nan, unmeasured_pile("nan"), NoHeadlineReason::kPhysicsStop, "physics_stop", "physics: nan"},
+      {settled, PileMeasure{}, NoHeadlineReason::kNoPile, "no_pile", "formed no pile"},
+  };
+  for (const auto& c : cases) {
+    const auto n = no_headline(c.stop, c.pile);
+    ASSERT_TRUE(n) << c.word;
+    EXPECT_EQ(n->reason, c.reason);
+    EXPECT_STREQ(no_headline_word(n->reason), c.word);
+    EXPECT_NE(n->message.find(c.says), std::string::npos) << n->message;
+    EXPECT_FALSE(no_headline_advice(n->reason).empty());
+    const nlohmann::json j = to_json(*n);
+    EXPECT_TRUE(j.at("headline_angle_deg").is_null());
+    EXPECT_EQ(j["no_headline"]["reason"], c.word);
+  }
+  PileMeasure no_flanks = ok;
+  no_flanks.status = sim::PileStatus::kNoFlanks;
+  EXPECT_EQ(no_headline(settled, no_flanks)->reason, NoHeadlineReason::kNoPile);
+}
+
 TEST(Headline, EveryMeasureIsDefinedInTheDocs) {
   std::ifstream in(std::filesystem::path(REPOSETWIN_SOURCE_DIR) / "docs" / "measures.md");
   std::stringstream s;
@@ -73,7 +113,8 @@ TEST(Headline, ACasesResultCarriesItUnderTheSameName) {
   EXPECT_DOUBLE_EQ(j["image"]["theta_deg"].get<double>(), 20.97);  // the old field is kept
   CaseResult clogged;
   clogged.pile = clogged_pile(12, "arched");
-  EXPECT_FALSE(to_json(clogged).contains("headline_angle_deg"));
+  EXPECT_TRUE(to_json(clogged)["headline_angle_deg"].is_null());
+  EXPECT_EQ(to_json(clogged)["no_headline"]["reason"], "jam");
 }
 
 }  // namespace
