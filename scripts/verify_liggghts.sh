@@ -65,7 +65,8 @@ if [[ ! -x "${bin}" ]]; then
 fi
 mpi=(mpirun -np "${np}")
 [[ "$(id -u)" -eq 0 ]] && mpi+=(--allow-run-as-root)
-mpi+=(--oversubscribe)
+# Ranks that yield while they wait: busy-polling ranks starve each other on shared cores.
+mpi+=(--oversubscribe --mca mpi_yield_when_idle 1)
 
 mkdir -p "${out}/ours" "${out}/liggghts"
 echo "scene ${scene}; overrides: ${sets[*]}"
@@ -86,7 +87,7 @@ for s in "${seed_list[@]}"; do
     exit 1
   fi
   jq -r --arg s "${s}" --arg w "$(cat "${ours}.wall" 2>/dev/null || echo 0)" \
-    '.result as $r | [$s, "reposetwin", $r.pile.status, $r.pile.height_m * 1000,
+    '. as $r | [$s, "reposetwin", $r.pile.status, $r.pile.height_m * 1000,
       $r.pile.base_diameter_m * 1000, $r.pile.theta_hd_deg, $r.particles.initial, ($w | tonumber)]
      | @csv' "${ours}/result.json" >> "${out}/summary.csv"
 

@@ -191,20 +191,38 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
      << num(mass) << " region fill ntry_mc 100000\n"
      << "fix integr all nve/sphere\n"
      << "compute rke all erotate/sphere\n"
-     << "thermo_style custom step atoms ke c_rke\nthermo 2000\n"
+     << "thermo_style custom step atoms ke c_rke\n"
      << "thermo_modify lost ignore norm no\n";
   auto steps = [&](double seconds) { return static_cast<long long>(std::ceil(seconds / model.dt)); };
   const ProcedureConfig& p = scene.procedure;
-  in << "# fill: the sample falls into the container and settles\n"
-     << "run " << steps(p.fill_settle_max) << "\n"
-     << "# lift at " << num(p.lift_speed) << " m/s until the rim is " << num(lift)
+  // Settling ends as the twin's does: when the kinetic energy per grain falls below
+  // 1/2 m_mean v^2 (v = procedure.settle_speed_m_s), that is the total below 1/2 M v^2, checked
+  // every `chunk` steps (a thermo step, so `ke` is current), or at the phase's time limit.
+  const long long chunk = 1000;
+  auto settle = [&](const std::string& label, double max_s) {
+    const long long n = std::max(1LL, steps(max_s) / chunk);
+    in << "variable " << label << "_n loop " << n << "\n"
+       << "label " << label << "\n"
+       << "run " << chunk << "\n"
+       << "if \"${ke_now} < ${ke_stop}\" then \"jump SELF " << label << "_done\"\n"
+       << "next " << label << "_n\n"
+       << "jump SELF " << label << "\n"
+       << "label " << label << "_done\n"
+       << "variable " << label << "_n delete\n";
+  };
+  in << "variable ke_now equal ke\n"
+     << "variable ke_stop equal " << num(0.5 * mass * p.settle_speed * p.settle_speed) << "\n"
+     << "thermo " << chunk << "\n"
+     << "# fill: the sample falls into the container and settles\n";
+  settle("fill", p.fill_settle_max);
+  in << "# lift at " << num(p.lift_speed) << " m/s until the rim is " << num(lift)
      << " m higher\n"
      << "fix lift all move/mesh mesh cad linear 0.0 0.0 " << num(p.lift_speed) << "\n"
      << "run " << steps(lift / p.lift_speed) << "\n"
      << "unfix lift\n"
-     << "# settle, then the grains for `reposetwin measure-particles`\n"
-     << "run " << steps(p.final_settle_max) << "\n"
-     << "write_dump all custom final.dump id type x y z radius\n";
+     << "# settle, then the grains for `reposetwin measure-particles`\n";
+  settle("final", p.final_settle_max);
+  in << "write_dump all custom final.dump id type x y z radius\n";
 
   LiggghtsDeck deck;
   deck.input = in.str();
@@ -242,8 +260,9 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
           "LIGGGHTS' uses w_i - w_j and R*.\n";
   md << "- The fill: the twin pours gently (speeds capped at procedure.fill_max_speed) and stops "
         "settling when the kinetic energy is low; the deck inserts at random and settles for a "
-        "fixed " << num(p.fill_settle_max) << " s. The lift and the final settle also run for fixed "
-        "times.\n- Each interval's sizes: the twin draws a clipped normal inside it, the deck uses "
+        "settling stops as the twin's (kinetic energy per grain below 1/2 m_mean v^2, checked every "
+        "1000 steps) or at procedure.fill_settle_max = " << num(p.fill_settle_max) << " s; the lift "
+        "runs for the container's height at the lift speed, not until the container is empty.\n- Each interval's sizes: the twin draws a clipped normal inside it, the deck uses "
         "its middle size.\n\n"
      << "## The rolling coefficient in other conventions (equal spheres)\n"
      << "| engine | model | mu_r |\n|---|---|---|\n"

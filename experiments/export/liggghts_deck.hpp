@@ -19,10 +19,11 @@
 //    so the two PSDs share every interval's mass and mean size.
 //  * The container as an STL mesh (mesh/surface, the same frustum as our shell wall), lifted
 //    with move/mesh at the scene's speed; the plate as a z-plane primitive.
-//  * The procedure in fixed times: insert the sample inside the container (and a column above
-//    it when the container alone cannot hold it at a random-insertion volume fraction of 0.3),
-//    let it fall and settle for procedure.fill_settle_max, lift the container by its own height
-//    (its rim then stands above any pile it could hold), settle for procedure.final_settle_max, and dump
+//  * The procedure: insert the sample inside the container (and a column above it when the
+//    container alone cannot hold it at a random-insertion volume fraction of 0.3), let it fall
+//    and settle (until the kinetic energy is below the twin's threshold, or for at most
+//    procedure.fill_settle_max), lift the container by its own height
+//    (its rim then stands above any pile it could hold), settle likewise (procedure.final_settle_max), and dump
 //    the grains (id type x y z radius) to final.dump, which `reposetwin measure-particles` reads
 //    with our pile measure.
 // Clumps are not exported yet (LIGGGHTS' multisphere templates would carry them): a scene with

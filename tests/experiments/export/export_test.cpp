@@ -45,6 +45,14 @@ TEST(LiggghtsDeck, CarriesTheSoftenedStiffnessTheLawAndTheProcedure) {
   EXPECT_TRUE(has(d.input, "write_dump all custom final.dump id type x y z radius"));
   // The sample's mass is inserted, and the PSD's mass fractions sum to one.
   EXPECT_TRUE(has(d.input, "particledistribution/discrete/massbased"));
+  // Settling stops at the twin's threshold: kinetic energy per grain 1/2 m_mean v^2, that is
+  // 1/2 M v^2 in all.
+  const double v = s.procedure.settle_speed;
+  std::ostringstream stop;
+  stop.precision(10);
+  stop << "variable ke_stop equal " << 0.5 * s.mass * v * v << "\n";
+  EXPECT_TRUE(has(d.input, stop.str())) << d.input;
+  EXPECT_TRUE(has(d.input, "if \"${ke_now} < ${ke_stop}\" then \"jump SELF fill_done\""));
   // The notes name every epsd contact whose dashpot epsd2 cannot carry.
   for (const auto& [names, p] : s.contacts)
     if (p.rolling_damping > 0)
