@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
+#include <stdexcept>
 #include <sstream>
 
 #include "experiments/campaign/campaign.hpp"
@@ -58,6 +59,20 @@ double parse_number(const std::string& text, const Where& w, const std::string& 
 std::string toml_number(double v) { return toml_float(v, 17); }
 
 }  // namespace
+
+const char* role_name(Role role) {
+  switch (role) {
+    case Role::kCalibrate: return "calibrate";
+    case Role::kValidate: return "validate";
+  }
+  throw std::logic_error("loop: no role " + std::to_string(static_cast<int>(role)));
+}
+
+std::optional<Role> parse_role(const std::string& text) {
+  for (Role r : {Role::kCalibrate, Role::kValidate})
+    if (text == role_name(r)) return r;
+  return std::nullopt;
+}
 
 const std::vector<ConditionColumn>& condition_columns() {
   static const std::vector<ConditionColumn> k = {
@@ -129,9 +144,11 @@ void read_identity(LabTest& test, const Row& row, Where& w, const fs::path& dir,
   if (!ids.insert(test.id).second)
     throw InputError(w.at("id") + ": test id \"" + test.id + "\" appears twice");
   w.id = test.id;
-  test.role = row.get("role");
-  if (test.role != "calibrate" && test.role != "validate")
-    throw InputError(w.at("role") + ": \"" + test.role + "\" must be \"calibrate\" or \"validate\"");
+  const std::string role = row.get("role");
+  const std::optional<Role> parsed = parse_role(role);
+  if (!parsed)
+    throw InputError(w.at("role") + ": \"" + role + "\" must be \"calibrate\" or \"validate\"");
+  test.role = *parsed;
   const std::string scene = row.get("scene");
   if (scene.empty()) throw InputError(w.at("scene") + ": empty (a base scene file is required)");
   test.scene_path = (dir / scene).lexically_normal().string();
@@ -311,7 +328,7 @@ LabData read_lab_csv(const std::string& path) {
 json to_json(const LabTest& t) {
   json o = json::object();
   for (const auto& [k, v] : t.overrides) o[k] = v;
-  json j = {{"id", t.id},          {"line", t.line},           {"role", t.role},
+  json j = {{"id", t.id},          {"line", t.line},           {"role", role_name(t.role)},
             {"scene", t.scene_path}, {"overrides", o},         {"conditions", t.conditions},
             {"angle_deg", t.angle_deg}};
   if (!t.text_conditions.empty()) j["text_conditions"] = t.text_conditions;
