@@ -124,6 +124,19 @@ Columns read_header(const CsvTable& csv, const std::string& file) {
     cols.header.push_back(h);
     cols.index[h] = static_cast<int>(i);
   }
+  // Two columns that set one scene key (mass_kg and mass_g, or a set:KEY beside the named
+  // column for KEY) would leave one silently winning on every row.
+  std::map<std::string, std::string> setter;  // scene key -> the column that sets it
+  for (const std::string& h : cols.header) {
+    std::string key = h.rfind("set:", 0) == 0 ? h.substr(4) : std::string();
+    for (const auto& c : condition_columns())
+      if (h == c.column) key = c.key;
+    if (key.empty()) continue;
+    const auto [first, fresh] = setter.emplace(key, h);
+    if (!fresh)
+      throw InputError(at + ": columns " + first->second + " and " + h +
+                       " both set the scene key " + key + "; keep one of them");
+  }
   for (const char* req : {"id", "role", "scene"})
     if (!cols.has(req))
       throw InputError(file + ": the required column \"" + std::string(req) + "\" is missing");
