@@ -48,10 +48,10 @@ endfunction()
 
 # The engine: the DEM, the pile test around it, the scene and its inputs, the run folders, the
 # loop's pile requests (loop_sim); the build files (flags). The imaging: the camera, renderer and vision, the photo pipeline and the
-# loop's photograph settings (loop_sim).
-sources_hash(REPOSETWIN_ENGINE_HASH sim experiments/pile experiments/io experiments/campaign
+# loop's photograph settings (loop_sim). Both use numeric/ (the median).
+sources_hash(REPOSETWIN_ENGINE_HASH sim numeric experiments/pile experiments/io experiments/campaign
              experiments/loop/loop_sim.cpp experiments/loop/loop_sim.hpp CMakeLists.txt cmake
              experiments/CMakeLists.txt)
-sources_hash(REPOSETWIN_IMAGING_HASH camera render vision experiments/photos
+sources_hash(REPOSETWIN_IMAGING_HASH camera numeric render vision experiments/photos
              experiments/loop/loop_sim.cpp experiments/loop/loop_sim.hpp)
 configure_file(${TEMPLATE} ${OUT} @ONLY)

@@ -10,8 +10,12 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "numeric/median.hpp"
+
 namespace reposetwin::sim {
 namespace {
+
+using numeric::median;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
@@ -146,16 +150,6 @@ std::vector<std::size_t> cluster_roots(std::span<const Vec3> x, std::span<const 
   std::vector<std::size_t> root(n);
   for (std::size_t i = 0; i < n; ++i) root[i] = sets.find(i);
   return root;
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  const std::size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + m, v.end());
-  const double upper = v[m];
-  if (v.size() % 2 == 1) return upper;
-  const double lower = *std::max_element(v.begin(), v.begin() + m);
-  return 0.5 * (lower + upper);
 }
 
 // Furthest reach of the footprint per azimuth sector around `centre`, and the outer points.

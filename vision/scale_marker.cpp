@@ -6,10 +6,13 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "numeric/median.hpp"
 #include "vision/image.hpp"
 
 namespace reposetwin::vision {
 namespace {
+
+using numeric::median;
 
 struct Blob {
   cv::Rect box;
@@ -31,13 +34,6 @@ std::vector<Blob> blobs(const cv::Mat& mask, int connectivity) {
     out.push_back(b);
   }
   return out;
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(mid), v.end());
-  return v[mid];
 }
 
 // Black bands: filled, rectangle-like dark blobs, wider than tall (about 2:1 by convention).
@@ -128,7 +124,8 @@ std::optional<ScaleBar> find_scale_bar_flat(const cv::Mat& flat, const MarkerSet
       whites.push_back(prof(static_cast<int>(
           std::lround(0.5 * (best_group[k].centroid.y + best_group[k + 1].centroid.y)))));
   }
-  const double kb = median(blacks), kw = median(whites);
+  // A single black band has no white level: 0, which the contrast test below refuses.
+  const double kb = median(blacks), kw = whites.empty() ? 0.0 : median(whites);
   if (!(kw - kb > 0.2)) return std::nullopt;
 
   // Edge positions against their index: top of black band n at t0 + 2 n b, bottom at

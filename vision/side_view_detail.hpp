@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "numeric/median.hpp"
 #include "vision/side_view.hpp"
 
 namespace reposetwin::vision::side_detail {
@@ -27,12 +28,7 @@ inline std::string str(double v) {
   return os.str();
 }
 
-inline double median(std::vector<double> v) {
-  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(mid), v.end());
-  return v[mid];
-}
+using numeric::median;
 
 // The toe on one side: the column alpha where the silhouette's low band meets the plate
 // (h = 0), with its standard error. beta = dx/dh is the fixed slope used to carry the band down.

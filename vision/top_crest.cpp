@@ -8,11 +8,14 @@
 #include <optional>
 #include <stdexcept>
 
+#include "numeric/median.hpp"
 #include "vision/image.hpp"
 
 namespace reposetwin::vision {
 
 namespace {
+
+using numeric::median;
 
 // One ring's least-squares fit g = m + a cos(phi) + b sin(phi) (the normal equations, so a ring
 // cut by the image border, or with an uneven azimuth coverage, is still fitted without bias).
@@ -37,14 +40,6 @@ struct Ring {
     return true;
   }
 };
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  if (v.size() % 2 == 1) return *mid;
-  return 0.5 * (*mid + *std::max_element(v.begin(), mid));
-}
 
 std::string num(double v, int digits = 1) {
   char buf[32];
@@ -180,6 +175,7 @@ double flank_noise(const Profile& p) {
     if (k1 != k + 1) continue;
     z.push_back((p.a1[k1] - p.a1[k]) / std::sqrt(1.0 / p.rings[k].n + 1.0 / p.rings[k1].n));
   }
+  if (z.empty()) return 0.0;  // no adjacent flank rings: no noise estimate
   const double z_med = median(z);
   for (double& v : z) v = std::abs(v - z_med);
   return 1.4826 * median(z);
@@ -218,7 +214,7 @@ TopCrest measure_top_crest(const cv::Mat& image, const TopProfile& footprint,
     var_sum += sigma_unit * sigma_unit / p.rings[k].n;
   }
   out.light_azimuth_deg = p.phi_l * 180.0 / std::numbers::pi;
-  out.flank_amplitude = median(flank_a1);
+  out.flank_amplitude = flank_a1.empty() ? 0.0 : median(flank_a1);
   out.flank_sigma = 1.2533 * std::sqrt(var_sum) / static_cast<double>(p.flank.size());
   if (!(out.flank_amplitude > settings.min_flank_snr * out.flank_sigma)) {
     out.reason = "the flank's brightness does not vary around the pile (first harmonic " +

@@ -65,6 +65,7 @@ json Loop::run() {
   rec.simulations = {
       cache_.simulations_started(), cache_.photos_started(),
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count()};
+  rec.summary = summarise(rec);
   return write(rec);
 }
 
@@ -98,7 +99,7 @@ void Loop::check_settings() {
   for (const LabTest& t : data_.tests) check_mu_key(t, s_.mu_key);
   grid_ = s_.mu_grid;
   for (std::size_t i = 0; i < data_.tests.size(); ++i) {
-    (data_.tests[i].role == "calibrate" ? cal_ : val_).push_back(i);
+    (data_.tests[i].role == Role::kCalibrate ? cal_ : val_).push_back(i);
     trace_.push_back(i);
   }
   if (cal_.empty())
@@ -211,32 +212,25 @@ Surface Loop::simulate_surface(const std::vector<EffectSetting>& effects) {
     c.mu = grid_;
     std::vector<Observation> obs;
     for (std::size_t j = 0; j < g; ++j) {
-      std::vector<double> a, h, d, cr;
+      PerChannel<std::vector<double>> at;  // per seed
       int clogged = 0;
       for (std::size_t r = 0; r < k; ++r, ++q) {
         const SimOutcome& o = out[q];
         clogged += o.clogged_pours;
         surf.raw[i][j].push_back(o);
         if (!o.pile) {  // a held-out test's jam (require_pile): no value, and no curve below
-          for (auto* v : {&a, &h, &d, &cr}) v->push_back(std::numeric_limits<double>::quiet_NaN());
+          for (Channel ch : kAllChannels)
+            at[ch].push_back(std::numeric_limits<double>::quiet_NaN());
           ++clogged;
           continue;
         }
-        const double angle = twin_angle(o, s_.angle);
-        a.push_back(angle);
-        h.push_back(o.height_mm);
-        d.push_back(o.diameter_mm);
-        cr.push_back(o.crest_mm);
-        obs.push_back({grid_[j], o.seed, std::clamp(angle, 0.0, 90.0)});
+        for (Channel ch : kAllChannels) at[ch].push_back(twin_value(o, ch));
+        obs.push_back({grid_[j], o.seed, std::clamp(at[Channel::kAngle].back(), 0.0, 90.0)});
       }
-      c.angle.push_back(sample_stats(a).mean);
-      c.h.push_back(sample_stats(h).mean);
-      c.d.push_back(sample_stats(d).mean);
-      c.angle_seeds.push_back(a);
-      c.h_seeds.push_back(h);
-      c.d_seeds.push_back(d);
-      c.crest.push_back(sample_stats(cr).mean);
-      c.crest_seeds.push_back(cr);
+      for (Channel ch : kAllChannels) {
+        c.mean[ch].push_back(sample_stats(at[ch]).mean);
+        c.seeds[ch].push_back(at[ch]);
+      }
       c.clogged.push_back(clogged);
     }
     c.no_pile = no_pile_reason(i, surf.raw[i]);
@@ -256,20 +250,30 @@ const Surface& Loop::simulate_baseline() {
   return *surfaces_.back();
 }
 
-// The seed spread of one pile's angle (channel 0), H (1), D (2) or crest width (3), pooled over
-// every test and grid point. A crest width some photograph did not record (cached by an older
-// version) gives NaN, so its channel is left out rather than given a made-up noise.
-double Loop::pooled_seed_sd(const Surface& base, int channel) const {
+// One pile's value of a channel: the angle the loop compares (twin_angle), H, D or the crest
+// width [deg or mm].
+double Loop::twin_value(const SimOutcome& o, Channel channel) const {
+  switch (channel) {
+    case Channel::kAngle: return twin_angle(o, s_.angle);
+    case Channel::kH: return o.height_mm;
+    case Channel::kD: return o.diameter_mm;
+    case Channel::kCrest: return o.crest_mm;
+  }
+  throw std::logic_error("loop: no channel " + std::to_string(static_cast<int>(channel)));
+}
+
+// The seed spread of one pile's value of a channel, pooled over every test and grid point. A
+// crest width some photograph did not record (cached by an older version) gives NaN, so its
+// channel is left out rather than given a made-up noise.
+double Loop::pooled_seed_sd(const Surface& base, Channel channel) const {
   double ss = 0.0;
   int dof = 0;
   for (const Curve& c : base.curve) {
     if (!c.no_pile.empty()) continue;  // a held-out test the twin predicts no pile for
-    for (const auto& a : channel == 0   ? c.angle_seeds
-                         : channel == 1 ? c.h_seeds
-                         : channel == 2 ? c.d_seeds
-                                        : c.crest_seeds) {
+    for (const auto& a : c.seeds[channel]) {
       const double m = sample_stats(a).mean;
-      if (channel == 3 && !std::isfinite(m)) return std::numeric_limits<double>::quiet_NaN();
+      if (channel == Channel::kCrest && !std::isfinite(m))
+        return std::numeric_limits<double>::quiet_NaN();
       for (double x : a) ss += (x - m) * (x - m);
       dof += static_cast<int>(a.size()) - 1;
     }
@@ -280,24 +284,16 @@ double Loop::pooled_seed_sd(const Surface& base, int channel) const {
 
 // The seed noise every residual and prediction carries (loop.hpp's design note).
 void Loop::set_seed_noise(const Surface& base) {
-  noise_sd_ = pooled_seed_sd(base, 0);
-  noise_sd_h_ = pooled_seed_sd(base, 1);
-  noise_sd_d_ = pooled_seed_sd(base, 2);
   crest_measured_ = std::any_of(data_.tests.begin(), data_.tests.end(),
                                 [](const LabTest& t) { return t.crest_mm.has_value(); });
-  noise_sd_crest_ = crest_measured_ ? pooled_seed_sd(base, 3) : 0.0;
-  seed_se_ = noise_sd_ / std::sqrt(double(s_.seeds.size()));
+  for (Channel c : kAllChannels)
+    noise_sd_[c] = c != Channel::kCrest || crest_measured_ ? pooled_seed_sd(base, c) : 0.0;
+  seed_se_ = noise_sd_[Channel::kAngle] / std::sqrt(double(s_.seeds.size()));
   const double k = static_cast<double>(s_.seeds.size());
   auto sigma = [k](double sd, int repeats) { return std::sqrt(sd * sd / repeats + sd * sd / k); };
-  sigma_.clear();
-  sigma_h_.clear();
-  sigma_d_.clear();
-  sigma_crest_.clear();
-  for (const LabTest& t : data_.tests) {
-    sigma_crest_.push_back(sigma(noise_sd_crest_, t.repeats));
-    sigma_.push_back(sigma(noise_sd_, t.repeats));
-    sigma_h_.push_back(sigma(noise_sd_h_, t.repeats));
-    sigma_d_.push_back(sigma(noise_sd_d_, t.repeats));
+  for (Channel c : kAllChannels) {
+    sigma_[c].clear();
+    for (const LabTest& t : data_.tests) sigma_[c].push_back(sigma(noise_sd_[c], t.repeats));
   }
 }
 
@@ -306,13 +302,14 @@ BaselineRecord Loop::calibrate_baseline(const Surface& base) const {
   Model model;
   model.terms = {{1.0, &base}};
   b.fit = fit_mu(model, nullptr, s_.t_max, cal_);
-  b.seed_sd_deg = noise_sd_;
+  b.seed_sd_deg = noise_sd_[Channel::kAngle];
   b.seed_se_deg = seed_se_;
   b.residuals = residuals(model, b.fit.mu);
   b.rmse = rmse_by_role(b.residuals);
   for (std::size_t i = 0; i < data_.tests.size(); ++i) {
     const Curve& c = base.curve[i];
-    BaselineCurve bc{data_.tests[i].id, c.mu, c.angle, c.angle_seeds, {}, c.clogged};
+    BaselineCurve bc{data_.tests[i].id, c.mu, c.mean[Channel::kAngle], c.seeds[Channel::kAngle],
+                     {}, c.clogged};
     for (const auto& at : base.raw[i]) {
       bc.pour_seeds.emplace_back();
       for (const SimOutcome& o : at) bc.pour_seeds.back().push_back(o.seed);
@@ -325,7 +322,8 @@ BaselineRecord Loop::calibrate_baseline(const Surface& base) const {
           " baseline pour(s) formed no pile and were repeated with new seeds");
   }
   say("baseline mu_r = " + std::to_string(b.fit.mu) + ", calibration RMSE " +
-      std::to_string(b.rmse.calibrate_deg) + " deg, seed sd " + std::to_string(noise_sd_) + " deg");
+      std::to_string(b.rmse.calibrate_deg) + " deg, seed sd " +
+      std::to_string(noise_sd_[Channel::kAngle]) + " deg");
   return b;
 }
 
@@ -363,12 +361,12 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
   // strength is the joint fit's, and mu_r and the effect are fitted to every traced observable.
   // One that passed on the angle keeps the angle's strength and fit.
   double coef = sc.coef;
-  std::vector<int> channels = {0};
+  std::vector<Channel> channels = {Channel::kAngle};
   if (!sc.accepted) {
     for (const JointScore& j : iter.joint)
       if (j.name == sc.name) coef = j.coef;
     for (const std::string& ch : iter.channels)
-      if (const int c = channel_index(ch); c != 0) channels.push_back(c);
+      if (const Channel c = channel_from_name(ch); c != Channel::kAngle) channels.push_back(c);
   }
   const double off = effect_off(e);
   const FingerprintRecord& fp =

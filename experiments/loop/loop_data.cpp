@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
+#include <stdexcept>
 #include <sstream>
 
 #include "experiments/campaign/campaign.hpp"
@@ -59,6 +60,20 @@ std::string toml_number(double v) { return toml_float(v, 17); }
 
 }  // namespace
 
+const char* role_name(Role role) {
+  switch (role) {
+    case Role::kCalibrate: return "calibrate";
+    case Role::kValidate: return "validate";
+  }
+  throw std::logic_error("loop: no role " + std::to_string(static_cast<int>(role)));
+}
+
+std::optional<Role> parse_role(const std::string& text) {
+  for (Role r : {Role::kCalibrate, Role::kValidate})
+    if (text == role_name(r)) return r;
+  return std::nullopt;
+}
+
 const std::vector<ConditionColumn>& condition_columns() {
   static const std::vector<ConditionColumn> k = {
       {"mass_kg", "sample.mass_kg", 1.0, "kg"},
@@ -109,6 +124,19 @@ Columns read_header(const CsvTable& csv, const std::string& file) {
     cols.header.push_back(h);
     cols.index[h] = static_cast<int>(i);
   }
+  // Two columns that set one scene key (mass_kg and mass_g, or a set:KEY beside the named
+  // column for KEY) would leave one silently winning on every row.
+  std::map<std::string, std::string> setter;  // scene key -> the column that sets it
+  for (const std::string& h : cols.header) {
+    std::string key = h.rfind("set:", 0) == 0 ? h.substr(4) : std::string();
+    for (const auto& c : condition_columns())
+      if (h == c.column) key = c.key;
+    if (key.empty()) continue;
+    const auto [first, fresh] = setter.emplace(key, h);
+    if (!fresh)
+      throw InputError(at + ": columns " + first->second + " and " + h +
+                       " both set the scene key " + key + "; keep one of them");
+  }
   for (const char* req : {"id", "role", "scene"})
     if (!cols.has(req))
       throw InputError(file + ": the required column \"" + std::string(req) + "\" is missing");
@@ -129,9 +157,11 @@ void read_identity(LabTest& test, const Row& row, Where& w, const fs::path& dir,
   if (!ids.insert(test.id).second)
     throw InputError(w.at("id") + ": test id \"" + test.id + "\" appears twice");
   w.id = test.id;
-  test.role = row.get("role");
-  if (test.role != "calibrate" && test.role != "validate")
-    throw InputError(w.at("role") + ": \"" + test.role + "\" must be \"calibrate\" or \"validate\"");
+  const std::string role = row.get("role");
+  const std::optional<Role> parsed = parse_role(role);
+  if (!parsed)
+    throw InputError(w.at("role") + ": \"" + role + "\" must be \"calibrate\" or \"validate\"");
+  test.role = *parsed;
   const std::string scene = row.get("scene");
   if (scene.empty()) throw InputError(w.at("scene") + ": empty (a base scene file is required)");
   test.scene_path = (dir / scene).lexically_normal().string();
@@ -311,7 +341,7 @@ LabData read_lab_csv(const std::string& path) {
 json to_json(const LabTest& t) {
   json o = json::object();
   for (const auto& [k, v] : t.overrides) o[k] = v;
-  json j = {{"id", t.id},          {"line", t.line},           {"role", t.role},
+  json j = {{"id", t.id},          {"line", t.line},           {"role", role_name(t.role)},
             {"scene", t.scene_path}, {"overrides", o},         {"conditions", t.conditions},
             {"angle_deg", t.angle_deg}};
   if (!t.text_conditions.empty()) j["text_conditions"] = t.text_conditions;

@@ -26,11 +26,19 @@
 
 namespace reposetwin::experiments {
 
+/// A lab test's part in the loop: mu_r is fitted on the calibration tests, and the validation
+/// tests are held out, predicted.
+enum class Role { kCalibrate, kValidate };
+/// "calibrate" or "validate", as the CSV and loop.json write it.
+const char* role_name(Role role);
+/// The role `text` names; std::nullopt for any other text.
+std::optional<Role> parse_role(const std::string& text);
+
 /// One measured lab test.
 struct LabTest {
   int line = 0;             // line of the CSV file (1-based), for messages
   std::string id;           // unique, filesystem-safe
-  std::string role;         // "calibrate" or "validate"
+  Role role = Role::kCalibrate;
   std::string scene_path;   // absolute path of the base scene
   std::vector<std::pair<std::string, std::string>> overrides;  // dotted key -> TOML value text
   std::vector<std::string> override_columns;  // the column each override came from (same order)

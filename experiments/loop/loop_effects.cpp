@@ -153,7 +153,7 @@ double reference_grain_diameter(const std::vector<LabTest>& tests) {
   double log_sum = 0.0;
   int n = 0;
   for (const LabTest& t : tests)
-    if (t.role == "calibrate") log_sum += std::log(median_grain_diameter(t)), ++n;
+    if (t.role == Role::kCalibrate) log_sum += std::log(median_grain_diameter(t)), ++n;
   if (n == 0)
     for (const LabTest& t : tests) log_sum += std::log(median_grain_diameter(t)), ++n;
   return std::exp(log_sum / n);

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 #include "experiments/loop/loop_stages.hpp"
 
@@ -42,41 +44,27 @@ double Model::mix(std::size_t i, Of of) const {
   return s;
 }
 
-double Model::angle(std::size_t i, double m) const {
-  return mix(i, [m](const Curve& c) { return c.at(m); });
+double Model::value(std::size_t i, double m, Channel channel) const {
+  if (channel == Channel::kAngle) return mix(i, [m](const Curve& c) { return c.at(m); });
+  return mix(i, [m, channel](const Curve& c) { return c.lin(c.mean[channel], m); });
 }
 
-double Model::h(std::size_t i, double m) const {
-  return mix(i, [m](const Curve& c) { return c.lin(c.h, m); });
-}
-
-double Model::d(std::size_t i, double m) const {
-  return mix(i, [m](const Curve& c) { return c.lin(c.d, m); });
-}
-
-double Model::crest(std::size_t i, double m) const {
-  return mix(i, [m](const Curve& c) { return c.lin(c.crest, m); });
-}
-
-double Model::value(std::size_t i, double m, int channel) const {
-  return channel == 0 ? angle(i, m) : channel == 1 ? h(i, m) : channel == 2 ? d(i, m) : crest(i, m);
-}
-
-double Loop::observed(std::size_t i, int channel) const {
+double Loop::observed(std::size_t i, Channel channel) const {
   const LabTest& t = data_.tests[i];
-  return channel == 0 ? t.angle_deg
-         : channel == 1 ? t.height_mm.value_or(0.0)
-         : channel == 2 ? t.diameter_mm.value_or(0.0)
-                        : t.crest_mm.value_or(0.0);
+  switch (channel) {
+    case Channel::kAngle: return t.angle_deg;
+    case Channel::kH: return t.height_mm.value_or(0.0);
+    case Channel::kD: return t.diameter_mm.value_or(0.0);
+    case Channel::kCrest: return t.crest_mm.value_or(0.0);
+  }
+  throw std::logic_error("loop: no channel " + std::to_string(static_cast<int>(channel)));
 }
 
 double Loop::effect_off(const CandidateEffect& e) const {
   return e.off_from_scene ? scene_value(data_.tests.front(), e.key) : e.off;
 }
 
-double Loop::noise(std::size_t i, int channel) const {
-  return channel == 0 ? sigma_[i] : channel == 1 ? sigma_h_[i] : channel == 2 ? sigma_d_[i] : sigma_crest_[i];
-}
+double Loop::noise(std::size_t i, Channel channel) const { return sigma_[channel][i]; }
 
 // The loop's joint fit, not calibration::calibrate_batch's: calibrate matches ONE test's angle
 // by inverting a monotone (isotonic) fit it samples adaptively, with a bootstrap interval; the
@@ -86,7 +74,8 @@ double Loop::noise(std::size_t i, int channel) const {
 // monotone curve both give the crossing of the interpolated curve, but neither generalises to the
 // other's problem, so they stay two estimators.
 MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max,
-                   const std::vector<std::size_t>& tests, const std::vector<int>& channels) const {
+                   const std::vector<std::size_t>& tests,
+                   const std::vector<Channel>& channels) const {
   const double lo = grid_.front(), hi = grid_.back();
   const int steps = 2000;
   const Model alone{{{1.0, extra}}};
@@ -97,7 +86,7 @@ MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max,
     double swdy = 0.0, swdd = 0.0;
     std::vector<double> y, dd, w;  // residual, extra surface's change, weight 1 / sigma^2
     for (std::size_t i : tests)
-      for (int c : channels) {
+      for (Channel c : channels) {
         const double base = model.value(i, m, c);
         const double di = extra ? alone.value(i, m, c) - base : 0.0;
         y.push_back(observed(i, c) - base);
@@ -121,7 +110,7 @@ MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max,
   Eigen::MatrixXd jac(tests.size() * channels.size(), extra ? 2 : 1);
   Eigen::Index k = 0;
   for (std::size_t i : tests)
-    for (int c : channels) {
+    for (Channel c : channels) {
       auto pred = [&](double m) {
         const double base = model.value(i, m, c);
         return extra ? base + best.t * (alone.value(i, m, c) - base) : base;
@@ -154,7 +143,7 @@ std::vector<ResidualRow> Loop::residuals(const Model& model, double m) const {
     r.measured_deg = t.angle_deg;
     r.predicted_deg = model.angle(i, m);
     r.residual_deg = t.angle_deg - r.predicted_deg;
-    r.sigma_deg = sigma_[i];
+    r.sigma_deg = sigma_[Channel::kAngle][i];
     r.predicted_se_deg = seed_se_;
     r.no_pile = model.no_pile(i);
     if (!r.no_pile.empty()) {  // NaN predictions; the lab's H, D and crest have no residual
@@ -162,12 +151,12 @@ std::vector<ResidualRow> Loop::residuals(const Model& model, double m) const {
       rows.push_back(r);
       continue;
     }
-    r.predicted_h_mm = model.h(i, m);
-    r.predicted_d_mm = model.d(i, m);
+    r.predicted_h_mm = model.value(i, m, Channel::kH);
+    r.predicted_d_mm = model.value(i, m, Channel::kD);
     if (t.height_mm) r.residual_h_mm = *t.height_mm - r.predicted_h_mm;
     if (t.diameter_mm) r.residual_d_mm = *t.diameter_mm - r.predicted_d_mm;
     if (t.crest_mm) {
-      r.predicted_crest_mm = model.crest(i, m);
+      r.predicted_crest_mm = model.value(i, m, Channel::kCrest);
       r.residual_crest_mm = *t.crest_mm - *r.predicted_crest_mm;
     }
     rows.push_back(r);

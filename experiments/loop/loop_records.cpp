@@ -29,7 +29,7 @@ RoleRmse rmse_by_role(const std::vector<ResidualRow>& rows) {
       ++out.n_no_pile;
       continue;
     }
-    (r.role == "calibrate" ? c : v).push_back(r.residual_deg);
+    (r.role == Role::kCalibrate ? c : v).push_back(r.residual_deg);
   }
   out.calibrate_deg = rmse(c);
   if (!v.empty()) out.validate_deg = rmse(v);
@@ -42,7 +42,7 @@ json to_json(const ResidualRow& r) {
   // A test predicted no pile has null predictions (NaN in the record).
   auto value = [](double v) { return std::isfinite(v) ? json(v) : json(); };
   json j = {{"id", r.id},
-            {"role", r.role},
+            {"role", role_name(r.role)},
             {"measured_deg", r.measured_deg},
             {"predicted_deg", value(r.predicted_deg)},
             {"residual_deg", value(r.residual_deg)},
@@ -86,39 +86,34 @@ json to_json(const BaselineRecord& b) {
           {"curves", to_json_array(b.curves)}};
 }
 
-const char* channel_name(int channel) {
-  static const char* const kNames[] = {"angle", "H", "D", "crest"};
-  if (channel < 0 || channel > 3)
-    throw std::logic_error("loop: no channel " + std::to_string(channel));
-  return kNames[channel];
+const char* channel_name(Channel c) {
+  switch (c) {
+    case Channel::kAngle: return "angle";
+    case Channel::kH: return "H";
+    case Channel::kD: return "D";
+    case Channel::kCrest: return "crest";
+  }
+  throw std::logic_error("loop: no channel " + std::to_string(static_cast<int>(c)));
 }
 
-int channel_index(const std::string& name) {
-  for (int c = 0; c < 4; ++c)
+const char* channel_unit(Channel c) { return c == Channel::kAngle ? "deg" : "mm"; }
+
+Channel channel_from_name(const std::string& name) {
+  for (Channel c : kAllChannels)
     if (name == channel_name(c)) return c;
   throw std::logic_error("loop: no channel named '" + name + "'");
-}
-
-const std::vector<double>& FingerprintRecord::column(int channel) const {
-  switch (channel) {
-    case 0: return angle_deg;
-    case 1: return h_mm;
-    case 2: return d_mm;
-    case 3: return crest_mm;
-  }
-  throw std::logic_error("loop: no channel " + std::to_string(channel));
 }
 
 json to_json(const FingerprintRecord& f) {
   json j = {{"name", f.name},
             {"probe", f.probe},
             {"mu_r", f.mu_r},
-            {"angle_deg", f.angle_deg},
+            {"angle_deg", f.change[Channel::kAngle]},
             {"angle_se_deg", f.angle_se_deg},
-            {"H_mm", f.h_mm},
-            {"D_mm", f.d_mm},
+            {"H_mm", f.change[Channel::kH]},
+            {"D_mm", f.change[Channel::kD]},
             {"probes_tried", f.probes_tried}};
-  if (!f.crest_mm.empty()) j["crest_mm"] = f.crest_mm;
+  if (!f.change[Channel::kCrest].empty()) j["crest_mm"] = f.change[Channel::kCrest];
   return j;
 }
 
@@ -254,83 +249,6 @@ json to_json(const PhotoPair& p) {
 }
 
 json to_json(const LoopRecord& loop) {
-  const double before = loop.baseline.rmse.calibrate_deg;
-  const double after = loop.final_model.rmse.calibrate_deg;
-  json names = json::array();
-  for (const ChosenEffect& c : loop.final_model.effects) names.push_back(c.refit.name);
-  // Every test's residual, the predictions included: with one calibration test the calibration
-  // RMSE is zero by construction, and the prediction residuals are what the loop traced.
-  auto all_rmse = [](const std::vector<ResidualRow>& rows) {
-    std::vector<double> r;
-    for (const ResidualRow& x : rows)
-      if (x.no_pile.empty()) r.push_back(x.residual_deg);
-    return rmse(r);
-  };
-  const double all_before = all_rmse(loop.baseline.residuals);
-  const double all_after = all_rmse(loop.final_model.residuals);
-  // An effect chosen makes the verdict "named"; otherwise it is the last iteration's: the
-  // trace's, or "not_confirmed" / "refit_failed" when the trace named a candidate (or the user
-  // declared one) that the simulated refit then did not bear out. The statement gives every
-  // iteration's decision and the fate of its refit in order.
-  json verdict = json();
-  json statement = json();
-  if (!loop.iterations.empty()) {
-    const IterationRecord& last = loop.iterations.back();
-    // A confirmed refit of the user's hypothesis (--refit) is "declared": the trace did not
-    // name it, and the statement keeps the trace's own verdict.
-    if (!loop.final_model.effects.empty())
-      verdict = loop.final_model.effects.back().declared ? "declared"
-                                                         : trace_verdict_name(TraceVerdict::kNamed);
-    else if (last.not_confirmed)
-      verdict = "not_confirmed";
-    else if (last.refit_failed)
-      verdict = "refit_failed";
-    else
-      verdict = trace_verdict_name(last.decision.verdict);
-    std::string text;
-    for (const IterationRecord& it : loop.iterations) {
-      text += (text.empty() ? "" : " | ") + ("iteration " + std::to_string(it.iteration) + ": ") +
-              it.decision.statement + (it.declared ? "; " + *it.declared : "");
-      if (it.not_confirmed)
-        text += "; " + it.not_confirmed->refit.name +
-                " not confirmed by the simulated refit: " + it.not_confirmed->reason;
-      if (it.refit_failed)
-        text += "; " + it.refit_failed->name +
-                "'s refit could not be simulated: " + it.refit_failed->refit_failed;
-    }
-    statement = text;
-  }
-  if (loop.not_traced) {
-    verdict = "not_traced";
-    statement = *loop.not_traced;
-  }
-  // A held-out test the final model predicts no pile for (its twin pours jammed) is a
-  // prediction that failed where the lab poured a pile: said in the statement, not hidden in
-  // an RMSE over fewer tests.
-  json no_pile = json::array();
-  for (const ResidualRow& r : loop.final_model.residuals)
-    if (!r.no_pile.empty()) no_pile.push_back(r.id);
-  if (!no_pile.empty()) {
-    std::string ids;
-    for (const json& id : no_pile) ids += (ids.empty() ? "" : ", ") + id.get<std::string>();
-    statement = (statement.is_string() ? statement.get<std::string>() + " | " : std::string()) +
-                "no pile predicted for " + ids +
-                " (held out): the final model's pours jammed where the lab's formed a pile; "
-                "the RMSEs leave it out";
-  }
-  const json summary = {
-      {"chosen", loop.final_model.effects.empty() ? json() : json(names.back())},
-      {"verdict", verdict},
-      {"statement", statement},
-      {"rmse_all_before_deg", all_before},
-      {"rmse_all_after_deg", all_after},
-      {"effects", names},
-      {"rmse_calibrate_before_deg", before},
-      {"rmse_calibrate_after_deg", after},
-      {"rmse_validate_before_deg", optional_number(loop.baseline.rmse.validate_deg)},
-      {"rmse_validate_after_deg", optional_number(loop.final_model.rmse.validate_deg)},
-      {"reduction", before > 0.0 ? 1.0 - after / before : 0.0},
-      {"no_pile_predicted", no_pile}};
   const json rule = {{"min_t", loop.rule.min_t},
                      {"loo_margin_deg", loop.rule.loo_margin_factor * loop.baseline.seed_se_deg},
                      {"text",
@@ -354,7 +272,7 @@ json to_json(const LoopRecord& loop) {
           {"fingerprints", to_json_array(loop.fingerprints)},
           {"iterations", to_json_array(loop.iterations)},
           {"final", to_json(loop.final_model)},
-          {"summary", summary},
+          {"summary", to_json(loop.summary)},
           {"simulations", to_json(loop.simulations)},
           {"provenance", to_json(loop.provenance)},
           {"photo_pairs", to_json_array(loop.photo_pairs)}};
@@ -395,7 +313,12 @@ RefitSummary refit_from_json(const json& j) {
 ResidualRow residual_row_from_json(const json& j) {
   ResidualRow r;
   r.id = j.at("id").get<std::string>();
-  r.role = j.at("role").get<std::string>();
+  const std::string role = j.at("role").get<std::string>();
+  const std::optional<Role> parsed = parse_role(role);
+  if (!parsed)
+    throw std::invalid_argument("residual row: role \"" + role +
+                                "\" is not calibrate or validate");
+  r.role = *parsed;
   r.measured_deg = num(j, "measured_deg");
   r.predicted_deg = num(j, "predicted_deg");
   r.residual_deg = num(j, "residual_deg");
@@ -458,11 +381,11 @@ FingerprintRecord fingerprint_record_from_json(const json& j) {
     for (const json& e : j.at(key)) v.push_back(json_number(e));
     return v;
   };
-  f.angle_deg = numbers("angle_deg");
+  f.change[Channel::kAngle] = numbers("angle_deg");
   f.angle_se_deg = numbers("angle_se_deg");
-  f.h_mm = numbers("H_mm");
-  f.d_mm = numbers("D_mm");
-  if (j.contains("crest_mm")) f.crest_mm = numbers("crest_mm");
+  f.change[Channel::kH] = numbers("H_mm");
+  f.change[Channel::kD] = numbers("D_mm");
+  if (j.contains("crest_mm")) f.change[Channel::kCrest] = numbers("crest_mm");
   if (j.contains("probes_tried")) f.probes_tried = numbers("probes_tried");
   return f;
 }

@@ -7,6 +7,7 @@
 // chosen, the refit failure when every refit simulation failed, or the chosen effect.
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -33,7 +34,7 @@ struct MuFit {
 /// One test's residual under a model at a mu_r.
 struct ResidualRow {
   std::string id;
-  std::string role;                     // "calibrate" or "validate"
+  Role role = Role::kCalibrate;
   double measured_deg = 0.0;            // lab angle as compared [deg]
   double predicted_deg = 0.0;           // twin angle [deg]
   double residual_deg = 0.0;            // measured - predicted [deg]
@@ -83,28 +84,40 @@ struct BaselineRecord {
   std::vector<BaselineCurve> curves;
 };
 
-/// The observables the loop traces, by the index every per-channel branch uses (Model::value,
-/// Loop::observed, Loop::noise): 0 the angle [deg], 1 H, 2 D, 3 the crest width [mm]. Their
-/// names are the joint trace's (IterationRecord::channels).
-const char* channel_name(int channel);
-/// The index of a channel named as channel_name gives it; throws std::logic_error for another.
-int channel_index(const std::string& name);
+/// The observables the loop traces: the angle [deg], H, D and the crest width [mm]. A quantity
+/// held per channel is a PerChannel, indexed by the enum, so a new channel is one enumerator
+/// (and its name, unit and value in the functions below and Loop::twin_value).
+enum class Channel { kAngle, kH, kD, kCrest };
+inline constexpr std::size_t kChannelCount = 4;
+inline constexpr std::array<Channel, kChannelCount> kAllChannels = {Channel::kAngle, Channel::kH,
+                                                                    Channel::kD, Channel::kCrest};
 
-/// A candidate's simulated change of every test's angle, H and D at its probe value.
+/// One T per channel.
+template <class T>
+struct PerChannel {
+  std::array<T, kChannelCount> values{};
+  T& operator[](Channel c) { return values[static_cast<std::size_t>(c)]; }
+  const T& operator[](Channel c) const { return values[static_cast<std::size_t>(c)]; }
+};
+
+/// The channel's name in loop.json and the joint trace (IterationRecord::channels): "angle",
+/// "H", "D" or "crest".
+const char* channel_name(Channel c);
+/// The unit of its values: "deg" for the angle, "mm" for the others.
+const char* channel_unit(Channel c);
+/// The channel named as channel_name gives it; throws std::logic_error for another name.
+Channel channel_from_name(const std::string& name);
+
+/// A candidate's simulated change of every test's angle, H, D and crest at its probe value.
 struct FingerprintRecord {
   std::string name;
-  double probe = 0.0;                // effect value simulated
-  double mu_r = 0.0;                 // grid point simulated at [-]
-  std::vector<double> angle_deg;     // per test: mean change of angle [deg]
-  std::vector<double> angle_se_deg;  // per test: its standard error over the seeds [deg]
-  std::vector<double> h_mm;          // per test: mean change of H [mm]
-  std::vector<double> d_mm;          // per test: mean change of D [mm]
+  double probe = 0.0;  // effect value simulated
+  double mu_r = 0.0;   // grid point simulated at [-]
+  // Per channel, per test: the mean change [deg or mm]. The crest's is empty when no test has a
+  // measured crest.
+  PerChannel<std::vector<double>> change;
+  std::vector<double> angle_se_deg;  // per test: the angle change's standard error [deg]
   std::vector<double> probes_tried;  // every probe simulated, the one used last
-  std::vector<double> crest_mm;      // per test: mean change of the crest width [mm]; empty
-                                     // when no test has a measured crest
-
-  /// The per-test change of one channel (channel_index's numbering).
-  const std::vector<double>& column(int channel) const;
 };
 
 /// The mu_r grid as the loop settled it: extended beyond a bound mu_r landed on, or left.
@@ -240,6 +253,41 @@ struct PhotoPair {
   std::string note;
 };
 
+/// The loop's verdict on its dataset: the trace's (TraceVerdict) when nothing was refitted, or
+/// what became of the refit.
+enum class Verdict {
+  kNothing,               // the trace: no candidate meets the rule
+  kNamed,                 // an effect named by the trace, confirmed by its simulated refit
+  kIndistinguishable,     // the trace: two or more explain the residual alike; none refitted
+  kMeasurementSuspected,  // the trace: a uniform offset beyond mu_r's reach; nothing named
+  kDeclared,              // the user's hypothesis (--refit), confirmed by its simulated refit
+  kNotConfirmed,          // a refit the simulations did not bear out
+  kRefitFailed,           // a refit none of whose simulations could be measured
+  kNotTraced,             // nothing traced: the design or the grid did not allow it
+};
+/// The verdict's word in loop.json ("named", "not_confirmed", ...).
+const char* verdict_name(Verdict v);
+/// The verdict `text` names; throws std::invalid_argument naming it for any other text.
+Verdict parse_verdict(const std::string& text);
+/// The loop's verdict when the trace's is the last word.
+Verdict verdict_of(TraceVerdict v);
+
+/// The loop's outcome in brief (loop.json's `summary`), decided by summarise.
+struct LoopSummary {
+  std::optional<std::string> chosen;     // the last effect chosen
+  std::optional<Verdict> verdict;        // none: the loop did not iterate
+  std::optional<std::string> statement;  // every iteration's decision and its refit, in words
+  double rmse_all_before_deg = 0.0;      // every test with a prediction [deg]
+  double rmse_all_after_deg = 0.0;       // [deg]
+  std::vector<std::string> effects;      // chosen, in order
+  double rmse_calibrate_before_deg = 0.0;             // [deg]
+  double rmse_calibrate_after_deg = 0.0;              // [deg]
+  std::optional<double> rmse_validate_before_deg;     // [deg]
+  std::optional<double> rmse_validate_after_deg;      // [deg]
+  double reduction = 0.0;                             // 1 - after / before (calibration) [-]
+  std::vector<std::string> no_pile_predicted;         // held-out tests the final model jams
+};
+
 /// The whole of loop.json.
 struct LoopRecord {
   std::vector<LabTest> tests;
@@ -255,7 +303,12 @@ struct LoopRecord {
   SimulationCounts simulations;
   LoopProvenance provenance;
   std::vector<PhotoPair> photo_pairs;  // one per test
+  LoopSummary summary;                 // summarise(*this), once the rest is filled in
 };
+
+/// The loop's summary of a record whose other fields are filled in: the verdict, the statement
+/// and the RMSEs before and after. to_json writes it as decided here.
+LoopSummary summarise(const LoopRecord& loop);
 
 nlohmann::json to_json(const ResidualRow& r);
 nlohmann::json to_json(const RoleRmse& r);
@@ -274,6 +327,7 @@ nlohmann::json to_json(const LoopProvenance& p);
 nlohmann::json to_json(const SimulationCounts& s);
 nlohmann::json to_json(const PhotoView& v);
 nlohmann::json to_json(const PhotoPair& p);
+nlohmann::json to_json(const LoopSummary& s);
 /// loop.json: the records, the candidate registry, the rule and a summary.
 nlohmann::json to_json(const LoopRecord& loop);
 
@@ -298,5 +352,6 @@ LoopProvenance loop_provenance_from_json(const nlohmann::json& j);
 SimulationCounts simulation_counts_from_json(const nlohmann::json& j);
 PhotoView photo_view_from_json(const nlohmann::json& j);
 PhotoPair photo_pair_from_json(const nlohmann::json& j);
+LoopSummary loop_summary_from_json(const nlohmann::json& j);
 
 }  // namespace reposetwin::experiments

@@ -41,7 +41,7 @@ double Loop::calibration_rmse(const Model& model, double mu) const {
 // held-out test that jams at p does not stop the trial: the model predicts no pile for it.
 // Returns false when no attempt could be simulated.
 bool Loop::run_trial(const CandidateEffect& e, double off, double p, const FingerprintRecord& fp,
-                     double mu_node, const LoopState& state, const std::vector<int>& channels,
+                     double mu_node, const LoopState& state, const std::vector<Channel>& channels,
                      Refit& refit) {
   std::unique_ptr<Surface> surf;
   for (int attempt = 0; attempt < 3 && !surf; ++attempt) {
@@ -67,9 +67,10 @@ bool Loop::run_trial(const CandidateEffect& e, double off, double p, const Finge
   const Model alone{{{1.0, tr.surf}}};
   double num = 0.0, den = 0.0;
   for (std::size_t i : fit_)
-    for (int c : channels) {
-      const double f = fp.column(c)[i];
-      const double w = c == 0 ? 1.0 : std::pow(noise(i, 0) / noise(i, c), 2);
+    for (Channel c : channels) {
+      const double f = fp.change[c][i];
+      const double w =
+          c == Channel::kAngle ? 1.0 : std::pow(noise(i, Channel::kAngle) / noise(i, c), 2);
       num += w * (alone.value(i, mu_node, c) - state.model.value(i, mu_node, c)) * f;
       den += w * f * f;
     }
@@ -94,7 +95,7 @@ bool Loop::run_trial(const CandidateEffect& e, double off, double p, const Finge
 // most twice more.
 Refit Loop::refit_by_simulation(const CandidateEffect& e, double off, double p1, double coef,
                                 const FingerprintRecord& fp, double mu_node,
-                                const LoopState& state, const std::vector<int>& channels) {
+                                const LoopState& state, const std::vector<Channel>& channels) {
   Refit refit;
   const int kMaxRefinements = 2;
   if (!run_trial(e, off, p1, fp, mu_node, state, channels, refit)) return refit;

@@ -30,11 +30,10 @@ namespace reposetwin::experiments::loop_detail {
 struct Curve {
   std::vector<double> mu;                        // grid [-]
   MonotoneFit fit;                               // angle against mu_r
-  std::vector<double> h, d, angle;               // seed means per grid point [mm, mm, deg]
-  std::vector<std::vector<double>> angle_seeds;  // per grid point, per seed [deg]
-  std::vector<std::vector<double>> h_seeds, d_seeds;
-  std::vector<double> crest;  // crest width seed means [mm] (NaN: not recorded)
-  std::vector<std::vector<double>> crest_seeds;
+  // Per channel: the seed means per grid point [deg or mm]; a crest no photograph recorded is
+  // NaN.
+  PerChannel<std::vector<double>> mean;
+  PerChannel<std::vector<std::vector<double>>> seeds;  // per channel, grid point and seed
   std::vector<int> clogged;  // per grid point: pours that formed no pile
   // Empty when every pour series formed a pile; else where a held-out test's pours all jammed
   // (a prediction of no pile: the curve has no fit and the model predicts nothing for it).
@@ -61,12 +60,10 @@ struct Model {
   /// Why the model predicts no pile for `test` (the first weighted surface's reason); empty
   /// when it predicts one.
   std::string no_pile(std::size_t test) const;
-  double angle(std::size_t test, double mu) const;       // [deg]
-  double h(std::size_t test, double mu) const;           // [mm]
-  double d(std::size_t test, double mu) const;           // [mm]
-  double crest(std::size_t test, double mu) const;       // crest width [mm]
-  /// Channel 0 angle, 1 H, 2 D, 3 crest.
-  double value(std::size_t test, double mu, int channel) const;
+  /// The predicted value of `channel` at mu_r `mu`: the angle from each curve's monotone fit,
+  /// the others interpolated on the grid [deg or mm].
+  double value(std::size_t test, double mu, Channel channel) const;
+  double angle(std::size_t test, double mu) const { return value(test, mu, Channel::kAngle); }
 
  private:
   template <class Of>
@@ -152,24 +149,26 @@ class Loop {
   std::string untraceable(const FingerprintRecord& f) const;
   JointProblem joint_problem(const LoopState& state, const std::vector<std::size_t>& tests,
                              std::vector<std::string>& left_out) const;
-  double mu_slope(const LoopState& state, std::size_t i, int channel) const;
-  double pooled_seed_sd(const Surface& base, int channel) const;
+  double mu_slope(const LoopState& state, std::size_t i, Channel channel) const;
+  double pooled_seed_sd(const Surface& base, Channel channel) const;
+  double twin_value(const SimOutcome& o, Channel channel) const;  // one pile's [deg or mm]
 
   // The model's fit and residuals (loop_model.cpp). fit_mu fits the tests `tests` on the
-  // observables `channels` (0 angle, 1 H, 2 D, 3 crest; each residual over its own noise).
+  // observables `channels` (each residual over its own noise).
   MuFit fit_mu(const Model& model, const Surface* extra, double t_max,
-               const std::vector<std::size_t>& tests, const std::vector<int>& channels = {0}) const;
-  double observed(std::size_t test, int channel) const;  // the lab's value
+               const std::vector<std::size_t>& tests,
+               const std::vector<Channel>& channels = {Channel::kAngle}) const;
+  double observed(std::size_t test, Channel channel) const;  // the lab's value
   double effect_off(const CandidateEffect& e) const;  // its value in the base model
-  double noise(std::size_t test, int channel) const;     // its residual's 1-sigma noise
+  double noise(std::size_t test, Channel channel) const;  // its residual's 1-sigma noise
   std::vector<ResidualRow> residuals(const Model& model, double mu) const;
 
   // Refit by simulation (loop_refit.cpp).
   Refit refit_by_simulation(const CandidateEffect& e, double off, double p1, double coef,
                             const FingerprintRecord& fp, double mu_node, const LoopState& state,
-                            const std::vector<int>& channels);
+                            const std::vector<Channel>& channels);
   bool run_trial(const CandidateEffect& e, double off, double p, const FingerprintRecord& fp,
-                 double mu_node, const LoopState& state, const std::vector<int>& channels,
+                 double mu_node, const LoopState& state, const std::vector<Channel>& channels,
                  Refit& refit);
   std::string unconfirmed_reason(const Trial& best, const LoopState& state) const;
   double calibration_rmse(const Model& model, double mu) const;
@@ -183,14 +182,12 @@ class Loop {
   std::vector<std::size_t> trace_;      // the tests traced: all of them
   std::vector<std::size_t> fit_;        // the tests a refit fits (design_.refit_on_all)
   DesignRecord design_;
-  double noise_sd_ = 0.0;               // pooled seed spread of one pile's angle [deg]
-  double noise_sd_h_ = 0.0, noise_sd_d_ = 0.0;  // the same for H and D [mm]
+  // Per channel: the pooled seed spread of one pile's value [deg or mm] (the crest's 0 when no
+  // test has a measured crest), and per test its residual's 1-sigma noise.
+  PerChannel<double> noise_sd_;
+  PerChannel<std::vector<double>> sigma_;
   double seed_se_ = 0.0;                // seed standard error of a predicted angle [deg]
-  std::vector<double> sigma_;           // per test: 1-sigma noise of its residual [deg]
-  std::vector<double> sigma_h_, sigma_d_;  // per test: the same for H and D [mm]
-  double noise_sd_crest_ = 0.0;            // pooled seed spread of the crest width [mm]
-  std::vector<double> sigma_crest_;        // per test: its residual's noise [mm]
-  bool crest_measured_ = false;            // some test has a measured crest width
+  bool crest_measured_ = false;         // some test has a measured crest width
   std::vector<std::unique_ptr<Surface>> surfaces_;
 };
 

@@ -73,7 +73,11 @@ std::string make_synthetic_dataset(const SynthDesign& d, const std::string& out_
   for (const SynthTest& st : d.tests) {
     LabTest t;
     t.id = st.id;
-    t.role = st.role;
+    const std::optional<Role> role = parse_role(st.role);
+    if (!role)
+      throw InputError("synthetic design: test " + st.id + ": role \"" + st.role +
+                       "\" must be \"calibrate\" or \"validate\"");
+    t.role = *role;
     t.scene_path = fs::absolute(scene_copy).lexically_normal().string();
     for (const auto& [col, v] : st.conditions) {
       std::string key;
@@ -163,7 +167,7 @@ std::string make_synthetic_dataset(const SynthDesign& d, const std::string& out_
     }
     const double n = static_cast<double>(measured);
     auto mean = [&](double sum) { return measured > 0 ? num(sum / n) : std::string(); };
-    csv << tests[i].id << "," << tests[i].role << ",scene.toml";
+    csv << tests[i].id << "," << role_name(tests[i].role) << ",scene.toml";
     for (const auto& c : cols)
       csv << "," << (d.tests[i].conditions.count(c) ? num(d.tests[i].conditions.at(c)) : "");
     for (const auto& c : text_cols)

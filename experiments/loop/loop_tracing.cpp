@@ -168,29 +168,30 @@ std::optional<FingerprintRecord> Loop::probe_candidate(
 // predicts no pile for (not poured, not traced).
 FingerprintRecord Loop::fingerprint(const CandidateEffect& e, double probe, const Surface& base,
                                     std::size_t node, const std::vector<SimOutcome>& on) const {
-  FingerprintRecord f{e.name, probe, grid_[node], {}, {}, {}, {}, {}, {}};
+  FingerprintRecord f;
+  f.name = e.name;
+  f.probe = probe;
+  f.mu_r = grid_[node];
+  // The crest is recorded only where the lab measured one, so a dataset without one keeps its
+  // record.
+  std::vector<Channel> recorded = {Channel::kAngle, Channel::kH, Channel::kD};
+  if (crest_measured_) recorded.push_back(Channel::kCrest);
   std::size_t q = 0;
   for (std::size_t i = 0; i < data_.tests.size(); ++i) {
     if (!base.curve[i].no_pile.empty()) {
       const double nan = std::numeric_limits<double>::quiet_NaN();
-      for (auto* v : {&f.angle_deg, &f.angle_se_deg, &f.h_mm, &f.d_mm}) v->push_back(nan);
-      if (crest_measured_) f.crest_mm.push_back(nan);
+      for (Channel c : recorded) f.change[c].push_back(nan);
+      f.angle_se_deg.push_back(nan);
       continue;
     }
-    std::vector<double> da, dh, dd, dc;
+    PerChannel<std::vector<double>> delta;  // per seed
     for (std::size_t r = 0; r < s_.seeds.size(); ++r, ++q) {
       const SimOutcome& off = base.raw[i][node][r];
-      da.push_back(twin_angle(on[q], s_.angle) - twin_angle(off, s_.angle));
-      dh.push_back(on[q].height_mm - off.height_mm);
-      dd.push_back(on[q].diameter_mm - off.diameter_mm);
-      dc.push_back(on[q].crest_mm - off.crest_mm);
+      for (Channel c : kAllChannels) delta[c].push_back(twin_value(on[q], c) - twin_value(off, c));
     }
-    const double mean_da = sample_stats(da).mean;
-    f.angle_deg.push_back(mean_da);
-    f.h_mm.push_back(sample_stats(dh).mean);
-    f.d_mm.push_back(sample_stats(dd).mean);
-    // Recorded only where the lab measured a crest, so a dataset without one keeps its record.
-    if (crest_measured_) f.crest_mm.push_back(sample_stats(dc).mean);
+    for (Channel c : recorded) f.change[c].push_back(sample_stats(delta[c]).mean);
+    const std::vector<double>& da = delta[Channel::kAngle];
+    const double mean_da = f.change[Channel::kAngle].back();
     double v = 0.0;
     for (double x : da) v += (x - mean_da) * (x - mean_da);
     f.angle_se_deg.push_back(std::sqrt(v / (da.size() - 1) / da.size()));
@@ -202,12 +203,13 @@ FingerprintRecord Loop::fingerprint(const CandidateEffect& e, double probe, cons
 std::string Loop::untraceable(const FingerprintRecord& f) const {
   std::vector<std::size_t> tests;
   for (std::size_t i : trace_)
-    if (std::isfinite(f.angle_deg[i])) tests.push_back(i);
+    if (std::isfinite(f.change[Channel::kAngle][i])) tests.push_back(i);
   // An effect that moves the angle by less than the seed noise of a predicted angle at its
   // probe cannot be traced: any residual would need an absurd strength (a lens whose
   // distortion shifts the angle by 0.01 deg "explains" 5 deg with k1 = 100).
   double ms = 0.0;
-  for (std::size_t i : tests) ms += f.angle_deg[i] * f.angle_deg[i];
+  const std::vector<double>& angle = f.change[Channel::kAngle];
+  for (std::size_t i : tests) ms += angle[i] * angle[i];
   const double rms = std::sqrt(ms / static_cast<double>(tests.size()));
   char why[240];
   if (rms < seed_se_) {
@@ -240,20 +242,13 @@ std::string Loop::untraceable(const FingerprintRecord& f) const {
   return "";
 }
 
-// The slope of the current model's angle (channel 0), H (1), D (2) or crest width (3) against
-// mu_r at the fit,
-// over a tenth of the grid span (the monotone fit is piecewise linear).
-double Loop::mu_slope(const LoopState& state, std::size_t i, int channel) const {
+// The slope of the current model's value of a channel against mu_r at the fit, over a tenth of
+// the grid span (the monotone fit is piecewise linear).
+double Loop::mu_slope(const LoopState& state, std::size_t i, Channel channel) const {
   const double span = grid_.back() - grid_.front();
   const double a = std::max(grid_.front(), state.fit.mu - 0.05 * span);
   const double b = std::min(grid_.back(), state.fit.mu + 0.05 * span);
-  auto v = [&](double m) {
-    return channel == 0   ? state.model.angle(i, m)
-           : channel == 1 ? state.model.h(i, m)
-           : channel == 2 ? state.model.d(i, m)
-                          : state.model.crest(i, m);
-  };
-  return (v(b) - v(a)) / (b - a);
+  return (state.model.value(i, b, channel) - state.model.value(i, a, channel)) / (b - a);
 }
 
 // The traced tests the model predicts a pile for. A held-out test whose twin pours jammed has
@@ -283,33 +278,35 @@ JointProblem Loop::joint_problem(const LoopState& state, const std::vector<std::
   for (std::size_t i : tests)
     hd = hd && data_.tests[i].height_mm.has_value() && data_.tests[i].diameter_mm.has_value();
   if (!hd) left_out.push_back("H and D: not measured on every test");
-  for (int c = 0; c < (hd ? 3 : 1); ++c) {
-    TraceChannel ch{channel_name(c), c == 0 ? "deg" : "mm",
-                    Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n)};
+  std::vector<Channel> always = {Channel::kAngle};
+  if (hd) always.insert(always.end(), {Channel::kH, Channel::kD});
+  const double mu = state.fit.mu;
+  for (Channel c : always) {
+    TraceChannel ch{channel_name(c), channel_unit(c), Eigen::VectorXd(n), Eigen::VectorXd(n),
+                    Eigen::VectorXd(n)};
     for (Eigen::Index k = 0; k < n; ++k) {
       const std::size_t i = tests[k];
-      const LabTest& t = data_.tests[i];
-      const double mu = state.fit.mu;
-      ch.residual[k] = c == 0   ? t.angle_deg - state.model.angle(i, mu)
-                       : c == 1 ? *t.height_mm - state.model.h(i, mu)
-                                : *t.diameter_mm - state.model.d(i, mu);
-      ch.sigma[k] = c == 0 ? sigma_[i] : c == 1 ? sigma_h_[i] : sigma_d_[i];
+      ch.residual[k] = observed(i, c) - state.model.value(i, mu, c);
+      ch.sigma[k] = noise(i, c);
       ch.mu_sensitivity[k] = mu_slope(state, i, c);
     }
     // A flat mu_r response (all slopes ~0) still leaves mu_r free as a constant shift.
-    if (c == 0 && ch.mu_sensitivity.cwiseAbs().maxCoeff() < 1e-6) ch.mu_sensitivity.setOnes();
+    if (c == Channel::kAngle && ch.mu_sensitivity.cwiseAbs().maxCoeff() < 1e-6)
+      ch.mu_sensitivity.setOnes();
     p.channels.push_back(std::move(ch));
   }
   if (!crest_measured_) return p;
-  OptionalChannel crest{{channel_name(3), "mm", Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n)},
+  const Channel cr = Channel::kCrest;
+  OptionalChannel crest{{channel_name(cr), channel_unit(cr), Eigen::VectorXd(n),
+                         Eigen::VectorXd(n), Eigen::VectorXd(n)},
                         std::vector<bool>(static_cast<std::size_t>(n))};
   for (Eigen::Index k = 0; k < n; ++k) {
     const std::size_t i = tests[k];
-    const LabTest& t = data_.tests[i];
-    crest.measured[static_cast<std::size_t>(k)] = t.crest_mm.has_value();
-    crest.channel.residual[k] = t.crest_mm ? *t.crest_mm - state.model.crest(i, state.fit.mu) : 0.0;
-    crest.channel.sigma[k] = sigma_crest_[i];
-    crest.channel.mu_sensitivity[k] = mu_slope(state, i, 3);
+    const bool measured = data_.tests[i].crest_mm.has_value();
+    crest.measured[static_cast<std::size_t>(k)] = measured;
+    crest.channel.residual[k] = measured ? observed(i, cr) - state.model.value(i, mu, cr) : 0.0;
+    crest.channel.sigma[k] = noise(i, cr);
+    crest.channel.mu_sensitivity[k] = mu_slope(state, i, cr);
   }
   add_optional_channel(p, crest, left_out);
   return p;
@@ -328,7 +325,8 @@ IterationRecord Loop::trace(int it, const LoopState& state,
   for (std::size_t i : traced(state.model, rec.tests_left_out)) {
     bool fingerprinted = true;
     for (const FingerprintRecord& f : fps)
-      fingerprinted = fingerprinted && (state.used.count(f.name) || std::isfinite(f.angle_deg[i]));
+      fingerprinted = fingerprinted &&
+                      (state.used.count(f.name) || std::isfinite(f.change[Channel::kAngle][i]));
     if (fingerprinted)
       tests.push_back(i);
     else
@@ -347,11 +345,12 @@ IterationRecord Loop::trace(int it, const LoopState& state,
   JointProblem joint = joint_problem(state, tests, rec.channels_left_out);
   // A crest fingerprint from photographs cached before the crest was recorded has no value: the
   // channel then leaves this trace rather than carry NaN into every score.
-  if (joint.channels.back().name == channel_name(3))
+  if (joint.channels.back().name == channel_name(Channel::kCrest))
     for (const FingerprintRecord& f : fps) {
       if (state.used.count(f.name)) continue;
-      bool finite = f.crest_mm.size() == data_.tests.size();
-      for (std::size_t i : tests) finite = finite && std::isfinite(f.crest_mm[i]);
+      const std::vector<double>& crest = f.change[Channel::kCrest];
+      bool finite = crest.size() == data_.tests.size();
+      for (std::size_t i : tests) finite = finite && std::isfinite(crest[i]);
       if (finite) continue;
       joint.channels.pop_back();
       rec.channels_left_out.push_back("crest: the photographs of " + f.name +
@@ -372,7 +371,7 @@ IterationRecord Loop::trace(int it, const LoopState& state,
     if (state.used.count(f.name)) continue;
     std::vector<Eigen::VectorXd> cols;
     for (const TraceChannel& ch : joint.channels) {
-      const std::vector<double>& v = f.column(channel_index(ch.name));
+      const std::vector<double>& v = f.change[channel_from_name(ch.name)];
       Eigen::VectorXd col(n);
       for (Eigen::Index k = 0; k < n; ++k) col[k] = v[tests[k]];
       cols.push_back(col);

@@ -433,6 +433,34 @@ TEST(LoopData, AnOptionalCrestColumnIsReadAndBadValuesRefused) {
       << e;
 }
 
+// Two columns that set one scene key are refused, naming both, before any row is read: with
+// mass_kg and mass_g (or a set:KEY beside the named column for KEY) one would silently win on
+// every row. Columns that set different keys stay accepted.
+TEST(LoopData, TwoColumnsSettingOneSceneKeyAreRefused) {
+  std::string e = error_of("bothmass", "id,role,scene,mass_kg,mass_g,angle_deg\n"
+                                       "t1,calibrate," + kScene + ",0.006,7,30\n");
+  EXPECT_NE(e.find("bothmass.csv line 1: columns mass_kg and mass_g both set the scene key "
+                   "sample.mass_kg"),
+            std::string::npos)
+      << e;
+  e = error_of("setmass", "id,role,scene,set:sample.mass_kg,mass_kg,angle_deg\n"
+                          "t1,calibrate," + kScene + ",0.007,0.006,30\n");
+  EXPECT_NE(e.find("columns set:sample.mass_kg and mass_kg both set the scene key sample.mass_kg"),
+            std::string::npos)
+      << e;
+  e = error_of("setplate", "id,role,scene,plate,set:plate.material,angle_deg\n"
+                           "t1,calibrate," + kScene + ",plate,plate,30\n");
+  EXPECT_NE(e.find("columns plate and set:plate.material"), std::string::npos) << e;
+  // The refusal holds whichever rows are filled: a column left empty on every row still names
+  // the key twice in the header.
+  e = error_of("emptymass", "id,role,scene,mass_kg,mass_g,angle_deg\n"
+                            "t1,calibrate," + kScene + ",0.006,,30\n");
+  EXPECT_NE(e.find("columns mass_kg and mass_g"), std::string::npos) << e;
+  EXPECT_EQ(error_of("onemass", "id,role,scene,mass_g,set:contacts.rock-plate.friction,angle_deg\n"
+                                "t1,calibrate," + kScene + ",6,0.3,30\n"),
+            "");
+}
+
 TEST(LoopData, ATestTheEngineCannotBuildNamesItsColumn) {
   // A scene key that does not exist and a plate material that does not exist.
   std::string e = error_of("badkey", "id,role,scene,set:contacts.rock-plate.fricton,angle_deg\n"

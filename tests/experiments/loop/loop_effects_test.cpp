@@ -17,7 +17,7 @@ const std::string kScene = std::string(REPOSETWIN_SOURCE_DIR) + "/data/loop/smal
 LabTest small_test() {
   LabTest t;
   t.id = "m15";
-  t.role = "calibrate";
+  t.role = Role::kCalibrate;
   t.scene_path = kScene;
   t.overrides = {{"sample.mass_kg", "0.015"}};
   return t;

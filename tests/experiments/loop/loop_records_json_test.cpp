@@ -13,7 +13,7 @@ namespace {
 using nlohmann::json;
 
 ResidualRow residual(double x) {
-  ResidualRow r{"t" + std::to_string(x), "validate", x + 0.1, x + 0.2, x + 0.3, x + 0.4,
+  ResidualRow r{"t" + std::to_string(x), Role::kValidate, x + 0.1, x + 0.2, x + 0.3, x + 0.4,
                 x + 0.5,                 x + 0.6,    x + 0.7, {},      x + 0.8,
                 x + 0.9,                 x + 1.0};
   return r;
@@ -109,10 +109,15 @@ TEST(LoopRecordsJson, BaselineAndFingerprintRoundTrip) {
   EXPECT_TRUE(std::isnan(back.curves[0].angle_seeds_deg[1][1]));  // NaN is null and back
   EXPECT_EQ(back.curves[0].pour_seeds[1][1], 1003u);
 
-  FingerprintRecord f{"plate_friction", 0.15, 0.3, {1.0, -0.5}, {0.2, 0.3},
-                      {0.4, 0.1},       {-2.0, 3.0}, {0.075, 0.15}, {0.5, -0.25}};
+  FingerprintRecord f{"plate_friction", 0.15, 0.3, {}, {0.2, 0.3}, {0.075, 0.15}};
+  f.change[Channel::kAngle] = {1.0, -0.5};
+  f.change[Channel::kH] = {0.4, 0.1};
+  f.change[Channel::kD] = {-2.0, 3.0};
+  f.change[Channel::kCrest] = {0.5, -0.25};
   expect_round_trip(f, fingerprint_record_from_json);
-  EXPECT_EQ(fingerprint_record_from_json(to_json(f)).d_mm, f.d_mm);
+  EXPECT_EQ(fingerprint_record_from_json(to_json(f)).change[Channel::kD], f.change[Channel::kD]);
+  EXPECT_EQ(fingerprint_record_from_json(to_json(f)).change[Channel::kCrest],
+            f.change[Channel::kCrest]);
   EXPECT_EQ(fingerprint_record_from_json(to_json(f)).probes_tried, f.probes_tried);
 }
 

@@ -180,7 +180,7 @@ TEST(LoopSynth, HiddenSmoothPlateIsFound) {
 // linear from 2 to 5 mm, so a band's d50 is its middle), and the candidate sets it with the
 // exponent. Held-out tests do not move it; a test outside a dataset uses its own d50.
 TEST(LoopSynth, RollingSizeReferenceIsTheCalibrationTestsTypicalGrain) {
-  auto band = [](const std::string& id, const std::string& role, double lo_mm, double hi_mm) {
+  auto band = [](const std::string& id, Role role, double lo_mm, double hi_mm) {
     LabTest t;
     t.id = id;
     t.role = role;
@@ -189,9 +189,9 @@ TEST(LoopSynth, RollingSizeReferenceIsTheCalibrationTestsTypicalGrain) {
                    {"sample.d_max_mm", std::to_string(hi_mm)}};
     return t;
   };
-  std::vector<LabTest> tests = {band("fine", "calibrate", 2.0, 2.5),
-                                band("coarse", "calibrate", 4.5, 5.0),
-                                band("all", "validate", 2.0, 5.0)};
+  std::vector<LabTest> tests = {band("fine", Role::kCalibrate, 2.0, 2.5),
+                                band("coarse", Role::kCalibrate, 4.5, 5.0),
+                                band("all", Role::kValidate, 2.0, 5.0)};
   EXPECT_NEAR(median_grain_diameter(tests[0]), 2.25e-3, 1e-12);
   EXPECT_NEAR(median_grain_diameter(tests[1]), 4.75e-3, 1e-12);
   EXPECT_NEAR(median_grain_diameter(tests[2]), 3.5e-3, 1e-12);
