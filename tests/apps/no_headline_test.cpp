@@ -74,7 +74,10 @@ TEST(NoHeadline, AJammedOutletHasNoAngle) {
 
 TEST(NoHeadline, PhotographsThatCannotBeWrittenAreAnErrorNotAFallback) {
   const fs::path out = fresh_dir("unwritable") / "run";
-  write_text(out / "images", "a file where the photographs' folder should be");
+  // A folder where the top photograph should be: the run folder holds no file, so it is a
+  // fresh run's (experiments/pile/run_folder.hpp), and the photograph cannot be written (root
+  // ignores permission bits, so a read-only images/ would not stop it).
+  fs::create_directories(out / "images" / "top.png");
   const CliResult cli = run_cli("run " + quoted(kTiny) + " --out " + quoted(out) + " --quiet");
   EXPECT_EQ(cli.code, 8) << cli.out;
   EXPECT_EQ(cli.out.find("angle of repose "), std::string::npos) << cli.out;
