@@ -3,7 +3,8 @@
 #   experiments/studies/pile_top_table.sh CAMPAIGN_OUT_DIR RESULTS_DIR
 # writes RESULTS_DIR/runs.csv (one row per finished run, with its provenance), table.md (per case:
 # mean +- sd over the seeds that formed a pile; jams = seeds whose outlet clogged or formed no
-# pile), cases.dat and crest_angle.png (photo atan(2H/D) and crest width per case, +- sd).
+# pile; a run stopped by its settle time limit is counted apart, as "unsettled", and left out of
+# the means, since the twin gives it no headline), cases.dat and crest_angle.png (photo atan(2H/D) and crest width per case, +- sd).
 # A case's factor is its name up to the first '_' (base, pour, size, psd, blocky).
 set -euo pipefail
 src=$(cd "$1" && pwd)
@@ -43,19 +44,20 @@ jq -r '(["case","seed","status","stop","angle_deg","angle_sd_deg","H_mm","D_mm",
 
 jq -r '
   def r1: if . == null then "-" else (. * 10 | round / 10 | tostring) end;
-  def ms(f): map(select(.status == "ok") | f | select(. != null)) |
+  def pile: .status == "ok" and .stop == "settled";
+  def ms(f): map(select(pile) | f | select(. != null)) |
     if length == 0 then "-" else (add / length) as $m |
       (if length > 1 then (map((. - $m) * (. - $m)) | add / (length - 1) | sqrt) else 0 end) as $s |
       "\($m | r1) ± \($s | r1)" end;
-  "| case | piles / runs | atan(2H/D) [deg] | H [mm] | D [mm] | flank [deg] | crest [mm] | jams | bodies | components | mass not simulated | CPU per run [s] |",
-  "|---|---|---|---|---|---|---|---|---|---|---|---|",
+  "| case | piles / runs | atan(2H/D) [deg] | H [mm] | D [mm] | flank [deg] | crest [mm] | jams | unsettled | bodies | components | mass not simulated | CPU per run [s] |",
+  "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
   (group_by(.case) | sort_by(.[0].case | if startswith("base") then "0" + . else . end)[] |
-   "| \(.[0].case) | \(map(select(.status == "ok")) | length)/\(length) | \(ms(.angle)) | \(ms(.h_mm)) | \(ms(.d_mm)) | \(ms(.flank)) | \(ms(.crest_mm)) | \(map(select(.status != "ok")) | length) | \(map(.bodies) | add / length | round) | \(map(.components) | add / length | round) | \(.[0].not_simulated * 100 | round)% | \(map(.cpu_s // 0) | add / length | round) |")
+   "| \(.[0].case) | \(map(select(pile)) | length)/\(length) | \(ms(.angle)) | \(ms(.h_mm)) | \(ms(.d_mm)) | \(ms(.flank)) | \(ms(.crest_mm)) | \(map(select(.status != "ok")) | length) | \(map(select(.status == "ok" and .stop != "settled")) | length) | \(map(.bodies) | add / length | round) | \(map(.components) | add / length | round) | \(.[0].not_simulated * 100 | round)% | \(map(.cpu_s // 0) | add / length | round) |")
 ' "$out/runs.json" > "$out/table.md"
 
 # cases.dat: index, case, angle mean, sd, crest mean, sd (piles only); for the plot.
 jq -r 'group_by(.case) | sort_by(.[0].case | if startswith("base") then "0" + . else . end) |
-  to_entries[] | .key as $i | .value as $v | ($v | map(select(.status == "ok"))) as $ok |
+  to_entries[] | .key as $i | .value as $v | ($v | map(select(.status == "ok" and .stop == "settled"))) as $ok |
   def mean(f): ($ok | map(f | select(. != null))) as $x | if ($x | length) == 0 then "NaN" else ($x | add / length) end;
   def sd(f): ($ok | map(f | select(. != null))) as $x |
     if ($x | length) < 2 then 0 else ($x | add / length) as $m | ($x | map((. - $m) * (. - $m)) | add / (length - 1) | sqrt) end;
@@ -64,12 +66,13 @@ jq -r 'group_by(.case) | sort_by(.[0].case | if startswith("base") then "0" + . 
 
 n=$(wc -l < "$out/cases.dat")
 gnuplot <<EOF
-set terminal pngcairo size 1100,700 font ",10"
+set terminal pngcairo size 1100,700 font ",10" noenhanced
 set output "$out/crest_angle.png"
 set multiplot layout 2,1 title "Pile-top study, Table 1 sample 4 (reduced): mean ± sd over the seeds that formed a pile"
 set xrange [-0.7:$n-0.3]
 set grid ytics
 set ylabel "photo atan(2H/D) [deg]"
+set yrange [*:38.5]
 set xtics rotate by 35 right
 set format x ""
 set arrow 1 from -0.7,37.17 to $n-0.3,37.17 nohead dt 2 lc rgb "black"
@@ -79,6 +82,7 @@ unset arrow 1
 unset label 1
 set format x "%g"
 set ylabel "crest width [mm]"
+set yrange [0:*]
 plot "$out/cases.dat" using 1:5:6:xtic(2) with yerrorbars pt 5 lc rgb "#d62728" notitle
 unset multiplot
 EOF
