@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
+#include "experiments/photos/photographs.hpp"
 #include "apps/reposetwin/validators.hpp"
 #include "experiments/io/provenance.hpp"
 #include "vision/image.hpp"
@@ -70,20 +71,6 @@ vision::ScaleSpec resolve_scale(const std::string& image, const std::optional<do
   return s;
 }
 
-// Encoded in memory and published atomically: a full disk is an error naming the path, and never
-// leaves half an image.
-void write_overlay(const std::string& path, const cv::Mat& img) {
-  std::vector<unsigned char> bytes;
-  bool ok = false;
-  try {
-    const std::string ext = fs::path(path).extension().string();
-    ok = cv::imencode(ext.empty() ? ".png" : ext, img, bytes);
-  } catch (const cv::Exception& e) {
-    throw std::runtime_error(path + ": cannot encode the overlay image (" + e.what() + ")");
-  }
-  if (!ok) throw std::runtime_error(path + ": cannot encode the overlay image");
-  experiments::write_file_atomic(path, std::string(bytes.begin(), bytes.end()));
-}
 
 // "angle of repose 25.65 ± 0.40 deg (image atan(2H/D), 1 side view, perspective corrected); H
 // 9.2 mm, D 38.1 mm; flank 31.20 deg; overlay side.measured.png": the measurement in one line.
@@ -166,12 +153,12 @@ void run_measure(const MeasureOptions& o) {
     for (size_t i = 0; i < sides.size(); ++i) {
       const std::string path =
           (i == 0 && !o.overlay.empty()) ? o.overlay : overlay_next_to(sides[i]);
-      write_overlay(path, overlays[i]);
+      experiments::write_image_atomic(path, overlays[i]);
       overlay_paths.push_back(path);
     }
     if (top) {
       const std::string path = o.top_overlay.empty() ? overlay_next_to(o.top) : o.top_overlay;
-      write_overlay(path, top_overlay);
+      experiments::write_image_atomic(path, top_overlay);
       overlay_paths.push_back(path);
     }
   }

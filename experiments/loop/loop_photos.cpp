@@ -16,6 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "experiments/loop/loop_stages.hpp"
+#include "experiments/photos/photographs.hpp"
 
 namespace reposetwin::experiments::loop_detail {
 namespace fs = std::filesystem;
@@ -59,8 +60,7 @@ PhotoView lab_view(const LabTest& test, const std::string& data_file, const fs::
     const std::string name = "lab" + fs::path(photo).extension().string();
     fs::copy_file(photo, out / rel / name, fs::copy_options::overwrite_existing);
     const cv::Mat& overlay = m.overlays.at(0);
-    if (!cv::imwrite((out / rel / "lab.measured.png").string(), overlay))
-      throw std::runtime_error((out / rel / "lab.measured.png").string() + ": cannot write");
+    write_image_atomic((out / rel / "lab.measured.png").string(), overlay);
     camera = 0;
     if (!m.cameras.empty())
       for (std::size_t k = 0; k < test.cameras.size(); ++k)

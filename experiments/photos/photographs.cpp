@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "experiments/io/input_error.hpp"
+#include "experiments/io/provenance.hpp"
 #include "render/output.hpp"
 #include "render/renderer.hpp"
 #include "sim/pile_geometry.hpp"
@@ -151,16 +152,7 @@ std::vector<camera::Camera> side_cameras(const render::Scene& scene, const Photo
 // full disk, a read-only folder) is an error naming it and the reason, never a photograph silently
 // missing.
 void write_overlay(const std::string& path, const cv::Mat& image) {
-  errno = 0;
-  bool ok = false;
-  try {
-    ok = cv::imwrite(path, image);
-  } catch (const cv::Exception& e) {
-    throw std::runtime_error(path + ": cannot write the overlay (" + e.what() + ")");
-  }
-  if (!ok)
-    throw std::runtime_error(path + ": cannot write the overlay (" +
-                             (errno ? std::strerror(errno) : "the image writer failed") + ")");
+  write_image_atomic(path, image);
 }
 
 render::Renderer& thread_renderer() {
@@ -259,6 +251,19 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
     write_overlay(base + ".measured.png",
                   stamp_warning(vision::draw_top_overlay(image, *photos.top), s.warning));
   return photos;
+}
+
+void write_image_atomic(const std::string& path, const cv::Mat& image) {
+  std::vector<unsigned char> bytes;
+  bool ok = false;
+  try {
+    const std::string ext = fs::path(path).extension().string();
+    ok = cv::imencode(ext.empty() ? ".png" : ext, image, bytes);
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error(path + ": cannot encode the image (" + e.what() + ")");
+  }
+  if (!ok) throw std::runtime_error(path + ": cannot encode the image");
+  write_file_atomic(path, std::string(bytes.begin(), bytes.end()));
 }
 
 }  // namespace reposetwin::experiments

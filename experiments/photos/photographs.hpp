@@ -20,6 +20,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -114,5 +115,10 @@ render::Scene centred_pile_scene(const PileSpheres& pile,
 PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& settings,
                            const std::string& out_dir, const nlohmann::json& provenance = nullptr,
                            std::optional<Eigen::Vector2d> centre = std::nullopt);
+
+/// Writes an image (PNG, or the format of the path's extension) encoded in memory and published
+/// atomically (io/provenance.hpp): a full disk or an unwritable folder is an error naming the
+/// path, and never leaves half an image. Every image the experiments write goes through it.
+void write_image_atomic(const std::string& path, const cv::Mat& image);
 
 }  // namespace reposetwin::experiments

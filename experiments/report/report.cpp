@@ -17,6 +17,7 @@
 #include "experiments/io/provenance.hpp"
 #include "experiments/loop/loop.hpp"
 #include "experiments/pile/headline.hpp"
+#include "experiments/photos/photographs.hpp"
 #include "experiments/pile/pile_record.hpp"
 #include "experiments/report/calibration_section.hpp"
 #include "experiments/report/format.hpp"
@@ -308,7 +309,7 @@ std::string lab_photo_section(const ReportSettings& settings, const fs::path& ou
     common = beside_scale({{lab.cols, m.mm_per_px}, {twin.cols, beside.mm_per_px}}, kBesideWidthPx);
   else
     common = beside_scale({{lab.cols, m.mm_per_px}}, kBesideWidthPx);
-  cv::imwrite((out / "lab_photo.measured.png").string(), resized(lab, m.mm_per_px / common));
+  write_image_atomic((out / "lab_photo.measured.png").string(), resized(lab, m.mm_per_px / common));
   std::vector<Figure> photos = {
       {"lab_photo.measured.png",
        "lab photo " + fs::path(settings.lab_photo).filename().string() +
@@ -320,8 +321,8 @@ std::string lab_photo_section(const ReportSettings& settings, const fs::path& ou
   if (has_render) {
     // A render of unknown scale is shown at the lab photo's width on the page, and said so.
     const double lab_width_px = lab.cols * m.mm_per_px / common;
-    cv::imwrite((out / "render_beside_lab.png").string(),
-                resized(twin, same_scale ? beside.mm_per_px / common : lab_width_px / twin.cols));
+    write_image_atomic((out / "render_beside_lab.png").string(),
+                       resized(twin, same_scale ? beside.mm_per_px / common : lab_width_px / twin.cols));
     photos.push_back({"render_beside_lab.png",
                       beside.caption + (same_scale ? "; its scale " +
                                                          fixed(beside.mm_per_px, 3) + " mm/px"
