@@ -87,8 +87,10 @@ for s in "${seed_list[@]}"; do
     exit 1
   fi
   jq -r --arg s "${s}" --arg w "$(cat "${ours}.wall" 2>/dev/null || echo 0)" \
-    '. as $r | [$s, "reposetwin", $r.pile.status, $r.pile.height_m * 1000,
-      $r.pile.base_diameter_m * 1000, $r.pile.theta_hd_deg, $r.particles.initial, ($w | tonumber)]
+    '. as $r | def mm: if . == null then null else . * 1000 end;
+     [$s, "reposetwin", (if $r.no_headline then $r.no_headline.reason else $r.pile.status end),
+      ($r.pile.height_m | mm), ($r.pile.base_diameter_m | mm), $r.pile.theta_hd_deg,
+      $r.particles.initial, ($w | tonumber)]
      | @csv' "${ours}/result.json" >> "${out}/summary.csv"
 
   lig="${out}/liggghts/seed_${s}"
@@ -101,13 +103,15 @@ for s in "${seed_list[@]}"; do
   fi
   "${bin}" measure-particles "${lig}/final.dump" --scene "${scene}" "${sets[@]}" --json |
     jq -r --arg s "${s}" --arg w "$(cat "${lig}.wall")" \
-      '[$s, "liggghts", .status, .height_m * 1000, .base_diameter_m * 1000, .theta_hd_deg,
+      '[$s, "liggghts", .status, (.height_m | if . == null then null else . * 1000 end),
+        (.base_diameter_m | if . == null then null else . * 1000 end), .theta_hd_deg,
         .particles, ($w | tonumber)] | @csv' >> "${out}/summary.csv"
 done
 
 # The table, the means and spreads, and the verdict: means agree when their difference is
 # within twice its standard error from the seed spreads.
-awk -F, 'NR > 1 { gsub(/"/, ""); e = $2; n[e]++; for (k = 4; k <= 6; k++) { s[e, k] += $k; q[e, k] += $k * $k }
+# Only settled piles ("ok") enter the means; a jam is printed and counted out.
+awk -F, 'NR > 1 { gsub(/"/, ""); e = $2; if ($3 != "ok") { printf "seed %s %-10s %s: no pile\n", $1, e, $3; next } n[e]++; for (k = 4; k <= 6; k++) { s[e, k] += $k; q[e, k] += $k * $k }
                printf "seed %s %-10s %-6s H %6.1f mm  D %6.1f mm  atan(2H/D) %6.2f deg  %s grains  wall %.0f s\n", $1, e, $3, $4, $5, $6, $7, $8 }
   END {
     split("H_mm D_mm theta_deg", name, " ")
