@@ -119,9 +119,7 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
   const sim::Model model = build_model(scene, r_min, r_max);
   const sim::PairParams& grain = pair_of(scene, t.name[0], t.name[0]);
   const bool cdt = grain.rolling_model == sim::RollingModel::kCdt;
-  const double e_soft = scene.settings.softened_youngs_modulus > 0
-                            ? scene.settings.softened_youngs_modulus
-                            : 0.0;
+  const double e_soft = scene.settings.softened_youngs_modulus;  // 0: each material's real E
   const double density = t.material[0]->density;
   const double mass = scene.mass * psd.simulated_mass_factor;
 
