@@ -9,8 +9,12 @@
 # same law on both sides. Not CI: it installs the Debian packages liggghts and openmpi-bin if
 # they are missing, and a pile of the default scene costs minutes on each side.
 #
+# With --from-twin-fill, LIGGGHTS starts each seed from the twin's filled sample (the run's
+# frames/filled.vtp, `reposetwin export --initial-state`): the fill and the grain sizes are then
+# the same in both, and a difference that remains is in the pour's dynamics.
+#
 # Usage: scripts/verify_liggghts.sh [SCENE] [--seeds 1,2,3] [--np 2] [--out DIR] [--build DIR]
-#                                   [--set key=value ...]
+#                                   [--from-twin-fill] [--set key=value ...]
 # Default SCENE: data/scenes/paper/table1_s4_dmax8p0_900g_reduced.toml with mu_r 0.4 (the
 # issue-37 study's base case). Results: DIR/summary.csv and the table on stdout.
 set -euo pipefail
@@ -23,6 +27,7 @@ out=runs/verify_liggghts
 build="${root}/build"
 sets=()
 default_scene=1
+from_fill=0
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --seeds) seeds="$2"; shift 2 ;;
@@ -30,7 +35,8 @@ while [[ $# -gt 0 ]]; do
     --out) out="$2"; shift 2 ;;
     --build) build="$2"; shift 2 ;;
     --set) sets+=(--set "$2"); shift 2 ;;
-    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+    --from-twin-fill) from_fill=1; shift ;;
+    -h|--help) sed -n '2,21p' "$0"; exit 0 ;;
     -*) echo "verify_liggghts.sh: unknown option '$1'" >&2; exit 2 ;;
     *) scene="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"; default_scene=0; shift ;;
   esac
@@ -95,7 +101,13 @@ for s in "${seed_list[@]}"; do
 
   lig="${out}/liggghts/seed_${s}"
   if [[ ! -f "${lig}/final.dump" ]]; then
-    "${bin}" export "${scene}" --out "${lig}" --seed "${s}" "${sets[@]}" --force
+    initial=()
+    if [[ ${from_fill} -eq 1 ]]; then
+      [[ -f "${ours}/frames/filled.vtp" ]] || { echo "verify_liggghts.sh: ${ours}/frames/filled.vtp:" \
+        "the twin's run wrote no filled state (output.frame_interval_s must be > 0)" >&2; exit 1; }
+      initial=(--initial-state "${ours}/frames/filled.vtp")
+    fi
+    "${bin}" export "${scene}" --out "${lig}" --seed "${s}" "${sets[@]}" "${initial[@]}" --force
     t0=$(date +%s.%N)
     (cd "${lig}" && "${mpi[@]}" liggghts -in in.pile > liggghts.log 2>&1) ||
       { echo "verify_liggghts.sh: LIGGGHTS failed on seed ${s}: ${lig}/liggghts.log" >&2; exit 1; }

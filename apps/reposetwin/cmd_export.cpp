@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
@@ -19,7 +20,7 @@ namespace fs = std::filesystem;
 
 void add_export_command(CLI::App& app) {
   struct Args {
-    std::string scene, out;
+    std::string scene, out, initial;
     std::vector<std::string> sets;
     std::uint64_t seed = 1;
     bool force = false;
@@ -32,12 +33,33 @@ void add_export_command(CLI::App& app) {
   cmd->add_option("--out,-o", a->out, "Folder for the deck")->required();
   cmd->add_option("--set", a->sets, "Override a scene key: dotted.key=value (repeatable)");
   cmd->add_option("--seed", a->seed, "Seed of LIGGGHTS' random streams")->capture_default_str();
+  cmd->add_option("--initial-state", a->initial,
+                  "Start from the twin's filled sample (a run's frames/filled.vtp) instead of "
+                  "inserting one: the two engines then compare the pour from one state");
   cmd->add_flag("--force", a->force, "Replace a deck already in --out");
   cmd->callback([a]() {
     const experiments::SceneConfig scene = experiments::load_scene(a->scene, a->sets);
     experiments::LiggghtsDeckSettings s;
     s.seed = a->seed;
-    const experiments::LiggghtsDeck deck = experiments::liggghts_deck(scene, s);
+    std::optional<experiments::SnapshotParticles> initial;
+    if (!a->initial.empty()) {
+      std::error_code ec;
+      if (!fs::is_regular_file(a->initial, ec))
+        throw experiments::InputError(a->initial + ": --initial-state: no such file");
+      try {
+        initial = experiments::read_vtp(a->initial);
+      } catch (const std::exception& e) {
+        throw experiments::InputError(std::string("--initial-state: ") + e.what());
+      }
+      s.initial_state = &*initial;
+    }
+    experiments::LiggghtsDeck deck;
+    try {
+      deck = experiments::liggghts_deck(scene, s);
+    } catch (const experiments::InputError& e) {
+      if (a->initial.empty()) throw;
+      throw experiments::InputError(a->initial + ": " + e.what());
+    }
     const fs::path out(a->out);
     if (fs::exists(out / "in.pile") && !a->force)
       throw experiments::InputError(a->out + ": holds a deck already (in.pile); --force replaces it");
@@ -47,6 +69,8 @@ void add_export_command(CLI::App& app) {
     experiments::write_file_atomic((out / "in.pile").string(), deck.input);
     experiments::write_file_atomic((out / "container.stl").string(), deck.funnel_stl);
     experiments::write_file_atomic((out / "README.md").string(), deck.notes);
+    if (!deck.initial_data.empty())
+      experiments::write_file_atomic((out / "initial.data").string(), deck.initial_data);
     std::cout << "LIGGGHTS deck of " << scene.name << " in " << a->out
               << ": run `liggghts -in in.pile` there (mpirun -np N for more cores)\n";
   });

@@ -93,6 +93,41 @@ std::string frustum_stl(double r_bottom, double r_top, double z_bottom, double z
   return os.str();
 }
 
+// The filled sample as a LIGGGHTS data file (atom_style granular: id type diameter density
+// x y z), in the deck's box. Every grain must be a sphere of the sample's material.
+std::string initial_data(const SceneConfig& scene, const SnapshotParticles& s, const Types& t,
+                         double density, const std::array<double, 6>& box) {
+  const std::string what = "the initial state";
+  if (s.x.empty()) throw InputError(what + " holds no grains");
+  if (!s.body.empty() &&
+      std::any_of(s.body.begin(), s.body.end(), [](std::int64_t b) { return b >= 0; }))
+    throw InputError(what + " holds clumps; only sphere states are exported");
+  std::ostringstream os;
+  os.precision(12);
+  os << "LIGGGHTS data file: scene " << scene.name << " as the twin filled it\n\n"
+     << s.x.size() << " atoms\n" << kTypes << " atom types\n\n"
+     << box[0] << " " << box[1] << " xlo xhi\n"
+     << box[2] << " " << box[3] << " ylo yhi\n"
+     << box[4] << " " << box[5] << " zlo zhi\n\nAtoms\n\n";
+  for (std::size_t i = 0; i < s.x.size(); ++i) {
+    const Eigen::Vector3d& x = s.x[i];
+    if (!x.allFinite() || !(s.radius[i] > 0) || x.x() < box[0] || x.x() > box[1] ||
+        x.y() < box[2] || x.y() > box[3] || x.z() < box[4] || x.z() > box[5])
+      throw InputError(what + ": grain " + std::to_string(i) + " at (" + num(x.x()) + ", " +
+                       num(x.y()) + ", " + num(x.z()) + ") m with radius " + num(s.radius[i]) +
+                       " m is not a grain inside the deck's box");
+    if (s.info && i < s.material.size() &&
+        static_cast<std::size_t>(s.material[i]) < s.info->material_names.size() &&
+        s.info->material_names[static_cast<std::size_t>(s.material[i])] != t.name[0])
+      throw InputError(what + ": grain " + std::to_string(i) + " is of material \"" +
+                       s.info->material_names[static_cast<std::size_t>(s.material[i])] +
+                       "\", not the sample's \"" + t.name[0] + "\"");
+    os << i + 1 << " 1 " << 2.0 * s.radius[i] << " " << density << " " << x.x() << " " << x.y()
+       << " " << x.z() << "\n";
+  }
+  return os.str();
+}
+
 }  // namespace
 
 RollingConventions rolling_conventions(double mu_r) { return {mu_r, mu_r, mu_r, 0.5 * mu_r}; }
@@ -143,7 +178,8 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
      << "communicate single vel yes\nunits si\nprocessors * * 1\n"
      << "region domain block " << num(-half) << " " << num(half) << " " << num(-half) << " "
      << num(half) << " " << num(-0.01) << " " << num(top) << " units box\n"
-     << "create_box " << kTypes << " domain\n"
+     << (settings.initial_state ? std::string("read_data initial.data\n")
+                                : "create_box " + std::to_string(kTypes) + " domain\n")
      << "neighbor " << num(model.settings.skin > 0 ? model.settings.skin : 0.5 * r_min)
      << " bin\nneigh_modify delay 0\n"
      << "soft_particles yes\n";
@@ -169,6 +205,7 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
   std::string mix;
   int k = 0;
   for (const sim::PsdInterval& iv : psd.intervals) {
+    if (settings.initial_state) break;  // the sample is read, not inserted
     if (iv.mass_fraction <= 0) continue;
     ++k;
     in << "fix pts" << k << " all particletemplate/sphere " << prime_seed(settings.seed, k)
@@ -176,18 +213,20 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
        << num(0.25 * (iv.lower + iv.upper)) << "\n";
     mix += " pts" + std::to_string(k) + " " + num(iv.mass_fraction);
   }
-  in << "fix pdd all particledistribution/discrete/massbased " << prime_seed(settings.seed, 0)
-     << " " << k << mix << "\n";
-  in << "region cone_in cone z 0 0 " << num(rin_b) << " " << num(rin_t) << " "
-     << num(zb + d_max) << " " << num(zt) << " units box\n"
-     << "region column cylinder z 0 0 " << num(rin_t) << " " << num(zt) << " "
-     << num(zt + column) << " units box\n"
-     << "region fill union 2 cone_in column\n"
-     << "fix ins all insert/pack seed " << prime_seed(settings.seed, 99)
-     << " distributiontemplate pdd insert_every once overlapcheck yes all_in yes "
-        "vel constant 0 0 0 mass_in_region "
-     << num(mass) << " region fill ntry_mc 100000\n"
-     << "fix integr all nve/sphere\n"
+  if (!settings.initial_state) {
+    in << "fix pdd all particledistribution/discrete/massbased " << prime_seed(settings.seed, 0)
+       << " " << k << mix << "\n";
+    in << "region cone_in cone z 0 0 " << num(rin_b) << " " << num(rin_t) << " "
+       << num(zb + d_max) << " " << num(zt) << " units box\n"
+       << "region column cylinder z 0 0 " << num(rin_t) << " " << num(zt) << " "
+       << num(zt + column) << " units box\n"
+       << "region fill union 2 cone_in column\n"
+       << "fix ins all insert/pack seed " << prime_seed(settings.seed, 99)
+       << " distributiontemplate pdd insert_every once overlapcheck yes all_in yes "
+          "vel constant 0 0 0 mass_in_region "
+       << num(mass) << " region fill ntry_mc 100000\n";
+  }
+  in << "fix integr all nve/sphere\n"
      << "compute rke all erotate/sphere\n"
      << "thermo_style custom step atoms ke c_rke\n"
      << "thermo_modify lost ignore norm no\n";
@@ -211,7 +250,8 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
   in << "variable ke_now equal ke\n"
      << "variable ke_stop equal " << num(0.5 * mass * p.settle_speed * p.settle_speed) << "\n"
      << "thermo " << chunk << "\n"
-     << "# fill: the sample falls into the container and settles\n";
+     << (settings.initial_state ? "# the twin's filled sample settles under this engine's laws\n"
+                                : "# fill: the sample falls into the container and settles\n");
   settle("fill", p.fill_settle_max);
   in << "# lift at " << num(p.lift_speed) << " m/s until the rim is " << num(lift)
      << " m higher\n"
@@ -224,6 +264,9 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
 
   LiggghtsDeck deck;
   deck.input = in.str();
+  if (settings.initial_state)
+    deck.initial_data = initial_data(scene, *settings.initial_state, t, density,
+                                     {-half, half, -half, half, -0.01, top});
   deck.funnel_stl = frustum_stl(rb, rt, zb, zt, settings.facets);
 
   const RollingConventions mu = rolling_conventions(grain.rolling_friction);
@@ -240,9 +283,14 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
      << ", 3 " << t.name[2] << ").\n"
      << "- Rolling: " << (cdt ? "cdt" : "epsd2 (the twin's epsd: k_r = k_t R*^2, cap mu_r |F_n| R*)")
      << ".\n- dt " << num(model.dt) << " s (the twin's), skin as the twin's.\n"
-     << "- The PSD: " << k << " templates, one per sieve interval in [" << num(1e3 * psd.d_min)
-     << ", " << num(1e3 * psd.d_max) << "] mm, of the interval's middle size, by mass fraction; "
-     << "sample mass " << num(mass) << " kg.\n"
+     << (settings.initial_state
+             ? "- The sample as the twin filled it: " +
+                   std::to_string(settings.initial_state->x.size()) +
+                   " grains, each with its position and size, read from `initial.data`.\n"
+             : "- The PSD: " + std::to_string(k) + " templates, one per sieve interval in [" +
+                   num(1e3 * psd.d_min) + ", " + num(1e3 * psd.d_max) +
+                   "] mm, of the interval's middle size, by mass fraction; sample mass " +
+                   num(mass) + " kg.\n")
      << "- The container (" << c.kind << ", " << num(c.bottom_diameter) << " to "
      << num(c.top_diameter) << " m, " << num(c.height) << " m high, " << num(c.gap)
      << " m above the plate) as `container.stl`, lifted at " << num(p.lift_speed) << " m/s.\n\n"
@@ -256,12 +304,22 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
   if (cdt)
     md << "- cdt: the twin's uses each body's own angular velocity and radius (EDEM Standard); "
           "LIGGGHTS' uses w_i - w_j and R*.\n";
-  md << "- The fill: the twin pours gently (speeds capped at procedure.fill_max_speed) and stops "
-        "settling when the kinetic energy is low; the deck inserts at random and settles for a "
-        "settling stops as the twin's (kinetic energy per grain below 1/2 m_mean v^2, checked every "
-        "1000 steps) or at procedure.fill_settle_max = " << num(p.fill_settle_max) << " s; the lift "
-        "runs for the container's height at the lift speed, not until the container is empty.\n- Each interval's sizes: the twin draws a clipped normal inside it, the deck uses "
-        "its middle size.\n\n"
+  if (settings.initial_state)
+    md << "- The filled state's contact springs: the deck reads positions and sizes only, so "
+          "its grains start without tangential or rolling springs and settle again (as the "
+          "twin's settling stops, or for at most procedure.fill_settle_max = "
+       << num(p.fill_settle_max) << " s) before the lift.\n";
+  else
+    md << "- The fill: the twin pours gently (speeds capped at procedure.fill_max_speed) and "
+          "stops settling when the kinetic energy is low; the deck inserts at random, lets the "
+          "sample fall and settles it as the twin's settling stops (kinetic energy per grain "
+          "below 1/2 m_mean v^2, checked every 1000 steps) or for at most "
+          "procedure.fill_settle_max = "
+       << num(p.fill_settle_max) << " s.\n"
+       << "- Each interval's sizes: the twin draws a clipped normal inside it, the deck uses "
+          "its middle size.\n";
+  md << "- The lift's end: the deck lifts the container by its height at the lift speed; the "
+        "twin removes it once it is empty.\n\n"
      << "## The rolling coefficient in other conventions (equal spheres)\n"
      << "| engine | model | mu_r |\n|---|---|---|\n"
      << "| ReposeTwin | epsd (lever arm R* = R_i R_j / (R_i + R_j)) | " << num(mu.ours) << " |\n"

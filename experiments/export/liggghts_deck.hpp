@@ -26,6 +26,9 @@
 //    (its rim then stands above any pile it could hold), settle likewise (procedure.final_settle_max), and dump
 //    the grains (id type x y z radius) to final.dump, which `reposetwin measure-particles` reads
 //    with our pile measure.
+// With an initial state (the twin's filled sample), the insertion is replaced by read_data and
+// the rest is unchanged: the fill and the sizes inside a sieve interval are then the twin's, so a
+// difference that remains is in the pour's dynamics (the contact laws, the walls, the integrator).
 // Clumps are not exported yet (LIGGGHTS' multisphere templates would carry them): a scene with
 // grain shapes is refused with that reason.
 #pragma once
@@ -34,6 +37,7 @@
 #include <string>
 
 #include "experiments/io/scene.hpp"
+#include "experiments/io/vtk_output.hpp"
 
 namespace reposetwin::experiments {
 
@@ -42,6 +46,8 @@ struct LiggghtsDeck {
   std::string input;       // in.pile: the LIGGGHTS input script
   std::string funnel_stl;  // container.stl: the container's surface (ASCII STL) [m]
   std::string notes;       // README.md: what was carried, what was not, and mu_r conventions
+  std::string initial_data;  // initial.data: the filled sample to start from; empty: the deck
+                             // inserts and fills itself
 };
 
 /// Settings of the deck that the scene does not hold.
@@ -49,6 +55,10 @@ struct LiggghtsDeckSettings {
   std::uint64_t seed = 1;           // LIGGGHTS' random seeds derive from it (primes > 10000)
   int facets = 64;                  // facets around the container's circumference [-]
   double insert_volume_fraction = 0.3;  // random insertion packs at most this [-]
+  // The twin's sample as filled (a run's frames/filled.vtp): the deck reads it (read_data) and
+  // starts at the lift, so the two engines compare the pour from one state. Null: the deck
+  // inserts at random and lets the sample fall and settle.
+  const SnapshotParticles* initial_state = nullptr;
 };
 
 /// Writes the deck of a scene. Throws InputError naming the scene file and the key for what

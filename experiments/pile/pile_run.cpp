@@ -365,6 +365,11 @@ class PileRunner {
     ctl_.inside_last = count_inside(*world_, scene_.container);
     ctl_.inside_changed = state().time;
     event("lift started");
+    // The sample as filled, the state another engine can start its lift from
+    // (`reposetwin export --initial-state`), so the two compare the pour alone.
+    if (scene_.output.frame_interval > 0)
+      write_vtp(path("frames/filled.vtp").string(), state().particles, frame_info(false),
+                &state().bodies);
   }
 
   // The container rises until it is empty. If the count inside stops changing, the flow has

@@ -25,7 +25,8 @@ const std::regex kTopFile(R"(result\.json|final\.vtp|checkpoint\.bin|controller\
 // summary.html or an images/ folder of a person's own.
 const std::regex kRunMarker(
     R"(result\.json|final\.vtp|checkpoint\.bin|controller\.json|series\.pvd|scene\.resolved\.toml)");
-const std::regex kFrameFile(R"((frame|container|contacts)_[0-9]{5}\.vtp|plate\.vtp)");
+const std::regex kFrameFile(
+    R"((frame|container|contacts)_[0-9]{5}\.vtp|plate\.vtp|filled\.vtp)");
 const std::regex kImageFile(
     R"(measurement\.json|(side_az[0-9]{3}(_[0-9]+)?|top)(\.measured)?\.(png|json))");
 // `reposetwin render --frame frames/frame_00004.vtp` photographs into images/frame_00004/.

@@ -59,6 +59,54 @@ TEST(LiggghtsDeck, CarriesTheSoftenedStiffnessTheLawAndTheProcedure) {
       EXPECT_TRUE(has(d.notes, "contacts." + names.first + "-" + names.second)) << d.notes;
 }
 
+// Started from the twin's filled sample, the deck reads it instead of inserting one: the data
+// file holds every grain with its diameter, density and position, and a state the deck cannot
+// carry (a clump, a grain outside the box, another material) is refused.
+TEST(LiggghtsDeck, StartsFromTheTwinsFilledSample) {
+  const SceneConfig s = tiny();
+  SnapshotParticles filled;
+  filled.x = {{0.001, 0.002, 0.003}, {-0.004, 0.0, 0.02}};
+  filled.radius = {0.002, 0.0025};
+  filled.material = {0, 0};
+  LiggghtsDeckSettings set;
+  set.initial_state = &filled;
+  const LiggghtsDeck d = liggghts_deck(s, set);
+  EXPECT_TRUE(has(d.input, "read_data initial.data\n"));
+  EXPECT_FALSE(has(d.input, "create_box"));
+  EXPECT_FALSE(has(d.input, "insert/pack"));
+  EXPECT_FALSE(has(d.input, "particletemplate"));
+  EXPECT_TRUE(has(d.input, "move/mesh"));
+  EXPECT_TRUE(has(d.initial_data, "2 atoms\n3 atom types\n"));
+  std::istringstream data(d.initial_data.substr(d.initial_data.find("Atoms\n\n") + 7));
+  int id = 0, type = 0;
+  double diameter = 0, density = 0, x = 0, y = 0, z = 0;
+  ASSERT_TRUE(data >> id >> type >> diameter >> density >> x >> y >> z);
+  EXPECT_EQ(id, 1);
+  EXPECT_EQ(type, 1);
+  EXPECT_DOUBLE_EQ(diameter, 0.004);
+  for (const sim::Material& m : s.materials)
+    if (m.name == s.sample_material) EXPECT_DOUBLE_EQ(density, m.density);
+  EXPECT_DOUBLE_EQ(z, 0.003);
+  ASSERT_TRUE(data >> id >> type >> diameter >> density >> x >> y >> z);
+  EXPECT_EQ(id, 2);
+  EXPECT_DOUBLE_EQ(x, -0.004);
+  EXPECT_TRUE(has(d.notes, "as the twin filled it: 2 grains"));
+
+  SnapshotParticles clump = filled;
+  clump.body = {0, 0};
+  set.initial_state = &clump;
+  EXPECT_THROW(liggghts_deck(s, set), InputError);
+  SnapshotParticles far = filled;
+  far.x[1].z() = 5.0;
+  set.initial_state = &far;
+  try {
+    liggghts_deck(s, set);
+    ADD_FAILURE() << "a grain outside the box was accepted";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(has(e.what(), "grain 1")) << e.what();
+  }
+}
+
 // The mesh is the frustum: every vertex lies on the cone between the rims, every facet's normal
 // is a unit vector, and there are two facets per step around.
 TEST(LiggghtsDeck, TheContainerMeshIsTheScenesFrustum) {
