@@ -34,11 +34,24 @@ rows() {
   done
 }
 
-rows | jq -s '.' > "$out/runs.json"
+# Where atan(2H/D) falls short of the flank, split in two (degrees; they add up to
+# flank - atan(2H/D)): the top, a flat crest c that cuts the cone of the flank angle phi, and the
+# toe, the base beyond the flank lines. D_flank = c + 2H / tan(phi) is the base of the trapezoid
+# of that crest and those flanks; toe_mm = D - D_flank; top_loss = phi - atan(2H / D_flank);
+# toe_loss = atan(2H / D_flank) - atan(2H / D).
+rows | jq -s 'map(. + (if .h_mm and .d_mm and .flank and .crest_mm then
+    (3.141592653589793 / 180) as $rad |
+    (.crest_mm + 2 * .h_mm / ((.flank * $rad | sin) / (.flank * $rad | cos)))  as $df |
+    {toe_mm: (.d_mm - $df),
+     top_loss: (.flank - ((2 * .h_mm / $df) | atan) / $rad),
+     toe_loss: ((((2 * .h_mm / $df) | atan) - ((2 * .h_mm / .d_mm) | atan)) / $rad)}
+  else {toe_mm: null, top_loss: null, toe_loss: null} end))' > "$out/runs.json"
 jq -r '(["case","seed","status","stop","angle_deg","angle_sd_deg","H_mm","D_mm","flank_deg",
-         "crest_mm","bodies","components","grain","mass_not_simulated","cpu_s","wall_s","dt_s",
+         "crest_mm","toe_mm","top_loss_deg","toe_loss_deg","bodies","components","grain",
+         "mass_not_simulated","cpu_s","wall_s","dt_s",
          "softened_E_pa","code_version","engine_version"] | @csv),
-       (.[] | [.case,.seed,.status,.stop,.angle,.angle_sd,.h_mm,.d_mm,.flank,.crest_mm,.bodies,
+       (.[] | [.case,.seed,.status,.stop,.angle,.angle_sd,.h_mm,.d_mm,.flank,.crest_mm,.toe_mm,
+               .top_loss,.toe_loss,.bodies,
                .components,.grain,.not_simulated,.cpu_s,.wall_s,.dt_s,.e_soft_pa,.code,.engine]
         | @csv)' "$out/runs.json" > "$out/runs.csv"
 
@@ -49,10 +62,10 @@ jq -r '
     if length == 0 then "-" else (add / length) as $m |
       (if length > 1 then (map((. - $m) * (. - $m)) | add / (length - 1) | sqrt) else 0 end) as $s |
       "\($m | r1) ± \($s | r1)" end;
-  "| case | piles / runs | atan(2H/D) [deg] | H [mm] | D [mm] | flank [deg] | crest [mm] | jams | unsettled | bodies | components | mass not simulated | CPU per run [s] |",
-  "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+  "| case | piles / runs | atan(2H/D) [deg] | H [mm] | D [mm] | flank [deg] | crest [mm] | toe [mm] | loss at the top [deg] | loss at the toe [deg] | jams | unsettled | bodies | components | mass not simulated | CPU per run [s] |",
+  "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
   (group_by(.case) | sort_by(.[0].case | if startswith("base") then "0" + . else . end)[] |
-   "| \(.[0].case) | \(map(select(pile)) | length)/\(length) | \(ms(.angle)) | \(ms(.h_mm)) | \(ms(.d_mm)) | \(ms(.flank)) | \(ms(.crest_mm)) | \(map(select(.status != "ok")) | length) | \(map(select(.status == "ok" and .stop != "settled")) | length) | \(map(.bodies) | add / length | round) | \(map(.components) | add / length | round) | \(.[0].not_simulated * 100 | round)% | \(map(.cpu_s // 0) | add / length | round) |")
+   "| \(.[0].case) | \(map(select(pile)) | length)/\(length) | \(ms(.angle)) | \(ms(.h_mm)) | \(ms(.d_mm)) | \(ms(.flank)) | \(ms(.crest_mm)) | \(ms(.toe_mm)) | \(ms(.top_loss)) | \(ms(.toe_loss)) | \(map(select(.status != "ok")) | length) | \(map(select(.status == "ok" and .stop != "settled")) | length) | \(map(.bodies) | add / length | round) | \(map(.components) | add / length | round) | \(.[0].not_simulated * 100 | round)% | \(map(.cpu_s // 0) | add / length | round) |")
 ' "$out/runs.json" > "$out/table.md"
 
 # cases.dat: index, case, angle mean, sd, crest mean, sd (piles only); for the plot.
