@@ -86,14 +86,14 @@ void add_measure_particles_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "measure-particles",
       "Measure a pile from another engine's grains (a LAMMPS/LIGGGHTS dump custom with x y z "
-      "radius) with the twin's particle measure: H, D, atan(2H/D)");
+      "radius) or a twin snapshot (.vtp) with the twin's particle measure: H, D, atan(2H/D)");
   cmd->add_option("dump", a->dump, "Dump file (the last snapshot is measured)")->required();
   cmd->add_option("--scene", a->scene, "Scene whose [measure] settings apply")->required();
   cmd->add_option("--set", a->sets, "Override a scene key (repeatable)");
   cmd->add_flag("--json", a->json, "Print the measurement as JSON");
   cmd->callback([a]() {
     const experiments::SceneConfig scene = experiments::load_scene(a->scene, a->sets);
-    const experiments::ParticleDump d = experiments::read_particle_dump(a->dump);
+    const experiments::ParticleDump d = experiments::read_particles(a->dump);
     const sim::PileGeometry g = sim::measure_pile(d.x, d.radius, scene.pile);
     const double deg = 180.0 / 3.14159265358979323846;
     if (a->json) {

@@ -2,10 +2,12 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "experiments/io/input_error.hpp"
+#include "experiments/io/vtk_output.hpp"
 
 namespace reposetwin::experiments {
 
@@ -79,6 +81,20 @@ ParticleDump read_particle_dump(const std::string& path) {
   }
   if (!any) throw InputError(path + ": no snapshot (ITEM: TIMESTEP) in the dump file");
   return last;
+}
+
+ParticleDump read_particles(const std::string& path) {
+  if (std::filesystem::path(path).extension() != ".vtp") return read_particle_dump(path);
+  SnapshotParticles s;
+  try {
+    s = read_vtp(path);
+  } catch (const std::exception& e) {
+    throw InputError(e.what());  // read_vtp names the file
+  }
+  ParticleDump d;
+  d.x = std::move(s.x);
+  d.radius = std::move(s.radius);
+  return d;
 }
 
 }  // namespace reposetwin::experiments

@@ -24,4 +24,9 @@ struct ParticleDump {
 /// Reads the last snapshot of a LAMMPS/LIGGGHTS `dump custom` text file.
 ParticleDump read_particle_dump(const std::string& path);
 
+/// Reads another engine's dump, or a twin snapshot when the name ends in ".vtp" (timestep 0),
+/// so that any frame of a run is measured as another engine's grains are. Throws InputError
+/// naming the file.
+ParticleDump read_particles(const std::string& path);
+
 }  // namespace reposetwin::experiments

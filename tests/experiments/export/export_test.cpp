@@ -16,6 +16,8 @@
 #include "experiments/export/particle_dump.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/scene.hpp"
+#include "experiments/io/vtk_output.hpp"
+#include "sim/particles.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -177,6 +179,28 @@ TEST(ParticleDump, ReadsTheLastSnapshotByColumnName) {
   EXPECT_DOUBLE_EQ(d.x[1].y(), 0.04);
   EXPECT_DOUBLE_EQ(d.x[1].z(), 0.005);
   EXPECT_DOUBLE_EQ(d.radius[0], 0.002);
+}
+
+// A twin snapshot is read as another engine's dump is: the same grains, in the same order.
+TEST(ParticleDump, ReadsATwinSnapshotByItsExtension) {
+  const std::filesystem::path dir = test_support::temp_dir("export_read_vtp");
+  sim::Particles p;
+  p.resize(2);
+  p.x[0] = sim::Vec3(0.01, 0.02, 0.003);
+  p.x[1] = sim::Vec3(-0.01, 0.0, 0.004);
+  p.radius[0] = 0.003;
+  p.radius[1] = 0.004;
+  for (std::size_t i = 0; i < 2; ++i) {
+    p.body[i] = -1;
+    p.component[i] = -1;
+  }
+  const std::string vtp = (dir / "frame.vtp").string();
+  write_vtp(vtp, p, FrameInfo{}, nullptr);
+  const ParticleDump d = read_particles(vtp);
+  ASSERT_EQ(d.x.size(), 2u);
+  EXPECT_DOUBLE_EQ(d.x[1].z(), 0.004);
+  EXPECT_DOUBLE_EQ(d.radius[0], 0.003);
+  EXPECT_THROW(read_particles((dir / "missing.vtp").string()), InputError);
 }
 
 TEST(ParticleDump, BadDumpsNameTheFileAndLine) {
