@@ -86,8 +86,11 @@ TEST(LiggghtsDeck, StartsFromTheTwinsFilledSample) {
   EXPECT_EQ(id, 1);
   EXPECT_EQ(type, 1);
   EXPECT_DOUBLE_EQ(diameter, 0.004);
-  for (const sim::Material& m : s.materials)
-    if (m.name == s.sample_material) EXPECT_DOUBLE_EQ(density, m.density);
+  for (const sim::Material& m : s.materials) {
+    if (m.name == s.sample_material) {
+      EXPECT_DOUBLE_EQ(density, m.density);
+    }
+  }
   EXPECT_DOUBLE_EQ(z, 0.003);
   ASSERT_TRUE(data >> id >> type >> diameter >> density >> x >> y >> z);
   EXPECT_EQ(id, 2);
