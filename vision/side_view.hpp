@@ -29,6 +29,8 @@
 //     differently and meeting under the pile; a level interpolated across the pile differed from
 //     both near the corner and read the corner as the pile standing on a top face (sample-3
 //     piles: H 64-76 mm for 47-59 mm). A top face is one plane and reads alike on both sides.
+//     Both sides are read, at the outermost columns the image has when the pile leaves less
+//     than its height beside it (one side read alone took the other face for pile).
 //     Limits: a toe line less than max(5 px, 4% of the pile's height) below the far edge is not
 //     told from a level view's edge, and the far edge stays the plate line (a camera 5 mm up at
 //     12 pile radii over the lab's 0.5 m plate); a raised camera facing the plate's corner sees

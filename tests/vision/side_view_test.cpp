@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <string>
 
 #include "tests/vision/synthetic.hpp"
 
@@ -147,6 +149,46 @@ TEST(SideView, PlateCornerFacingALevelCameraIsNotATopFace) {
     EXPECT_NEAR(p.height_px * s.mm_per_px, s.height_mm, 0.3) << shade;
     EXPECT_NEAR(p.diameter_px * s.mm_per_px, s.diameter_mm, 0.5) << shade;
   }
+}
+
+TEST(SideView, PlateCornerBesideALargePileIsNotATopFace) {
+  // The same corner view with the pile off centre and as wide as most of the image: the plate's
+  // faces are in view, beyond a margin as wide as the pile is tall, on one side of the pile only
+  // (the twin's 1800 g piles at 135 deg azimuth). The faces' levels read on that side alone
+  // missed the other face, which then read as pile under the plate line: the pile grew into it
+  // down to the image border and was refused as cut by the border.
+  for (double axis_u : {600.0, 680.0})
+    for (double shade : {0.6, 1.5}) {
+      SideScene s;
+      s.axis_u = axis_u;
+      s.plate_right_shade = shade;
+      s.scale_bar = false;
+      const SideProfile p = measure_side_pixels(synthetic::draw_side(s));
+      EXPECT_FALSE(p.far_edge) << axis_u << " " << shade;
+      EXPECT_NEAR(p.plate.v_at(axis_u), s.plate_v, 0.5) << axis_u << " " << shade;
+      EXPECT_NEAR(p.height_px * s.mm_per_px, s.height_mm, 0.3) << axis_u << " " << shade;
+      EXPECT_NEAR(p.diameter_px * s.mm_per_px, s.diameter_mm, 0.5) << axis_u << " " << shade;
+    }
+}
+
+TEST(SideView, PileCutByTheSideBorderIsRefused) {
+  // The base runs 100 px past the left border (or the right), on a plate of one shade or a
+  // corner view: H stands but D would be short, so the picture is refused.
+  for (double axis_u : {300.0, 979.0})
+    for (double shade : {1.0, 0.6}) {
+      SideScene s;
+      s.axis_u = axis_u;
+      s.plate_right_shade = shade;
+      s.scale_bar = false;
+      try {
+        measure_side_pixels(synthetic::draw_side(s), {}, "cut.png");
+        ADD_FAILURE() << "measured a cut pile: " << axis_u << " " << shade;
+      } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("cut by the left or right border"),
+                  std::string::npos)
+            << e.what();
+      }
+    }
 }
 
 TEST(SideView, TiltedPlateLine) {
