@@ -254,6 +254,10 @@ std::string pose_contradiction(const PoseEstimate& e, double tolerance_deg) {
   return why;
 }
 
+bool pose_determined(const PoseEstimate& e) {
+  return e.sigma_pitch_deg <= 0.5 && e.sigma_elevation_deg <= 0.5;
+}
+
 camera::Camera posed_camera(const camera::Camera& declared, const PoseEstimate& e,
                             const Eigen::Vector3d& axis_foot) {
   camera::Camera c = declared;

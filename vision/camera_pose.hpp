@@ -79,6 +79,10 @@ std::string pose_contradiction(const PoseEstimate& pose, double tolerance_deg = 
 /// max(tolerance_deg, 3 sigma).
 bool pitch_contradicts(const PoseEstimate& pose, double tolerance_deg = 3.0);
 
+/// True when the estimate is sharp enough to measure through (PosePolicy::kEstimate): pitch and
+/// elevation each known to within half a degree (one sigma).
+bool pose_determined(const PoseEstimate& pose);
+
 /// The declared camera (lens, horizontal position) at the estimated height and pitch.
 camera::Camera posed_camera(const camera::Camera& declared, const PoseEstimate& pose,
                             const Eigen::Vector3d& axis_foot);

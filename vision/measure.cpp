@@ -1,5 +1,16 @@
 #include "vision/measure.hpp"
 
+// Design note (the pose check). measure_side checks every cue a photo offers against its
+// declared camera: (a) the base ellipse's pitch and toe line (camera_pose.hpp); (b) its height:
+// a pose whose pitch agrees can stand higher than declared (a level camera raised), which biases
+// atan(2H/D) through the toe line, so the angle is measured through the declared camera and
+// through the ellipse's pose, and a difference above 0.5 deg is a contradiction; (c) without a
+// top face, the detected plate line against the declared camera's axis foot, beyond max(2 px,
+// 3 sigma) (a biasing warning, SideWarningKind::kCameraMismatch, which the loop refuses). With
+// PosePolicy::kEstimate a contradicted photo is measured through the ellipse's pose when that
+// pose is determined (pose_determined), else refused.
+
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -121,7 +132,102 @@ void check_input(const cv::Mat& image, const ScaleSpec& scale, const std::string
                                 str(*scale.mm_per_px));
 }
 
+// The detected plate line against the axis foot the camera predicts, when the photo shows no
+// plate top face (a camera at the plate's height, or a plate face vision cannot tell from its
+// edge): the gap in pixels, its uncertainty (the line's own, and a pixel of the toes' depth in
+// front of the axis), and what it says of the camera in numbers: the pitch it needs at the
+// declared height, or the height at the declared pitch. Empty when they agree.
+std::optional<std::string> plate_line_mismatch(const SideProfile& p, const camera::Camera& cam,
+                                               const Eigen::Vector3d& axis_foot) {
+  const auto foot = camera::project(cam, axis_foot);
+  if (!foot) return "the camera does not see the axis foot at all";
+  const double line_v = p.plate.v_at(foot->x());
+  const double gap = line_v - foot->y();
+  const double sigma = std::hypot(p.plate.sigma_px, 1.0);
+  if (std::abs(gap) <= std::max(2.0, 3.0 * sigma)) return std::nullopt;
+  const Eigen::Vector3d d_foot = camera::unproject(cam, *foot).direction;
+  const Eigen::Vector3d d_line =
+      camera::unproject(cam, Eigen::Vector2d(foot->x(), line_v)).direction;
+  // Angles below the horizontal of the two rays [rad]: the line lies lower in the image than
+  // the foot when the camera is pitched more, or stands higher, than declared.
+  const double below_foot = std::asin(std::clamp(-d_foot.z(), -1.0, 1.0));
+  const double below_line = std::asin(std::clamp(-d_line.z(), -1.0, 1.0));
+  const double dpitch = below_foot - below_line;
+  const double distance = (cam.extrinsics.position.head<2>() - axis_foot.head<2>()).norm();
+  const double height = cam.extrinsics.position.z() - axis_foot.z();
+  const double h_at_pitch = distance * std::tan(std::atan2(height, distance) + below_line -
+                                                below_foot);
+  return "the camera puts the axis foot " + fixed(gap, 1) + " +- " + fixed(sigma, 1) +
+         " px from the detected plate line and the photo shows no plate top face to check its "
+         "pose with: the camera does not match the image (the plate line says it is pitched " +
+         fixed(dpitch * kRadToDeg, 1) + " deg more than declared at the declared height, or "
+         "stands " + fixed(1000.0 * h_at_pitch, 1) + " mm above the plate for a declared " +
+         fixed(1000.0 * height, 1) + " mm at the declared pitch); D and the flank angles through "
+         "it may be biased";
+}
+
+// A pose whose pitch agrees with the declared one can still stand higher than declared (a level
+// camera raised): the toe line then reads H + h R^2 / (L^2 - R^2) (the design note), 1.8 deg
+// too steep for a 14 mm pile 150 mm below a camera at 12 pile radii. The angle is measured
+// through the declared camera and through the pose the photo shows; when they differ by more
+// than kPoseAngleToleranceDeg the declared camera is said to contradict the photo, in numbers.
+constexpr double kPoseAngleToleranceDeg = 0.5;
+
+// The largest elevation off the declared one a photo is measured at [deg]. A camera 30 mm above
+// the plate at 12 pile radii (elevation 3 deg) read a 42 mm cone of spheres 1.1 deg steeper
+// than its level photo, through the declared camera and through the pose the photo shows alike
+// (tests/experiments/photos/tilted_camera_test.cpp); the lab's 5-10 mm (0.6-2 deg) read within
+// 0.3 deg.
+constexpr double kMaxElevationDeg = 2.5;
+
+std::string height_bias(const SideMeasurement& base, const camera::Camera& declared,
+                        const PoseEstimate& pose, const Eigen::Vector3d& axis_foot,
+                        const std::string& where) {
+  SideMeasurement through_declared = base, through_pose = base;
+  try {
+    measure_through_camera(through_declared, declared, axis_foot, where);
+    measure_through_camera(through_pose, posed_camera(declared, pose, axis_foot), axis_foot,
+                           where);
+  } catch (const std::runtime_error& e) {
+    return std::string("the camera the photo shows cannot measure it (") + e.what() + ")";
+  }
+  const double bias = through_declared.theta_deg - through_pose.theta_deg;
+  if (std::abs(bias) <= kPoseAngleToleranceDeg) return "";
+  return "the pile's base ellipse says the camera stands " + fixed(1000.0 * pose.height_m, 1) +
+         " +- " + fixed(1000.0 * pose.distance_m * pose.sigma_elevation_deg / kRadToDeg, 1) +
+         " mm above the plate, pitched " + fixed(pose.pitch_deg, 1) + " deg (declared " +
+         fixed(1000.0 * pose.distance_m * std::tan(pose.declared_elevation_deg / kRadToDeg), 1) +
+         " mm, " + fixed(pose.declared_pitch_deg, 1) + " deg); through the declared camera "
+         "atan(2H/D) reads " + fixed(through_declared.theta_deg, 2) + " deg, through the pose " +
+         fixed(through_pose.theta_deg, 2) + " deg: a bias of " + fixed(bias, 2) +
+         " deg, more than " + fixed(kPoseAngleToleranceDeg, 1) + " deg";
+}
+
 }  // namespace
+
+std::string to_string(SideWarningKind kind) {
+  switch (kind) {
+    case SideWarningKind::kPlateTilted:
+      return "plate_tilted";
+    case SideWarningKind::kOnTopFace:
+      return "on_top_face";
+    case SideWarningKind::kFlanksDiffer:
+      return "flanks_differ";
+    case SideWarningKind::kCameraMismatch:
+      return "camera_mismatch";
+    case SideWarningKind::kPoseEstimated:
+      return "pose_estimated";
+  }
+  return "unknown";
+}
+
+bool biases_measure(SideWarningKind kind) { return kind == SideWarningKind::kCameraMismatch; }
+
+std::optional<SideWarning> first_biasing_warning(const SideMeasurement& m) {
+  for (const SideWarning& w : m.warnings)
+    if (biases_measure(w.kind)) return w;
+  return std::nullopt;
+}
 
 SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
                              const SideSettings& settings, const std::string& where) {
@@ -157,19 +263,22 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
   m.pixels = measure_side_pixels(prepared, set, where);
   const SideProfile& p = m.pixels;
   if (std::abs(p.plate.tilt_deg()) > 1.0)
-    m.warnings.push_back("plate line tilted by " + fixed(p.plate.tilt_deg(), 2) +
-                         " deg: level the camera");
+    m.warnings.push_back({SideWarningKind::kPlateTilted,
+                          "plate line tilted by " + fixed(p.plate.tilt_deg(), 2) +
+                              " deg: level the camera"});
   if (p.far_edge) {
     const double u = p.apex.x;
     m.warnings.push_back(
-        "the pile stands on the plate's visible top face (camera above the plate): the plate line "
-        "is its toe line, " +
-        fixed(p.plate.v_at(u) - p.far_edge->v_at(u), 1) + " px below the plate's far edge");
+        {SideWarningKind::kOnTopFace,
+         "the pile stands on the plate's visible top face (camera above the plate): the plate "
+         "line is its toe line, " +
+             fixed(p.plate.v_at(u) - p.far_edge->v_at(u), 1) + " px below the plate's far edge"});
   }
   if (std::abs(p.left.angle_deg - p.right.angle_deg) > 3.0)
-    m.warnings.push_back("flank angles differ by " +
-                         fixed(std::abs(p.left.angle_deg - p.right.angle_deg), 1) +
-                         " deg: asymmetric pile or camera off the pile axis");
+    m.warnings.push_back({SideWarningKind::kFlanksDiffer,
+                          "flank angles differ by " +
+                              fixed(std::abs(p.left.angle_deg - p.right.angle_deg), 1) +
+                              " deg: asymmetric pile or camera off the pile axis"});
   m.crest = measure_crest(p, {}, where);
 
   if (!scale.camera) {
@@ -203,23 +312,49 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
   // Perspective correction with the known camera, once the photo's own pose agrees with it: a
   // photo taken from above and pitched down but declared level, measured through the declared
   // camera, read atan(2H/D) degrees too steep (the toe line through the middle of the pile's
-  // base, D far too short); it is refused with the numbers instead.
+  // base, D far too short); it is refused with the numbers instead, or, when asked
+  // (PosePolicy::kEstimate), measured through the pose its base ellipse gives.
   camera::Camera cam = *scale.camera;
   if (scale.check_pose) {
     m.pose = estimate_side_pose(prepared, p, cam, scale.axis_foot);
-    const std::string why = m.pose ? pose_contradiction(*m.pose) : std::string();
-    if (!why.empty())
-      throw PoseContradiction(where + ": not measured through the declared camera: " + why);
+    std::string why = m.pose ? pose_contradiction(*m.pose) : std::string();
+    // Seen from well above the plate the toe line lies on the plate's top face, and no pose
+    // measures the pile as a level photo does: refused whatever the policy.
+    if (m.pose) {
+      const double de = m.pose->elevation_deg - m.pose->declared_elevation_deg;
+      if (std::abs(de) > std::max(kMaxElevationDeg, 3.0 * m.pose->sigma_elevation_deg))
+        throw PoseContradiction(
+            where + ": not measured through the declared camera: the pile's base ellipse says "
+                    "the camera stands " + fixed(1000.0 * m.pose->height_m, 1) +
+            " mm above the plate, elevation " + fixed(m.pose->elevation_deg, 1) + " +- " +
+            fixed(m.pose->sigma_elevation_deg, 1) + " deg seen from the pile, declared " +
+            fixed(m.pose->declared_elevation_deg + 0.0, 1) + " deg, and pitched " +
+            fixed(m.pose->pitch_deg, 1) + " deg (declared " +
+            fixed(std::abs(m.pose->declared_pitch_deg) < 0.05 ? 0.0 : m.pose->declared_pitch_deg,
+                  1) +
+            " deg): more than " +
+            fixed(kMaxElevationDeg, 1) + " deg of elevation off the declared reads atan(2H/D) "
+            "about 1 deg steep through any camera (give a level photo)" +
+            (why.empty() ? std::string() : "; " + why));
+    }
+    if (why.empty() && m.pose && pose_determined(*m.pose))
+      why = height_bias(m, cam, *m.pose, scale.axis_foot, where);
+    if (!why.empty()) {
+      if (scale.pose_policy == PosePolicy::kRefuse || !pose_determined(*m.pose))
+        throw PoseContradiction(where + ": not measured through the declared camera: " + why);
+      cam = posed_camera(cam, *m.pose, scale.axis_foot);
+      m.pose_used = true;
+      m.warnings.push_back({SideWarningKind::kPoseEstimated,
+                            "measured through the pose the photo shows, not the declared camera: " +
+                                why});
+    }
   }
   // Without the plate's top face in the picture there is no base ellipse to check the pose
-  // with; a camera that puts the axis foot off the plate line does not match the image.
-  const auto foot = camera::project(cam, scale.axis_foot);
-  if (!p.far_edge && foot && std::abs(foot->y() - p.plate.v_at(foot->x())) > 2.0)
-    m.warnings.push_back(
-        "the camera puts the axis foot " + fixed(p.plate.v_at(foot->x()) - foot->y(), 1) +
-        " px from the detected plate line and the photo shows no plate top face to check its "
-        "pose with: the camera does not match the image; D and the flank angles through it may "
-        "be biased");
+  // with, but the plate line is a cue of its own: a camera that puts the axis foot off it by
+  // more than the line's uncertainty does not match the image.
+  if (!p.far_edge)
+    if (const auto miss = plate_line_mismatch(p, cam, scale.axis_foot))
+      m.warnings.push_back({SideWarningKind::kCameraMismatch, *miss});
   measure_through_camera(m, cam, scale.axis_foot, where);
   return m;
 }

@@ -53,6 +53,12 @@ enum class ScaleSource { kCamera, kMmPerPx, kScaleBar, kCheckerCard };
 /// "camera", "mm_per_px", "scale_bar" or "checker_card".
 std::string to_string(ScaleSource source);
 
+/// What measure_side does with a photo whose own pose contradicts its declared camera
+/// (vision/camera_pose.hpp): refuse it (PoseContradiction, with the numbers), or measure it
+/// through the pose the photo shows when that pose is determined (the base ellipse), reporting
+/// the pose (SideMeasurement::pose, pose_used) and refusing it when it is not.
+enum class PosePolicy { kRefuse, kEstimate };
+
 /// How pixels become metres. With nothing set and `search_marker` false, measuring throws.
 struct ScaleSpec {
   std::optional<camera::Camera> camera;      // known camera: perspective corrected
@@ -63,6 +69,7 @@ struct ScaleSpec {
   // Check the camera's pose against the photo's base ellipse (vision/camera_pose.hpp) and refuse
   // the photo, with both numbers, when they contradict.
   bool check_pose = true;
+  PosePolicy pose_policy = PosePolicy::kRefuse;
   // A top view's crest stands H above the plate, nearer the camera than the plate the scale is
   // given on: with this height (the side views' H) its width is read on the plane z = H.
   std::optional<double> crest_height_m;
@@ -80,6 +87,37 @@ ScaleSpec scale_from_sidecar(const std::string& path,
 class PoseContradiction : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+/// What a side measurement's warning is about. A kind biases the measure or only informs
+/// (biases_measure); a caller that must not use a biased measure (the loop, a calibration target)
+/// refuses the photo on the kind, never by reading the text.
+enum class SideWarningKind {
+  kPlateTilted,     // the plate line is tilted in the image (a rolled camera); H and D are read
+                    // perpendicular to it and hold
+  kOnTopFace,       // the pile stands on the plate's visible top face: the toe line is the plate
+                    // line (side_view.hpp step 2); the measure holds
+  kFlanksDiffer,    // the two flanks differ by more than 3 deg: an asymmetric pile, or a camera
+                    // off the pile's axis
+  kCameraMismatch,  // the declared camera puts the axis foot off the detected plate line by more
+                    // than its uncertainty and no top face shows to check the pose with: H, D
+                    // and the angles through that camera may be biased
+  kPoseEstimated,   // the photo contradicted its declared camera and was measured through the
+                    // pose it shows (PosePolicy::kEstimate): the measure holds within that
+                    // pose's uncertainty
+};
+inline constexpr int kSideWarningKinds = 5;
+
+/// "plate_tilted", "on_top_face", "flanks_differ", "camera_mismatch", "pose_estimated".
+std::string to_string(SideWarningKind kind);
+
+/// True for the kinds whose measure may be biased (kCameraMismatch).
+bool biases_measure(SideWarningKind kind);
+
+/// One warning: its kind and the numbers in words.
+struct SideWarning {
+  SideWarningKind kind = SideWarningKind::kPlateTilted;
+  std::string text;
 };
 
 /// A side view measured in metres and degrees.
@@ -100,8 +138,10 @@ struct SideMeasurement {
   double crest_width_m = 0.0;          // its width at the apex height [m]
   double sigma_crest_width_m = 0.0;    // its uncertainty [m]
   // The side camera's pose as the photo shows it (vision/camera_pose.hpp), when the declared
-  // camera was checked against it (and agreed: a contradiction is refused).
+  // camera was checked against it (and agreed, or, with PosePolicy::kEstimate, was replaced by
+  // it: pose_used).
   std::optional<PoseEstimate> pose;
+  bool pose_used = false;  // measured through the estimated pose, not the declared camera
   ScaleSource scale_source = ScaleSource::kMmPerPx;
   double mm_per_px = 0.0;                        // scale at the pile axis [mm/px]
   double sigma_scale_rel = 0.0;                  // relative uncertainty of the scale [-]
@@ -110,8 +150,11 @@ struct SideMeasurement {
   Eigen::Vector3d base_center_m{0.0, 0.0, 0.0};  // base circle centre (camera case) [m]
   double plate_line_z_m = 0.0;        // the detected plate line at the axis (camera case) [m]
   std::string note;                   // ScaleSpec::note
-  std::vector<std::string> warnings;  // conditions that may bias the result, in words
+  std::vector<SideWarning> warnings;  // conditions met while measuring, by kind
 };
+
+/// The first warning of `m` whose kind biases the measure, if any.
+std::optional<SideWarning> first_biasing_warning(const SideMeasurement& m);
 
 /// Measures a side view (`image`: any image vision::gray_levels accepts). `where` names the
 /// image in error messages. Throws std::invalid_argument / std::runtime_error as the pixel

@@ -91,7 +91,12 @@ nlohmann::json to_json(const SideMeasurement& m) {
         {"flank_right", flank_json(p.right)},
         {"pile_level", p.pile_level},
         {"threshold", p.threshold}}}};
-  j["warnings"] = m.warnings;
+  j["warnings"] = nlohmann::json::array();
+  for (const SideWarning& w : m.warnings)
+    j["warnings"].push_back({{"kind", to_string(w.kind)},
+                             {"biases_measure", biases_measure(w.kind)},
+                             {"text", w.text}});
+  j["pose_used"] = m.pose_used;
   if (m.pose) j["camera_pose"] = to_json(*m.pose);
   if (m.perspective_corrected) {
     j["camera_correction"] = {

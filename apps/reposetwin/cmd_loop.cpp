@@ -43,6 +43,8 @@ void add_loop_command(CLI::App& app) {
     std::string candidates;
     std::string angle = "image";
     std::string at_bound = "extend";
+    std::string mu_range;
+    std::string mu_range_reason;
     experiments::LoopSettings settings;
     bool quiet = false;
     bool own_cameras = false;
@@ -92,6 +94,12 @@ void add_loop_command(CLI::App& app) {
                   "Grid points the loop may add beyond a bound mu_r lands on")
       ->check(CLI::Range(0, 10))
       ->capture_default_str();
+  cmd->add_option("--mu-range", args->mu_range,
+                  "mu_r's plausible range LO,HI (a prior, e.g. 0.02,0.4 for rock in our "
+                  "convention): never simulated or fitted outside it; mu_r alone needing more is "
+                  "traced as evidence for an effect. Needs --mu-range-reason");
+  cmd->add_option("--mu-range-reason", args->mu_range_reason,
+                  "Why mu_r lies in --mu-range (recorded in loop.json)");
   cmd->add_option("--mu-max", args->settings.mu_max, "The grid is never extended above this")
       ->capture_default_str();
   cmd->add_option("--probe-scalings", args->settings.probe_scalings,
@@ -139,6 +147,17 @@ void add_loop_command(CLI::App& app) {
     }
     s.angle = experiments::parse_angle_measure(args->angle, "--angle");
     s.at_bound = experiments::parse_grid_bound(args->at_bound, "--at-bound");
+    if (!args->mu_range.empty()) {
+      const std::vector<double> r = parse_list(args->mu_range, "--mu-range");
+      if (r.size() != 2)
+        throw experiments::InputError("--mu-range " + args->mu_range + ": give two values, LO,HI");
+      if (args->mu_range_reason.empty())
+        throw experiments::InputError("--mu-range " + args->mu_range +
+                                      ": give its reason with --mu-range-reason");
+      s.mu_prior = {r[0], r[1], args->mu_range_reason};
+    } else if (!args->mu_range_reason.empty()) {
+      throw experiments::InputError("--mu-range-reason given without --mu-range");
+    }
     s.progress = !args->quiet;
     s.image.use_lab_cameras = !args->own_cameras;
     s.page = experiments::write_loop_html;

@@ -189,7 +189,7 @@ void run_measure(const MeasureOptions& o) {
   j["scale_sources"] = sources;
   std::vector<std::string> warnings;
   for (const auto& v : views)
-    for (const auto& w : v.warnings) warnings.push_back(v.source + ": " + w);
+    for (const auto& w : v.warnings) warnings.push_back(v.source + ": " + w.text);
   j["warnings"] = warnings;
   j["summary"] = vision::to_json(summary);
   j["side"] = nlohmann::json::array();

@@ -48,7 +48,7 @@ json Loop::run() {
   state.fit = rec.baseline.fit;
   if (!design_.can_trace)
     rec.not_traced = design_.cannot.back();
-  else if (rec.grid.at_bound && s_.at_bound != GridBound::kTrace)
+  else if (rec.grid.at_bound && !rec.grid.beyond_prior && s_.at_bound != GridBound::kTrace)
     rec.not_traced = rec.grid.statement;
   if (rec.not_traced) {
     say("nothing traced: " + *rec.not_traced);
@@ -93,6 +93,17 @@ void Loop::check_settings() {
   if (s_.grid_extensions < 0 || !(s_.mu_max >= s_.mu_grid.back()))
     throw InputError("loop: grid_extensions must be >= 0 and mu_max (" +
                      std::to_string(s_.mu_max) + ") at least the grid's top");
+  if (s_.mu_prior.declared()) {
+    const MuPrior& pr = s_.mu_prior;
+    if (!(pr.lo >= 0.0 && pr.hi > pr.lo && std::isfinite(pr.hi)))
+      throw InputError("loop: --mu-range " + significant(pr.lo, 6) + "," + significant(pr.hi, 6) +
+                       " must be two increasing values >= 0");
+    if (s_.mu_grid.front() < pr.lo - 1e-12 || s_.mu_grid.back() > pr.hi + 1e-12)
+      throw InputError("loop: --mu-grid " + significant(s_.mu_grid.front(), 6) + "-" +
+                       significant(s_.mu_grid.back(), 6) + " leaves the declared --mu-range " +
+                       significant(pr.lo, 6) + "-" + significant(pr.hi, 6) + " (" + pr.reason +
+                       "): mu_r is never simulated outside its declared range");
+  }
   if (s_.probe_scalings < 0) throw InputError("loop: probe_scalings must be >= 0");
   if (s_.seeds.size() < 2) throw InputError("loop: at least two seeds are needed (seed noise)");
   if (!s_.refit.empty()) check_declared_refit();
@@ -419,6 +430,25 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
   c.t_at_limit = joint.t <= 0.0 || joint.t >= s_.t_max;
   c.mu_r_se = joint.mu_se;
   c.declared = choice.declared && iter.decision.named != e.name;
+  if (joint.region) {
+    c.region = joint.region;
+    const double a = off + joint.region->t_lo * (best_trial.p - off);
+    const double b = off + joint.region->t_hi * (best_trial.p - off);
+    c.value_lo = std::min(a, b);
+    c.value_hi = std::max(a, b);
+    say(e.name + ": " + joint.region->statement + "; the value " + significant(c.value_lo, 3) +
+        "-" + significant(c.value_hi, 3) + " " + e.units);
+    // What would separate them: a repeat of each fitted test, as an independent observation
+    // with that test's noise (the lab's repeat and the twin's seeds alike).
+    std::vector<NextTest> repeats;
+    for (const auto& [i, part] : joint.test_info)
+      repeats.push_back({"a repeat of " + data_.tests[i].id, part});
+    c.next_tests = rank_next_tests(joint.info, repeats);
+    if (!c.next_tests.empty())
+      say(e.name + ": " + c.next_tests.front().name + " would shrink its interval to " +
+          significant(100.0 * c.next_tests.front().t_interval_ratio, 3) + "% (mu_r's to " +
+          significant(100.0 * c.next_tests.front().mu_interval_ratio, 3) + "%)");
+  }
   state.model = best_trial.model;
   state.fit = joint;
   state.effects.push_back({&e, value});

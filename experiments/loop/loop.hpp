@@ -60,6 +60,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -83,6 +84,18 @@ std::string grid_bound_name(GridBound g);
 /// "extend", "refuse" or "trace"; throws InputError naming `option` and the value otherwise.
 GridBound parse_grid_bound(const std::string& text, const std::string& option);
 
+/// The range of mu_r the loop may use, declared by the user with its reason (a prior: for rock
+/// in our convention, 0.02-0.4). mu_r is never calibrated, extended or refitted outside it; when
+/// mu_r alone needs a value beyond it to fit the data, that is evidence for an effect, and the
+/// effects are traced with mu_r held inside it rather than the loop stopping at the bound.
+/// Undeclared: [0, mu_max], and a bound mu_r reaches is handled by GridBound.
+struct MuPrior {
+  double lo = 0.0;                                      // [-]
+  double hi = std::numeric_limits<double>::infinity();  // [-]
+  std::string reason;  // why this range (required when declared)
+  bool declared() const { return !reason.empty(); }
+};
+
 /// Settings of the loop.
 struct LoopSettings {
   std::string mu_key = "contacts.{sample}-{sample}.rolling_friction";  // calibrated scene key
@@ -95,6 +108,7 @@ struct LoopSettings {
   GridBound at_bound = GridBound::kExtend;  // mu_r on the grid's bound
   int grid_extensions = 2;                 // grid points added beyond a bound, one at a time
   double mu_max = 1.0;                     // the grid is never extended above this [-]
+  MuPrior mu_prior;                        // mu_r's declared range (--mu-range)
   int probe_scalings = 2;                  // doublings of a probe lost in the seed noise
   int max_effects = 2;                     // stop after adding this many effects
   std::string refit;                       // a candidate refitted even when the trace names

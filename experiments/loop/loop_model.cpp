@@ -81,9 +81,10 @@ MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max,
   const Model alone{{{1.0, extra}}};
   MuFit best;
   double best_sse = 1e300;
+  std::vector<ProfileRow> profile;  // the likelihood surface, for the joint region
   for (int q = 0; q <= steps; ++q) {
     const double m = lo + (hi - lo) * q / steps;
-    double swdy = 0.0, swdd = 0.0;
+    double swdy = 0.0, swdd = 0.0, swyy = 0.0;
     std::vector<double> y, dd, w;  // residual, extra surface's change, weight 1 / sigma^2
     for (std::size_t i : tests)
       for (Channel c : channels) {
@@ -94,7 +95,9 @@ MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max,
         w.push_back(1.0 / (noise(i, c) * noise(i, c)));
         swdy += w.back() * di * y.back();
         swdd += w.back() * di * di;
+        swyy += w.back() * y.back() * y.back();
       }
+    profile.push_back({m, swyy, swdy, swdd});
     const double t = (extra && swdd > 0.0) ? std::clamp(swdy / swdd, 0.0, t_max) : 0.0;
     double sse = 0.0;
     for (std::size_t k = 0; k < y.size(); ++k) sse += w[k] * std::pow(y[k] - t * dd[k], 2);
@@ -105,6 +108,8 @@ MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max,
     }
   }
   best.at_edge = best.mu <= lo + 1e-12 || best.mu >= hi - 1e-12;
+  const int n_obs = static_cast<int>(tests.size() * channels.size());
+  if (extra && n_obs >= 3) best.region = joint_region(profile, 0.0, t_max, n_obs);
   // Standard errors from the Jacobian of the prediction in (mu, t), each row over its noise.
   const double h = (hi - lo) / 100.0;
   Eigen::MatrixXd jac(tests.size() * channels.size(), extra ? 2 : 1);
@@ -121,6 +126,15 @@ MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max,
       ++k;
     }
   const Eigen::MatrixXd info = jac.transpose() * jac;
+  if (extra) {
+    best.info = info;
+    Eigen::Index row = 0;
+    for (std::size_t i : tests) {
+      const Eigen::MatrixXd part = jac.middleRows(row, static_cast<Eigen::Index>(channels.size()));
+      best.test_info.push_back({i, part.transpose() * part});
+      row += static_cast<Eigen::Index>(channels.size());
+    }
+  }
   Eigen::FullPivLU<Eigen::MatrixXd> lu(info);
   if (lu.isInvertible()) {
     const Eigen::MatrixXd cov = lu.inverse();

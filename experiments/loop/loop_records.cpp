@@ -118,8 +118,13 @@ json to_json(const FingerprintRecord& f) {
 }
 
 json to_json(const GridRecord& g) {
-  return {{"initial", g.initial}, {"final", g.final_grid}, {"added", g.added},
-          {"policy", g.policy},   {"mu_r_at_bound", g.at_bound}, {"statement", g.statement}};
+  json j = {{"initial", g.initial}, {"final", g.final_grid}, {"added", g.added},
+            {"policy", g.policy},   {"mu_r_at_bound", g.at_bound}, {"statement", g.statement}};
+  if (g.prior)
+    j["mu_r_prior"] = {{"range", {g.prior->first, g.prior->second}},
+                       {"reason", g.prior_reason},
+                       {"mu_r_alone_beyond_it", g.beyond_prior}};
+  return j;
 }
 
 json to_json(const UnavailableCandidate& u) { return {{"name", u.name}, {"why", u.why}}; }
@@ -160,6 +165,14 @@ json to_json(const ChosenEffect& c) {
             {"t_at_limit", c.t_at_limit},
             {"mu_r_se", c.mu_r_se},
             {"declared", c.declared}});
+  if (c.region) {
+    j["joint_region"] = to_json(*c.region);
+    j["joint_region"]["value_range"] = {c.value_lo, c.value_hi};
+  }
+  if (!c.next_tests.empty()) {
+    j["next_tests"] = json::array();
+    for (const NextTestGain& g : c.next_tests) j["next_tests"].push_back(to_json(g));
+  }
   return j;
 }
 
@@ -398,6 +411,12 @@ GridRecord grid_record_from_json(const json& j) {
   g.policy = j.at("policy").get<std::string>();
   g.at_bound = j.at("mu_r_at_bound").get<bool>();
   g.statement = j.at("statement").get<std::string>();
+  if (j.contains("mu_r_prior")) {
+    const json& p = j.at("mu_r_prior");
+    g.prior = std::make_pair(p.at("range").at(0).get<double>(), p.at("range").at(1).get<double>());
+    g.prior_reason = p.at("reason").get<std::string>();
+    g.beyond_prior = p.at("mu_r_alone_beyond_it").get<bool>();
+  }
   return g;
 }
 
@@ -424,6 +443,18 @@ ChosenEffect chosen_effect_from_json(const json& j) {
   c.mu_r_se = num(j, "mu_r_se");
   // Written by a loop that knew declared hypotheses; older loop.json files have none.
   c.declared = j.value("declared", false);
+  // Written by a loop that reports the joint region; older loop.json files have none.
+  if (j.contains("joint_region")) {
+    c.region = joint_region_from_json(j.at("joint_region"));
+    c.value_lo = j.at("joint_region").at("value_range").at(0).get<double>();
+    c.value_hi = j.at("joint_region").at("value_range").at(1).get<double>();
+  }
+  if (j.contains("next_tests"))
+    for (const json& g : j.at("next_tests"))
+      c.next_tests.push_back({g.at("test").get<std::string>(),
+                              g.at("effect_interval_ratio").get<double>(),
+                              g.at("mu_r_interval_ratio").get<double>(),
+                              g.at("region_area_ratio").get<double>()});
   return c;
 }
 

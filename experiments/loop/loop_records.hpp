@@ -7,6 +7,7 @@
 // chosen, the refit failure when every refit simulation failed, or the chosen effect.
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <chrono>
 #include <cstddef>
@@ -14,10 +15,12 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "experiments/loop/loop_data.hpp"
 #include "experiments/loop/loop_joint.hpp"
+#include "experiments/loop/loop_region.hpp"
 #include "experiments/loop/loop_trace.hpp"
 
 namespace reposetwin::experiments {
@@ -29,6 +32,12 @@ struct MuFit {
   double t = 0.0;        // weight of the extra simulated surface (0 without one) [-]
   double t_se = 0.0;     // its standard error [-]
   bool at_edge = false;  // mu sits on an end of the mu_r grid
+  // With an extra surface: the joint region of (mu_r, t) over the scan (loop_region.hpp).
+  std::optional<JointRegion> region;
+  // With an extra surface: the Fisher information of the fitted data at the optimum (mu_r, t)
+  // and each fitted test's share of it (its channels), in the order of the tests fitted.
+  Eigen::Matrix2d info = Eigen::Matrix2d::Zero();
+  std::vector<std::pair<std::size_t, Eigen::Matrix2d>> test_info;
 };
 
 /// One test's residual under a model at a mu_r.
@@ -127,6 +136,11 @@ struct GridRecord {
   std::string policy;                       // "extend", "refuse" or "trace"
   bool at_bound = false;                    // mu_r still on an end of the final grid
   std::string statement;                    // what was done, in words
+  // mu_r's declared range (LoopSettings::mu_prior), when declared, and whether mu_r alone
+  // needed a value beyond it (then traced as evidence for an effect, mu_r held inside it).
+  std::optional<std::pair<double, double>> prior;
+  std::string prior_reason;
+  bool beyond_prior = false;
 };
 
 /// A candidate left out of the tracing, with the reason.
@@ -165,6 +179,13 @@ struct ChosenEffect {
   bool t_at_limit = false;
   double mu_r_se = 0.0;
   bool declared = false;  // refitted as the user's hypothesis (--refit), not named by the trace
+  // The joint 95% region of (mu_r, the effect's value) from the refit's profile likelihood,
+  // its correlation, and whether the data separate the two (loop_region.hpp).
+  std::optional<JointRegion> region;
+  double value_lo = 0.0, value_hi = 0.0;  // the region's extent in the effect's value [units]
+  // What would separate them: a repeat of each fitted test, ranked by the shrink of the effect's
+  // 95% interval it is expected to give (Fisher information at the optimum; loop_region.hpp).
+  std::vector<NextTestGain> next_tests;
 };
 
 /// An accepted candidate whose simulated refit did not confirm it.

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "experiments/io/format.hpp"
 #include "experiments/io/json_fields.hpp"
 #include "experiments/loop/loop_records.hpp"
 
@@ -92,6 +93,16 @@ LoopSummary summarise(const LoopRecord& loop) {
   if (!loop.iterations.empty()) {
     s.verdict = loop_verdict(loop);
     s.statement = iterations_statement(loop.iterations);
+    // Each value with its joint region, and what would separate it from mu_r.
+    for (const ChosenEffect& c : loop.final_model.effects)
+      if (c.region) {
+        *s.statement += " | " + c.refit.name + " " + significant(c.value, 3) + " (95% region " +
+                        significant(c.value_lo, 3) + "-" + significant(c.value_hi, 3) + " " +
+                        c.units + "): " + c.region->statement;
+        if (!c.next_tests.empty())
+          *s.statement += "; " + c.next_tests.front().name + " would shrink the interval to " +
+                          significant(100.0 * c.next_tests.front().t_interval_ratio, 3) + "%";
+      }
   }
   if (loop.not_traced) {
     s.verdict = Verdict::kNotTraced;

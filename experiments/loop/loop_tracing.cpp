@@ -58,14 +58,23 @@ GridRecord Loop::settle_grid(const Surface*& base, BaselineRecord& baseline) {
   g.initial = grid_;
   g.policy = grid_bound_name(s_.at_bound);
   const int allowed = s_.at_bound == GridBound::kExtend ? s_.grid_extensions : 0;
+  const MuPrior& prior = s_.mu_prior;
+  const double floor = prior.declared() ? prior.lo : 0.0;
+  const double ceiling = prior.declared() ? std::min(prior.hi, s_.mu_max) : s_.mu_max;
+  const auto at_prior = [&](bool low) {
+    return prior.declared() && (low ? grid_.front() <= prior.lo + 1e-12
+                                    : grid_.back() >= prior.hi - 1e-12);
+  };
   std::string limit;
   while (baseline.fit.at_edge && static_cast<int>(g.added.size()) < allowed) {
     const bool low = baseline.fit.mu <= grid_.front() + 1e-12;
     double next = low ? grid_.front() - (grid_[1] - grid_[0])
                       : grid_.back() + (grid_.back() - grid_[grid_.size() - 2]);
-    next = low ? std::max(0.0, next) : std::min(s_.mu_max, next);
-    if ((low && grid_.front() <= 0.0) || (!low && grid_.back() >= s_.mu_max)) {
-      limit = low ? "mu_r cannot go below 0" : "mu_max " + significant(s_.mu_max, 3) + " reached";
+    next = low ? std::max(floor, next) : std::min(ceiling, next);
+    if ((low && grid_.front() <= floor) || (!low && grid_.back() >= ceiling)) {
+      limit = at_prior(low) ? "the declared range's end"
+              : low         ? "mu_r cannot go below 0"
+                            : "mu_max " + significant(s_.mu_max, 3) + " reached";
       break;
     }
     say("mu_r " + std::to_string(baseline.fit.mu) + " on the grid's " + (low ? "low" : "high") +
@@ -79,12 +88,24 @@ GridRecord Loop::settle_grid(const Surface*& base, BaselineRecord& baseline) {
   }
   g.final_grid = grid_;
   g.at_bound = baseline.fit.at_edge;
+  if (prior.declared()) {
+    g.prior = std::make_pair(prior.lo, prior.hi);
+    g.prior_reason = prior.reason;
+    g.beyond_prior = g.at_bound && at_prior(baseline.fit.mu <= grid_.front() + 1e-12);
+  }
   std::string added;
   for (double a : g.added) added += (added.empty() ? "" : ", ") + significant(a, 3);
   const std::string mu = significant(baseline.fit.mu, 3);
   if (!g.at_bound)
     g.statement = g.added.empty() ? "mu_r " + mu + " lies inside the grid"
                                   : "mu_r " + mu + " lies inside the grid extended by " + added;
+  else if (g.beyond_prior)
+    g.statement = "mu_r alone needs a value beyond its declared range " +
+                  significant(prior.lo, 3) + "-" + significant(prior.hi, 3) + " (" +
+                  prior.reason + ") to fit the data: it sits at " + mu +
+                  (g.added.empty() ? std::string() : " after adding " + added) +
+                  ". That is evidence for an effect mu_r lacks, so the candidates are traced "
+                  "and refitted jointly with mu_r held inside that range";
   else
     g.statement = "mu_r " + mu + " sits on the grid's bound" +
                   (g.added.empty() ? std::string() : " after adding " + added) +

@@ -78,6 +78,11 @@ LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
     if (this_scale.camera) cameras.push_back(*this_scale.camera);
     try {
       views.push_back(vision::measure_side(image, this_scale, {}, p));
+      // A measure vision says may be biased is no measure: refused like a contradicted pose,
+      // with vision's numbers, before anything is simulated.
+      if (const auto w = vision::first_biasing_warning(views.back()))
+        throw vision::PoseContradiction(p + ": not measured through the declared camera (" +
+                                        vision::to_string(w->kind) + "): " + w->text);
       if (draw_overlays) overlays.push_back(vision::draw_side_overlay(image, views.back()));
     } catch (const vision::PoseContradiction& e) {
       // The declared camera is wrong for this photo: the test is refused, not measured on the

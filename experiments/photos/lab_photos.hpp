@@ -11,7 +11,10 @@
 // test, one that vision cannot measure is recorded (`unmeasured`) and the others still count. A
 // photo whose pose contradicts its declared camera (vision/camera_pose.hpp: a camera pitched
 // down at the pile, declared level) is refused with both pitches, whatever the other photos
-// show: its camera is declared wrong, and so, most likely, are those of the same setup.
+// show: its camera is declared wrong, and so, most likely, are those of the same setup. So is a
+// photo vision measured with a warning whose kind may bias the measure (vision::biases_measure:
+// the declared camera puts the axis foot off the detected plate line), by its kind, with vision's
+// numbers.
 #pragma once
 
 #include <nlohmann/json.hpp>

@@ -13,6 +13,7 @@
 #include "experiments/loop/loop_records.hpp"
 #include "experiments/loop/loop_sim.hpp"
 #include "experiments/io/csv.hpp"
+#include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/report/loop_report.hpp"
 
@@ -162,6 +163,28 @@ TEST(LoopData, ATwinRunWithoutAPileStopsTheLoop) {
     EXPECT_NE(what.find("in 2 pour(s)"), std::string::npos) << what;
     // The last pour named is the repeat, with its own seed.
     EXPECT_NE(what.find("seed_" + std::to_string(1 + kRepourSeedStride)), std::string::npos)
+        << what;
+  }
+  EXPECT_FALSE(fs::exists(out / "loop.json"));
+}
+
+// mu_r's declared range is checked before anything runs: a grid that leaves it is refused,
+// naming the range and its reason.
+TEST(LoopData, AGridOutsideTheDeclaredMuRangeIsRefusedBeforeAnyRun) {
+  const std::string csv = write_csv(
+      "prior", "id,role,scene,mass_g,angle_deg\n"
+               "a,calibrate," + kScene + ",6,25\n");
+  const fs::path out = fs::temp_directory_path() / "reposetwin_loop_prior_test";
+  fs::remove_all(out);
+  LoopSettings s = tiny_settings();
+  s.mu_grid = {0.1, 0.5};
+  s.mu_prior = {0.02, 0.4, "rock in our convention"};
+  try {
+    (void)run_loop(read_lab_csv(csv), out.string(), s);
+    ADD_FAILURE() << "the loop ran a grid beyond its declared mu_r range";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("--mu-range 0.02-0.4 (rock in our convention)"), std::string::npos)
         << what;
   }
   EXPECT_FALSE(fs::exists(out / "loop.json"));

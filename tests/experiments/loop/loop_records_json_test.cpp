@@ -95,7 +95,7 @@ TEST(LoopRecordsJson, SmallRecordsRoundTrip) {
 
 TEST(LoopRecordsJson, BaselineAndFingerprintRoundTrip) {
   BaselineRecord b;
-  b.fit = {0.21, 0.02, 0.0, 0.0, true};
+  b.fit = {0.21, 0.02, 0.0, 0.0, true, {}, Eigen::Matrix2d::Zero(), {}};
   b.seed_sd_deg = 0.9;
   b.seed_se_deg = 0.6;
   b.residuals = {residual(1.0), residual(2.0)};
@@ -161,7 +161,7 @@ TEST(LoopRecordsJson, EffectsAndIterationsRoundTrip) {
 
 TEST(LoopRecordsJson, FinalAndProvenanceRoundTrip) {
   FinalRecord f;
-  f.fit = {0.19, 0.015, 0.75, 0.1, false};
+  f.fit = {0.19, 0.015, 0.75, 0.1, false, {}, Eigen::Matrix2d::Zero(), {}};
   f.effects = {chosen()};
   f.residuals = {residual(3.0)};
   f.rmse = {0.7, std::nullopt, 1, 0};
