@@ -1,6 +1,4 @@
 // `reposetwin run`: the plan, the pile test, its photographs and the summary page, then one line.
-#include <unistd.h>
-
 #include <chrono>
 #include <iostream>
 #include <memory>
@@ -9,6 +7,7 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
+#include "apps/reposetwin/plan_gate.hpp"
 #include "apps/reposetwin/validators.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
@@ -26,11 +25,10 @@ struct RunArgs {
   std::string scene;
   std::vector<std::string> sets;
   experiments::RunOptions run;
-  experiments::PlanSettings plan;
+  std::shared_ptr<PlanArgs> plan = std::make_shared<PlanArgs>();
   bool quiet = false;
   bool json = false;
   bool no_images = false;
-  bool yes = false;
 };
 
 // The threads the run will use: the command line's, the scene's, or every core.
@@ -40,23 +38,13 @@ int run_threads(const RunArgs& a, const experiments::SceneConfig& scene) {
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
-// Prints the plan; a plan above the limits goes ahead only with --yes or a person's "y".
-// Returns false when it must not start.
-bool accept_plan(const RunArgs& a, const experiments::SceneConfig& scene) {
+// Prints the plan; a plan above the limits goes ahead only when confirmed (plan_gate.hpp).
+bool accept_run_plan(const RunArgs& a, const experiments::SceneConfig& scene) {
   if (a.run.resume) return true;  // planned when it started
-  const experiments::RunPlan plan = experiments::plan_run(scene, run_threads(a, scene), a.plan);
-  if (!a.quiet) std::cerr << experiments::plan_text(plan, a.plan);
-  const std::string refusal = experiments::plan_refusal(plan, a.plan);
-  if (refusal.empty() || a.yes) return true;
-  if (isatty(STDIN_FILENO) && isatty(STDERR_FILENO)) {
-    if (a.quiet) std::cerr << experiments::plan_text(plan, a.plan);
-    std::cerr << refusal << "\nRun it anyway? [y/N] ";
-    std::string answer;
-    std::getline(std::cin, answer);
-    if (answer == "y" || answer == "Y" || answer == "yes") return true;
-  }
-  std::cerr << "reposetwin: refused: " << refusal << "\n";
-  return false;
+  const experiments::RunPlan plan =
+      experiments::plan_run(scene, run_threads(a, scene), a.plan->limits);
+  return accept_plan(experiments::plan_text(plan, a.plan->limits),
+                     experiments::plan_refusal(plan, a.plan->limits), *a.plan, a.quiet);
 }
 
 // The run's photographs from its final state in memory, measured; nullopt when there are none:
@@ -119,21 +107,12 @@ void add_run_command(CLI::App& app) {
   cmd->add_flag(
       "--no-images", args->no_images,
       "No photographs: faster; the headline is then the particle atan(2H/D), and says so");
-  cmd->add_flag("--yes,-y", args->yes,
-                "Start even when the plan is above the limits (--max-particles, --max-hours)");
-  cmd->add_option("--max-particles", args->plan.max_particles,
-                  "Plan limit: more particles need --yes")
-      ->capture_default_str()
-      ->check(positive_number());
-  auto* hours = cmd->add_option_function<double>(
-      "--max-hours", [args](double h) { args->plan.max_wall_s = 3600.0 * h; },
-      "Plan limit: a longer estimated wall time needs --yes [h] (default 1)");
-  hours->check(positive_number());
+  add_plan_options(cmd, args->plan);
   cmd->callback([args]() {
     const auto t0 = std::chrono::steady_clock::now();
     const experiments::SceneConfig scene = experiments::load_scene(args->scene, args->sets);
     experiments::check_run_folder(args->run.out_dir, args->run.resume, args->run.force);
-    if (!accept_plan(*args, scene)) {
+    if (!accept_run_plan(*args, scene)) {
       set_exit_code(ExitCode::kPlanRefused);
       return;
     }

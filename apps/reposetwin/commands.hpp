@@ -14,7 +14,7 @@ enum class ExitCode : int {
   kPhysicsStop = 3,    // run: the engine stopped the run
   kSomeFailed = 4,     // campaign: some cases failed or gave no angle; paper: some items
   kUnreachable = 5,    // calibrate: the target angle cannot be reached
-  kPlanRefused = 6,    // run: the plan is above the limits and was not confirmed
+  kPlanRefused = 6,    // run, calibrate: the plan is above the limits and was not confirmed
   kNoPile = 7,         // run, measure-particles: no settled pile to measure (time limit, not
                        // settled, jam, none)
   kNoPhotographs = 8,  // run: the photographs could not be written or measured

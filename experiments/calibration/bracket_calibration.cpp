@@ -308,7 +308,10 @@ BracketCalibration calibrate_bracket(const PourBatchFn& pour, const Target& targ
   BracketCalibration c;
   PourLog log(pour);
   const int k = static_cast<int>(s.seeds.size());
-  log.run({s.mu_r_start.value_or(0.5 * (s.mu_r_lo + s.mu_r_hi))}, s.seeds);
+  if (s.ends_first)
+    log.run({s.mu_r_lo, s.mu_r_hi}, s.seeds);
+  else
+    log.run({s.mu_r_start.value_or(0.5 * (s.mu_r_lo + s.mu_r_hi))}, s.seeds);
   for (;;) {
     c.pours = log.pours;
     c.points = points_of(c.pours);
@@ -344,12 +347,16 @@ BracketCalibration calibrate_bracket(const PourBatchFn& pour, const Target& targ
       return c;
     }
     if (!next || log.runs() + k > s.max_runs) {
+      // Out of runs, or a new point cannot help (the seed spread alone is above the tolerance):
+      // the fit's mu_r stands, with the tolerance not met, and the message says which.
       finish(c, target, s, CalibrationStatus::kBudgetSpent,
-             "budget of " + std::to_string(s.max_runs) +
-                 " pile runs spent before the mu_r "
-                 "tolerance of " +
-                 num(s.mu_r_tolerance) + " was met" +
-                 (why.empty() ? std::string() : " (" + why + ")"));
+             next ? "budget of " + std::to_string(s.max_runs) +
+                        " pile runs spent before the mu_r tolerance of " +
+                        num(s.mu_r_tolerance) + " was met" +
+                        (why.empty() ? std::string() : " (" + why + ")")
+                  : "stopped after " + std::to_string(log.runs()) + " of " +
+                        std::to_string(s.max_runs) + " pile runs before the mu_r tolerance of " +
+                        num(s.mu_r_tolerance) + " was met: " + why);
       return c;
     }
     log.run({*next}, s.seeds);
@@ -396,6 +403,7 @@ nlohmann::json to_json(const BracketCalibration& c, const BracketSettings& s) {
   j["max_jam_rate"] = s.max_jam_rate;
   j["slope_guess_deg"] = s.slope_guess_deg;
   j["mu_r_start"] = s.mu_r_start.value_or(0.5 * (s.mu_r_lo + s.mu_r_hi));
+  j["ends_first"] = s.ends_first;
   return j;
 }
 

@@ -8,6 +8,10 @@
 //    (positions, sizes), so a seed's angles at two mu_r differ mostly by the effect of mu_r: the
 //    slope and the side of the target come out of two points with little noise, and each seed
 //    gives its own curve and its own crossing of the target.
+//  * Ends first (ends_first, as a lab's calibration from its sheets runs): the first batch is
+//    both ends of the mu_r range, so a target outside what the range reaches is known after
+//    those two points (step_out finds no new point: the range end has run) and reported as
+//    cannot reach with the reachable interval; otherwise the next point is the fitted crossing.
 //  * Bracketing: the first point is mu_r_start (a prior guess, default the middle of the range),
 //    the next one a secant step from the fitted slope (the declared slope_guess_deg before two
 //    points exist), stretched by a quarter so that it lands beyond the target and brackets it;

@@ -12,6 +12,7 @@
 #include "experiments/calibration/bracket_calibration.hpp"
 #include "experiments/calibration/calibration.hpp"
 #include "experiments/campaign/case_runner.hpp"
+#include "experiments/io/format.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/pile/headline.hpp"
 #include "sim/contact.hpp"
@@ -453,6 +454,108 @@ AngleFn prediction_angle(AngleMeasure measure) {
     if (no_headline(c.stop, c.pile)) return std::numeric_limits<double>::quiet_NaN();
     return case_angle_deg(r, measure);
   };
+}
+
+BatchPlan plan_calibration(const Campaign& c, int workers) {
+  const CampaignCalibration& cc = calibration_of(c);
+  const bool bracket = cc.method == CalibrationMethod::kBracket;
+  std::vector<BatchPlan::Part> parts;
+  const SceneConfig cal_scene =
+      build_case_scene(calibration_run(c, cc.settings.mu_r_lo, cc.settings.first_seed)).config();
+  parts.push_back({"calibration runs (" + c.name + ")", plan_run(cal_scene, 1),
+                   bracket ? cc.bracket.max_runs : cc.settings.max_simulations});
+  for (const PredictionCase& p : c.predictions) {
+    if (p.seeds.empty()) continue;
+    const SceneConfig scene =
+        build_case_scene(prediction_run(c, p, cc.settings.mu_r_lo, p.seeds.front())).config();
+    const int runs = static_cast<int>(p.seeds.size()) * (p.interval_ends ? 3 : 1);
+    parts.push_back({"runs of the prediction " + p.name, plan_run(scene, 1), runs});
+  }
+  return plan_batch(std::move(parts), workers);
+}
+
+std::string calibration_order_text(const Campaign& c) {
+  const CampaignCalibration& cc = calibration_of(c);
+  const std::string range = "mu_r " + significant(cc.settings.mu_r_lo, 3) + " to " +
+                            significant(cc.settings.mu_r_hi, 3);
+  std::string t = "calibrate: " + keys_of(cc).front() + " over " + range + " to match " +
+                  significant(cc.target.angle_deg, 4) + " deg; ";
+  if (cc.method == CalibrationMethod::kBracket) {
+    const BracketSettings& b = cc.bracket;
+    t += std::to_string(b.seeds.size()) + " seeds a point, ";
+    t += b.ends_first ? "the two ends of the range first (a target out of reach is known after "
+                        "them), then the fitted crossing"
+                      : "first at mu_r " +
+                            significant(b.mu_r_start.value_or(0.5 * (b.mu_r_lo + b.mu_r_hi)), 3) +
+                            ", then bracketing";
+    t += "; at most " + std::to_string(b.max_runs) + " runs\n";
+  } else {
+    t += std::to_string(cc.settings.seeds_per_point) +
+         " seeds a point, the two ends of the range first, then a secant; at most " +
+         std::to_string(cc.settings.max_simulations) + " runs\n";
+  }
+  if (!c.predictions.empty())
+    t += "calibrate: then " + std::to_string(c.predictions.size()) +
+         " [[predict]] test(s) at the calibrated mu_r\n";
+  return t;
+}
+
+std::string cannot_reach_advice(const Campaign& c, const nlohmann::json& cal,
+                                AngleMeasure measure) {
+  if (cal.contains("mu_r") && cal["mu_r"].is_number()) return "";
+  const CampaignCalibration& cc = calibration_of(c);
+  const double target = cc.target.angle_deg;
+  const std::string lo = significant(cc.settings.mu_r_lo, 3), hi = significant(cc.settings.mu_r_hi, 3);
+  const std::string angle = angle_measure_name(measure);
+  const bool high = cal.value("status", std::string()) == to_string(CalibrationStatus::kCannotReachHigh);
+  const bool low = cal.value("status", std::string()) == to_string(CalibrationStatus::kCannotReachLow);
+  const int runs = cal.value("simulations", 0);
+  std::string t;
+  const nlohmann::json reach = cal.value("reachable_deg", nlohmann::json());
+  const bool have_reach = cal.contains("observations") && !cal["observations"].empty() &&
+                          reach.is_array() && reach.size() == 2;
+  if (have_reach) {
+    const double a = reach[0].get<double>(), b = reach[1].get<double>();
+    t = "cannot reach: the target " + significant(target, 4) + " deg (angle '" + angle + "') is " +
+        (high ? "above" : low ? "below" : "outside") + " what mu_r " + lo + " to " + hi +
+        " reaches, " + significant(a, 4) + " to " + significant(b, 4) + " deg (" +
+        significant(high ? target - b : a - target, 3) + " deg short, after " +
+        std::to_string(runs) + " pile runs)\n";
+  } else {
+    t = "cannot reach: no pour formed a pile to measure in " + std::to_string(runs) +
+        " pile runs between mu_r " + lo + " and " + hi + " (" + cal.value("message", "") + ")\n";
+  }
+  t += "what to try:\n";
+  if (high || !have_reach) {
+    t += "  - the grain shape: spheres roll where angular rock locks; blocky grains build steeper "
+         "piles: in the scene, [sample.shape] kind = \"blocky\" with your grains' elongation, "
+         "flatness and angularity (README, grain shapes; experiments/io/grain_shape.hpp)\n";
+    t += "  - the plate friction: the pile's toe slides on the base plate; set the plate "
+         "material's contacts (contacts.rock-plate.friction, rolling_friction), or calibrate "
+         "both rolling keys: calibration.key = [\"contacts.rock-rock.rolling_friction\", "
+         "\"contacts.rock-plate.rolling_friction\"]\n";
+    int jams = 0;
+    for (const auto& q : cal.value("jam_rate_per_mu_r", nlohmann::json::array()))
+      jams += q.value("jams", 0);
+    if (jams > 0)
+      t += "  - the pours jam near the top of the range: a wider funnel outlet (W_mm, "
+           "container.bottom_diameter_m) lets a higher mu_r flow\n";
+    else
+      t += "  - a wider mu_r range (now " + lo + " to " + hi +
+           ") when the angle still rises at its top end\n";
+    if (measure == AngleMeasure::kImage || measure == AngleMeasure::kParticles)
+      t += "  - as a declared fallback, the flank measure: --angle image_flank matches the twin's "
+           "flank angle (steeper than its atan(2H/D) on a flat-topped pile, 5-7 deg on the "
+           "shipped scenes) to the lab's; say so beside the result (docs/measures.md)\n";
+  } else {
+    t += "  - a lower start of the mu_r range (now " + lo + ")" +
+         (cc.settings.mu_r_lo > 0.0 ? std::string() : std::string(": it is 0 already")) + "\n";
+    t += "  - the sliding friction contacts.rock-rock.friction, or spheres instead of shaped "
+         "grains ([sample.shape]), if the scene has them\n";
+    t += "  - the lab's angle: a lab photo read as atan(2H/D) (reposetwin measure) is the "
+         "twin's 'image' measure; a protractor angle is steeper (--angle image_flank)\n";
+  }
+  return t;
 }
 
 CalibrateOutcome calibrate_and_predict(const Campaign& c, const std::string& out,

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "experiments/campaign/campaign.hpp"
+#include "experiments/pile/run_plan.hpp"
 
 namespace reposetwin::experiments {
 
@@ -72,6 +73,22 @@ AngleFn calibration_angle(AngleMeasure measure);
 
 /// The angle a prediction reports: NaN for a run that made no pile (listed as no_pile).
 AngleFn prediction_angle(AngleMeasure measure);
+
+/// The plan of a calibration and its predictions, before anything runs: at most the budget's
+/// calibration runs (its scene at the low end of the range, the largest count of grains) and
+/// every [[predict]] run, `workers` at a time, one thread each.
+BatchPlan plan_calibration(const Campaign& campaign, int workers);
+
+/// How the calibration searches, in a line for the plan: the range, its order (the two ends
+/// first, or a start point) and the seeds per point.
+std::string calibration_order_text(const Campaign& campaign);
+
+/// Why a calibration did not reach its target, in numbers (the target against the interval the
+/// mu_r range reaches, after how many runs), and what to try, one suggestion a line: the grain
+/// shape (blocky grains), the plate friction, the mu_r range, and the flank measure as a declared
+/// fallback. Empty when calibration.json has a calibrated mu_r.
+std::string cannot_reach_advice(const Campaign& campaign, const nlohmann::json& calibration,
+                                AngleMeasure measure);
 
 /// What calibrate_and_predict() wrote.
 struct CalibrateOutcome {

@@ -43,6 +43,9 @@ struct BracketSettings {
   double mu_r_lo = 0.0;                       // low end of the mu_r range [-], >= 0
   double mu_r_hi = 0.5;                       // high end of the mu_r range [-], > mu_r_lo
   std::optional<double> mu_r_start;           // first point [-]; nothing = middle of the range
+  bool ends_first = false;                    // run both ends of the range first (instead of
+                                              // mu_r_start): a target out of reach is then
+                                              // known after those two points
   double slope_guess_deg = 25.0;              // expected d(angle)/d(mu_r) [deg per unit mu_r], > 0
   std::vector<std::uint64_t> seeds = {1, 2};  // the seeds run at every point, >= 2 distinct
   double mu_r_tolerance = 0.02;               // stop when the uncertainty of mu_r is below [-], > 0

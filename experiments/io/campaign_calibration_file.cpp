@@ -3,6 +3,7 @@
 #include <set>
 
 #include "experiments/io/campaign_file_detail.hpp"
+#include "experiments/io/campaign_keys.hpp"
 #include "experiments/io/overrides.hpp"
 #include "experiments/io/toml_edit.hpp"
 
@@ -184,6 +185,10 @@ void read_bracket_settings(TableReader& t, CampaignCalibration& cc) {
   b.max_runs = s.max_simulations;
   b.bootstrap = s.bootstrap;
   b.mu_r_start = optional_number(t, "mu_r_start");
+  b.ends_first = t.boolean("ends_first", false);
+  if (b.ends_first && b.mu_r_start)
+    throw bad(file, p + "mu_r_start", value_text(*t.raw().get("mu_r_start")),
+              "not with ends_first = true (the first points are then the range ends)");
   if (auto v = optional_number(t, "slope_guess_deg")) b.slope_guess_deg = *v;
   if (auto v = optional_number(t, "mu_r_tolerance")) b.mu_r_tolerance = *v;
   if (auto v = optional_number(t, "max_jam_rate")) b.max_jam_rate = *v;
@@ -202,10 +207,7 @@ void read_bracket_settings(TableReader& t, CampaignCalibration& cc) {
 }  // namespace
 
 CampaignCalibration read_calibration_table(TableReader& t, const Campaign& c, SceneCache& scenes) {
-  t.known_keys({"key", "target_deg", "target_sd_deg", "target_photos", "target_photo_camera",
-                "target_mm_per_px", "mu_r_range", "seeds_per_point", "first_seed", "tolerance_deg",
-                "max_simulations", "bootstrap_replicates", "confirm", "table1_sample", "angle",
-                "method", "mu_r_start", "slope_guess_deg", "mu_r_tolerance", "max_jam_rate"});
+  t.known_keys(campaign_table_keys("calibration"));
   CampaignCalibration cc;
   read_keys(t, cc);
   cc.method = read_method(t);
@@ -216,7 +218,8 @@ CampaignCalibration read_calibration_table(TableReader& t, const Campaign& c, Sc
   if (cc.method == CalibrationMethod::kBracket) {
     read_bracket_settings(t, cc);
   } else {
-    for (const char* k : {"mu_r_start", "slope_guess_deg", "mu_r_tolerance", "max_jam_rate"})
+    for (const char* k :
+         {"mu_r_start", "ends_first", "slope_guess_deg", "mu_r_tolerance", "max_jam_rate"})
       if (t.has(k))
         throw bad(t.file(), std::string("calibration.") + k, value_text(*t.raw().get(k)),
                   "only with method = \"bracket\"");

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "experiments/io/campaign_file_detail.hpp"
+#include "experiments/io/campaign_keys.hpp"
 #include "experiments/io/hash.hpp"
 #include "experiments/io/overrides.hpp"
 #include "experiments/io/toml_edit.hpp"
@@ -215,7 +216,7 @@ Campaign read_top_level(TableReader& root) {
 std::vector<CaseDef> read_case_tables(TableReader& root, const Campaign& c) {
   std::vector<CaseDef> cases;
   for (TableReader& t : array_of_tables(root, "case", "[[case]]")) {
-    t.known_keys({"name", "scene", "overrides", "description"});
+    t.known_keys(campaign_table_keys("case"));
     CaseDef d;
     d.name_key = t.where("name");
     d.name = safe_name(t, "name");
@@ -231,7 +232,7 @@ std::vector<CaseDef> read_case_tables(TableReader& root, const Campaign& c) {
 
 std::vector<CaseDef> read_sweep(TableReader& t, const Campaign& c) {
   const std::string& file = c.file;
-  t.known_keys({"key", "values", "name"});
+  t.known_keys(campaign_table_keys("sweep"));
   const std::string key = required_string(t, "key");
   const auto parts = split_dotted_key(key, file + ": key 'sweep.key'");
   const std::string prefix = t.string("name", parts.back());
@@ -308,8 +309,7 @@ std::vector<CaseSpec> expand_runs(const Campaign& c, const std::vector<CaseDef>&
 PredictionCase read_prediction(TableReader& t, const Campaign& c, SceneCache& scenes,
                                std::set<std::string>& names) {
   const std::string& file = c.file;
-  t.known_keys({"name", "description", "scene", "measured_deg", "measured_sd_deg", "seeds",
-                "overrides", "interval_ends", "table1_sample"});
+  t.known_keys(campaign_table_keys("predict"));
   PredictionCase pc;
   pc.name = safe_name(t, "name");
   if (!names.insert(lower_case(pc.name)).second)
@@ -441,8 +441,7 @@ Campaign parse_campaign(std::string_view text, const std::string& path) {
   const std::string file = fs::absolute(fs::path(path)).lexically_normal().string();
   const toml::table doc = parse_toml(std::string(text), file);
   TableReader root(doc, file);
-  root.known_keys({"name", "description", "paper", "scene", "seeds", "overrides", "case", "sweep",
-                   "calibration", "predict"});
+  root.known_keys(campaign_table_keys(""));
   SceneCache scenes;
   Campaign c = read_top_level(root);
   c.runs = expand_runs(c, read_cases(root, c), scenes);

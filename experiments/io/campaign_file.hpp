@@ -50,6 +50,7 @@
 //                                             # first_seed.. at every point, max_simulations
 //                                             # pours, default 3 x seeds_per_point), with:
 //   mu_r_start = 0.35                         # optional first point (default: mid-range)
+//   ends_first = true                         # optional (false): both range ends first instead
 //   slope_guess_deg = 26.0                    # optional d(angle)/d(mu_r) guess (25)
 //   mu_r_tolerance = 0.02                     # optional stop tolerance on mu_r (0.02)
 //   max_jam_rate = 0.5                        # optional: points jamming more are unusable

@@ -115,6 +115,9 @@ void apply_override(toml::table& doc, std::string_view dotted_key, const toml::n
 
   const std::string& leaf = parts.back();
   if (auto* t = parent->as_table()) {
+    // A sieve file set on a scene replaces the scene's own inline table, as a person means it,
+    // whether the override comes from --set, a campaign or a lab's sieve sheet.
+    if (key == "sample.psd_file") t->erase("psd");
     const toml::node* existing = t->get(leaf);
     if (existing == nullptr) {
       store(value, value.type(), [&](const auto& v) { t->insert_or_assign(leaf, v); });

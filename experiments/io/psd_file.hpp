@@ -47,8 +47,9 @@ struct PsdFile {
 /// The one rule for relative paths, as the README, `reposetwin keys` and docs/scene.md state it.
 inline constexpr const char* kRelativePathRule =
     "A relative path written in a file (sample.psd_file in a scene, a campaign's scene, "
-    "overrides and target_photos) is relative to that file's folder; a path typed on the command "
-    "line, --set included, is relative to the working folder.";
+    "overrides and target_photos, a test sheet's scene, photo and photo_camera) is relative to "
+    "that file's folder; a path typed on the command line, --set, --tests, --sieve and --scene "
+    "included, is relative to the working folder.";
 
 /// The header of a CSV sieve sheet.
 inline constexpr const char* kCsvHeader = "sieve_mm,passing_percent";

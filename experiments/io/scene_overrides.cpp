@@ -48,10 +48,6 @@ void SceneDoc::apply_command_line(std::span<const std::string> sets) {
   } catch (const InputError& e) {
     throw InputError(file_ + ": " + e.what());
   }
-  // A sieve file given on the command line replaces the scene's own table, as a person means it.
-  for (const Override& o : overrides)
-    if (o.key == "sample.psd_file")
-      if (toml::table* sample = tree_->doc["sample"].as_table()) sample->erase("psd");
   sets_.insert(sets_.end(), sets.begin(), sets.end());
 }
 

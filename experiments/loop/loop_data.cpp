@@ -79,12 +79,56 @@ const std::vector<ConditionColumn>& condition_columns() {
       {"mass_kg", "sample.mass_kg", 1.0, "kg"},
       {"mass_g", "sample.mass_kg", 1e-3, "g"},
       {"W_mm", "container.bottom_diameter_m", 1e-3, "mm"},
+      {"funnel_top_mm", "container.top_diameter_m", 1e-3, "mm"},
+      {"funnel_height_mm", "container.height_m", 1e-3, "mm"},
       {"d_max_mm", "sample.d_max_mm", 1.0, "mm"},
       {"d_min_mm", "sample.d_min_mm", 1.0, "mm"},
       {"lift_speed_m_s", "procedure.lift_speed_m_s", 1.0, "m/s"},
       {"plate", "plate.material", 0.0, "material name"},
   };
   return k;
+}
+
+const std::vector<SheetColumn>& test_sheet_columns() {
+  static const std::vector<SheetColumn> k = {
+      {"id", "required: the test's name, [A-Za-z0-9][A-Za-z0-9._-]*, unique"},
+      {"role",
+       "calibrate (the test mu_r is fitted on) or validate (predicted at the calibrated mu_r); "
+       "required by `loop`; for `calibrate --tests` optional: without it the first row "
+       "calibrates and the others are predicted"},
+      {"scene",
+       "the test's base scene (TOML), relative to the sheet; required by `loop`; for "
+       "`calibrate --tests` optional: empty or absent, the --scene"},
+      {"angle_deg", "* the measured angle of repose atan(2H/D) [deg], in (0, 90)"},
+      {"H_mm", "* the measured pile height [mm]; with D_mm the angle is atan(2H/D)"},
+      {"D_mm", "* the measured pile base diameter [mm]"},
+      {"photo",
+       "* side photo(s) of the pile, ';'-separated, relative to the sheet; measured by vision as "
+       "the twin's renders (they replace a typed angle, H and D)"},
+      {"photo_camera",
+       "a camera sidecar JSON for every photo of the row (else mm_per_px, a STEM.json beside "
+       "each photo, or the scale marker in the image)"},
+      {"mm_per_px", "the photos' scale at the pile axis [mm/px] (orthographic view assumed)"},
+      {"camera_height_m", "the lab camera's height above the plate [m]"},
+      {"crest_mm", "the measured crest (flat top) width [mm], >= 0"},
+      {"repeats", "piles averaged into the measured values (default 1)"},
+      {"note", "free text"},
+  };
+  return k;
+}
+
+std::string test_sheet_markdown() {
+  std::string t = "| column | meaning |\n|---|---|\n";
+  for (const SheetColumn& c : test_sheet_columns())
+    t += "| `" + std::string(c.column) + "` | " + c.meaning + " |\n";
+  for (const ConditionColumn& c : condition_columns())
+    t += "| `" + std::string(c.column) + "` | a condition [" + c.unit + "]: sets the scene's `" +
+         c.key + "` |\n";
+  t += "| `set:KEY` | any other scene key, e.g. `set:contacts.rock-rock.restitution`; the value "
+       "is TOML or a bare word |\n";
+  return t +
+         "\n\\* every row needs a measured value: `angle_deg`, or `H_mm` and `D_mm`, or "
+         "`photo`.\n";
 }
 
 namespace {
@@ -108,11 +152,10 @@ struct Row {
 };
 
 // Phase 1: the header names only known columns, each once, and the required ones.
-Columns read_header(const CsvTable& csv, const std::string& file) {
+Columns read_header(const CsvTable& csv, const std::string& file, const LabSheetForm& form) {
   const std::string at = file + " line " + std::to_string(csv.header_line);
-  std::set<std::string> known = {
-      "id",           "role",      "scene",           "H_mm",    "D_mm", "angle_deg", "photo",
-      "photo_camera", "mm_per_px", "camera_height_m", "repeats", "note", "crest_mm"};
+  std::set<std::string> known;
+  for (const SheetColumn& c : test_sheet_columns()) known.insert(c.column);
   for (const auto& c : condition_columns()) known.insert(c.column);
   Columns cols;
   for (std::size_t i = 0; i < csv.header.size(); ++i) {
@@ -120,7 +163,7 @@ Columns read_header(const CsvTable& csv, const std::string& file) {
     if (cols.has(h)) throw InputError(at + ": column " + h + " appears twice");
     if (!known.count(h) && h.rfind("set:", 0) != 0)
       throw InputError(at + ": unknown column \"" + h +
-                       "\" (see docs/loop.md; any scene key goes in a set:KEY column)");
+                       "\" (see docs/calibration.md or docs/loop.md; any scene key goes in a set:KEY column)");
     cols.header.push_back(h);
     cols.index[h] = static_cast<int>(i);
   }
@@ -137,19 +180,24 @@ Columns read_header(const CsvTable& csv, const std::string& file) {
       throw InputError(at + ": columns " + first->second + " and " + h +
                        " both set the scene key " + key + "; keep one of them");
   }
-  for (const char* req : {"id", "role", "scene"})
+  std::string header_text;
+  for (const std::string& h : cols.header) header_text += (header_text.empty() ? "" : ",") + h;
+  std::vector<std::string> required = {"id"};
+  if (form.role_required) required.push_back("role");
+  if (form.base_scene.empty()) required.push_back("scene");
+  for (const std::string& req : required)
     if (!cols.has(req))
-      throw InputError(file + ": the required column \"" + std::string(req) + "\" is missing");
+      throw InputError(at + ": the required column \"" + req + "\" is missing (header \"" +
+                       header_text + "\")");
   if (!cols.has("angle_deg") && !(cols.has("H_mm") && cols.has("D_mm")) && !cols.has("photo"))
-    throw InputError(file +
-                     ": a measured value is required: column angle_deg, or H_mm and D_mm, "
-                     "or photo");
+    throw InputError(at + ": a measured value is required: column angle_deg, or H_mm and D_mm, "
+                          "or photo (header \"" + header_text + "\")");
   return cols;
 }
 
 // Phase 2: the test's id (safe, unique), role and base scene.
 void read_identity(LabTest& test, const Row& row, Where& w, const fs::path& dir,
-                   std::set<std::string>& ids) {
+                   std::set<std::string>& ids, const LabSheetForm& form, bool first_row) {
   test.id = row.get("id");
   if (!is_safe_name(test.id))
     throw InputError(w.at("id") + ": \"" + test.id +
@@ -158,20 +206,26 @@ void read_identity(LabTest& test, const Row& row, Where& w, const fs::path& dir,
     throw InputError(w.at("id") + ": test id \"" + test.id + "\" appears twice");
   w.id = test.id;
   const std::string role = row.get("role");
+  if (!form.role_required && !row.cols.has("role")) {
+    test.role = first_row ? Role::kCalibrate : Role::kValidate;
+  } else {
   const std::optional<Role> parsed = parse_role(role);
   if (!parsed)
     throw InputError(w.at("role") + ": \"" + role + "\" must be \"calibrate\" or \"validate\"");
   test.role = *parsed;
+  }
   const std::string scene = row.get("scene");
-  if (scene.empty()) throw InputError(w.at("scene") + ": empty (a base scene file is required)");
-  test.scene_path = (dir / scene).lexically_normal().string();
+  if (scene.empty() && form.base_scene.empty())
+    throw InputError(w.at("scene") + ": empty (a base scene file is required)");
+  test.scene_path =
+      scene.empty() ? form.base_scene : (dir / scene).lexically_normal().string();
   if (!fs::exists(test.scene_path))
     throw InputError(w.at("scene") + ": \"" + test.scene_path + "\" does not exist");
 }
 
 // Phase 3: conditions and set:KEY columns become overrides of the scene, which must build (the
 // message names the column whose override breaks it).
-void read_overrides(LabTest& test, const Row& row, const Where& w) {
+void read_overrides(LabTest& test, const Row& row, const Where& w, const LabSheetForm& form) {
   for (const ConditionColumn& c : condition_columns()) {
     const std::string v = row.get(c.column);
     if (v.empty()) continue;
@@ -207,16 +261,18 @@ void read_overrides(LabTest& test, const Row& row, const Where& w) {
     }
   }
   std::vector<std::string> sets;
+  for (const auto& [k, v] : form.common) sets.push_back(k + "=" + v);
+  const std::size_t own = sets.size();
   for (const auto& [k, v] : test.overrides) sets.push_back(k + "=" + v);
   try {
     (void)load_scene(test.scene_path, sets);
   } catch (const std::exception& e) {
     std::string culprit;
-    for (std::size_t k = 1; k <= sets.size() && culprit.empty(); ++k) {
+    for (std::size_t k = own + 1; k <= sets.size() && culprit.empty(); ++k) {
       try {
         (void)load_scene(test.scene_path, {sets.begin(), sets.begin() + k});
       } catch (const std::exception&) {
-        culprit = test.override_columns[k - 1] + " (" + sets[k - 1] + ")";
+        culprit = test.override_columns[k - 1 - own] + " (" + sets[k - 1] + ")";
       }
     }
     throw InputError(w.at(culprit.empty() ? "scene" : culprit) +
@@ -269,6 +325,11 @@ void read_photos(LabTest& test, const Row& row, const Where& w, const fs::path& 
   std::string p;
   while (std::getline(ss, p, ';'))
     if (!trim(p).empty()) test.photos.push_back((dir / trim(p)).lexically_normal().string());
+  std::error_code ec;
+  for (const std::string& photo : test.photos)
+    if (!fs::is_regular_file(photo, ec))
+      throw InputError(w.at("photo") + ": \"" + photo + "\" does not exist (a photo path is "
+                       "relative to the sheet's folder)");
   std::string cam = row.get("photo_camera");
   if (!cam.empty()) cam = (dir / cam).lexically_normal().string();
   std::optional<double> mmpx;
@@ -296,7 +357,7 @@ void read_photos(LabTest& test, const Row& row, const Where& w, const fs::path& 
 
 // One data row as a test: the phases above, then the angle's range.
 LabTest read_row(const CsvRecord& rec, const Columns& cols, const std::string& file,
-                 const fs::path& dir, std::set<std::string>& ids) {
+                 const fs::path& dir, std::set<std::string>& ids, const LabSheetForm& form) {
   Where w{file, rec.line, ""};
   if (rec.fields.size() != cols.header.size())
     throw InputError(w.at("") + ": " + std::to_string(rec.fields.size()) + " fields for " +
@@ -304,8 +365,8 @@ LabTest read_row(const CsvRecord& rec, const Columns& cols, const std::string& f
   const Row row{cols, rec.fields};
   LabTest test;
   test.line = rec.line;
-  read_identity(test, row, w, dir, ids);
-  read_overrides(test, row, w);
+  read_identity(test, row, w, dir, ids, form, ids.empty());
+  read_overrides(test, row, w, form);
   bool have_angle = read_measured(test, row, w);
   if (!row.get("photo").empty()) {
     read_photos(test, row, w, dir, have_angle);
@@ -322,16 +383,17 @@ LabTest read_row(const CsvRecord& rec, const Columns& cols, const std::string& f
 
 }  // namespace
 
-LabData read_lab_csv(const std::string& path) {
+LabData read_lab_csv(const std::string& path, const LabSheetForm& form) {
   if (!std::ifstream(path)) throw InputError(path + ": cannot open the measured-data CSV");
   LabData data;
   data.file = fs::absolute(path).lexically_normal().string();
   const fs::path dir = fs::path(data.file).parent_path();
   const CsvTable csv = parse_csv(read_file(path), data.file);
   if (csv.header.empty()) throw InputError(data.file + ": no header line");
-  const Columns cols = read_header(csv, data.file);
+  const Columns cols = read_header(csv, data.file, form);
   std::set<std::string> ids;
-  for (const CsvRecord& rec : csv.rows) data.tests.push_back(read_row(rec, cols, data.file, dir, ids));
+  for (const CsvRecord& rec : csv.rows)
+    data.tests.push_back(read_row(rec, cols, data.file, dir, ids, form));
   if (data.tests.empty()) throw InputError(data.file + ": no test rows");
   const double d_ref = reference_grain_diameter(data.tests);
   for (LabTest& t : data.tests) t.reference_diameter_m = d_ref;

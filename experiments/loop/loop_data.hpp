@@ -74,6 +74,18 @@ struct LabData {
   std::vector<LabTest> tests;  // in file order
 };
 
+/// Which form of the lab's test sheet read_lab_csv reads: the loop's (every row names its scene
+/// and role) or a calibration's (`reposetwin calibrate --tests`: the command gives the base
+/// scene, and the role says which row is calibrated on, by default the first).
+struct LabSheetForm {
+  std::string base_scene;      // absolute path; empty: the `scene` column is required, else a
+                               // row's empty or absent scene is this one
+  bool role_required = true;   // false: without a role column the first row calibrates and
+                               // the others are predicted (validate)
+  std::vector<std::pair<std::string, std::string>> common;  // overrides of every row's scene
+                                                           // before its own (the sieve sheet)
+};
+
 /// Reads a loop CSV (see docs/loop.md): checks every column, builds every test's scene (with
 /// its overrides), measures the photos and sets every test's reference_diameter_m to the
 /// dataset's typical grain (reference_grain_diameter of loop_effects.hpp). Throws InputError
@@ -81,7 +93,7 @@ struct LabData {
 /// missing required columns, unknown columns, non-numbers, an angle outside (0, 90), neither an
 /// angle nor H and D nor a photo, an unknown role, duplicate ids, scene or override errors,
 /// unreadable photos or photos without a usable scale.
-LabData read_lab_csv(const std::string& path);
+LabData read_lab_csv(const std::string& path, const LabSheetForm& form = {});
 
 /// The named condition columns and the scene key each one drives (with its unit conversion).
 struct ConditionColumn {
@@ -91,6 +103,17 @@ struct ConditionColumn {
   const char* unit;    // the CSV unit, for docs
 };
 const std::vector<ConditionColumn>& condition_columns();
+
+/// The other columns of a test sheet (besides the condition columns and set:KEY), with their
+/// meaning: the reader allows these and no others, and `reposetwin keys --campaign` lists them.
+struct SheetColumn {
+  const char* column;   // CSV header
+  const char* meaning;  // one line, for docs
+};
+const std::vector<SheetColumn>& test_sheet_columns();
+
+/// Every test-sheet column as a Markdown table (docs/calibration.md, `keys --campaign`).
+std::string test_sheet_markdown();
 
 nlohmann::json to_json(const LabTest& t);
 

@@ -96,22 +96,72 @@ std::string plan_text(const RunPlan& p, const PlanSettings& s) {
   return t + representativeness_text(p.representative);
 }
 
-std::string plan_refusal(const RunPlan& p, const PlanSettings& s) {
+namespace {
+
+// Why `subject` is above the limits (empty when it is not), and what shrinks it.
+std::string refusal(const std::string& subject, std::int64_t particles, double wall_s,
+                    double d_min_mm, double d_max_mm, const PlanSettings& s) {
   std::string why;
-  if (p.particles > s.max_particles)
-    why = std::to_string(p.particles) + " particles is above the limit of " +
+  if (particles > s.max_particles)
+    why = std::to_string(particles) + " particles is above the limit of " +
           std::to_string(s.max_particles);
-  if (p.wall_s > s.max_wall_s)
-    why += (why.empty() ? "" : " and ") + std::string("the estimated ") + duration_text(p.wall_s) +
+  if (wall_s > s.max_wall_s)
+    why += (why.empty() ? "" : " and ") + std::string("the estimated ") + duration_text(wall_s) +
            " is above the limit of " + duration_text(s.max_wall_s);
   if (why.empty()) return "";
-  const double bigger = 2.0 * p.d_min_mm;
+  const double bigger = 2.0 * d_min_mm;
   const std::string example =
-      bigger < 0.9 * p.d_max_mm ? ", e.g. --set sample.d_min_mm=" + fmt("%.3g", bigger) : "";
-  return "this run is too large to start unasked: " + why +
-         ". Raise the cut-off sample.d_min_mm (now " + fmt("%.3g", p.d_min_mm) +
+      bigger < 0.9 * d_max_mm ? ", e.g. --set sample.d_min_mm=" + fmt("%.3g", bigger) : "";
+  return subject + " is too large to start unasked: " + why +
+         ". Raise the cut-off sample.d_min_mm (now " + fmt("%.3g", d_min_mm) +
          " mm; the count grows about as d_min^-3)" + example +
          ", or lower sample.mass_kg; or pass --yes to run it anyway";
+}
+
+}  // namespace
+
+std::string plan_refusal(const RunPlan& p, const PlanSettings& s) {
+  return refusal("this run", p.particles, p.wall_s, p.d_min_mm, p.d_max_mm, s);
+}
+
+BatchPlan plan_batch(std::vector<BatchPlan::Part> parts, int workers) {
+  BatchPlan b;
+  b.workers = std::max(1, workers);
+  double cpu_s = 0.0;
+  for (const BatchPlan::Part& part : parts) {
+    b.runs += part.runs;
+    cpu_s += part.runs * part.plan.wall_s;
+  }
+  b.wall_s = cpu_s / std::min(b.workers, std::max(1, b.runs));
+  b.parts = std::move(parts);
+  return b;
+}
+
+std::string plan_text(const BatchPlan& b, const PlanSettings& s) {
+  std::string t = "plan: at most " + std::to_string(b.runs) + " pile runs, " +
+                  std::to_string(b.workers) + " at a time: estimated wall time " +
+                  duration_text(b.wall_s) + " (simulation; the photographs add seconds a run)\n";
+  for (const BatchPlan::Part& part : b.parts) {
+    t += "plan: " + std::to_string(part.runs) + " x " + part.what + ", each:\n";
+    const std::string one = plan_text(part.plan, s);
+    std::size_t from = 0;
+    while (from < one.size()) {
+      const std::size_t end = one.find('\n', from);
+      t += "  " + one.substr(from, end == std::string::npos ? std::string::npos : end - from + 1);
+      if (end == std::string::npos) break;
+      from = end + 1;
+    }
+  }
+  return t;
+}
+
+std::string plan_refusal(const BatchPlan& b, const PlanSettings& s) {
+  const RunPlan* largest = nullptr;
+  for (const BatchPlan::Part& part : b.parts)
+    if (!largest || part.plan.particles > largest->particles) largest = &part.plan;
+  if (!largest) return "";
+  return refusal("this batch of " + std::to_string(b.runs) + " runs", largest->particles,
+                 b.wall_s, largest->d_min_mm, largest->d_max_mm, s);
 }
 
 }  // namespace reposetwin::experiments

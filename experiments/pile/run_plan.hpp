@@ -16,6 +16,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "experiments/io/scene.hpp"
 #include "experiments/pile/representativeness.hpp"
@@ -57,6 +58,31 @@ std::string plan_text(const RunPlan& plan, const PlanSettings& settings = {});
 /// Empty when the plan is within the settings' limits; otherwise why not, naming the limit, the
 /// key that shrinks the run (sample.d_min_mm, sample.mass_kg) and how to go ahead anyway.
 std::string plan_refusal(const RunPlan& plan, const PlanSettings& settings = {});
+
+/// The plan of many pile runs (a calibration and its predictions): every kind of run with its
+/// own plan and count, and the wall time with `workers` runs side by side. The runs of a batch
+/// use one thread each, as the campaign pool runs them.
+struct BatchPlan {
+  struct Part {
+    std::string what;  // which runs, for a person ("calibration runs of test t1")
+    RunPlan plan;      // one run's plan (threads = 1)
+    int runs = 0;      // how many runs of it at most [-]
+  };
+  std::vector<Part> parts;
+  int workers = 1;   // runs side by side [-]
+  int runs = 0;      // sum of the parts' runs [-]
+  double wall_s = 0.0;  // sum(runs x wall) / workers [s]
+};
+
+/// A batch of `parts` on `workers` runs at once.
+BatchPlan plan_batch(std::vector<BatchPlan::Part> parts, int workers);
+
+/// The batch's plan for a person: its total, then every part's plan_text, indented.
+std::string plan_text(const BatchPlan& plan, const PlanSettings& settings = {});
+
+/// As plan_refusal of one run: the largest run's particles and the batch's wall time against
+/// the limits; empty when within them.
+std::string plan_refusal(const BatchPlan& plan, const PlanSettings& settings = {});
 
 /// "45s", "12m5s", "3h20m", "4d6h": a duration for a person.
 std::string duration_text(double seconds);

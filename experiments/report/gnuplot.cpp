@@ -15,7 +15,17 @@ bool run_gnuplot(const std::filesystem::path& script_path, const std::string& sc
   // folder can be moved or committed and the script still runs there.
   const std::string cmd = "cd '" + script_path.parent_path().string() + "' && gnuplot '" +
                           script_path.filename().string() + "' > /dev/null 2>&1";
-  return std::system(cmd.c_str()) == 0 && std::filesystem::exists(png);
+  const bool ok = std::system(cmd.c_str()) == 0 && std::filesystem::file_size(png, ec) > 0 && !ec;
+  // gnuplot opens its output before it reads the plot command: a script that fails leaves an
+  // empty PNG behind, which a page must not show as a figure.
+  if (!ok) std::filesystem::remove(png, ec);
+  return ok;
+}
+
+std::string gnuplot_string(const std::string& text) {
+  std::string s = "'";
+  for (char c : text) s += c == '\'' ? std::string("''") : std::string(1, c);
+  return s + "'";
 }
 
 std::string png_terminal(const std::filesystem::path& png, int width, int height, bool enhanced) {

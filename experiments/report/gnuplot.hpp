@@ -11,9 +11,14 @@
 namespace reposetwin::experiments::report {
 
 /// Writes `script` to `script_path` and runs gnuplot on it. Returns whether gnuplot succeeded
-/// and `png` exists. Throws std::runtime_error when the script cannot be written.
+/// and `png` is not empty (an empty one is removed). Throws std::runtime_error when the script
+/// cannot be written.
 bool run_gnuplot(const std::filesystem::path& script_path, const std::string& script,
                  const std::filesystem::path& png);
+
+/// `text` as a gnuplot single-quoted string ('mu_r (EDEM''s)'): a quote in a label must not end
+/// the string and the script with it.
+std::string gnuplot_string(const std::string& text);
 
 /// The first lines of a script drawing a `width` x `height` PNG to `png` (by its file name: the
 /// script runs in the PNG's folder); `enhanced` false

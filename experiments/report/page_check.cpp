@@ -1,6 +1,8 @@
 #include "experiments/report/page_check.hpp"
 
+#include <map>
 #include <regex>
+#include <set>
 
 #include "experiments/io/provenance.hpp"
 
@@ -82,6 +84,61 @@ void check_scripts(const fs::path& dir, std::vector<PageProblem>& out) {
   }
 }
 
+// The data files a gnuplot script reads: every quoted name ending in .dat.
+std::vector<std::string> script_data(const std::string& script) {
+  std::vector<std::string> out;
+  const std::regex dat(R"(['"]([^'"]+\.dat)['"])");
+  for (auto it = std::sregex_iterator(script.begin(), script.end(), dat);
+       it != std::sregex_iterator(); ++it)
+    out.push_back((*it)[1]);
+  return out;
+}
+
+// The page's figures: two it shows with the same image or drawn from the same data; and every
+// empty image or data file in its folder.
+void check_figures(const fs::path& page, const std::string& html, std::vector<PageProblem>& out) {
+  const fs::path dir = page.parent_path();
+  std::map<std::string, std::string> by_image, by_data;  // content -> the first figure's name
+  std::set<std::string> seen;
+  for (const std::string& ref : page_references(html)) {
+    if (ref.empty() || is_external(ref) || is_absolute(ref)) continue;
+    const std::string name = file_part(ref);
+    if (fs::path(name).extension() != ".png" || !seen.insert(name).second) continue;
+    std::error_code ec;
+    const fs::path png = dir / name;
+    if (!fs::is_regular_file(png, ec)) continue;  // a missing file is reported already
+    if (fs::file_size(png, ec) == 0) continue;  // reported with the folder's files below
+    const std::string bytes = read_file(png.string());
+    if (const auto [it, fresh] = by_image.emplace(bytes, name); !fresh)
+      out.push_back({PageProblemKind::kSameData, page.string(), name + " shows " + it->second});
+    const fs::path script = fs::path(png).replace_extension(".gp");
+    if (!fs::is_regular_file(script, ec)) continue;
+    std::string data;
+    for (const std::string& f : script_data(read_file(script.string()))) {
+      const fs::path file = script.parent_path() / f;
+      if (!fs::is_regular_file(file, ec)) continue;
+      data += read_file(file.string()) + "\x1f";
+    }
+    if (data.empty()) continue;
+    if (const auto [it, fresh] = by_data.emplace(data, name); !fresh && by_image.at(bytes) == name)
+      out.push_back({PageProblemKind::kSameData, page.string(),
+                     name + " is drawn from the data of " + it->second});
+  }
+  // Every image and data file beside the page, shown or not: an empty one is a figure that
+  // failed to draw, or a series written with nothing in it.
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string ext = e.path().extension().string();
+    if ((ext != ".png" && ext != ".dat") || !e.is_regular_file(ec)) continue;
+    const std::string name = e.path().filename().string();
+    if (ext == ".png" && fs::file_size(e.path(), ec) == 0)
+      out.push_back({PageProblemKind::kEmptyImage, page.string(), name});
+    if (ext == ".dat" &&
+        read_file(e.path().string()).find_first_not_of(" \t\r\n") == std::string::npos)
+      out.push_back({PageProblemKind::kEmptyData, page.string(), name});
+  }
+}
+
 }  // namespace
 
 std::string to_string(PageProblemKind kind) {
@@ -91,6 +148,9 @@ std::string to_string(PageProblemKind kind) {
     case PageProblemKind::kRawJson: return "raw JSON";
     case PageProblemKind::kAbsolutePath: return "absolute path in text";
     case PageProblemKind::kAbsoluteScript: return "absolute path in a gnuplot script";
+    case PageProblemKind::kEmptyImage: return "empty image";
+    case PageProblemKind::kEmptyData: return "empty data file";
+    case PageProblemKind::kSameData: return "two figures from the same data";
   }
   return "?";
 }
@@ -111,6 +171,7 @@ std::vector<PageProblem> page_problems(const fs::path& page) {
   check_pre_blocks(page, html, out);
   check_text_paths(page, html, out);
   check_scripts(page.parent_path(), out);
+  check_figures(page, html, out);
   return out;
 }
 

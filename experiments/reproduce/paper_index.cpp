@@ -41,6 +41,18 @@ PaperPoints read_points(TableReader& t, const std::string& file) {
   return p;
 }
 
+PaperLevels read_levels(TableReader& t, const std::string& file) {
+  t.known_keys({"y", "source"});
+  PaperLevels p;
+  p.y = t.numbers("y");
+  p.source = t.string("source");
+  if (p.y.empty()) throw bad(file, t.where("y"), "[]", "needs at least one level");
+  for (double a : p.y)
+    if (!(a >= 0.0 && a <= 90.0))
+      throw bad(file, t.where("y"), show_node(*t.raw().get("y")), "values must lie in [0, 90]");
+  return p;
+}
+
 // The item's campaign or calibration file, loaded to check it; the load's own message (which
 // names that file, its key and value) is kept behind the index's key.
 void check_item_file(const PaperItem& item, TableReader& t, const std::string& written) {
@@ -65,7 +77,8 @@ void check_item_file(const PaperItem& item, TableReader& t, const std::string& w
 PaperItem read_item(TableReader& t, const fs::path& base) {
   const std::string& file = t.file();
   t.known_keys({"name", "paper", "kind", "file", "from", "calibrated_by", "reductions", "x_key",
-                "x_label", "x_scale", "trend", "paper_points", "angle", "if_not_calibrated"});
+                "x_label", "x_scale", "x_range", "trend", "paper_points", "paper_levels", "angle",
+                "if_not_calibrated"});
   PaperItem item;
   item.name = t.string("name");
   if (!is_safe_name(item.name))
@@ -111,8 +124,16 @@ PaperItem read_item(TableReader& t, const fs::path& base) {
   item.x_scale = t.number("x_scale", 1.0);
   if (!(item.x_scale > 0.0))
     throw bad(file, t.where("x_scale"), show_node(*t.raw().get("x_scale")), "must be > 0");
+  if (t.has("x_range")) {
+    const std::vector<double> r = t.numbers("x_range");
+    if (r.size() != 2 || !(r[1] > r[0]))
+      throw bad(file, t.where("x_range"), show_node(*t.raw().get("x_range")),
+                "must be [lo, hi] with lo < hi");
+    item.x_range = std::pair{r[0], r[1]};
+  }
   item.trend = t.string("trend", "");
   if (auto pts = t.table("paper_points", true)) item.paper_points = read_points(*pts, file);
+  if (auto lv = t.table("paper_levels", true)) item.paper_levels = read_levels(*lv, file);
   item.calibrated_by = t.string("calibrated_by", "");
   if (!item.calibrated_by.empty() && item.kind != PaperItemKind::kCalibration)
     throw bad(file, t.where("calibrated_by"), in_quotes(item.calibrated_by),
@@ -343,6 +364,8 @@ nlohmann::json to_json(const PaperItem& item, const ItemPlan& plan) {
                          {"x", item.paper_points->x},
                          {"y", item.paper_points->y},
                          {"source", item.paper_points->source}};
+  if (item.paper_levels)
+    j["paper_levels"] = {{"y", item.paper_levels->y}, {"source", item.paper_levels->source}};
   return j;
 }
 

@@ -51,6 +51,13 @@ struct PaperPoints {
   std::string source;                             // where the paper states them
 };
 
+/// Angles the paper states as a level rather than at a point ("stabilises at about 36.5 deg"),
+/// drawn as horizontal lines on the item's own axes.
+struct PaperLevels {
+  std::vector<double> y;  // the levels [deg], in [0, 90]
+  std::string source;     // where the paper states them
+};
+
 /// One item of the index.
 struct PaperItem {
   std::string name;   // filesystem-safe, unique: the results folder OUT/<name>
@@ -64,11 +71,15 @@ struct PaperItem {
                                            // mu_r, predict at its usable point closest to the
                                            // target (marked not calibrated) instead of skipping
   std::string reductions;         // the declared reductions and why, in words
-  std::string x_key;              // campaign items: the override key whose value is the plot's x
+  std::string x_key;              // the scene key whose value (a campaign case's, a prediction's)
+                                  // is the plot's x
   std::string x_label;            // its label on the page (default: x_key)
   double x_scale = 1.0;           // x shown = value x x_scale (e.g. 1000 for kg -> g)
+  std::optional<std::pair<double, double>> x_range;  // the figure's x axis, where the paper's
+                                                     // statement spans more than our points
   std::string trend;              // the paper's shape-only statement, if it gives no numbers
   std::optional<PaperPoints> paper_points;
+  std::optional<PaperLevels> paper_levels;
   std::string angle = "image";  // campaign items: the angle shown (image, image_flank, ...)
 };
 

@@ -15,6 +15,8 @@
 #include "experiments/report/calibration_section.hpp"
 #include "experiments/report/format.hpp"
 #include "experiments/report/gnuplot.hpp"
+#include "experiments/io/scene_overrides.hpp"
+#include "sim/psd.hpp"
 #include "experiments/report/html.hpp"
 #include "experiments/report/templates.hpp"
 
@@ -94,38 +96,70 @@ std::string reasons_text(const std::map<std::string, int>& m) {
   return t.empty() ? "-" : t;
 }
 
-// The plot of an item: ours with error bars, the paper's points beside them. `tics` (one per
-// point of ours, or none) label the x axis when x is only the case's position.
-bool item_plot(const PaperItem& item, const std::vector<std::array<double, 3>>& ours,
-               const std::string& our_title, const std::string& x_label, const std::string& y_label,
-               const fs::path& page_dir, const std::vector<std::string>& tics = {}) {
-  if (ours.empty() && !item.paper_points) return false;
-  std::ostringstream o, p;
-  for (std::size_t i = 0; i < ours.size(); ++i)
-    o << ours[i][0] << " " << ours[i][1] << " " << ours[i][2] << " \""
-      << (i < tics.size() ? tics[i] : std::string()) << "\"\n";
-  if (item.paper_points)
+// One series of ours on an item's figure: (x, y, error bar) rows, written to
+// PAGE/<item>_<suffix>.dat.
+struct Series {
+  std::string title;
+  std::string suffix;
+  std::vector<std::array<double, 3>> rows;
+  std::vector<std::string> tics;  // x tic labels, one per row (x is then the position)
+  int point_type = 7;             // gnuplot's pt: 7 a filled circle, 6 an open one
+};
+
+// The figure of an item on its own axes: our series with error bars, the paper's points beside
+// them and its stated levels as dashed lines. A data file is written only for what is drawn, so
+// no figure reads an empty one.
+bool item_figure(const PaperItem& item, const std::vector<Series>& ours, const std::string& x_label,
+                 const std::string& y_label, const fs::path& page_dir) {
+  std::vector<std::string> parts;
+  bool tics = false;
+  for (const Series& s : ours) {
+    if (s.rows.empty()) continue;
+    std::ostringstream o;
+    for (std::size_t i = 0; i < s.rows.size(); ++i)
+      o << s.rows[i][0] << " " << s.rows[i][1] << " " << s.rows[i][2] << " \""
+        << (i < s.tics.size() ? s.tics[i] : std::string()) << "\"\n";
+    const fs::path f = page_dir / (item.name + "_" + s.suffix + ".dat");
+    write_file_atomic(f.string(), o.str());
+    tics = tics || !s.tics.empty();
+    parts.push_back(gnuplot_string(f.filename().string()) + " using 1:2:3" +
+                    (s.tics.empty() ? std::string() : std::string(":xtic(4)")) +
+                    " with yerrorbars pt " + std::to_string(s.point_type) + " ps 1.5 title " +
+                    gnuplot_string(s.title));
+  }
+  if (parts.empty()) return false;
+  // The paper's points first, so that ours are drawn over them where both lie at one place.
+  std::vector<std::string> paper;
+  if (item.paper_points) {
+    std::ostringstream p;
     for (std::size_t i = 0; i < item.paper_points->x.size(); ++i)
       p << item.paper_points->x[i] << " " << item.paper_points->y[i] << "\n";
-  const fs::path od = page_dir / (item.name + "_ours.dat"),
-                 pd = page_dir / (item.name + "_paper.dat");
-  write_file_atomic(od.string(), o.str());
-  write_file_atomic(pd.string(), p.str());
+    const fs::path f = page_dir / (item.name + "_paper.dat");
+    write_file_atomic(f.string(), p.str());
+    paper.push_back(gnuplot_string(f.filename().string()) +
+                    " using 1:2 with points pt 5 ps 1.5 title " +
+                    gnuplot_string("paper (" + item.paper_points->source + ")"));
+  }
+  if (item.paper_levels)
+    for (std::size_t i = 0; i < item.paper_levels->y.size(); ++i)
+      paper.push_back(as_printed(item.paper_levels->y[i]) + " with lines dt 2 lw 2 title " +
+                      gnuplot_string(i == 0 ? "paper: " + item.paper_levels->source : ""));
+  parts.insert(parts.begin(), paper.begin(), paper.end());
   std::string plot = "plot ";
-  if (!ours.empty())
-    plot += "'" + od.filename().string() + "' using 1:2:3" +
-            (tics.empty() ? std::string() : std::string(":xtic(4)")) +
-            " with yerrorbars pt 7 title '" +
-            our_title + "'";
-  if (item.paper_points)
-    plot += std::string(ours.empty() ? "" : ", ") + "'" + pd.filename().string() +
-            "' using 1:2 with points pt 5 ps 1.5 title 'paper'";
+  for (std::size_t i = 0; i < parts.size(); ++i) plot += (i ? ", " : "") + parts[i];
   const fs::path png = page_dir / (item.name + ".png");
+  // Offsets in graph units: an axis of mu_r (0.1-0.4) and one of degrees get the same margin.
   const std::string script =
-      png_terminal(png, 720, 420, false) + "set xlabel '" +
-      x_label + "'\nset ylabel '" + y_label +
-      "'\nset key top left\nset offsets graph 0.05, graph 0.05, 1, 1\n" +
-      (tics.empty() ? std::string() : std::string("set xtics rotate by 30 right\n")) + plot + "\n";
+      png_terminal(png, 900, 540, false) + "set xlabel " + gnuplot_string(x_label) +
+      "\nset ylabel " + gnuplot_string(y_label) +
+      // Below the plot: the key's sentences (the paper's source) are wider than a corner.
+      "\nset key below left Left reverse\n"
+      "set offsets graph 0.05, graph 0.05, graph 0.1, graph 0.1\n" +
+      (tics ? std::string("set xtics rotate by 30 right\n") : std::string()) +
+      (item.x_range ? "set xrange [" + as_printed(item.x_range->first) + ":" +
+                          as_printed(item.x_range->second) + "]\n"
+                    : std::string()) +
+      plot + "\n";
   return run_gnuplot(page_dir / (item.name + ".gp"), script, png);
 }
 
@@ -182,11 +216,58 @@ void campaign_part(const PaperItem& item, const fs::path& dir, const fs::path& p
                    (st.n ? mean_sd(st.mean, st.sd) : "no pile");
   }
   d.set("ours", to_data(t));
-  if (item_plot(item, plotted, "ours (" + item.angle + ")",
-                item.x_label.empty() ? "case" : item.x_label,
-                item.paper_points ? item.paper_points->y_label : "angle of repose [deg]", page_dir,
-                item.x_key.empty() ? tics : std::vector<std::string>{}))
+  Series series{"ours (" + item.angle + ")", "ours", plotted,
+                item.x_key.empty() ? tics : std::vector<std::string>{}};
+  if (item_figure(item, {series}, item.x_label.empty() ? "case" : item.x_label,
+                  item.paper_points ? item.paper_points->y_label : "angle of repose [deg]",
+                  page_dir))
     d.set("plot", item.name + ".png");
+}
+
+// The value of the item's x key in a built scene [the key's unit]: the key as the scene (with
+// its overrides) gives it, or, for sample.d_max_mm set by the sieve table, the table's d_max.
+std::optional<double> scene_x(const SceneDoc& doc, const std::string& key) {
+  if (auto v = doc.number(key)) return v;
+  if (key == "sample.d_max_mm") return 1e3 * sim::resolve_psd(doc.config().psd.spec).d_max;
+  return std::nullopt;
+}
+
+// The figure of an item whose [[predict]] tests run at another item's calibrated mu_r: each
+// test's angle (mean and seed sd) against its x, the tests that made no pile at angle 0 (as the
+// paper draws a lodged funnel), and the calibration test itself at its fitted angle.
+bool prediction_figure(const PaperItem& item, const json& cal, const fs::path& dir,
+                       const fs::path& page_dir) {
+  const auto pred = read_json_file(dir / "predictions.json");
+  if (!pred || !cal.value("mu_r", json()).is_number()) return false;
+  const Campaign c = read_campaign_file(item.file);
+  const double mu = cal["mu_r"].get<double>();
+  const std::string angle = pred->value("angle", item.angle);
+  Series piles{"ours: predicted at mu_r " + fixed(mu, 3) + " (" + angle + ", mean and seed sd)",
+               "ours", {}, {}};
+  Series none{"ours: no pile in any seed (drawn at angle 0)", "nopile", {}, {}, 6};
+  for (const json& q : (*pred)["predictions"]) {
+    const std::string name = q.value("name", std::string());
+    const auto p = std::find_if(c.predictions.begin(), c.predictions.end(),
+                                [&](const PredictionCase& x) { return x.name == name; });
+    if (p == c.predictions.end() || p->seeds.empty()) continue;
+    const auto x = scene_x(build_case_scene(prediction_run(c, *p, mu, p->seeds.front())),
+                           item.x_key);
+    if (!x) continue;
+    if (q["mean_deg"].is_number())
+      piles.rows.push_back({*x * item.x_scale, q["mean_deg"].get<double>(),
+                            q["seed_sd_deg"].is_number() ? q["seed_sd_deg"].get<double>() : 0.0});
+    else
+      none.rows.push_back({*x * item.x_scale, 0.0, 0.0});
+  }
+  Series fit{"ours: the calibration test, its fit at mu_r (95% half-width)", "calibration",
+             {}, {}, 9};
+  if (cal.value("fitted_angle_deg", json()).is_number() && c.calibration)
+    if (const auto x = scene_x(build_case_scene(calibration_run(c, mu, c.calibration->settings.first_seed)),
+                               item.x_key))
+      fit.rows.push_back({*x * item.x_scale, cal["fitted_angle_deg"].get<double>(),
+                          cal.value("fitted_angle_halfwidth_deg", 0.0)});
+  const std::string x_label = item.x_label.empty() ? item.x_key : item.x_label;
+  return item_figure(item, {piles, none, fit}, x_label, "angle of repose [deg]", page_dir);
 }
 
 // Our part of a calibration item: mu_r, runs, jam rates, predictions.
@@ -236,8 +317,12 @@ void calibration_part(const PaperItem& item, const fs::path& dir, const fs::path
                 fixed_or_dash(q["error_deg"])}});
   d.set("ours", to_data(t));
   s.ours_text = "mu_r " + mu + ", " + std::to_string(cal->value("simulations", 0)) + " pile runs";
-  if (calibration_plot(*cal, read_json_file(dir / "predictions.json").value_or(json()), page_dir,
-                       item.name))
+  // An item that predicts at another item's calibration is drawn on its own axes (angle
+  // against mass, W/d_max, d_max); the calibration plot (angle against mu_r) is its source's.
+  const bool own_axes = !item.calibrated_by.empty() && !item.x_key.empty();
+  if (own_axes ? prediction_figure(item, *cal, dir, page_dir)
+               : calibration_plot(*cal, read_json_file(dir / "predictions.json").value_or(json()),
+                                  page_dir, item.name))
     d.set("plot", item.name + ".png");
 }
 
@@ -247,7 +332,7 @@ void derived_part(const PaperItem& item, const PaperIndex& index, const fs::path
   Table t;
   t.numeric = true;
   t.header = {"calibration", "d_max [mm]", "mu_r", "95% interval", "model"};
-  std::vector<std::array<double, 3>> pts;
+  std::map<std::string, std::vector<std::array<double, 3>>> pts;  // by rolling model
   for (const std::string& src : item.from) {
     const auto it = std::find_if(index.items.begin(), index.items.end(),
                                  [&](const PaperItem& p) { return p.name == src; });
@@ -260,26 +345,37 @@ void derived_part(const PaperItem& item, const PaperIndex& index, const fs::path
     const double lo = iv[0].get<double>(), hi = iv[1].get<double>();
     Cell c(src);
     c.left = true;
-    t.rows.push_back(
-        {{c, fixed(dmax, 2), fixed(mu, 3), "[" + fixed(lo, 3) + ", " + fixed(hi, 3) + "]",
-          cal->value("rolling_model", json::object()).value("keyword", std::string("?"))}});
-    pts.push_back({dmax, mu, 0.5 * (hi - lo)});
+    const std::string model =
+        cal->value("rolling_model", json::object()).value("keyword", std::string("?"));
+    t.rows.push_back({{c, fixed(dmax, 2), fixed(mu, 3),
+                       "[" + fixed(lo, 3) + ", " + fixed(hi, 3) + "]", model}});
+    pts[model].push_back({dmax, mu, 0.5 * (hi - lo)});
     s.ours_text += (s.ours_text.empty() ? "" : "; ") + src + " " + fixed(mu, 3);
   }
   if (t.rows.empty()) return;
   d.set("ours", to_data(t));
-  if (item_plot(item, pts, "ours (calibrated mu_r, 95% half-width)", "d_max [mm]", "mu_r",
-                page_dir))
-    d.set("plot", item.name + ".png");
+  // One series per rolling law: an epsd mu_r is about twice a cdt (EDEM's) one for the same
+  // torque, so they are not one curve.
+  std::vector<Series> series;
+  for (const auto& [model, rows] : pts)
+    series.push_back({"ours, " + model + " (calibrated mu_r, 95% half-width)", model, rows, {}});
+  if (item_figure(item, series, "d_max [mm]", "mu_r", page_dir)) d.set("plot", item.name + ".png");
 }
 
 std::string paper_text(const PaperItem& item) {
-  if (!item.paper_points) return "";
   std::ostringstream o;
-  const PaperPoints& p = *item.paper_points;
-  for (std::size_t i = 0; i < p.x.size(); ++i)
-    o << (i ? "; " : "") << p.x_label << " " << as_printed(p.x[i]) << ": " << as_printed(p.y[i]);
-  o << " (" << p.source << ")";
+  if (item.paper_points) {
+    const PaperPoints& p = *item.paper_points;
+    for (std::size_t i = 0; i < p.x.size(); ++i)
+      o << (i ? "; " : "") << p.x_label << " " << as_printed(p.x[i]) << ": " << as_printed(p.y[i]);
+    o << " (" << p.source << ")";
+  }
+  if (item.paper_levels) {
+    const PaperLevels& l = *item.paper_levels;
+    o << (item.paper_points ? "; " : "") << "level";
+    for (std::size_t i = 0; i < l.y.size(); ++i) o << (i ? ", " : " ") << as_printed(l.y[i]);
+    o << " deg (" << l.source << ")";
+  }
   return o.str();
 }
 
@@ -332,7 +428,8 @@ std::string build_paper_page(const PaperIndex& index, const std::string& out_dir
     planned += plan.cpu_hours;
     Cell name;
     name.links.push_back({"#" + item.name, item.name});
-    const std::string paper = item.paper_points ? paper_text(item) : item.trend;
+    const std::string paper =
+        item.paper_points || item.paper_levels ? paper_text(item) : item.trend;
     summary.rows.push_back(
         {{Cell(item.paper), name, paper.empty() ? "-" : paper, s.ours_text, item.reductions,
           std::to_string(plan.runs), fixed(plan.cpu_hours, 2), st.state}});

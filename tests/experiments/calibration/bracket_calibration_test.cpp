@@ -185,6 +185,50 @@ TEST(BracketCalibration, JamsBelowTheTargetMakeItUnreachable) {
   for (const Observation& o : c.result.observations) EXPECT_LE(o.mu_r, 0.3);
 }
 
+// A lab's calibration from its sheets runs the two range ends first: a target above what the
+// range reaches is known after those two points (4 pours with 2 seeds), and the reachable
+// interval is the curve's values at the ends.
+TEST(BracketCalibration, EndsFirstKnowsAnUnreachableTargetAfterTwoPoints) {
+  FakePours fake;
+  fake.seed_sd = 0.0;
+  fake.run_sd = 0.0;
+  BracketSettings s = sample1_settings();
+  s.mu_r_start.reset();
+  s.ends_first = true;
+  s.max_runs = 12;
+  const BracketCalibration c = calibrate_bracket(std::ref(fake), {45.0, 0.0}, s);
+  EXPECT_EQ(c.result.status, CalibrationStatus::kCannotReachHigh) << c.result.message;
+  ASSERT_EQ(c.pours.size(), 4u);
+  EXPECT_EQ(fake.calls, 4);
+  EXPECT_EQ(c.pours[0].mu_r, s.mu_r_lo);
+  EXPECT_EQ(c.pours[1].mu_r, s.mu_r_lo);
+  EXPECT_EQ(c.pours[2].mu_r, s.mu_r_hi);
+  EXPECT_EQ(c.pours[3].mu_r, s.mu_r_hi);
+  EXPECT_NEAR(c.result.reachable_low_deg, curve(s.mu_r_lo), 1e-9);
+  EXPECT_NEAR(c.result.reachable_high_deg, curve(s.mu_r_hi), 1e-9);
+  const nlohmann::json j = to_json(c, s);
+  EXPECT_TRUE(j["ends_first"].get<bool>());
+}
+
+// Ends first, a reachable target: the third point is the fitted crossing between the ends, and
+// the calibration ends near the known root.
+TEST(BracketCalibration, EndsFirstThenTheCrossing) {
+  FakePours fake;
+  BracketSettings s = sample1_settings();
+  s.mu_r_start.reset();
+  s.ends_first = true;
+  s.max_runs = 12;
+  const double target = 33.47;
+  const BracketCalibration c = calibrate_bracket(std::ref(fake), {target, 0.0}, s);
+  ASSERT_GE(c.pours.size(), 6u);
+  EXPECT_EQ(c.pours[0].mu_r, s.mu_r_lo);
+  EXPECT_EQ(c.pours[2].mu_r, s.mu_r_hi);
+  EXPECT_GT(c.pours[4].mu_r, s.mu_r_lo);
+  EXPECT_LT(c.pours[4].mu_r, s.mu_r_hi);
+  ASSERT_TRUE(c.result.mu_r.has_value()) << c.result.message;
+  EXPECT_NEAR(*c.result.mu_r, curve_root(target), 0.03);
+}
+
 TEST(BracketCalibration, SettingsAreChecked) {
   FakePours fake;
   BracketSettings s = sample1_settings();

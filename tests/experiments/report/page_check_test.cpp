@@ -60,5 +60,49 @@ TEST(PageCheck, PassesAPageThatOpensAnywhere) {
   EXPECT_EQ(page_references("<img src='a.png'><a HREF=\"b.html\">").size(), 2u);
 }
 
+// A figure page's own faults: an empty image, a script reading an empty data file, a figure
+// drawn from another's data (fig8 reads the same numbers as t3 under other names) and a figure
+// that is another's image; the figure with its own data passes.
+TEST(PageCheck, NamesEmptyAndRepeatedFigures) {
+  const fs::path dir = test_support::temp_dir("page_check_figures");
+  const auto put = [&](const std::string& name, const std::string& text) {
+    write_file_atomic((dir / name).string(), text);
+  };
+  put("t3.png", "png t3");
+  put("t3.gp", "set output 't3.png'\nplot 't3_runs.dat' using 1:2, 't3_fit.dat' with lines\n");
+  put("t3_runs.dat", "0.1 30\n0.2 34\n");
+  put("t3_fit.dat", "0.1 30\n0.2 34\n");
+  put("fig8.png", "png fig8");
+  put("fig8.gp", "set output 'fig8.png'\nplot 'fig8_runs.dat' using 1:2, 'fig8_fit.dat' with lines\n");
+  put("fig8_runs.dat", "0.1 30\n0.2 34\n");
+  put("fig8_fit.dat", "0.1 30\n0.2 34\n");
+  put("fig5.png", "png fig5");
+  put("fig5.gp", "set output 'fig5.png'\nplot 'fig5_ours.dat', 'fig5_paper.dat'\n");
+  put("fig5_ours.dat", "0.1 21 0.5\n");
+  put("fig5_paper.dat", "");
+  put("fig6.png", "");
+  put("fig7.png", "png t3");
+  put("fig9.png", "png fig9");
+  put("fig9.gp", "set output 'fig9.png'\nplot 'fig9_ours.dat'\n");
+  put("fig9_ours.dat", "50 31 0.4\n900 36 0.3\n");
+  put("index.html",
+      "<img src='t3.png'><img src='fig8.png'><img src='fig5.png'><img src='fig6.png'>"
+      "<img src='fig7.png'><img src='fig9.png'><a href='t3.png'>t3 again</a>");
+  const std::vector<PageProblem> problems = page_problems(dir / "index.html");
+  const auto n = kinds(problems);
+  EXPECT_EQ(n.count(PageProblemKind::kEmptyImage) ? n.at(PageProblemKind::kEmptyImage) : 0, 1);
+  EXPECT_EQ(n.count(PageProblemKind::kEmptyData) ? n.at(PageProblemKind::kEmptyData) : 0, 1);
+  EXPECT_EQ(n.count(PageProblemKind::kSameData) ? n.at(PageProblemKind::kSameData) : 0, 2);
+  EXPECT_EQ(problems.size(), 4u);
+  for (const PageProblem& p : problems) {
+    if (p.kind == PageProblemKind::kEmptyImage) EXPECT_EQ(p.what, "fig6.png");
+    if (p.kind == PageProblemKind::kEmptyData) EXPECT_EQ(p.what, "fig5_paper.dat");
+    if (p.kind == PageProblemKind::kSameData)
+      EXPECT_TRUE(p.what == "fig8.png is drawn from the data of t3.png" ||
+                  p.what == "fig7.png shows t3.png")
+          << p.what;
+  }
+}
+
 }  // namespace
 }  // namespace reposetwin::experiments::report
