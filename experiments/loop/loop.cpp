@@ -447,7 +447,7 @@ LoopProvenance Loop::provenance(const Surface& base) const {
   p.lab_angle_source = lab_angle_source(s_.angle);
   p.mu_grid = grid_;
   p.mu_key = s_.mu_key;
-  p.image = s_.image.key();
+  p.image = to_json(photo_settings(s_.image)).dump();
   p.max_pours = s_.max_pours;
   p.cache = cache_.dir();
   p.finished = utc_now();

@@ -32,7 +32,7 @@ TEST(CaseAngle, ImageFirstThenParticles) {
   EXPECT_TRUE(case_made_no_pile(run_result("clogged", "no pile")));
   EXPECT_TRUE(case_made_no_pile(run_result("clogged", "no pile")["result"]));
   EXPECT_FALSE(case_made_no_pile(run_result("settled", "ok")));
-  EXPECT_EQ(case_outcome(run_result("settled", "ok")["result"]), "pile");
+  EXPECT_EQ(case_outcome(run_result("settled", "ok")["result"]), PileStatus::kPile);
 }
 
 // Every run without a headline gives no angle under any measure, and its outcome names why.
@@ -43,12 +43,12 @@ TEST(CaseAngle, ARunWithoutAHeadlineHasNoAngleAndCountsByItsReason) {
                                                        {"physics: nan", "physics_stop"}};
   for (const auto& [stop, outcome] : cases) {
     const nlohmann::json r = run_result(stop, stop == std::string("clogged") ? "no pile" : "ok");
-    EXPECT_EQ(case_outcome(r["result"]), outcome) << stop;
+    EXPECT_EQ(case_outcome_word(r["result"]), outcome) << stop;
     for (AngleMeasure m : {AngleMeasure::kImage, AngleMeasure::kParticles, AngleMeasure::kSlice})
       EXPECT_THROW(case_angle_deg(r, m), std::runtime_error) << stop;
   }
-  EXPECT_EQ(case_outcome(run_result("settled", "no flanks")["result"]), "no_pile");
-  EXPECT_EQ(case_outcome(run_result("settled", "no pile")["result"]), "no_pile");
+  EXPECT_EQ(case_outcome(run_result("settled", "no flanks")["result"]), PileStatus::kNoPile);
+  EXPECT_EQ(case_outcome(run_result("settled", "no pile")["result"]), PileStatus::kNoPile);
   // A case result written for a run that settled carries its headline; one that did not, null.
   CaseResult unsettled;
   unsettled.stop = {StopReason::kSettleTimeLimit, sim::Status::kOk, "still moving", ""};
