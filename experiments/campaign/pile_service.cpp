@@ -16,6 +16,7 @@
 #include "experiments/campaign/pool.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/scene_overrides.hpp"
+#include "experiments/io/toml_edit.hpp"
 #include "experiments/io/vtk_output.hpp"
 #include "experiments/photos/pile_images.hpp"
 #include "experiments/pile/headline.hpp"
@@ -84,6 +85,17 @@ bool order_free(const std::vector<Override>& ov) {
   return true;
 }
 
+// One spelling per value: the text read as TOML and written back, so "0.1" and
+// "0.10000000000000001" (one double), 'plate' and "plate" (one string) are one key.
+std::string canonical_value(const std::string& text) {
+  try {
+    const toml::table t = toml::parse("v = " + text);
+    if (const toml::node* n = t.get("v")) return toml_value_text(*n);
+  } catch (const toml::parse_error&) {
+  }
+  return text;  // not TOML: the scene reader refuses it when the pile is poured
+}
+
 json pile_json(const PileRequest& r) {
   // Canonical: overrides whose order cannot matter are listed by key, so a campaign (sorted by
   // key) and the loop (the test's, then the grid's) asking for one scene share its pile.
@@ -92,7 +104,7 @@ json pile_json(const PileRequest& r) {
     std::sort(ordered.begin(), ordered.end(),
               [](const Override& a, const Override& b) { return a.key < b.key; });
   json ov = json::array();
-  for (const Override& o : ordered) ov.push_back({o.key, o.value});
+  for (const Override& o : ordered) ov.push_back({o.key, canonical_value(o.value)});
   return {{"scene", r.scene_path},
           {"scene_sha256", sha256_hex(read_file(r.scene_path))},
           {"overrides", ov},

@@ -1,5 +1,7 @@
 #include "experiments/loop/loop.hpp"
 
+#include "experiments/campaign/case_runner.hpp"
+
 #include <Eigen/Core>
 #include <algorithm>
 #include <chrono>
@@ -502,21 +504,19 @@ std::string lab_angle_source(AngleMeasure measure) {
 }
 
 double twin_angle(const SimOutcome& o, AngleMeasure measure) {
-  switch (measure) {
-    case AngleMeasure::kImage:
-      return o.angle_deg;
-    case AngleMeasure::kImageFlank:
-      if (o.pile && !std::isfinite(o.flank_deg))
-        throw std::runtime_error(o.image_dir +
-                                 ": this photograph's measurement has no flank angle (made by an "
-                                 "older version); use a fresh --cache");
-      return o.pile ? o.flank_deg : 0.0;
-    case AngleMeasure::kParticles:
-      return o.positions_angle_deg;
-    case AngleMeasure::kSlice:
-      break;
-  }
-  throw std::runtime_error("the loop compares image, image_flank or particles angles, not slice");
+  if (measure == AngleMeasure::kSlice)
+    throw std::runtime_error("the loop compares image, image_flank or particles angles, not slice");
+  if (!o.pile) return 0.0;  // a pour without a measured pile has no angle to compare
+  if (measure == AngleMeasure::kImageFlank && !std::isfinite(o.flank_deg))
+    throw std::runtime_error(o.image_dir +
+                             ": this photograph's measurement has no flank angle (made by an "
+                             "older version); use a fresh --cache");
+  // The campaign's selector (case_runner.hpp), on the loop's record in metres.
+  PileMeasure pile;
+  pile.theta_hd_deg = o.positions_angle_deg;
+  const PhotoMeasure photo{o.angle_deg,          0.0,         1e-3 * o.height_mm,
+                           1e-3 * o.diameter_mm, o.flank_deg, 1e-3 * o.crest_mm};
+  return select_angle_deg(pile, photo, measure, o.image_dir);
 }
 
 std::string grid_bound_name(GridBound g) {
