@@ -151,7 +151,8 @@ void Loop::require_pile(std::size_t i, std::size_t j, std::size_t r, const SimOu
   if (o.pile || !fitted(i)) return;
   throw std::runtime_error("test " + data_.tests[i].id + " formed no pile at mu_r " +
                            std::to_string(grid_[j]) + ", seed " + std::to_string(s_.seeds[r]) +
-                           ", in " + std::to_string(s_.max_pours) + " pour(s) (last: " + o.sim_dir +
+                           ", in " + std::to_string(s_.max_pours) + " pour(s) (last: seed " +
+                           std::to_string(o.seed) + ", " + o.sim_dir +
                            (o.no_pile.empty() ? "" : "; its photographs: " + o.no_pile) +
                            "): the loop needs a pile at every grid point");
 }

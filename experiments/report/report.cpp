@@ -137,9 +137,9 @@ void read_campaign_runs(FolderResults& f) {
     const json& res = meta.at("result");
     // The run and its photographs are where the case's record says (the pile service's store).
     const fs::path run = p.parent_path() / res.value("run_dir", std::string("run"));
-    const fs::path images =
-        res.contains("image") ? p.parent_path() / res["image"].value("images", std::string())
-                              : run / "images";
+    const bool named = res.contains("image") && res["image"].contains("images");
+    const fs::path images = named ? p.parent_path() / res["image"]["images"].get<std::string>()
+                                  : run / "images";
     const auto rel = [&](const fs::path& x) {
       return fs::relative(x.lexically_normal(), f.dir).string();
     };

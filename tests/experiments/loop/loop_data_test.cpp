@@ -161,7 +161,7 @@ TEST(LoopData, ATwinRunWithoutAPileStopsTheLoop) {
     EXPECT_NE(what.find("mu_r 0.1"), std::string::npos) << what;
     EXPECT_NE(what.find("in 2 pour(s)"), std::string::npos) << what;
     // The last pour named is the repeat, with its own seed.
-    EXPECT_NE(what.find("seed_" + std::to_string(1 + kRepourSeedStride)), std::string::npos)
+    EXPECT_NE(what.find("seed " + std::to_string(1 + kRepourSeedStride)), std::string::npos)
         << what;
   }
   EXPECT_FALSE(fs::exists(out / "loop.json"));
