@@ -115,7 +115,10 @@ for s in "${seed_list[@]}"; do
   fi
   "${bin}" measure-particles "${lig}/final.dump" --scene "${scene}" "${sets[@]}" --json |
     jq -r --arg s "${s}" --arg w "$(cat "${lig}.wall")" \
-      '[$s, "liggghts", .status, (.height_m | if . == null then null else . * 1000 end),
+      '[$s, "liggghts",
+        # A clog: the container lifted most grains away, and what fell before it is no pile.
+        (if .status == "ok" and .pile_count < 0.9 * .particles then "jam" else .status end),
+        (.height_m | if . == null then null else . * 1000 end),
         (.base_diameter_m | if . == null then null else . * 1000 end), .theta_hd_deg,
         .particles, ($w | tonumber)] | @csv' >> "${out}/summary.csv"
 done
