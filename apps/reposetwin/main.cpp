@@ -2,6 +2,7 @@
 // apps/reposetwin/cmd_*.cpp and is registered in the table below.
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <csignal>
 #include <exception>
 #include <iostream>
 #include <string>
@@ -33,6 +34,10 @@ std::string unknown_command(CLI::App& app, const std::string& word) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A file-size limit (ulimit -f, a quota) reached mid-write kills a process with SIGXFSZ by
+  // default, leaving a temporary file and no word; ignored, the write fails with EFBIG and the
+  // writer names the file, as on a full disk.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"ReposeTwin: a DEM digital twin of the angle-of-repose pile test"};
   app.set_version_flag("--version", reposetwin::experiments::code_version());
   app.require_subcommand(1);

@@ -290,3 +290,31 @@ TEST(BadInput, ACalibrationWithARefusedShapeValueRunsNothing) {
     EXPECT_FALSE(fs::exists(out)) << "a refused calibration wrote " << out;
   }
 }
+
+namespace {
+
+// A disk that fills up mid-run, made by a file-size limit (`ulimit -f`, a write past it fails
+// with EFBIG as one on a full disk fails with ENOSPC; root cannot fill a real disk in a test):
+// the run stops with a non-zero exit and a message naming a file it could not write, and leaves
+// no truncated final.vtp behind (writes are atomic: the whole file or none).
+TEST(BadInput, AFullDiskStopsTheRunNamingTheFile) {
+  const fs::path dir = fresh_dir("disk_full");
+  const fs::path scene = dir / "tiny.toml";
+  write_text(scene, reposetwin::test_support::kTinyScene);
+  const fs::path out = dir / "run", log = dir / "log.txt";
+  const std::string cmd = "ulimit -f 4; '" + std::string(REPOSETWIN_BIN) + "' run " +
+                          quoted(scene) + " --out " + quoted(out) +
+                          " --no-images --yes --quiet </dev/null >" + quoted(log) +
+                          " 2>&1";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by a signal: " << read_text(log);
+  EXPECT_NE(WEXITSTATUS(status), 0) << read_text(log);
+  const std::string text = read_text(log);
+  EXPECT_NE(text.find(out.string()), std::string::npos) << text;
+  EXPECT_FALSE(fs::exists(out / "final.vtp"));
+  for (const auto& e : fs::recursive_directory_iterator(out))
+    EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos)
+        << "a temporary file was left: " << e.path();
+}
+
+}  // namespace
