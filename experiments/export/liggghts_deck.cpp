@@ -201,19 +201,19 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
      << "fix cad all mesh/surface file container.stl type 2\n"
      << "fix walls all wall/gran " << law << " mesh n_meshes 1 meshes cad\n";
 
-  // The PSD: one template per sieve interval, mixed by mass.
-  std::string mix;
+  // The PSD: one template per sieve interval, mixed by mass, and the sample inserted (unless it
+  // is read from an initial state).
   int k = 0;
-  for (const sim::PsdInterval& iv : psd.intervals) {
-    if (settings.initial_state) break;  // the sample is read, not inserted
-    if (iv.mass_fraction <= 0) continue;
-    ++k;
-    in << "fix pts" << k << " all particletemplate/sphere " << prime_seed(settings.seed, k)
-       << " atom_type 1 density constant " << num(density) << " radius constant "
-       << num(0.25 * (iv.lower + iv.upper)) << "\n";
-    mix += " pts" + std::to_string(k) + " " + num(iv.mass_fraction);
-  }
   if (!settings.initial_state) {
+    std::string mix;
+    for (const sim::PsdInterval& iv : psd.intervals) {
+      if (iv.mass_fraction <= 0) continue;
+      ++k;
+      in << "fix pts" << k << " all particletemplate/sphere " << prime_seed(settings.seed, k)
+         << " atom_type 1 density constant " << num(density) << " radius constant "
+         << num(0.25 * (iv.lower + iv.upper)) << "\n";
+      mix += " pts" + std::to_string(k) + " " + num(iv.mass_fraction);
+    }
     in << "fix pdd all particledistribution/discrete/massbased " << prime_seed(settings.seed, 0)
        << " " << k << mix << "\n";
     in << "region cone_in cone z 0 0 " << num(rin_b) << " " << num(rin_t) << " "
