@@ -335,6 +335,7 @@ void read_procedure(TableReader t, ProcedureConfig& p) {
   p.clog_window = t.number("clog_window_s", p.clog_window);
   p.max_retained_fraction = t.number("max_retained_fraction", p.max_retained_fraction);
   p.lattice_gap = t.number("lattice_gap", p.lattice_gap);
+  p.fill_jitter = t.number("fill_jitter", p.fill_jitter);
   p.fill_max_speed = t.number("fill_max_speed_m_s", p.fill_max_speed);
   if (!(p.fill_max_speed > 0))
     t.fail("fill_max_speed_m_s", "= " + num(p.fill_max_speed) + " must be positive");
@@ -357,6 +358,10 @@ void read_procedure(TableReader t, ProcedureConfig& p) {
   if (!(p.lattice_gap >= 0 && p.lattice_gap <= kMaxLatticeGap))
     t.fail("lattice_gap", "= " + num(p.lattice_gap) + " must be in [0, " + num(kMaxLatticeGap) +
                               "] (fill spacing d_max (1 + this))");
+  if (!(p.fill_jitter >= 0 && p.fill_jitter <= 1))
+    t.fail("fill_jitter", "= " + num(p.fill_jitter) +
+                              " must be in [0, 1] (the fraction of a grain's free room in its "
+                              "lattice cell)");
   t.finish();
 }
 

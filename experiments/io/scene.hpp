@@ -39,6 +39,9 @@ struct ProcedureConfig {
                                      // lifted away with it (cohesive grains on its wall, as in the
                                      // lab), and the pile settles; above it the test clogged [-]
   double lattice_gap = 0.05;         // fill lattice spacing = d_max (1 + this) [-]
+  double fill_jitter = 0.0;          // each grain moved off its lattice point by up to this
+                                     // fraction of its free room in the cell, seeded: breaks the
+                                     // lattice's columns that a poured lab fill never has [-]
   double fill_max_speed = 0.3;       // gentle pour: speeds capped at this while filling [m/s]
 };
 

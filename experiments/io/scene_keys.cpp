@@ -182,6 +182,8 @@ std::vector<SceneKey> procedure_keys() {
        "at most this fraction stuck inside is lifted away; more is a clog"},
       {"procedure.lattice_gap", "number", n(p.lattice_gap), "-",
        "fill lattice spacing = d_max (1 + this)"},
+      {"procedure.fill_jitter", "number", n(p.fill_jitter), "-",
+       "grains moved off the lattice by up to this fraction of their room (seeded)"},
       {"procedure.fill_max_speed_m_s", "number", n(p.fill_max_speed), "m/s",
        "speeds capped at this while filling (a gentle pour)"},
   };
