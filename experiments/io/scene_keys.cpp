@@ -225,7 +225,8 @@ std::vector<SceneKey> output_keys() {
       {"output.progress_interval_s", "number", n(o.progress_interval), "s",
        "wall time between progress lines"},
       {"output.contact_forces", "boolean", o.contact_forces ? "true" : "false", "-",
-       "also write each frame's particle contacts (force per pair) for ParaView"},
+       "also write every frame's particle contacts (force per pair) for ParaView; the last "
+       "frame always has them"},
   };
 }
 
