@@ -98,6 +98,8 @@ TEST(UserCalibration, FromTheLabsSheetsToMuR) {
   EXPECT_LE(lo, mu);
   EXPECT_LE(mu, hi);
   EXPECT_LE(hi, 0.5);
+  // Stopped because the seeds' spread alone is wider than the tolerance, said as such.
+  if (j["status"] != "calibrated") EXPECT_EQ(j["status"], "seed_noise_limited") << j["message"];
   EXPECT_TRUE(fs::exists(d / "cal" / "campaign.toml"));
   EXPECT_NE(cal.out.find("mu_r "), std::string::npos) << cal.out;
 
