@@ -276,6 +276,8 @@ const std::vector<CommandCase> kCommandCases = {
     {"P2 loop --width 0", "loop SHEET --out DIR/l --width 0", 105, {"--width"}, {}},
     {"P2 loop --min-t nan", "loop SHEET --out DIR/l --min-t nan", 105, {"--min-t", "nan"}, {}},
     {"P2 export --seed -1", "export SCENE --out DIR/e --seed -1", 105, {"--seed"}, {}},
+    {"P2 a folder as the campaign", "campaign DIR --out DIR/c", 2,
+     {"is a directory, not a file"}, {"not found"}},
 };
 
 TEST(BadInputTable, EveryCommandCaseIsRefusedNamingItsOption) {
