@@ -106,7 +106,8 @@ void fill_container(sim::World& world, const SceneConfig& scene, const PileSampl
   const ContainerConfig& c = scene.container;
   // Clearance from a slanted wall, measured horizontally: (s/2) / cos(wall slant).
   const double slope = 0.5 * (c.top_diameter - c.bottom_diameter) / c.height;
-  const double clearance = 0.5 * s * std::sqrt(1.0 + slope * slope);
+  const double secant = std::sqrt(1.0 + slope * slope);  // 1 / cos(wall slant)
+  const double clearance = 0.5 * s * secant;
   // The jitter's own stream, so that the PSD draw and the orientations stay those of the seed.
   sim::Rng rng(scene.seed ^ 0x6a09e667f3bcc909ULL);
   const double jitter = scene.procedure.fill_jitter;
@@ -125,7 +126,7 @@ void fill_container(sim::World& world, const SceneConfig& scene, const PileSampl
     const double z_rel = at.z() - c.gap;
     const double r_wall =
         std::min(container_radius(c, z_rel - reach), container_radius(c, z_rel + reach)) -
-        reach * std::sqrt(1.0 + slope * slope);
+        reach * secant;
     if (std::hypot(at.x() + dx, at.y() + dy) <= r_wall) {
       at.x() += dx;
       at.y() += dy;

@@ -352,7 +352,7 @@ std::string lab_photo_section(const std::optional<LabView>& given, const fs::pat
     if (note.empty()) return "";
     mustache::data d;
     d.set("photos", mustache::data::type::list);
-    d.set("render", true);
+    d.set("render", true);  // no "render missing" line: the note says why nothing is shown
     d.set("scale", false);
     d.set("note", note);
     return render(templates::kLabPhoto, d);
