@@ -49,7 +49,8 @@ struct OutputConfig {
   double frame_interval = 0.0;       // simulated time between .vtp frames; 0 = final only [s]
   double checkpoint_interval = 120.0; // wall-clock time between checkpoints [s]
   double progress_interval = 5.0;    // wall-clock time between progress lines [s]
-  bool contact_forces = false;       // every frame's particle contacts too, not the last one only (ParaView) [-]
+  bool contact_forces = false;       // every frame's particle contacts, not the last one's
+                                     // only (ParaView) [-]
 };
 
 struct SceneConfig {
