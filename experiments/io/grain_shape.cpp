@@ -75,11 +75,15 @@ sim::ClumpShape generate_shape(TableReader& t, GrainShape& g) {
                           num(g.elongation) + "; use at least " + std::to_string(2 * rows));
   // In one row, neighbours stand (L - 2 roundness r) / (n - 1) apart with radii at most r:
   // farther than 2 r, the grain is in pieces, and the elongation is the key to blame.
-  if (rows == 1 && per_row > 1 && g.elongation > per_row - 1 + g.roundness)
+  if (rows == 1 && per_row > 1 && g.elongation > per_row - 1 + g.roundness) {
+    const double needed = std::ceil(g.elongation + 1.0 - g.roundness);
     t.fail("elongation", "= " + num(g.elongation) + " with spheres = " + std::to_string(n) +
                              " leaves gaps between the spheres (the grain would fall in pieces); "
-                             "use at most " + num(per_row - 1 + g.roundness) +
-                             " or more spheres");
+                             "use an elongation of at most " + num(per_row - 1 + g.roundness) +
+                             (needed <= 64 ? ", or spheres = " + num(needed)
+                                           : " (64 spheres, the most, allow " +
+                                                 num(63 + g.roundness) + ")"));
+  }
   g.spheres = static_cast<int>(n);
   const double r = 0.5, length = g.elongation * g.flatness;
   const double row_y = 0.5 * (g.flatness - 1.0);

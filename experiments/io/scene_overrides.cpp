@@ -86,18 +86,33 @@ SceneConfig SceneDoc::config_after_command_line() const {
   try {
     return config();
   } catch (const InputError& e) {
-    // The key in error, or a table holding it, or a key inside it, came from a --set.
-    auto related = [&](const std::string& set_key) {
-      const std::string& k = e.key();
-      auto under = [](const std::string& a, const std::string& b) {
-        return a.size() > b.size() && a.compare(0, b.size(), b) == 0 && a[b.size()] == '.';
-      };
-      return !k.empty() && (k == set_key || under(k, set_key) || under(set_key, k));
+    // The reader names the k-th of [[sample.shapes]] "sample.shapes[k]", an override
+    // "sample.shapes.k".
+    std::string k = e.key();
+    for (std::size_t at; (at = k.find('[')) != std::string::npos;) {
+      const std::size_t close = k.find(']', at);
+      if (close == std::string::npos) break;
+      k = k.substr(0, at) + "." + k.substr(at + 1, close - at - 1) + k.substr(close + 1);
+    }
+    if (k.empty()) throw;
+    auto under = [](const std::string& a, const std::string& b) {
+      return a.size() > b.size() && a.compare(0, b.size(), b) == 0 && a[b.size()] == '.';
     };
-    // The last --set of a key is the one whose value was read.
-    for (auto it = sets_.rbegin(); it != sets_.rend(); ++it)
-      if (related(parse_override(*it, "--set").key))
+    auto parent = [](const std::string& a) { return a.substr(0, a.rfind('.')); };
+    // The key in error, or a table holding it, or a key inside it, came from a --set: the last
+    // --set of it is the one whose value was read.
+    for (auto it = sets_.rbegin(); it != sets_.rend(); ++it) {
+      const std::string set = parse_override(*it, "--set").key;
+      if (k == set || under(k, set) || under(set, k))
         throw InputError(std::string(e.what()) + " (set by --set " + *it + ")", e.key());
+    }
+    // Else a key of the same table did: a rule between keys (a shape's flatness and its sphere
+    // count), where the user's change is the other key.
+    for (auto it = sets_.rbegin(); it != sets_.rend(); ++it) {
+      const std::string set = parse_override(*it, "--set").key;
+      if (k.find('.') != std::string::npos && parent(k) == parent(set))
+        throw InputError(std::string(e.what()) + " (with --set " + *it + ")", e.key());
+    }
     throw;
   }
 }

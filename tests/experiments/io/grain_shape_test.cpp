@@ -168,6 +168,13 @@ TEST(GrainShape, BadFamiliesNameFileKeyAndValue) {
   // Rows farther apart than the spheres reach: flatness 3 makes two separate rods.
   expect_error("[sample.shape]\nkind = \"generated\"\nflatness = 3.0\nspheres = 4\n",
                {"sample.shape.spheres", "in pieces"});
+  // A rod too long for its spheres: the message gives both ways out, the longest elongation
+  // the spheres reach (n - 1 + roundness) and the sphere count the elongation needs, or that
+  // none is enough.
+  expect_error("[sample.shape]\nkind = \"generated\"\nelongation = 4.5\nspheres = 3\n",
+               {"sample.shape.elongation", "= 4.5", "in pieces", "at most 3", "spheres = 5"});
+  expect_error("[sample.shape]\nkind = \"generated\"\nelongation = 100.0\nspheres = 3\n",
+               {"sample.shape.elongation", "at most 3", "64 spheres, the most, allow 64"});
   // A typo is refused by name, before the missing key it stood for.
   expect_error("[sample.shape]\nkind = \"generated\"\nelongaton = 1.5\nspheres = 4\n",
                {"sample.shape.elongaton"});

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "experiments/io/input_error.hpp"
+#include "experiments/io/provenance.hpp"
 #include "experiments/io/scene.hpp"
 #include "experiments/io/scene_keys.hpp"
 #include "experiments/io/scene_overrides.hpp"
@@ -37,15 +38,20 @@ namespace fs = std::filesystem;
 const fs::path kSource = REPOSETWIN_SOURCE_DIR;
 
 // The reference's keys of a kind expanded to the scene's own names: <name> to each material,
-// <a>-<b> to each contact pair. Grain-shape keys (sample.shapes[<k>]) are left out: the scenes
-// fuzzed here have no shape mix.
+// <a>-<b> to each contact pair, [<k>] to each shape of a mix as an override writes it
+// (sample.shapes.<k>.elongation).
 std::vector<std::string> concrete_keys(const SceneConfig& scene, const std::string& type) {
   std::vector<std::string> out;
   for (const SceneKey& k : scene_keys()) {
-    if (k.type != type || k.key.find("[<k>]") != std::string::npos) continue;
+    if (k.type != type) continue;
     const std::size_t name = k.key.find("<name>");
     const std::size_t pair = k.key.find("<a>-<b>");
-    if (name != std::string::npos) {
+    const std::size_t shape = k.key.find("[<k>]");
+    if (shape != std::string::npos) {
+      const std::size_t n = scene.shapes.size();
+      for (std::size_t i = 0; n > 1 && i < n; ++i)
+        out.push_back(k.key.substr(0, shape) + "." + std::to_string(i) + k.key.substr(shape + 5));
+    } else if (name != std::string::npos) {
       for (const sim::Material& m : scene.materials)
         out.push_back(k.key.substr(0, name) + m.name + k.key.substr(name + 6));
     } else if (pair != std::string::npos) {
@@ -185,6 +191,48 @@ TEST(SceneFuzz, EveryKeyOfTheTinySceneWithEveryHostileValue) {
   const std::vector<Mutation> all = all_mutations(kSource / "data/loop/tiny_scene.toml");
   ASSERT_GT(all.size(), 800u);
   run_all(all);
+}
+
+// A mix of three grain shapes (one of each kind) on the tiny scene: every key of every shape,
+// as `--set sample.shapes.<k>.KEY=VALUE` writes it, with every hostile value; a refusal names
+// the key so spelt.
+TEST(SceneFuzz, EveryKeyOfAShapeMixWithEveryHostileValue) {
+  const fs::path dir = fs::temp_directory_path() / "reposetwin_scene_fuzz_shapes";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::string text = read_file((kSource / "data/loop/tiny_scene.toml").string());
+  text += R"(
+[[sample.shapes]]
+name = "rod"
+kind = "generated"
+mass_fraction = 0.4
+elongation = 2.0
+spheres = 3
+
+[[sample.shapes]]
+name = "block"
+kind = "blocky"
+mass_fraction = 0.4
+elongation = 1.5
+flatness = 1.2
+angularity = 0.5
+
+[[sample.shapes]]
+name = "pair"
+kind = "template"
+mass_fraction = 0.2
+offsets = [[0.0, 0.0, 0.0], [0.6, 0.0, 0.0]]
+radii = [0.5, 0.5]
+)";
+  const fs::path scene = dir / "shape_mix.toml";
+  write_file_atomic(scene.string(), text);
+  ASSERT_EQ(parse_scene_file(scene.string()).shapes.size(), 3u);
+  // The scene's other keys are the tiny scene's, fuzzed above.
+  std::vector<Mutation> shape_keys;
+  for (const Mutation& m : all_mutations(scene))
+    if (m.key.rfind("sample.shapes.", 0) == 0) shape_keys.push_back(m);
+  ASSERT_GT(shape_keys.size(), 300u) << "every shape's keys are mutated";
+  run_all(shape_keys);
 }
 
 TEST(SceneFuzz, PaperScenesWithSeededDraws) {
