@@ -1,5 +1,7 @@
 #include "experiments/campaign/case_runner.hpp"
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <set>
 #include <stdexcept>
@@ -74,8 +76,31 @@ PileRequest case_request(const CaseSpec& spec, const CaseRunSettings& settings) 
 
 namespace {
 
-// The case's record of the service's answer, with the run's and the photographs' folders
-// relative to the case folder.
+// The case folder's run/ as a campaign has always laid it out (result.json, final.vtp, the
+// frame series, images/), made of links into the store: each entry of the pile's run folder,
+// and images/ to its photographs. A user opens CASE/run/result.json or run/images/ as before,
+// and the pile stays one pile in the store, shared with any other caller. Relative links, so an
+// output folder moved whole with its store keeps them. Made beside and renamed into place, so
+// a killed worker leaves no half-made run/ (an earlier one, from an interrupted attempt, is
+// replaced).
+void link_case_run(const PileOutcome& o, const fs::path& case_dir) {
+  const fs::path run = case_dir / "run";
+  const fs::path tmp = case_dir / ("run.tmp." + std::to_string(::getpid()));
+  fs::remove_all(tmp);
+  fs::create_directories(tmp);
+  for (const fs::directory_entry& e : fs::directory_iterator(o.run_dir)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind('.', 0) == 0) continue;  // the store's lock files
+    fs::create_symlink(fs::relative(e.path(), run), tmp / name);
+  }
+  if (o.photo && o.photo->measured)
+    fs::create_directory_symlink(fs::relative(o.photo->dir, run), tmp / "images");
+  fs::remove_all(run);
+  fs::rename(tmp, run);
+}
+
+// The case's record of the service's answer: its run/ and run/images/ (links into the store,
+// link_case_run), relative to the case folder as a campaign has always written them.
 CaseResult case_result_of(const PileOutcome& o, const fs::path& case_dir) {
   CaseResult r;
   r.stop = o.stop;
@@ -85,11 +110,11 @@ CaseResult case_result_of(const PileOutcome& o, const fs::path& case_dir) {
   r.provenance = o.provenance;
   r.psd_fines_fraction = o.psd_fines_fraction;
   r.shape = o.shape;
-  r.run_dir = fs::relative(o.run_dir, case_dir).string();
+  r.run_dir = "run";
   if (o.photo && o.photo->measured) {
     const PhotoMeasure& m = *o.photo->measured;
     r.image = CaseImages{m.theta_deg,  m.theta_sd_deg, m.height_m, m.diameter_m, m.flank_deg,
-                         fs::relative(o.photo->dir, case_dir).string()};
+                         "run/images"};
   }
   return r;
 }
@@ -110,7 +135,9 @@ CaseFn pile_case_fn(const CaseRunSettings& settings) {
     ps.threads = settings.threads;
     ps.frames = true;  // a campaign's run keeps the scene's frame series
     PileService service(store.string(), ps);
-    return to_json(case_result_of(service.run_one(case_request(spec, settings)), dir));
+    const PileOutcome o = service.run_one(case_request(spec, settings));
+    link_case_run(o, dir);
+    return to_json(case_result_of(o, dir));
   };
 }
 

@@ -5,8 +5,11 @@
 // (pile_service.hpp) for the case's pour (scene, overrides, seed, photo settings), so a pile
 // another campaign, a calibration or the loop already poured into the same store is not poured
 // again, and returns a CaseResult: the particle-position angles, the image angle, the stop
-// reason, the provenance and where the run and its photographs are. The runner stores it as
-// JSON (to_json), and calibration and reports read it back with case_result_from_json.
+// reason, the provenance and where the run and its photographs are. The case folder keeps the
+// layout campaigns have always had (result.json, and run/ with the run's result.json,
+// final.vtp, frames and images/), its run/ made of links to the pile and photographs in the
+// store. The runner stores the result as JSON (to_json), and calibration and reports read it
+// back with case_result_from_json.
 #pragma once
 
 #include <optional>
@@ -39,6 +42,7 @@ struct CaseImages {
   double diameter_m = 0.0;            // D [m]
   double flank_deg = 0.0;             // flank-line angle [deg]
   std::string images = "run/images";  // the photographs' folder, relative to the case folder
+                                      // (a link into the pile service's store)
 };
 
 /// One case's outcome (the "result" of its result.json).
@@ -49,8 +53,8 @@ struct CaseResult {
   RunPerformance performance;
   RunProvenance provenance;
   double psd_fines_fraction = 0.0;  // mass fraction of the PSD below d_min, not simulated [-]
-  std::string run_dir = "run";      // the pile run's folder, relative to the case folder (in
-                                    // the pile service's store)
+  std::string run_dir = "run";      // the pile run's folder, relative to the case folder (its
+                                    // entries are links into the pile service's store)
   std::optional<CaseImages> image;  // absent: not photographed (--no-images, or no pile)
   std::optional<ShapeRecord> shape;  // a clump sample's shapes as run; absent for spheres, so a
                                      // campaign over shape keys says in each case what it ran

@@ -16,7 +16,6 @@
 #include "experiments/campaign/pool.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/scene_overrides.hpp"
-#include "experiments/io/toml_edit.hpp"
 #include "experiments/io/vtk_output.hpp"
 #include "experiments/photos/pile_images.hpp"
 #include "experiments/pile/headline.hpp"
@@ -76,39 +75,25 @@ json to_json(const PhotoRequest& p) {
 
 namespace {
 
-// True when no override's key is another's or lies inside another's table ("a.b" and "a.b.c"),
-// so the order they are applied in cannot change the scene.
-bool order_free(const std::vector<Override>& ov) {
-  for (const Override& a : ov)
-    for (const Override& b : ov)
-      if (&a != &b && (a.key == b.key || b.key.rfind(a.key + ".", 0) == 0)) return false;
-  return true;
-}
-
-// One spelling per value: the text read as TOML and written back, so "0.1" and
-// "0.10000000000000001" (one double), 'plate' and "plate" (one string) are one key.
-std::string canonical_value(const std::string& text) {
-  try {
-    const toml::table t = toml::parse("v = " + text);
-    if (const toml::node* n = t.get("v")) return toml_value_text(*n);
-  } catch (const toml::parse_error&) {
-  }
-  return text;  // not TOML: the scene reader refuses it when the pile is poured
+// The request's scene as it is poured, in one canonical text: the scene file with the
+// overrides applied in order and the seed set, read strictly and written back
+// (SceneConfig::resolved_toml: keys sorted, every value in one spelling, a sieve-table file
+// copied in, every contact's defaults written out). The key is made from this, not from the
+// file's path or the overrides' text, so one scene at two paths (a loop's copy of the lab's
+// scene beside its CSV) is one pile, overrides that end in the same scene are one pile whatever
+// their order or spelling, and an edited scene file (or sieve file) is never served a stale pile.
+// The frame series is not part of it (final_frame_only is a setting of the run, not the pile).
+// Throws InputError naming the scene file for a scene the overrides break.
+std::string resolved_scene(const PileRequest& r) {
+  SceneDoc doc(r.scene_path, r.overrides, "pile request (scene " + r.scene_path + ")");
+  doc.set_seed(r.seed);
+  return doc.config().resolved_toml;
 }
 
 json pile_json(const PileRequest& r) {
-  // Canonical: overrides whose order cannot matter are listed by key, so a campaign (sorted by
-  // key) and the loop (the test's, then the grid's) asking for one scene share its pile.
-  std::vector<Override> ordered = r.overrides;
-  if (order_free(ordered))
-    std::sort(ordered.begin(), ordered.end(),
-              [](const Override& a, const Override& b) { return a.key < b.key; });
   json ov = json::array();
-  for (const Override& o : ordered) ov.push_back({o.key, canonical_value(o.value)});
-  return {{"scene", r.scene_path},
-          {"scene_sha256", sha256_hex(read_file(r.scene_path))},
-          {"overrides", ov},
-          {"seed", r.seed}};
+  for (const Override& o : r.overrides) ov.push_back({o.key, o.value});
+  return {{"scene", r.scene_path}, {"overrides", ov}, {"seed", r.seed}};
 }
 
 // Waits for an entry's lock: another process computing the same entry finishes it, and this
@@ -165,12 +150,14 @@ SceneConfig request_scene(const PileRequest& r, bool frames) {
 
 json to_json(const PileRequest& r) {
   json j = pile_json(r);
+  j["scene_resolved_sha256"] = sha256_hex(resolved_scene(r));
   j["photo"] = r.photo ? to_json(*r.photo) : json(nullptr);
   return j;
 }
 
 std::string pile_key(const PileRequest& r) {
-  return sha256_hex(pile_json(r).dump() + "\nengine " + engine_version());
+  const json keyed = {{"scene_resolved", resolved_scene(r)}, {"seed", r.seed}};
+  return sha256_hex(keyed.dump() + "\nengine " + engine_version());
 }
 
 std::string photo_key(const PileRequest& r) {

@@ -6,8 +6,11 @@
 // overrides and a seed, poured, then perhaps photographed with some settings. A PileRequest says
 // exactly that and nothing else; how it is run (threads, progress, frame series) is not part of
 // it. The store keeps each answer under a key that is the SHA-256 (OpenSSL's libcrypto, a
-// Debian package) of the request's canonical JSON (to_json: the scene file's content hash, the
-// overrides, the seed) and the engine's source hash (engine_version()); a photograph under the
+// Debian package) of the scene the request pours in its canonical form (the scene file with the
+// overrides applied and the seed set, read strictly and written back: SceneConfig::resolved_toml)
+// and the engine's source hash (engine_version()), never of the file's path or the overrides'
+// text: one scene at two paths is one pile, and an edited scene file is a new one; a photograph
+// under the
 // SHA-256 of its pile's key, the photo settings' JSON and the imaging source hash
 // (imaging_version()). No field is listed by hand for the key: a field added to a record enters
 // its to_json and so changes the key by itself, and a changed engine or renderer computes afresh
@@ -80,12 +83,15 @@ struct PileRequest {
   std::uint64_t seed = 1;            // [scene] seed
   std::optional<PhotoRequest> photo;  // absent: the pile is not photographed
 };
-/// The request's canonical JSON: the scene path and the SHA-256 of its text, the overrides in
-/// order, the seed and the photo request. Throws std::runtime_error for an unreadable scene.
+/// The request as asked (the scene path, the overrides in order, the seed), the SHA-256 of the
+/// scene it pours (resolved, as pile_key takes it) and the photo request: the store's record of
+/// an entry (request.json). Throws as pile_key does.
 nlohmann::json to_json(const PileRequest& r);
 
-/// The store key of the request's pile run: SHA-256 of its JSON without the photo, and the
-/// engine version.
+/// The store key of the request's pile run: SHA-256 of the resolved scene (the file with the
+/// overrides applied in order and the seed set, read strictly and written back), the seed and
+/// the engine version. Throws std::runtime_error for an unreadable scene file and InputError
+/// naming it for a scene the overrides break.
 std::string pile_key(const PileRequest& r);
 /// The store key of its photograph: SHA-256 of the pile key, the photo request's JSON and the
 /// imaging version. Throws std::invalid_argument for a request without a photo.
