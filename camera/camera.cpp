@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 #include <utility>
 
 namespace reposetwin::camera {
@@ -332,7 +333,11 @@ Camera read_sidecar(const std::string& path, SidecarView expect) {
   try {
     j = nlohmann::json::parse(in);
   } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument(path + ": not valid JSON (" + e.what() + ")");
+    // The library's text without its "[json.exception.parse_error.101] " tag.
+    std::string why = e.what();
+    const std::size_t tag = why.find("] ");
+    if (why.rfind("[json.", 0) == 0 && tag != std::string::npos) why.erase(0, tag + 2);
+    throw std::invalid_argument(path + ": not valid JSON (" + why + ")");
   }
   if (!j.is_object() || !j.contains("camera"))
     throw std::invalid_argument(path + ": field \"camera\" is missing");
@@ -355,6 +360,14 @@ Camera read_sidecar(const std::string& path, SidecarView expect) {
   }
   require_complete(j["camera"], path + ": camera");
   Camera cam = from_json(j["camera"], path + ": camera");
+  // A sidecar's principal point lies on the image (pixel centres span [-0.5, W - 0.5]); one far
+  // off it is a typo that would still project, to the wrong pixels.
+  const Intrinsics& ci = cam.intrinsics;
+  for (const auto& [name, c, size] : {std::tuple{"intrinsics.cx_px", ci.cx_px, ci.width_px},
+                                      std::tuple{"intrinsics.cy_px", ci.cy_px, ci.height_px}})
+    if (c && !(*c >= -0.5 && *c <= size - 0.5))
+      fail(path + ": camera", name,
+           "= " + str(*c) + " must lie on the image, in [-0.5, " + str(size - 0.5) + "]");
   for (const auto& [name, k] : {std::pair{"intrinsics.k1", cam.intrinsics.k1},
                                 std::pair{"intrinsics.k2", cam.intrinsics.k2}})
     if (!(std::abs(k) <= kMaxDistortion))

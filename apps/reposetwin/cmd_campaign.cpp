@@ -12,6 +12,7 @@
 #include "experiments/io/format.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/loop/sheet_campaign.hpp"
+#include "experiments/pile/run_folder.hpp"
 
 namespace reposetwin::cli {
 namespace {
@@ -34,6 +35,7 @@ void add_pool_options(CLI::App* cmd, PoolArgs& a, const char* force_help,
   if (campaign_required) file->required();
   cmd->add_option("--out,-o", a.out, "Output folder (default: runs/<campaign name>)");
   cmd->add_option("--workers", a.workers, "Runs side by side on this machine")
+      ->check(CLI::Range(1, 1024))
       ->capture_default_str();
   cmd->add_option("--mode", a.mode, "Local pool: processes or threads")
       ->check(CLI::IsMember({"processes", "threads"}))
@@ -41,6 +43,7 @@ void add_pool_options(CLI::App* cmd, PoolArgs& a, const char* force_help,
   cmd->add_flag("--force", a.force, force_help);
   cmd->add_flag("--no-images", a.no_images, "Skip renders and vision (particle angles only)");
   cmd->add_option("--views", a.views, "Side views per pile for the image angle")
+      ->check(CLI::Range(1, 64))
       ->capture_default_str();
   cmd->add_option("--cache", a.cache,
                   "Pile store (default OUT/cache): piles already poured there by a campaign, a "
@@ -78,6 +81,7 @@ void add_campaign_command(CLI::App& app) {
     const experiments::Campaign c = experiments::load_campaign(a->file);
     experiments::check_pile_cases(c);
     const std::string out = a->out.empty() ? "runs/" + c.name : a->out;
+    experiments::check_output_folder(out);
     const experiments::CampaignSummary s =
         experiments::run_campaign(c, out, case_fn(*a), runner(*a));
     std::cout << nlohmann::json{{"campaign", c.name},
@@ -228,6 +232,7 @@ void add_calibrate_command(CLI::App& app) {
   cmd->callback([a, angle, predict_only, only, sheets, plan, json]() {
     std::string out, sheet_text;
     experiments::Campaign c = calibrate_campaign(*a, *sheets, *angle, out, sheet_text);
+    experiments::check_output_folder(out);
     if (!only->empty()) experiments::keep_only_predictions(c, *only);
     if (!c.calibration)
       throw std::invalid_argument(c.file + ": [calibration] is missing (target_deg, mu_r_range)");

@@ -32,7 +32,9 @@ void add_export_command(CLI::App& app) {
   cmd->add_option("scene", a->scene, "Scene file")->required();
   cmd->add_option("--out,-o", a->out, "Folder for the deck")->required();
   cmd->add_option("--set", a->sets, "Override a scene key: dotted.key=value (repeatable)");
-  cmd->add_option("--seed", a->seed, "Seed of LIGGGHTS' random streams")->capture_default_str();
+  cmd->add_option("--seed", a->seed, "Seed of LIGGGHTS' random streams")
+      ->check(CLI::NonNegativeNumber)  // checked as typed: -1 would wrap to 2^64 - 1
+      ->capture_default_str();
   cmd->add_option("--initial-state", a->initial,
                   "Start from the twin's filled sample (a run's frames/filled.vtp) instead of "
                   "inserting one: the two engines then compare the pour from one state");

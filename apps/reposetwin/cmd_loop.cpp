@@ -1,5 +1,6 @@
 // reposetwin loop DATA.csv --out DIR: close the loop on measured data (experiments/loop/loop.hpp).
 // reposetwin loop-synth DESIGN.toml --out DIR: a synthetic lab dataset with hidden settings.
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -7,8 +8,10 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
+#include "apps/reposetwin/validators.hpp"
 #include "experiments/loop/loop.hpp"
 #include "experiments/loop/loop_synth.hpp"
+#include "experiments/pile/run_folder.hpp"
 #include "experiments/report/loop_report.hpp"
 #include "experiments/io/input_error.hpp"
 
@@ -24,9 +27,10 @@ std::vector<double> parse_list(const std::string& text, const std::string& optio
     try {
       std::size_t used = 0;
       out.push_back(std::stod(item, &used));
-      if (used != item.size()) throw std::invalid_argument(item);
+      if (used != item.size() || !std::isfinite(out.back())) throw std::invalid_argument(item);
     } catch (const std::exception&) {
-      throw experiments::InputError(option + ": \"" + item + "\" is not a number");
+      throw experiments::InputError(option + " " + text + ": \"" + item +
+                                    "\" is not a finite number");
     }
   }
   return out;
@@ -78,6 +82,7 @@ void add_loop_command(CLI::App& app) {
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
   cmd->add_option("--min-t", args->settings.rule.min_t, "Significance threshold |c|/se")
+      ->check(positive_number())
       ->capture_default_str();
   cmd->add_option("--min-delta-chi2", args->settings.rule.min_delta_chi2,
                   "A candidate is named only when its joint chi^2 (angle, H, D) beats every "
@@ -101,6 +106,7 @@ void add_loop_command(CLI::App& app) {
   cmd->add_option("--mu-range-reason", args->mu_range_reason,
                   "Why mu_r lies in --mu-range (recorded in loop.json)");
   cmd->add_option("--mu-max", args->settings.mu_max, "The grid is never extended above this")
+      ->check(positive_number())
       ->capture_default_str();
   cmd->add_option("--probe-scalings", args->settings.probe_scalings,
                   "Doublings of a candidate's probe while its fingerprint does not stand out "
@@ -108,12 +114,16 @@ void add_loop_command(CLI::App& app) {
       ->check(CLI::Range(0, 10))
       ->capture_default_str();
   cmd->add_option("--workers", args->settings.workers, "Concurrent simulations")
+      ->check(CLI::Range(1, 1024))
       ->capture_default_str();
   cmd->add_option("--width", args->settings.image.width_px, "Render width [px]")
+      ->check(CLI::Range(64, 16384))
       ->capture_default_str();
   cmd->add_option("--height", args->settings.image.height_px, "Render height [px]")
+      ->check(CLI::Range(64, 16384))
       ->capture_default_str();
   cmd->add_option("--views", args->settings.image.side_views, "Side views per pile")
+      ->check(CLI::Range(1, 64))
       ->capture_default_str();
   cmd->add_flag("--own-cameras", args->own_cameras,
                 "Photograph the twin's piles with its own framing (--width, --height, --views) "
@@ -128,7 +138,14 @@ void add_loop_command(CLI::App& app) {
   cmd->add_flag("--quiet,-q", args->quiet, "No progress lines");
   cmd->callback([args]() {
     experiments::LoopSettings s = args->settings;
-    if (!args->grid.empty()) s.mu_grid = parse_list(args->grid, "--mu-grid");
+    if (!args->grid.empty()) {
+      s.mu_grid = parse_list(args->grid, "--mu-grid");
+      for (std::size_t i = 0; i < s.mu_grid.size(); ++i)
+        if (s.mu_grid[i] < 0.0 || (i > 0 && !(s.mu_grid[i] > s.mu_grid[i - 1])) ||
+            s.mu_grid.size() < 2)
+          throw experiments::InputError("--mu-grid " + args->grid +
+                                        ": give at least two increasing values >= 0");
+    }
     if (!args->seeds.empty()) {
       s.seeds.clear();
       for (double v : parse_list(args->seeds, "--seeds")) {
@@ -141,7 +158,11 @@ void add_loop_command(CLI::App& app) {
       std::stringstream ss(args->candidates);
       std::string c;
       while (std::getline(ss, c, ',')) {
-        (void)experiments::find_effect(c);
+        try {
+          (void)experiments::find_effect(c);
+        } catch (const std::exception& e) {
+          throw experiments::InputError("--candidates " + args->candidates + ": " + e.what());
+        }
         s.candidates.push_back(c);
       }
     }
@@ -161,6 +182,7 @@ void add_loop_command(CLI::App& app) {
     s.progress = !args->quiet;
     s.image.use_lab_cameras = !args->own_cameras;
     s.page = experiments::write_loop_html;
+    experiments::check_output_folder(args->out);
     const experiments::LabData data = experiments::read_lab_csv(args->data);
     const nlohmann::json loop = experiments::run_loop(data, args->out, s);
     std::cout << loop["summary"].dump(2) << "\n";
@@ -182,7 +204,9 @@ void add_loop_command(CLI::App& app) {
       ->required();
   syn->add_option("--out,-o", sargs->out, "Output folder")->capture_default_str();
   syn->add_option("--cache", sargs->cache, "Simulation cache (default: a hidden folder)");
-  syn->add_option("--workers", sargs->workers, "Concurrent simulations")->capture_default_str();
+  syn->add_option("--workers", sargs->workers, "Concurrent simulations")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
   syn->callback([sargs]() {
     const experiments::SynthDesign d = experiments::read_synth_design(sargs->design);
     experiments::SimCache cache(sargs->cache.empty() ? sargs->out + "/.hidden_cache" : sargs->cache,

@@ -100,8 +100,11 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--set", args->sets, "Override a scene key: dotted.key=value; the value is TOML or a bare word (repeatable)");
   cmd->add_option("--threads", args->run.threads, "OpenMP threads (0: the scene's setting)")
       ->check(CLI::Range(0, 4096));
-  cmd->add_flag("--force", args->run.force, "Overwrite a finished result in the run folder");
-  cmd->add_flag("--resume", args->run.resume, "Continue from the run folder's checkpoint");
+  auto* force = cmd->add_flag("--force", args->run.force,
+                              "Overwrite a finished result in the run folder (start again)");
+  // Continue the run and start it again are opposite requests: one of them, never both.
+  cmd->add_flag("--resume", args->run.resume, "Continue from the run folder's checkpoint")
+      ->excludes(force);
   cmd->add_flag("--quiet,-q", args->quiet, "No plan or progress lines");
   cmd->add_flag("--json", args->json, "Also print result.json on stdout (before the last line)");
   cmd->add_flag(

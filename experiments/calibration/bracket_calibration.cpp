@@ -349,7 +349,9 @@ BracketCalibration calibrate_bracket(const PourBatchFn& pour, const Target& targ
     if (!next || log.runs() + k > s.max_runs) {
       // Out of runs, or a new point cannot help (the seed spread alone is above the tolerance):
       // the fit's mu_r stands, with the tolerance not met, and the message says which.
-      finish(c, target, s, CalibrationStatus::kBudgetSpent,
+      const bool noise = !next && c.mu_r_seed_se > s.mu_r_tolerance;
+      finish(c, target, s,
+             noise ? CalibrationStatus::kSeedNoiseLimited : CalibrationStatus::kBudgetSpent,
              next ? "budget of " + std::to_string(s.max_runs) +
                         " pile runs spent before the mu_r tolerance of " +
                         num(s.mu_r_tolerance) + " was met" +

@@ -140,6 +140,8 @@ std::string to_string(CalibrationStatus status) {
       return "calibrated";
     case CalibrationStatus::kBudgetSpent:
       return "budget_spent";
+    case CalibrationStatus::kSeedNoiseLimited:
+      return "seed_noise_limited";
     case CalibrationStatus::kCannotReachLow:
       return "cannot_reach_low";
     case CalibrationStatus::kCannotReachHigh:

@@ -91,6 +91,8 @@ struct MonotoneFit {
 enum class CalibrationStatus {
   kCalibrated,      // converged within the tolerance
   kBudgetSpent,     // a calibrated value exists but the tolerance was not met within the budget
+  kSeedNoiseLimited,  // a calibrated value exists, but the seed spread alone is above the
+                      // tolerance: another mu_r point cannot narrow it, more seeds would
   kCannotReachLow,  // the target is below the lowest angle the mu_r range reaches
   kCannotReachHigh  // the target is above the highest angle the mu_r range reaches
 };

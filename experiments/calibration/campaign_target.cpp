@@ -19,6 +19,10 @@ void measure_target_photos(CampaignCalibration& cc, const std::string& file) {
   const vision::Spread& s = flank ? m.summary.flank_deg : m.summary.theta_deg;
   cc.target_photos = m.record;
   cc.target_photos["photos"] = f.photos;
+  // How their scale was known, so that the report measures the same photo the same way.
+  nlohmann::json& record = cc.target_photos;
+  record["camera_sidecar"] = f.camera_json.empty() ? nlohmann::json() : nlohmann::json(f.camera_json);
+  record["declared_mm_per_px"] = f.mm_per_px ? nlohmann::json(*f.mm_per_px) : nlohmann::json();
   cc.target_photos["target_from"] = flank ? "flank_deg (mean flank angle over the photos)"
                                           : "theta_deg (atan(2H/D), mean over the photos)";
   cc.target = Target{s.mean, f.sd_deg.value_or(s.sigma_mean)};

@@ -433,8 +433,8 @@ std::string shortest_text(double x) {
 
 Campaign read_campaign_file(const std::string& path) {
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw std::runtime_error(path + ": campaign file not found");
-  return parse_campaign(read_file(path), path);
+  if (!fs::exists(path, ec)) throw std::runtime_error(path + ": campaign file not found");
+  return parse_campaign(read_file(path), path);  // which names a folder, a pipe or a device
 }
 
 Campaign parse_campaign(std::string_view text, const std::string& path) {

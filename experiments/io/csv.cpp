@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "experiments/io/input_error.hpp"
+#include "experiments/io/provenance.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -44,6 +45,18 @@ struct ParserFree {
   }
 };
 
+// A parse error for a person: the file, the line and what is wrong in CSV terms (libcsv's own
+// text, "error parsing data while strict checking enabled", names neither).
+std::string csv_problem(const std::string& where, int line, int error, bool open_quote) {
+  const std::string why =
+      open_quote ? "a quoted field is never closed (an unmatched \")"
+      : error == CSV_EPARSE
+          ? "a quote where CSV allows none (a \" inside an unquoted field, or text after a "
+            "closing quote; a quote inside a field is written \"\")"
+          : std::string(csv_strerror(error));
+  return where + ":" + std::to_string(line) + ": " + why;
+}
+
 }  // namespace
 
 CsvTable parse_csv(const std::string& text, const std::string& where) {
@@ -76,21 +89,22 @@ CsvTable parse_csv(const std::string& text, const std::string& where) {
       if (ch == '"') in_quotes = !in_quotes;
     line += '\n';
     if (csv_parse(p.get(), line.data(), line.size(), on_field, on_record, &c) != line.size())
-      throw InputError(where + ":" + std::to_string(line_no) + ": " +
-                       csv_strerror(csv_error(p.get())));
+      throw InputError(csv_problem(where, line_no, csv_error(p.get()), false));
   }
   if (csv_fini(p.get(), on_field, on_record, &c) != 0)
-    throw InputError(where + ":" + std::to_string(c.record_line) + ": " +
-                     csv_strerror(csv_error(p.get())));
+    throw InputError(csv_problem(where, c.record_line, csv_error(p.get()), in_quotes));
   return c.table;
 }
 
 CsvTable read_csv_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot read the CSV file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_csv(text.str(), path);
+  // read_file reads only a regular file: a pipe would wait for a writer that never comes.
+  std::string text;
+  try {
+    text = read_file(path);
+  } catch (const std::exception& e) {
+    throw InputError(std::string(e.what()) + " (a CSV file)");
+  }
+  return parse_csv(text, path);
 }
 
 }  // namespace reposetwin::experiments

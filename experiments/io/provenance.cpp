@@ -71,8 +71,9 @@ void write_file_atomic(const std::string& path, const std::string& text) {
   }
   fs::rename(tmp, target, ec);
   if (ec) {
+    const std::string why = ec.message();  // "Is a directory", "Permission denied", ...
     fs::remove(tmp, ec);
-    throw std::runtime_error(path + ": cannot move the finished file into place");
+    throw std::runtime_error(path + ": cannot move the finished file into place (" + why + ")");
   }
   sync_folder(target.parent_path());
 }

@@ -43,8 +43,32 @@ std::string locate(const std::string& source, const std::string& where, const st
   std::ostringstream s;
   s << source;
   if (node != nullptr && node->source().begin.line > 0) s << ':' << node->source().begin.line;
-  s << ": [" << where << ']';
-  if (!key.empty()) s << '.' << key;
+  s << ": ";
+  if (key.empty()) {
+    s << where;
+    return s.str();
+  }
+  // Each key of a list ("sieve_mm / passing_percent") as the user writes it: where.key.
+  std::size_t from = 0;
+  for (;;) {
+    const std::size_t bar = key.find(" / ", from);
+    s << where << '.' << key.substr(from, bar == std::string::npos ? bar : bar - from);
+    if (bar == std::string::npos) break;
+    s << " / ";
+    from = bar + 3;
+  }
+  return s.str();
+}
+
+// Sieve openings a grading can have [mm]: a micrometre to ten metres; beyond them a value is a
+// typo (a unit slip of 10^3 or an exponent), and would make a time step or a grain count absurd.
+constexpr double kMinSieveMm = 1e-3;
+constexpr double kMaxSieveMm = 1e4;
+
+std::string sieve_range_text(double mm) {
+  std::ostringstream s;
+  s << "= " << mm << " mm is outside [" << kMinSieveMm << ", " << kMaxSieveMm
+    << "] mm (sieve openings in millimetres)";
   return s.str();
 }
 
@@ -166,7 +190,10 @@ PsdFile read_psd_csv(const std::string& path) {
         bad(line, std::string(name) + " = \"" + text + "\" is not a number");
       return v;
     };
-    f.spec.table.size.push_back(1e-3 * number(sieve, "sieve_mm"));
+    const double mm = number(sieve, "sieve_mm");
+    if (!(mm >= kMinSieveMm && mm <= kMaxSieveMm))
+      bad(line, "sieve_mm " + sieve_range_text(mm));
+    f.spec.table.size.push_back(1e-3 * mm);
     f.spec.table.passing.push_back(number(passing, "passing_percent"));
   }
   if (csv.rows.empty()) bad(path, "has a header and no sieves");
@@ -196,6 +223,10 @@ PsdFile parse_psd_table(const toml::table& t, const std::string& source, const s
   f.assumption = read_string(t, "assumption", source, where);
 
   const std::vector<double> sieve_mm = read_numbers(t, "sieve_mm", source, where);
+  for (std::size_t i = 0; i < sieve_mm.size(); ++i)
+    if (!(sieve_mm[i] >= kMinSieveMm && sieve_mm[i] <= kMaxSieveMm))
+      bad(locate(source, where, "sieve_mm[" + std::to_string(i) + "]", nullptr),
+          sieve_range_text(sieve_mm[i]));
   const std::vector<double> passing = read_numbers(t, "passing_percent", source, where);
   for (double d : sieve_mm) f.spec.table.size.push_back(d * 1e-3);
   f.spec.table.passing = passing;

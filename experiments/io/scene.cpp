@@ -89,7 +89,8 @@ sim::PairParams read_contact(TableReader t) {
            "= " + num(p.rolling_reference_diameter) + " must be finite and not negative [m]");
   if (p.rolling_size_exponent != 0 && !(p.rolling_reference_diameter > 0))
     t.fail("rolling_reference_diameter_m", "= " + num(p.rolling_reference_diameter) +
-                                               " must be positive when rolling_size_exponent = " +
+                                               " must be positive when " +
+                                               t.where("rolling_size_exponent") + " = " +
                                                num(p.rolling_size_exponent) + " is not 0");
   if (!(p.restitution > 0 && p.restitution <= 1))
     t.fail("restitution", "= " + num(p.restitution) + " must lie in (0, 1]");
@@ -200,9 +201,15 @@ void read_sample(TableReader t, SceneConfig& s, const toml::table& doc,
     t.fail("psd_file", "or an inline [sample.psd] table is required (exactly one of them)");
   try {
     if (has_file) {
-      const std::filesystem::path p = dir / t.string("psd_file");
-      if (!std::filesystem::exists(p))
-        t.fail("psd_file", "= \"" + p.string() + "\" does not exist");
+      const std::string name = t.string("psd_file");
+      if (name.empty()) t.fail("psd_file", "is empty: name a sieve-table file (TOML or CSV)");
+      if (name.find('\0') != std::string::npos)
+        t.fail("psd_file", "holds a NUL character; a file name cannot");
+      const std::filesystem::path p = dir / name;
+      std::error_code ec;  // a name the system refuses (too long, ...) is a bad value too
+      if (!std::filesystem::exists(p, ec))
+        t.fail("psd_file", "= \"" + p.string() + "\" does not exist" +
+                               (ec ? " (" + ec.message() + ")" : std::string()));
       s.psd = read_psd_file(p.string());
     } else {
       t.mark_used("psd");
@@ -213,7 +220,9 @@ void read_sample(TableReader t, SceneConfig& s, const toml::table& doc,
   } catch (const InputError&) {
     throw;
   } catch (const std::invalid_argument& e) {  // the PSD reader names the file and key
-    throw InputError(e.what());
+    throw InputError(e.what(), t.where(has_file ? "psd_file" : "psd"));
+  } catch (const std::exception& e) {  // a file that is no sieve table at all
+    throw InputError(file + ": " + t.where("psd_file") + ": " + e.what(), t.where("psd_file"));
   }
   for (const char* key : {"d_min_mm", "d_max_mm"}) {
     if (!t.has(key)) continue;
@@ -228,13 +237,17 @@ void read_sample(TableReader t, SceneConfig& s, const toml::table& doc,
     resolved = sim::resolve_psd(s.psd.spec);
   } catch (const std::invalid_argument& e) {
     // A cut-off outside the table is the cut-off key's fault when the scene set it.
+    // (Both, when the message is about the two: "d_min = ... must be below d_max = ...".)
     const std::string what = e.what();
+    std::string keys, first;
     for (const char* key : {"d_min_mm", "d_max_mm"}) {
       const std::string name = std::string(key).substr(0, 5);  // "d_min", "d_max"
-      if (t.has(key) && what.find(name + " =") != std::string::npos)
-        throw InputError(file + ": " + t.where(key) + " = " + num(t.number(key)) + ": " + what,
-                         t.where(key));
+      if (t.has(key) && what.find(name + " =") != std::string::npos) {
+        keys += (keys.empty() ? "" : ", ") + t.where(key) + " = " + num(t.number(key));
+        if (first.empty()) first = t.where(key);
+      }
     }
+    if (!keys.empty()) throw InputError(file + ": " + keys + ": " + what, first);
     throw InputError(file + ": sample.psd: " + what);
   }
   // A sample of a few grains is no pile, and the sampler could only round it up to one grain
@@ -244,7 +257,8 @@ void read_sample(TableReader t, SceneConfig& s, const toml::table& doc,
   if (s.mass < kMinGrains * grain)
     t.fail("mass_kg", "= " + num(s.mass) + " kg is " + num(s.mass / grain) +
                           " grains of the largest size (" + num(1e3 * resolved.d_max) + " mm, " +
-                          num(grain) + " kg each); a pile needs at least " + num(kMinGrains));
+                          num(grain) + " kg each, from sample.psd's sieve sizes or " +
+                          "sample.d_max_mm); a pile needs at least " + num(kMinGrains));
 }
 
 // [contacts]: one table per pair of declared materials, "a-b" (both orders set).
@@ -282,7 +296,8 @@ void read_container(TableReader t, SceneConfig& s, const std::string& file) {
   if (!(c.bottom_diameter > 0 && c.bottom_diameter <= kMaxContainerSize))
     t.fail("bottom_diameter_m", "= " + num(c.bottom_diameter) + " must be in (0, " + most);
   if (!(c.top_diameter >= c.bottom_diameter))
-    t.fail("top_diameter_m", "= " + num(c.top_diameter) + " must not be below the outlet");
+    t.fail("top_diameter_m", "= " + num(c.top_diameter) + " must not be below the outlet " +
+                                 t.where("bottom_diameter_m") + " = " + num(c.bottom_diameter));
   if (!(c.top_diameter <= kMaxContainerSize))
     t.fail("top_diameter_m", "= " + num(c.top_diameter) + " must be at most " + most);
   if (!(c.height > 0 && c.height <= kMaxContainerSize))
@@ -302,7 +317,9 @@ void read_container(TableReader t, SceneConfig& s, const std::string& file) {
   if (bulk > container_volume(c)) {
     throw InputError(file + ": sample.mass_kg = " + num(s.mass) + " needs about " +
                      num(bulk * 1e6) + " cm^3 of bulk volume, more than the container's " +
-                     num(container_volume(c) * 1e6) + " cm^3");
+                     num(container_volume(c) * 1e6) + " cm^3 (container.bottom_diameter_m = " +
+                     num(c.bottom_diameter) + ", container.top_diameter_m = " +
+                     num(c.top_diameter) + ", container.height_m = " + num(c.height) + ")");
   }
 }
 
@@ -335,6 +352,7 @@ void read_procedure(TableReader t, ProcedureConfig& p) {
   p.clog_window = t.number("clog_window_s", p.clog_window);
   p.max_retained_fraction = t.number("max_retained_fraction", p.max_retained_fraction);
   p.lattice_gap = t.number("lattice_gap", p.lattice_gap);
+  p.fill_jitter = t.number("fill_jitter", p.fill_jitter);
   p.fill_max_speed = t.number("fill_max_speed_m_s", p.fill_max_speed);
   if (!(p.fill_max_speed > 0))
     t.fail("fill_max_speed_m_s", "= " + num(p.fill_max_speed) + " must be positive");
@@ -357,6 +375,10 @@ void read_procedure(TableReader t, ProcedureConfig& p) {
   if (!(p.lattice_gap >= 0 && p.lattice_gap <= kMaxLatticeGap))
     t.fail("lattice_gap", "= " + num(p.lattice_gap) + " must be in [0, " + num(kMaxLatticeGap) +
                               "] (fill spacing d_max (1 + this))");
+  if (!(p.fill_jitter >= 0 && p.fill_jitter <= 1))
+    t.fail("fill_jitter", "= " + num(p.fill_jitter) +
+                              " must be in [0, 1] (the fraction of a grain's free room in its "
+                              "lattice cell)");
   t.finish();
 }
 
@@ -536,7 +558,9 @@ SceneConfig parse_scene_text(const std::string& text, const std::string& file) {
 }
 
 SceneConfig parse_scene_file(const std::string& path) {
-  if (!std::filesystem::exists(path)) throw InputError(path + ": scene file does not exist");
+  std::error_code ec;  // a path the system refuses (too long, ...) does not exist either
+  if (!std::filesystem::exists(path, ec))
+    throw InputError(path + ": scene file does not exist" + (ec ? " (" + ec.message() + ")" : ""));
   return parse_scene_text(read_file(path), path);
 }
 

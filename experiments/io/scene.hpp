@@ -39,6 +39,9 @@ struct ProcedureConfig {
                                      // lifted away with it (cohesive grains on its wall, as in the
                                      // lab), and the pile settles; above it the test clogged [-]
   double lattice_gap = 0.05;         // fill lattice spacing = d_max (1 + this) [-]
+  double fill_jitter = 0.0;          // each grain moved off its lattice point by up to this
+                                     // fraction of its free room in the cell, seeded: breaks the
+                                     // lattice's columns that a poured lab fill never has [-]
   double fill_max_speed = 0.3;       // gentle pour: speeds capped at this while filling [m/s]
 };
 
@@ -46,7 +49,8 @@ struct OutputConfig {
   double frame_interval = 0.0;       // simulated time between .vtp frames; 0 = final only [s]
   double checkpoint_interval = 120.0; // wall-clock time between checkpoints [s]
   double progress_interval = 5.0;    // wall-clock time between progress lines [s]
-  bool contact_forces = false;       // also write each frame's particle contacts (ParaView) [-]
+  bool contact_forces = false;       // every frame's particle contacts, not the last one's
+                                     // only (ParaView) [-]
 };
 
 struct SceneConfig {

@@ -182,6 +182,8 @@ std::vector<SceneKey> procedure_keys() {
        "at most this fraction stuck inside is lifted away; more is a clog"},
       {"procedure.lattice_gap", "number", n(p.lattice_gap), "-",
        "fill lattice spacing = d_max (1 + this)"},
+      {"procedure.fill_jitter", "number", n(p.fill_jitter), "-",
+       "grains moved off the lattice by up to this fraction of their room (seeded)"},
       {"procedure.fill_max_speed_m_s", "number", n(p.fill_max_speed), "m/s",
        "speeds capped at this while filling (a gentle pour)"},
   };
@@ -223,7 +225,8 @@ std::vector<SceneKey> output_keys() {
       {"output.progress_interval_s", "number", n(o.progress_interval), "s",
        "wall time between progress lines"},
       {"output.contact_forces", "boolean", o.contact_forces ? "true" : "false", "-",
-       "also write each frame's particle contacts (force per pair) for ParaView"},
+       "also write every frame's particle contacts (force per pair) for ParaView; the last "
+       "frame always has them"},
   };
 }
 

@@ -39,6 +39,9 @@ void SceneDoc::apply_command_line(std::span<const std::string> sets) {
       Override o = typed_override(raw.key, raw.value, "--set");
       if (o.key == "sample.psd_file") {
         const auto path = toml::parse("v = " + o.value)["v"].value<std::string>();
+        if (path && path->empty())
+          throw InputError("--set " + text + ": sample.psd_file is empty; name a sieve-table file",
+                           o.key);
         if (path)
           o = string_override(o.key, std::filesystem::absolute(*path).lexically_normal().string());
       }
@@ -100,8 +103,9 @@ SceneConfig SceneDoc::config_after_command_line() const {
 }
 
 SceneConfig load_scene(const std::string& path, const std::vector<std::string>& sets) {
-  if (!path.empty() && !std::filesystem::exists(path))
-    throw InputError(path + ": scene file does not exist");
+  std::error_code ec;  // a path the system refuses (too long, ...) does not exist either
+  if (!path.empty() && !std::filesystem::exists(path, ec))
+    throw InputError(path + ": scene file does not exist" + (ec ? " (" + ec.message() + ")" : ""));
   SceneDoc doc(path);
   doc.apply_command_line(sets);
   return doc.config_after_command_line();
@@ -109,8 +113,9 @@ SceneConfig load_scene(const std::string& path, const std::vector<std::string>& 
 
 SceneConfig load_scene(const std::string& path, std::span<const Override> overrides) {
   const std::string file = path.empty() ? "<embedded>" : path;
-  if (!path.empty() && !std::filesystem::exists(path))
-    throw InputError(path + ": scene file does not exist");
+  std::error_code ec;  // a path the system refuses (too long, ...) does not exist either
+  if (!path.empty() && !std::filesystem::exists(path, ec))
+    throw InputError(path + ": scene file does not exist" + (ec ? " (" + ec.message() + ")" : ""));
   SceneDoc doc(path);
   try {
     doc.apply(overrides, "--set");

@@ -219,8 +219,12 @@ void read_identity(LabTest& test, const Row& row, Where& w, const fs::path& dir,
     throw InputError(w.at("scene") + ": empty (a base scene file is required)");
   test.scene_path =
       scene.empty() ? form.base_scene : (dir / scene).lexically_normal().string();
-  if (!fs::exists(test.scene_path))
+  std::error_code ec;
+  if (!fs::exists(test.scene_path, ec))
     throw InputError(w.at("scene") + ": \"" + test.scene_path + "\" does not exist");
+  if (!fs::is_regular_file(test.scene_path, ec))
+    throw InputError(w.at("scene") + ": \"" + test.scene_path +
+                     "\" is not a scene file (a folder, a pipe or a device)");
 }
 
 // Phase 3: conditions and set:KEY columns become overrides of the scene, which must build (the
@@ -267,7 +271,14 @@ void read_overrides(LabTest& test, const Row& row, const Where& w, const LabShee
   try {
     (void)load_scene(test.scene_path, sets);
   } catch (const std::exception& e) {
+    // The first of the row's own overrides that breaks the scene; the scene itself (with the
+    // sheet's common overrides) when it is broken without any of them.
     std::string culprit;
+    try {
+      (void)load_scene(test.scene_path, {sets.begin(), sets.begin() + own});
+    } catch (const std::exception&) {
+      culprit = "scene";
+    }
     for (std::size_t k = own + 1; k <= sets.size() && culprit.empty(); ++k) {
       try {
         (void)load_scene(test.scene_path, {sets.begin(), sets.begin() + k});
@@ -372,23 +383,41 @@ LabTest read_row(const CsvRecord& rec, const Columns& cols, const std::string& f
     read_photos(test, row, w, dir, have_angle);
     have_angle = true;
   }
+  if (!have_angle && test.height_mm.has_value() != test.diameter_mm.has_value()) {
+    const bool has_h = test.height_mm.has_value();
+    throw InputError(w.at(has_h ? "D_mm" : "H_mm") + ": empty, while " +
+                     (has_h ? "H_mm = " + row.get("H_mm") : "D_mm = " + row.get("D_mm")) +
+                     " is given: the angle atan(2H/D) needs both (or type angle_deg)");
+  }
   if (!have_angle)
     throw InputError(w.at("angle_deg") +
                      ": no measured value (angle_deg, H_mm and D_mm, or photo)");
-  if (!(test.angle_deg > 0.0 && test.angle_deg < 90.0))
+  if (!(test.angle_deg > 0.0 && test.angle_deg < 90.0)) {
+    // The angle's source: the photos, the typed angle, or the typed H and D it came from.
+    if (test.photos.empty() && row.get("angle_deg").empty())
+      throw InputError(w.at("H_mm") + " and D_mm: H " + row.get("H_mm") + " mm and D " +
+                       row.get("D_mm") + " mm give an angle atan(2H/D) of " +
+                       toml_number(test.angle_deg) + " deg, outside (0, 90)");
     throw InputError(w.at(test.photos.empty() ? "angle_deg" : "photo") + ": angle " +
                      toml_number(test.angle_deg) + " deg is outside (0, 90)");
+  }
   return test;
 }
 
 }  // namespace
 
 LabData read_lab_csv(const std::string& path, const LabSheetForm& form) {
-  if (!std::ifstream(path)) throw InputError(path + ": cannot open the measured-data CSV");
+  // Read only a regular file: opening a pipe would wait for a writer that never comes.
+  std::string text;
+  try {
+    text = read_file(path);
+  } catch (const std::exception& e) {
+    throw InputError(std::string(e.what()) + " (the measured-data CSV)");
+  }
   LabData data;
   data.file = fs::absolute(path).lexically_normal().string();
   const fs::path dir = fs::path(data.file).parent_path();
-  const CsvTable csv = parse_csv(read_file(path), data.file);
+  const CsvTable csv = parse_csv(text, data.file);
   if (csv.header.empty()) throw InputError(data.file + ": no header line");
   const Columns cols = read_header(csv, data.file, form);
   std::set<std::string> ids;

@@ -490,8 +490,9 @@ class PileRunner {
     return info;
   }
 
-  // One time step of the series: the particles, the plate, the container while it stands and,
-  // if asked, the contacts, as parts of one ParaView time step.
+  // One time step of the series: the particles, the plate, the container while it stands and
+  // the contacts (at the last frame always, at every frame if asked), as parts of one ParaView
+  // time step. The pile's force chains are what a user opens the final state to see.
   void write_frame(bool final_state = false) {
     const int k = ctl_.frames++;
     auto name = [k](const char* stem) {
@@ -509,7 +510,7 @@ class PileRunner {
       parts.push_back(name("container"));
       write_shell_vtp((out_ / parts.back()).string(), *info.container);
     }
-    if (scene_.output.contact_forces) {
+    if (scene_.output.contact_forces || final_state) {
       parts.push_back(name("contacts"));
       write_contacts_vtp((out_ / parts.back()).string(), state());
     }

@@ -106,7 +106,33 @@ void fill_container(sim::World& world, const SceneConfig& scene, const PileSampl
   const ContainerConfig& c = scene.container;
   // Clearance from a slanted wall, measured horizontally: (s/2) / cos(wall slant).
   const double slope = 0.5 * (c.top_diameter - c.bottom_diameter) / c.height;
-  const double clearance = 0.5 * s * std::sqrt(1.0 + slope * slope);
+  const double secant = std::sqrt(1.0 + slope * slope);  // 1 / cos(wall slant)
+  const double clearance = 0.5 * s * secant;
+  // The jitter's own stream, so that the PSD draw and the orientations stay those of the seed.
+  sim::Rng rng(scene.seed ^ 0x6a09e667f3bcc909ULL);
+  const double jitter = scene.procedure.fill_jitter;
+  // Grain g at lattice point p, moved by up to jitter x its room in the cell on each axis. The
+  // grain stays inside its own cube of side s (cubes of a staggered layer and of the layers
+  // s apart do not overlap, so grains do not), and above the plate. A horizontal move that
+  // would take it nearer the slanted wall than its reach is dropped: the lattice point itself
+  // keeps that clearance for every grain and any vertical move within the cube.
+  auto place = [&](sim::Vec3 at, std::size_t g) {
+    if (jitter <= 0.0) return at;
+    const double reach = grain_reach(scene, sample, g);
+    const double room = jitter * std::max(0.0, 0.5 * s - reach);
+    const double dx = rng.uniform(-room, room), dy = rng.uniform(-room, room);
+    const double dz = rng.uniform(-room, room);
+    at.z() += dz;
+    const double z_rel = at.z() - c.gap;
+    const double r_wall =
+        std::min(container_radius(c, z_rel - reach), container_radius(c, z_rel + reach)) -
+        reach * secant;
+    if (std::hypot(at.x() + dx, at.y() + dy) <= r_wall) {
+      at.x() += dx;
+      at.y() += dy;
+    }
+    return at;
+  };
   std::size_t next = 0;
   for (int level = 0; next < n; ++level) {
     const double z_rel = 0.5 * s + level * s;
@@ -119,7 +145,7 @@ void fill_container(sim::World& world, const SceneConfig& scene, const PileSampl
       for (int iy = -k - 1; iy <= k && next < n; ++iy) {
         const double x = ix * s + shift, y = iy * s + shift;
         if (std::hypot(x, y) > r_avail) continue;
-        const sim::Vec3 at(x, y, c.gap + z_rel);
+        const sim::Vec3 at = place(sim::Vec3(x, y, c.gap + z_rel), next);
         if (sample.shape.empty())
           world.add_particle(at, 0.5 * sample.diameter[next], material);
         else  // grain g's template is model clump g

@@ -99,7 +99,7 @@ RunFolderState run_folder_state(const fs::path& dir, std::vector<std::string>* f
   return RunFolderState::kStarted;
 }
 
-void check_run_folder(const std::string& out, bool resume, bool force) {
+void check_output_folder(const std::string& out) {
   if (out.empty())
     throw InputError("--out is empty: name the run folder (for example --out runs/my_pile)",
                      "--out");
@@ -127,6 +127,11 @@ void check_run_folder(const std::string& out, bool resume, bool force) {
                          existing.string() + " is not writable (" + why + ")",
                      "--out");
   }
+}
+
+void check_run_folder(const std::string& out, bool resume, bool force) {
+  check_output_folder(out);
+  const fs::path dir(out);
   std::vector<std::string> foreign;
   switch (run_folder_state(dir, &foreign)) {
     case RunFolderState::kAbsent:

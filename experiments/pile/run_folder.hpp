@@ -43,6 +43,11 @@ RunFolderState run_folder_state(const std::filesystem::path& dir,
 /// (without --resume or --force) and a folder that is not a run (without --force).
 void check_run_folder(const std::string& out, bool resume, bool force);
 
+/// The part of check_run_folder about the place alone, for any command's output folder (a
+/// campaign's, a calibration's, a loop's): --out names a folder, or one that can be made in a
+/// writable folder. Throws InputError naming --out and the path.
+void check_output_folder(const std::string& out);
+
 /// Removes the files a run makes from `dir` (and then-empty folders of its own), leaving every
 /// other file; the lock file stays (the caller holds it).
 void remove_run_files(const std::filesystem::path& dir);

@@ -17,6 +17,7 @@
 #include "experiments/io/provenance.hpp"
 #include "experiments/loop/loop.hpp"
 #include "experiments/pile/headline.hpp"
+#include "experiments/photos/lab_photos.hpp"
 #include "experiments/photos/photographs.hpp"
 #include "experiments/pile/pile_record.hpp"
 #include "experiments/report/calibration_section.hpp"
@@ -302,38 +303,92 @@ cv::Mat resized(const cv::Mat& img, double f) {
 // from its scale bar or --lab-mm-per-px, the render's from its camera), the coarser of the two or
 // coarser still so the wider one is kBesideWidthPx on the page. A pile of one size is then one
 // size in both. "" when no lab photo is given.
-std::string lab_photo_section(const ReportSettings& settings, const fs::path& out,
-                              const RenderBeside& beside, json& summary) {
-  if (settings.lab_photo.empty()) return "";
+// The lab's side photo as the page shows it: vision's overlay drawn on it, its scale at the pile
+// axis and the caption with its measurement.
+struct LabView {
+  cv::Mat overlay;
+  double mm_per_px = 0.0;  // [mm/px]
+  std::string caption;
+};
+
+// The photo given to `report --lab-photo`, measured here (its scale bar or --lab-mm-per-px).
+std::optional<LabView> given_lab_view(const ReportSettings& settings, json& summary) {
+  if (settings.lab_photo.empty()) return std::nullopt;
   const cv::Mat photo = cv::imread(settings.lab_photo, cv::IMREAD_COLOR);
   if (photo.empty()) throw InputError(settings.lab_photo + ": not an image");
   vision::ScaleSpec scale;
   if (settings.lab_mm_per_px > 0) scale.mm_per_px = settings.lab_mm_per_px;
   const vision::SideMeasurement m = vision::measure_side(photo, scale, {}, settings.lab_photo);
-  const cv::Mat lab = vision::draw_side_overlay(photo, m);
   summary["lab_photo"] = vision::to_json(m);
+  return LabView{vision::draw_side_overlay(photo, m), m.mm_per_px,
+                 "lab photo " + fs::path(settings.lab_photo).filename().string() +
+                     ": theta = atan(2H/D) = " + mean_sd(m.theta_deg, m.sigma_theta_deg) +
+                     " deg (vision, as the renders); its scale " + fixed(m.mm_per_px, 3) +
+                     " mm/px (" + vision::to_string(m.scale_source) + ")"};
+}
+
+// A calibration's own target photo (its first measured one), measured again exactly as the
+// calibration measured it (the same camera sidecar or declared scale), with its overlay; none when
+// the calibration's target was typed, or when the photo is no longer where it was (said on the
+// page through `note`).
+std::optional<LabView> target_lab_view(const json& cal, std::string& note) {
+  const json tp = cal.is_object() ? cal.value("target_photos", json()) : json();
+  if (!tp.is_object() || !tp.contains("photos") || tp["photos"].empty()) return std::nullopt;
+  const std::string photo = tp["photos"][0].get<std::string>();
+  LabPhotoScale scale;
+  if (tp.value("camera_sidecar", json()).is_string()) scale.camera_json = tp["camera_sidecar"];
+  if (tp.value("declared_mm_per_px", json()).is_number())
+    scale.mm_per_px = tp["declared_mm_per_px"].get<double>();
+  try {
+    const LabPhotoMeasurement m = measure_lab_photos(
+        {photo}, scale, {"calibration.json: target_photos", "target_photos.camera_sidecar",
+                         "target_photos.declared_mm_per_px", "photo_camera", "mm_per_px"},
+        true);
+    const json& v = m.record.at("views").at(0);
+    const double mm = v.at("scale").at("mm_per_px").get<double>();
+    return LabView{m.overlays.at(0), mm,
+                   "the lab's photo " + fs::path(photo).filename().string() +
+                       " (the calibration's target): theta = atan(2H/D) = " +
+                       mean_sd(v.at("theta_deg").get<double>(),
+                               v.at("sigma_theta_deg").get<double>()) +
+                       " deg (vision, as the renders); its scale " + fixed(mm, 3) + " mm/px"};
+  } catch (const std::exception& e) {
+    note = "The lab's photo " + photo + " could not be shown: " + e.what();
+    return std::nullopt;
+  }
+}
+
+std::string lab_photo_section(const std::optional<LabView>& given, const fs::path& out,
+                              const RenderBeside& beside, json& summary,
+                              const std::string& note = "") {
+  if (!given) {
+    if (note.empty()) return "";
+    mustache::data d;
+    d.set("photos", mustache::data::type::list);
+    d.set("render", true);  // no "render missing" line: the note says why nothing is shown
+    d.set("scale", false);
+    d.set("note", note);
+    return render(templates::kLabPhoto, d);
+  }
+  const LabView& view = *given;
+  const cv::Mat& lab = view.overlay;
   const cv::Mat twin = beside.overlay.empty() || !fs::exists(beside.overlay)
                              ? cv::Mat()
                              : cv::imread(beside.overlay.string(), cv::IMREAD_COLOR);
   const bool has_render = !twin.empty();
-  const bool same_scale = has_render && beside.mm_per_px > 0 && m.mm_per_px > 0;
-  double common = m.mm_per_px;  // [mm/px]
+  const double lab_mm = view.mm_per_px;
+  const bool same_scale = has_render && beside.mm_per_px > 0 && lab_mm > 0;
+  double common = lab_mm;  // [mm/px]
   if (same_scale)
-    common = beside_scale({{lab.cols, m.mm_per_px}, {twin.cols, beside.mm_per_px}}, kBesideWidthPx);
+    common = beside_scale({{lab.cols, lab_mm}, {twin.cols, beside.mm_per_px}}, kBesideWidthPx);
   else
-    common = beside_scale({{lab.cols, m.mm_per_px}}, kBesideWidthPx);
-  write_image_atomic((out / "lab_photo.measured.png").string(), resized(lab, m.mm_per_px / common));
-  std::vector<Figure> photos = {
-      {"lab_photo.measured.png",
-       "lab photo " + fs::path(settings.lab_photo).filename().string() +
-           ": theta = atan(2H/D) = " + mean_sd(m.theta_deg, m.sigma_theta_deg) +
-           " deg (vision, as the renders); its scale " + fixed(m.mm_per_px, 3) + " mm/px (" +
-           vision::to_string(m.scale_source) + ")",
-       0}};
+    common = beside_scale({{lab.cols, lab_mm}}, kBesideWidthPx);
+  write_image_atomic((out / "lab_photo.measured.png").string(), resized(lab, lab_mm / common));
+  std::vector<Figure> photos = {{"lab_photo.measured.png", view.caption, 0}};
   std::string scale_text;
   if (has_render) {
     // A render of unknown scale is shown at the lab photo's width on the page, and said so.
-    const double lab_width_px = lab.cols * m.mm_per_px / common;
+    const double lab_width_px = lab.cols * lab_mm / common;
     write_image_atomic((out / "render_beside_lab.png").string(),
                        resized(twin, same_scale ? beside.mm_per_px / common : lab_width_px / twin.cols));
     photos.push_back({"render_beside_lab.png",
@@ -353,6 +408,7 @@ std::string lab_photo_section(const ReportSettings& settings, const fs::path& ou
   d.set("photos", to_data(photos));
   d.set("render", has_render);
   d.set("scale", text_or_false(scale_text));
+  d.set("note", text_or_false(note));
   return render(templates::kLabPhoto, d);
 }
 
@@ -609,13 +665,23 @@ json build_report(const std::string& dir, const ReportSettings& settings) {
   const fs::path out = f.dir / "report";
   fs::create_directories(out);
   json summary = case_summary(f);
-  std::vector<std::string> sections = {
-built_section(folder_name(f.dir), 1)};
-  sections.push_back(lab_photo_section(settings, out, render_beside_lab(f), summary));
-  if (is_calibration_dir(f.dir)) {
-    const json cmp = paper_comparison({dir}, settings.paper_dir);
-    sections.push_back(comparison_section(cmp, out));
-    summary["paper_comparison"] = cmp;
+  std::vector<std::string> sections = {built_section(folder_name(f.dir), 1)};
+  // A calibration's page leads with its answer: the calibrated value, its interval and curve,
+  // then the lab's photo (the one given, else the calibration's own target photo) beside the
+  // twin's at that value; the runs follow, and the paper's Table 3 comes last, on a paper
+  // sample's calibration only.
+  std::string photo_note;
+  std::optional<LabView> lab = given_lab_view(settings, summary);
+  if (!lab && !f.calibration.is_null()) lab = target_lab_view(f.calibration, photo_note);
+  if (!f.calibration.is_null()) {
+    sections.push_back(calibration_section(f.calibration, f.predictions ? *f.predictions : json(),
+                                           out, "../calibration.json"));
+    summary["calibration"] = f.calibration;
+  }
+  sections.push_back(lab_photo_section(lab, out, render_beside_lab(f), summary, photo_note));
+  if (f.predictions) {
+    sections.push_back(predictions_section(*f.predictions, "../predictions.json"));
+    summary["predictions"] = *f.predictions;
   }
   if (!f.cases.empty()) {
     mustache::data plotted;
@@ -625,14 +691,10 @@ built_section(folder_name(f.dir), 1)};
   } else if (is_calibration_dir(f.dir)) {
     sections.push_back(no_cases_section(f, out));
   }
-  if (!f.calibration.is_null()) {
-    sections.push_back(calibration_section(f.calibration, f.predictions ? *f.predictions : json(),
-                                           out, "../calibration.json"));
-    summary["calibration"] = f.calibration;
-  }
-  if (f.predictions) {
-    sections.push_back(predictions_section(*f.predictions, "../predictions.json"));
-    summary["predictions"] = *f.predictions;
+  if (is_calibration_dir(f.dir) && f.calibration.value("table1_sample", json()).is_number()) {
+    const json cmp = paper_comparison({dir}, settings.paper_dir);
+    sections.push_back(comparison_section(cmp, out));
+    summary["paper_comparison"] = cmp;
   }
   write_page(out, f.title, std::move(sections), summary);
   return summary;
@@ -672,7 +734,7 @@ json build_report(const std::vector<std::string>& dirs, const std::string& out_d
     sections.push_back(comparison_section(cmp, out));
     summary["paper_comparison"] = cmp;
   }
-  sections.push_back(lab_photo_section(settings, out, {}, summary));
+  sections.push_back(lab_photo_section(given_lab_view(settings, summary), out, {}, summary));
   mustache::data list;
   list.set("folders", folders);
   sections.push_back(render(templates::kFolders, list));

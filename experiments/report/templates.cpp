@@ -47,12 +47,13 @@ const char* const kBuilt =
 )";
 
 // photos: figures (the lab photo, then the render beside it); render: whether there is one;
-// scale: the common scale in words, or false.
+// scale: the common scale in words, or false; note: why the lab photo is not shown, or false.
 const char* const kLabPhoto = R"(<h2>Lab photo beside the simulated render</h2>
 {{#scale}}<p>{{scale}}</p>
 {{/scale}}<div class='beside'>{{#photos}}{{> figure}}{{/photos}}</div>
 {{^render}}<p>(no simulated render with a measurement overlay in this folder)</p>
-{{/render}})";
+{{/render}}{{#note}}<p>{{note}}</p>
+{{/note}})";
 
 // plot: PNG name or false; comparison: table.
 const char* const kComparison = R"(<h2>Beside the paper's Table 3</h2>

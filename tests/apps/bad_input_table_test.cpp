@@ -93,6 +93,22 @@ const std::vector<Case> kRunCases = {
      {"friction=0.4)"}},
     {"8 flank band values", "", "", "--set measure.flank_low=0.9 --set measure.flank_high=0.1", 2,
      {"measure.flank_low", "0.9", "flank_high", "0.1"}, {}},
+    // Second pass (scene fuzz, hostile pass 2026-12-06): the key as the user writes it.
+    {"P2 sieve table out of order", "", "", "--set sample.psd.sieve_mm=[4.0,3.0,2.0]", 2,
+     {"sample.psd.sieve_mm", "--set sample.psd.sieve_mm=[4.0,3.0,2.0]", "not larger"},
+     {"[sample.psd]."}},
+    {"P2 passing above 100", "", "", "--set sample.psd.passing_percent=[0.0,150.0,100.0]", 2,
+     {"sample.psd.passing_percent", "150"}, {"[sample.psd]."}},
+    {"P2 psd d_max 0", "", "", "--set sample.psd.d_max_mm=0.0", 2,
+     {"sample.psd.d_max_mm", "0.0", "--set"}, {"[sample.psd]."}},
+    {"P2 empty psd_file", "", "", "--set sample.psd_file=", 2,
+     {"sample.psd_file", "empty"}, {"filesystem", "absolute"}},
+    {"P2 psd_file name too long", "", "", "--set sample.psd_file=" + std::string(5000, 'x'), 2,
+     {"sample.psd_file", "does not exist"}, {"filesystem error"}},
+    {"P2 size exponent without a reference diameter", "", "",
+     "--set contacts.rock-rock.rolling_size_exponent=-1.0", 2,
+     {"contacts.rock-rock.rolling_size_exponent", "-1", "rolling_reference_diameter_m"}, {}},
+    {"P2 --resume with --force", "", "", "--resume --force", 108, {"--resume", "--force"}, {}},
     // 9 (output folders) follows the table.
 };
 
@@ -185,6 +201,126 @@ TEST(BadInputTable, EverySidecarCaseIsRefusedNamingItsField) {
     EXPECT_EQ(r.code, 2) << r.out;
     expect_message(r, c.must, {});
   }
+}
+
+// 7, second pass (loop CSV fuzz): a sheet's row refused naming the line and the column that is
+// wrong, in words a person reads.
+struct SheetCase {
+  std::string item;
+  std::string from, to;  // a replacement in the sheet
+  std::vector<std::string> must, must_not;
+};
+
+const std::string kSheet =
+    "id,role,scene,mass_kg,H_mm,D_mm,angle_deg\n"
+    "a,calibrate,scene.toml,0.006,8.1,31.0,\n"
+    "b,validate,scene.toml,0.006,,,30.9\n";
+
+const std::vector<SheetCase> kSheetCases = {
+    {"P2 a folder as the scene", "a,calibrate,scene.toml", "a,calibrate,adir",
+     {"line 2", "column scene", "adir", "not a scene file"}, {"column mass_kg"}},
+    {"P2 H and D giving 90 deg", "8.1,31.0", "1e300,31.0",
+     {"line 2", "H_mm", "D_mm", "1e300", "outside (0, 90)"}, {"column angle_deg"}},
+    {"P2 D without H", "8.1,31.0", ",31.0",
+     {"line 2", "column H_mm", "D_mm = 31.0", "needs both"}, {}},
+    {"P2 an unclosed quote", "b,validate", "b,\"validate", {"sheet.csv:3", "never closed"},
+     {"strict checking"}},
+    {"P2 a quote inside a field", "b,validate", "b,vali\"date",
+     {"sheet.csv:3", "a quote where CSV allows none"}, {"strict checking"}},
+};
+
+TEST(BadInputTable, EverySheetCaseIsRefusedNamingItsLineAndColumn) {
+  const fs::path dir = fresh_dir("table_sheet");
+  write_text(dir / "scene.toml", reposetwin::test_support::kTinyScene);
+  fs::create_directories(dir / "adir");
+  for (const SheetCase& c : kSheetCases) {
+    SCOPED_TRACE(c.item);
+    std::string text = kSheet;
+    const std::size_t at = text.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    text.replace(at, c.from.size(), c.to);
+    write_text(dir / "sheet.csv", text);
+    const CliResult r =
+        run_cli("loop " + quoted(dir / "sheet.csv") + " --out " + quoted(dir / "loop"));
+    EXPECT_EQ(r.code, 2) << r.out;
+    expect_message(r, c.must, c.must_not);
+    EXPECT_FALSE(fs::exists(dir / "loop" / "loop.json"));
+  }
+}
+
+// Second pass (hostile pass 2026-12-06): other commands' options and outputs, refused before
+// anything runs. In `args`, SCENE is the tiny scene, CAMP a campaign of it, SHEET a loop sheet
+// of it, FIFO a named pipe, AFILE a plain file and DIR the test's folder.
+struct CommandCase {
+  std::string item;
+  std::string args;
+  int code;
+  std::vector<std::string> must, must_not;
+};
+
+const std::vector<CommandCase> kCommandCases = {
+    {"P2 campaign --workers 0", "campaign CAMP --out DIR/c --workers 0", 105, {"--workers", "0"},
+     {}},
+    {"P2 campaign --views 0", "campaign CAMP --out DIR/c --views 0", 105, {"--views", "0"}, {}},
+    {"P2 campaign --out at a file", "campaign CAMP --out AFILE", 2,
+     {"a_file", "names a file"}, {"filesystem error"}},
+    {"P2 loop --out at a file", "loop SHEET --out AFILE", 2, {"a_file", "names a file"},
+     {"filesystem error"}},
+    {"P2 loop sheet a FIFO", "loop FIFO --out DIR/l", 2, {"fifo.csv", "not a regular file"}, {}},
+    {"P2 loop --mu-grid nan", "loop SHEET --out DIR/l --mu-grid 0.1,nan", 2,
+     {"--mu-grid", "nan", "not a finite number"}, {"grid_extensions"}},
+    {"P2 loop --mu-grid negative", "loop SHEET --out DIR/l --mu-grid -0.1,0.2", 2,
+     {"--mu-grid -0.1,0.2", "increasing"}, {}},
+    {"P2 loop --candidates unknown", "loop SHEET --out DIR/l --candidates warp_drive", 2,
+     {"--candidates", "warp_drive"}, {}},
+    {"P2 loop --width 0", "loop SHEET --out DIR/l --width 0", 105, {"--width"}, {}},
+    {"P2 loop --min-t nan", "loop SHEET --out DIR/l --min-t nan", 105, {"--min-t", "nan"}, {}},
+    {"P2 export --seed -1", "export SCENE --out DIR/e --seed -1", 105, {"--seed"}, {}},
+    {"P2 a folder as the campaign", "campaign DIR --out DIR/c", 2,
+     {"is a directory, not a file"}, {"not found"}},
+};
+
+TEST(BadInputTable, EveryCommandCaseIsRefusedNamingItsOption) {
+  const fs::path dir = fresh_dir("table_command");
+  write_text(dir / "scene.toml", reposetwin::test_support::kTinyScene);
+  write_text(dir / "camp.toml",
+             "name = \"t\"\nscene = \"scene.toml\"\nseeds = [1]\n[[case]]\nname = \"a\"\n"
+             "overrides = { \"contacts.rock-rock.rolling_friction\" = 0.1 }\n");
+  write_text(dir / "sheet.csv", kSheet);
+  write_text(dir / "a_file", "x");
+  ASSERT_EQ(::mkfifo((dir / "fifo.csv").c_str(), 0644), 0);
+  const std::vector<std::pair<std::string, fs::path>> names = {
+      {"SCENE", dir / "scene.toml"}, {"CAMP", dir / "camp.toml"}, {"SHEET", dir / "sheet.csv"},
+      {"FIFO", dir / "fifo.csv"},    {"AFILE", dir / "a_file"},   {"DIR", dir}};
+  for (const CommandCase& c : kCommandCases) {
+    SCOPED_TRACE(c.item);
+    std::string args = c.args;
+    for (const auto& [name, path] : names)
+      for (std::size_t at; (at = args.find(name)) != std::string::npos;)
+        args.replace(at, name.size(), quoted(path));
+    const CliResult r = run_cli(args);
+    EXPECT_EQ(r.code, c.code) << r.out;
+    expect_message(r, c.must, c.must_not);
+  }
+}
+
+// 6, second pass (sidecar fuzz): a principal point off the image, and JSON errors in words.
+TEST(BadInputTable, ASidecarPrincipalPointOffTheImageIsRefused) {
+  const fs::path dir = fresh_dir("table_sidecar_p2");
+  const fs::path image = dir / "side.png";
+  ASSERT_TRUE(cv::imwrite(image.string(), cv::Mat(48, 64, CV_8UC1, cv::Scalar(255))));
+  std::string text = kSidecar;
+  const std::string k1 = "\"k1\": 0.0";
+  text.replace(text.find(k1), k1.size(), k1 + ", \"cx_px\": 1e300");
+  write_text(dir / "cam.json", text);
+  CliResult r = run_cli("measure " + quoted(image) + " --no-overlay --camera " +
+                        quoted(dir / "cam.json"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  expect_message(r, {"cam.json", "intrinsics.cx_px", "1e+300", "on the image"}, {});
+  write_text(dir / "cam.json", "{\"camera\": ");
+  r = run_cli("measure " + quoted(image) + " --no-overlay --camera " + quoted(dir / "cam.json"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  expect_message(r, {"cam.json", "not valid JSON"}, {"json.exception"});
 }
 
 // 1. Files that never end or never open: refused by kind, at once, naming the file.

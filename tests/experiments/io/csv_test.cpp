@@ -35,12 +35,21 @@ TEST(Csv, CommentsBlankLinesAndLineEnds) {
 }
 
 TEST(Csv, MalformedQuotesAreErrorsWithTheLine) {
-  EXPECT_THROW(parse_csv("a,b\nx,\"y\n", "f.csv"), InputError);  // unterminated
+  try {
+    parse_csv("a,b\nx,\"y\n", "f.csv");  // unterminated
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("f.csv:2: a quoted field is never closed"),
+              std::string::npos)
+        << e.what();
+  }
   try {
     parse_csv("a,b\nx,y\"z\n", "f.csv");  // a quote inside an unquoted field
     FAIL() << "expected an error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("f.csv:2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("f.csv:2: a quote where CSV allows none"),
+              std::string::npos)
+        << e.what();
   }
   const CsvTable empty = parse_csv("# only a comment\n", "t");
   EXPECT_TRUE(empty.header.empty());

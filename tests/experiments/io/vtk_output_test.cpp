@@ -3,6 +3,8 @@
 #include "experiments/io/vtk_output.hpp"
 
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <vtkCellData.h>
 #include <vtkDoubleArray.h>
 #include <vtkFieldData.h>
@@ -155,6 +157,29 @@ TEST(VtkSeries, ContactLinesJoinTouchingParticles) {
                                (a[2] - b[2]) * (a[2] - b[2]));
     EXPECT_LT(d, 4e-3);
   }
+}
+
+// Without output.contact_forces the series still ends with the settled pile's contacts (what a
+// user opens the final state for), and no earlier frame has any.
+TEST(VtkSeries, TheLastFrameHasItsContactsByDefault) {
+  const fs::path d = fs::temp_directory_path() / "reposetwin_vtk_series_default_contacts";
+  fs::remove_all(d);
+  RunOptions opt;
+  opt.out_dir = (d / "run").string();
+  opt.progress = false;
+  const std::string text = std::string(test_support::kTinyScene) + "[output]\nframe_interval_s = 0.05\n";
+  run_pile_test(parse_scene_text(text, (d / "tiny.toml").string()), opt);
+  std::vector<std::string> frames, contacts;
+  for (const auto& e : fs::directory_iterator(d / "run" / "frames")) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("frame_", 0) == 0) frames.push_back(name.substr(6));
+    if (name.rfind("contacts_", 0) == 0) contacts.push_back(name.substr(9));
+  }
+  ASSERT_GT(frames.size(), 2u);
+  ASSERT_EQ(contacts.size(), 1u);
+  EXPECT_EQ(contacts[0], *std::max_element(frames.begin(), frames.end()));
+  EXPECT_GT(read_poly(d / "run" / "frames" / ("contacts_" + contacts[0]))->GetNumberOfLines(), 5);
+  EXPECT_NE(slurp(d / "run" / "series.pvd").find("contacts_" + contacts[0]), std::string::npos);
 }
 
 TEST(PvdSeries, PartsSurviveALoadAndTruncate) {

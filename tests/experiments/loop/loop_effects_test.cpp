@@ -71,5 +71,28 @@ TEST(LoopEffects, RollingSizeNeedsTestsOfDifferentSizes) {
   EXPECT_EQ(effect_unidentifiable({a}, e), "");  // one test: nothing to compare
 }
 
+
+// The restitution candidate drives the sample's own pair (not the plate's, which the pile-top
+// study found moves nothing), is off at the scene's declared value, and is tried only when named.
+TEST(LoopEffects, RestitutionSetsTheSamplesOwnPairFromItsDeclaredValue) {
+  const CandidateEffect& e = find_effect("restitution");
+  EXPECT_TRUE(e.opt_in);
+  EXPECT_TRUE(e.off_from_scene);
+  const LabTest t = small_test();
+  EXPECT_EQ(scene_value(t, e.key), 0.5);  // small_scene.toml's rock-rock restitution
+  EXPECT_EQ(effect_unavailable(t, e), "");
+  const SimRequest r = make_request(t, "contacts.{sample}-{sample}.rolling_friction", 0.2, 1,
+                                    {{&e, 0.3}}, ImageVariant{});
+  const SceneConfig s = load_scene(t.scene_path, resolved_overrides(r));
+  const SceneConfig declared = load_scene(t.scene_path, resolved_overrides(make_request(
+      t, "contacts.{sample}-{sample}.rolling_friction", 0.2, 1, {}, ImageVariant{})));
+  ASSERT_EQ(s.contacts.size(), declared.contacts.size());
+  EXPECT_EQ(s.contacts.at({"rock", "rock"}).restitution, 0.3);
+  for (const auto& [pair, params] : s.contacts)
+    if (pair != std::make_pair(std::string("rock"), std::string("rock")))
+      EXPECT_EQ(params.restitution, declared.contacts.at(pair).restitution)
+          << pair.first << "-" << pair.second;
+}
+
 }  // namespace
 }  // namespace reposetwin::experiments

@@ -172,5 +172,57 @@ TEST(PileSample, AOneSphereTemplateDrawsTheSphereSample) {
   EXPECT_EQ(a.r_max, b.r_max);
 }
 
+
+// The fill with procedure.fill_jitter: grains leave their lattice points (the sample and its
+// draw unchanged), yet no two overlap and none crosses the funnel's slanted wall or the plate,
+// for spheres and for clumps; jitter 0 is the lattice itself.
+void expect_jittered_fill_is_sound(const std::string& shapes) {
+  const std::string base = scene_text(shapes);
+  const SceneConfig lattice = parse_scene_text(base, "sieve.toml");
+  const SceneConfig jittered =
+      parse_scene_text(base + "[procedure]\nfill_jitter = 1.0\n", "sieve.toml");
+  const int rock = material_index(lattice, "rock", "");
+  auto fill = [&](const SceneConfig& scene) {
+    const PileSample sample = draw_pile_sample(scene, rock);
+    sim::Model model = build_model(scene, sample.r_min, sample.r_max);
+    add_grain_templates(model, scene, sample);
+    sim::World world(std::move(model));
+    fill_container(world, scene, sample, rock);
+    return world.state().particles;
+  };
+  const sim::Particles a = fill(lattice), b = fill(jittered);
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 500u);
+  const ContainerConfig& c = jittered.container;
+  const double slope = 0.5 * (c.top_diameter - c.bottom_diameter) / c.height;
+  double moved = 0.0;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    EXPECT_EQ(a.radius[i], b.radius[i]);
+    moved = std::max(moved, (a.x[i] - b.x[i]).norm() / a.radius[i]);
+    const double z = b.x[i].z() - c.gap;
+    EXPECT_GE(z - b.radius[i], -1e-12) << "component " << i << " below the plate";
+    // Horizontal distance from the slanted wall at the sphere's height, against its radius.
+    const double t = std::clamp(z / c.height, 0.0, 1.0);
+    const double wall = 0.5 * (c.bottom_diameter + t * (c.top_diameter - c.bottom_diameter));
+    const double r_xy = std::hypot(b.x[i].x(), b.x[i].y());
+    EXPECT_LE(r_xy + b.radius[i] * std::sqrt(1.0 + slope * slope), wall + 1e-12)
+        << "component " << i << " through the wall";
+    for (std::size_t j = i + 1; j < b.size(); ++j) {
+      if (b.body[i] >= 0 && b.body[i] == b.body[j]) continue;  // one clump's own components
+      EXPECT_GE((b.x[i] - b.x[j]).norm(), b.radius[i] + b.radius[j] - 1e-12)
+          << "components " << i << " and " << j << " overlap";
+    }
+  }
+  EXPECT_GT(moved, 0.1);  // off the lattice by a tenth of a radius at least somewhere
+  const sim::Particles a2 = fill(lattice);
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a.x[i], a2.x[i]);
+}
+
+TEST(PileSample, AJitteredFillOfSpheresKeepsThemApartAndInside) { expect_jittered_fill_is_sound(""); }
+
+TEST(PileSample, AJitteredFillOfClumpsKeepsThemApartAndInside) {
+  expect_jittered_fill_is_sound(kMix);
+}
+
 }  // namespace
 }  // namespace reposetwin::experiments
