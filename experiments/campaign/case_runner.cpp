@@ -70,7 +70,7 @@ CaseResult case_result_from_json(const json& j) {
 
 PileRequest case_request(const CaseSpec& spec, const CaseRunSettings& settings) {
   PileRequest r{spec.scene_path, spec.overrides, spec.seed, std::nullopt};
-  if (settings.images) r.photo = PhotoRequest{settings.image, true};
+  if (settings.images) r.photo = PhotoRequest{settings.image, true, PhotographWhen::kHeadline};
   return r;
 }
 
@@ -101,7 +101,7 @@ void link_case_run(const PileOutcome& o, const fs::path& case_dir) {
 
 // The case's record of the service's answer: its run/ and run/images/ (links into the store,
 // link_case_run), relative to the case folder as a campaign has always written them.
-CaseResult case_result_of(const PileOutcome& o, const fs::path& case_dir) {
+CaseResult case_result_of(const PileOutcome& o) {
   CaseResult r;
   r.stop = o.stop;
   r.pile = o.pile;
@@ -137,7 +137,7 @@ CaseFn pile_case_fn(const CaseRunSettings& settings) {
     PileService service(store.string(), ps);
     const PileOutcome o = service.run_one(case_request(spec, settings));
     link_case_run(o, dir);
-    return to_json(case_result_of(o, dir));
+    return to_json(case_result_of(o));
   };
 }
 

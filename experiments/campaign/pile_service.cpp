@@ -70,7 +70,16 @@ std::string sha256_hex(std::string_view text) {
 
 json to_json(const PhotoRequest& p) {
   return {{"settings", to_json(p.settings)},
-          {"centre_on_run_footprint", p.centre_on_run_footprint}};
+          {"centre_on_run_footprint", p.centre_on_run_footprint},
+          {"when", p.when == PhotographWhen::kHeadline ? "headline" : "formed"}};
+}
+
+bool photographed(PhotographWhen when, PileStatus status, const PileMeasure& pile) {
+  switch (when) {
+    case PhotographWhen::kHeadline: return status == PileStatus::kPile;
+    case PhotographWhen::kFormed: return pile.status == sim::PileStatus::kOk;
+  }
+  throw std::logic_error("photographed: unknown PhotographWhen");
 }
 
 namespace {
@@ -238,10 +247,10 @@ PileOutcome PileService::run_one(const PileRequest& r) {
   const PileRun run = pile_stage(r, entry, settings_, started);
   started_sims_ += started;
   PileOutcome o = outcome_of(run, (fs::path(entry) / "run").string());
-  if (!r.photo || o.status != PileStatus::kPile) return o;
+  if (!r.photo || !photographed(r.photo->when, o.status, o.pile)) return o;
   o.photo = photo_stage(r, run, o.run_dir, photo_dir(r), started);
   started_photos_ += started;
-  if (!o.photo->measured) o.status = PileStatus::kUnmeasured;
+  if (!o.photo->measured && o.status == PileStatus::kPile) o.status = PileStatus::kUnmeasured;
   return o;
 }
 
@@ -332,7 +341,8 @@ void PileService::photograph_missing(const std::vector<PileRequest>& requests,
     if (!requests[i].photo || failed_piles.count(pile_dir(requests[i]))) continue;
     const std::string entry = photo_dir(requests[i]);
     if (!seen.insert(entry).second || fs::exists(fs::path(entry) / "result.json")) continue;
-    if (finished_run(requests[i]).status == PileStatus::kPile) photos.push_back(i);
+    const PileOutcome pile = finished_run(requests[i]);
+    if (photographed(requests[i].photo->when, pile.status, pile.pile)) photos.push_back(i);
   }
   const std::size_t before = errors.size();
   pool_jobs(

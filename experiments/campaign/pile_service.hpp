@@ -66,13 +66,21 @@ PileStatus pile_status_of(const RunStop& stop, const PileMeasure& pile);
 /// The SHA-256 of `text` as 64 lower-case hex digits.
 std::string sha256_hex(std::string_view text);
 
-/// How a pile is photographed: the one photo pipeline's settings (photos/photographs.hpp), and
-/// where its camera axis is centred.
+/// Which finished pile runs are photographed.
+enum class PhotographWhen {
+  kHeadline,  // a pile with a headline only (settled, not jammed): a campaign's case
+  kFormed,    // every pile the run measured on the plate, settled or not: the loop judges a
+              // pour by whether its photographs can be measured
+};
+
+/// How a pile is photographed: the one photo pipeline's settings (photos/photographs.hpp),
+/// where its camera axis is centred, and which runs are photographed.
 struct PhotoRequest {
   PhotoSettings settings;
   // True: centred on the footprint centre the pile run measured (a campaign's photos); false:
   // on the footprint the photo pipeline measures from the spheres (the loop's).
   bool centre_on_run_footprint = false;
+  PhotographWhen when = PhotographWhen::kHeadline;
 };
 nlohmann::json to_json(const PhotoRequest& p);
 
@@ -126,8 +134,11 @@ struct PileOutcome {
   double psd_fines_fraction = 0.0;   // PSD mass below d_min, not simulated [-]
   std::optional<ShapeRecord> shape;  // a clump sample's shapes as run
   std::string run_dir;               // the pile run's folder (absolute)
-  std::optional<PhotoOutcome> photo;  // when asked for and a pile formed
+  std::optional<PhotoOutcome> photo;  // when asked for and the run is one photo.when takes
 };
+
+/// Whether a finished run with this status and pile is photographed under `when`.
+bool photographed(PhotographWhen when, PileStatus status, const PileMeasure& pile);
 
 /// How the service runs what it has to: settings of this process, not of the answer.
 struct PileServiceSettings {

@@ -153,7 +153,7 @@ PileRequest pile_request(const SimRequest& r) {
   for (const std::string& set : resolved_overrides(r))
     out.overrides.push_back(parse_override(set, r.test->scene_path));
   out.seed = r.seed;
-  out.photo = PhotoRequest{photo_settings(r.image), false};
+  out.photo = PhotoRequest{photo_settings(r.image), false, PhotographWhen::kFormed};
   return out;
 }
 

@@ -210,16 +210,13 @@ TEST(LoopHeldOut, AHeldOutTestWhoseTwinJamsIsPredictedNoPileAndTheRefitGoesOn) {
   fs::remove_all(dir);
   // Four calibration tests that pour, and one held out through a 5 mm outlet that the 3-4 mm
   // spheres arch over on every pour (the same outlet stops the loop as a calibration test).
-  // A pile still moving when its last settling ends has no angle (the pile service refuses it),
-  // and the lift-speed probe's fast lifts at mu_r 0.1 spread the tiny pile for more than the
-  // scene's 5 s: 20 s lets them settle, and a pile that settles sooner stops sooner.
   const LabData data = read_lab_csv(write_csv(
-      "held_out", "id,role,scene,W_mm,mass_g,angle_deg,set:procedure.final_settle_max_s\n"
-                  "a,calibrate," + kScene + ",20,5,25,20\n"
-                  "b,calibrate," + kScene + ",20,6,26,20\n"
-                  "c,calibrate," + kScene + ",20,7,25.5,20\n"
-                  "d,calibrate," + kScene + ",20,8,26.5,20\n"
-                  "narrow,validate," + kScene + ",5,6,27,20\n"));
+      "held_out", "id,role,scene,W_mm,mass_g,angle_deg\n"
+                  "a,calibrate," + kScene + ",20,5,25\n"
+                  "b,calibrate," + kScene + ",20,6,26\n"
+                  "c,calibrate," + kScene + ",20,7,25.5\n"
+                  "d,calibrate," + kScene + ",20,8,26.5\n"
+                  "narrow,validate," + kScene + ",5,6,27\n"));
   LoopSettings s = tiny_settings();
   s.at_bound = GridBound::kTrace;
   s.candidates = {"plate_friction", "lift_speed"};
