@@ -14,6 +14,7 @@ PACKAGES=(
   nlohmann-json3-dev       # result files
   libkainjow-mustache-dev  # HTML templates of the reports (header-only)
   libcsv-dev               # CSV reader (the paper's tables, measured data)
+  libssl-dev               # SHA-256 (libcrypto) of the pile service's store keys
   libgtest-dev             # tests
   gnuplot-nox              # report plots
   libopenmpi-dev openmpi-bin  # optional campaign spreading under mpirun

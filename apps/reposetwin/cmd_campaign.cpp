@@ -26,6 +26,7 @@ struct PoolArgs {
   bool no_images = false;
   int views = 4;
   bool quiet = false;
+  std::string cache;
 };
 
 void add_pool_options(CLI::App* cmd, PoolArgs& a, const char* force_help,
@@ -44,6 +45,10 @@ void add_pool_options(CLI::App* cmd, PoolArgs& a, const char* force_help,
   cmd->add_option("--views", a.views, "Side views per pile for the image angle")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
+  cmd->add_option("--cache", a.cache,
+                  "Pile store (default OUT/cache): piles already poured there by a campaign, a "
+                  "calibration or a loop for the same scene, overrides and seed are not poured "
+                  "again");
 }
 
 experiments::RunnerSettings runner(const PoolArgs& a) {
@@ -52,7 +57,7 @@ experiments::RunnerSettings runner(const PoolArgs& a) {
   s.mode =
       a.mode == "threads" ? experiments::WorkerMode::kThreads : experiments::WorkerMode::kProcesses;
   s.force = a.force;
-  s.outcome_of = experiments::case_outcome;  // counts piles apart from jams and physics stops
+  s.outcome_of = experiments::case_outcome_word;  // counts piles apart from jams and physics stops
   return s;
 }
 
@@ -61,6 +66,7 @@ experiments::CaseFn case_fn(const PoolArgs& a) {
   s.images = !a.no_images;
   s.image.side_views = a.views;
   s.threads = 1;
+  s.store = a.cache;
   return experiments::pile_case_fn(s);
 }
 

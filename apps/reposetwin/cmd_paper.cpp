@@ -91,7 +91,7 @@ void add_paper_command(CLI::App& app) {
     rs.workers = a->workers;
     rs.mode = a->mode == "threads" ? experiments::WorkerMode::kThreads
                                    : experiments::WorkerMode::kProcesses;
-    rs.outcome_of = experiments::case_outcome;
+    rs.outcome_of = experiments::case_outcome_word;
     experiments::CaseRunSettings cs;
     cs.image.side_views = a->views;
     experiments::PaperRunOptions opt;

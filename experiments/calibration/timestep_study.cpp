@@ -61,9 +61,9 @@ json run_timestep_study(const std::string& scene_path, const std::string& out_di
     const auto r = read_run_result(out_dir, run);
     if (!r) continue;
     dt_of[run.case_name] = r->at("result").at("provenance").at("time_step_s");
-    const std::string outcome = case_outcome(r->at("result"));
-    if (outcome != "pile") {
-      ++without_angle[run.case_name][outcome];
+    const PileStatus outcome = case_outcome(r->at("result"));
+    if (outcome != PileStatus::kPile) {
+      ++without_angle[run.case_name][pile_status_word(outcome)];
       continue;
     }
     angles[run.case_name].push_back(

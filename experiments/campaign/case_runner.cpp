@@ -1,5 +1,7 @@
 #include "experiments/campaign/case_runner.hpp"
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <set>
 #include <stdexcept>
@@ -7,9 +9,9 @@
 #include "experiments/io/json_fields.hpp"
 #include "experiments/io/scene.hpp"
 #include "experiments/pile/headline.hpp"
-#include "experiments/pile/pile_run.hpp"
 
 namespace reposetwin::experiments {
+namespace fs = std::filesystem;
 using nlohmann::json;
 
 json to_json(const CaseResult& r) {
@@ -66,45 +68,76 @@ CaseResult case_result_from_json(const json& j) {
   }
 }
 
-namespace {
-
-CaseResult case_result_of(const PileRun& run) {
-  CaseResult r;
-  r.stop = run.stop;
-  r.pile = run.pile;
-  r.particles = run.particles;
-  r.performance = run.performance;
-  r.provenance = run.provenance;
-  r.psd_fines_fraction = run.psd.fines_fraction_not_simulated;
-  r.shape = run.shape;
+PileRequest case_request(const CaseSpec& spec, const CaseRunSettings& settings) {
+  PileRequest r{spec.scene_path, spec.overrides, spec.seed, std::nullopt};
+  if (settings.images) r.photo = PhotoRequest{settings.image, true, PhotographWhen::kHeadline};
   return r;
 }
 
-CaseImages case_images_of(const json& m) {
-  return {json_number(m, "theta_deg"), json_number(m, "theta_sd_deg"), json_number(m, "height_m"),
-          json_number(m, "diameter_m"), json_number(m, "flank_deg")};
+namespace {
+
+// The case folder's run/ as a campaign has always laid it out (result.json, final.vtp, the
+// frame series, images/), made of links into the store: each entry of the pile's run folder,
+// and images/ to its photographs. A user opens CASE/run/result.json or run/images/ as before,
+// and the pile stays one pile in the store, shared with any other caller. Relative links, so an
+// output folder moved whole with its store keeps them. Made beside and renamed into place, so
+// a killed worker leaves no half-made run/ (an earlier one, from an interrupted attempt, is
+// replaced).
+void link_case_run(const PileOutcome& o, const fs::path& case_dir) {
+  const fs::path run = case_dir / "run";
+  const fs::path tmp = case_dir / ("run.tmp." + std::to_string(::getpid()));
+  fs::remove_all(tmp);
+  fs::create_directories(tmp);
+  for (const fs::directory_entry& e : fs::directory_iterator(o.run_dir)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind('.', 0) == 0) continue;  // the store's lock files
+    fs::create_symlink(fs::relative(e.path(), run), tmp / name);
+  }
+  if (o.photo && o.photo->measured)
+    fs::create_directory_symlink(fs::relative(o.photo->dir, run), tmp / "images");
+  fs::remove_all(run);
+  fs::rename(tmp, run);
+}
+
+// The case's record of the service's answer: its run/ and run/images/ (links into the store,
+// link_case_run), relative to the case folder as a campaign has always written them.
+CaseResult case_result_of(const PileOutcome& o) {
+  CaseResult r;
+  r.stop = o.stop;
+  r.pile = o.pile;
+  r.particles = o.particles;
+  r.performance = o.performance;
+  r.provenance = o.provenance;
+  r.psd_fines_fraction = o.psd_fines_fraction;
+  r.shape = o.shape;
+  r.run_dir = "run";
+  if (o.photo && o.photo->measured) {
+    const PhotoMeasure& m = *o.photo->measured;
+    r.image = CaseImages{m.theta_deg,  m.theta_sd_deg, m.height_m, m.diameter_m, m.flank_deg,
+                         "run/images"};
+  }
+  return r;
 }
 
 }  // namespace
 
 CaseFn pile_case_fn(const CaseRunSettings& settings) {
   return [settings](const CaseSpec& spec, const std::string& case_dir) -> json {
-    SceneDoc doc = build_case_scene(spec);
-    doc.set_seed(spec.seed);
-    const SceneConfig scene = doc.config();
-    RunOptions opt;
-    opt.out_dir = (std::filesystem::path(case_dir) / "run").string();
-    opt.progress = false;
-    opt.threads = settings.threads;
-    opt.extra_provenance = {{"campaign_case", spec.id()}};
-    const std::optional<PileRun> run = run_pile_test_or_continue(scene, opt);
-    if (!run) throw std::logic_error(opt.out_dir + ": a case run has no stop limit, yet stopped");
-    CaseResult r = case_result_of(*run);
-    // A run without a headline (not settled, jammed, ...) has nothing the photographs could
-    // give an angle of.
-    if (settings.images && !no_headline(run->stop, run->pile))
-      r.image = case_images_of(render_and_measure_run(*run, opt.out_dir, settings.image));
-    return to_json(r);
+    // Read here first so that a scene the override breaks is an error naming the case.
+    (void)build_case_scene(spec).config();
+    // case_dir is OUT/cases/<case>/seed_<n>: the default store is OUT/cache.
+    const fs::path dir = fs::absolute(case_dir);
+    const fs::path store = settings.store.empty()
+                               ? dir.parent_path().parent_path().parent_path() / "cache"
+                               : fs::path(settings.store);
+    PileServiceSettings ps;
+    ps.workers = 1;
+    ps.threads = settings.threads;
+    ps.frames = true;  // a campaign's run keeps the scene's frame series
+    PileService service(store.string(), ps);
+    const PileOutcome o = service.run_one(case_request(spec, settings));
+    link_case_run(o, dir);
+    return to_json(case_result_of(o));
   };
 }
 
@@ -140,16 +173,31 @@ void check_pile_cases(const Campaign& campaign) {
   }
 }
 
-bool case_made_no_pile(const json& r) {
-  const CaseResult c = case_result_from_json(r);
-  const auto none = no_headline(c.stop, c.pile);
-  return none && none->reason == NoHeadlineReason::kJammed;
+bool case_made_no_pile(const json& r) { return case_outcome(r) == PileStatus::kJam; }
+
+PileStatus case_outcome(const json& j) {
+  const CaseResult r = case_result_from_json(j);
+  return pile_status_of(r.stop, r.pile);
 }
 
-std::string case_outcome(const json& j) {
-  const CaseResult r = case_result_from_json(j);
-  const auto none = no_headline(r.stop, r.pile);
-  return none ? no_headline_word(none->reason) : "pile";
+std::string case_outcome_word(const json& j) { return pile_status_word(case_outcome(j)); }
+
+double select_angle_deg(const PileMeasure& pile, const std::optional<PhotoMeasure>& photo,
+                        AngleMeasure measure, const std::string& where) {
+  switch (measure) {
+    case AngleMeasure::kImage:
+      return photo ? photo->theta_deg : pile.theta_hd_deg;
+    case AngleMeasure::kImageFlank:
+      if (!photo)
+        throw std::runtime_error("the image flank angle needs the run's photographs, and " +
+                                 where + " has none (run without --no-images)");
+      return photo->flank_deg;
+    case AngleMeasure::kParticles:
+      return pile.theta_hd_deg;
+    case AngleMeasure::kSlice:
+      return pile.slice_angle_mean_deg;
+  }
+  throw std::logic_error("select_angle_deg: unknown angle measure");
 }
 
 double case_angle_deg(const json& j, AngleMeasure measure) {
@@ -158,20 +206,11 @@ double case_angle_deg(const json& j, AngleMeasure measure) {
     throw std::runtime_error("the run has no angle (" +
                              std::string(no_headline_word(none->reason)) + ": " + none->message +
                              "); " + r.run_dir);
-  switch (measure) {
-    case AngleMeasure::kImage:
-      return r.image ? r.image->theta_deg : r.pile.theta_hd_deg;
-    case AngleMeasure::kImageFlank:
-      if (!r.image)
-        throw std::runtime_error("the image flank angle needs the run's photographs, and " +
-                                 r.run_dir + " has none (run without --no-images)");
-      return r.image->flank_deg;
-    case AngleMeasure::kParticles:
-      return r.pile.theta_hd_deg;
-    case AngleMeasure::kSlice:
-      return r.pile.slice_angle_mean_deg;
-  }
-  throw std::logic_error("case_angle_deg: unknown angle measure");
+  std::optional<PhotoMeasure> photo;
+  if (r.image)
+    photo = PhotoMeasure{r.image->theta_deg,  r.image->theta_sd_deg, r.image->height_m,
+                         r.image->diameter_m, r.image->flank_deg,    0.0};
+  return select_angle_deg(r.pile, photo, measure, r.run_dir);
 }
 
 }  // namespace reposetwin::experiments

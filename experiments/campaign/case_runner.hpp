@@ -1,10 +1,14 @@
 // One campaign run = one pile test (+ its photographs measured by vision).
 //
 // The campaign runner (campaign.hpp) knows nothing of piles: it hands a CaseSpec and a folder to
-// a case function. pile_case_fn() is that function for the pile test: it builds the case's scene
-// (overrides and seed applied), runs it into CASE_DIR/run, photographs and measures the pile,
-// and returns a CaseResult: the particle-position angles, the image angle, the stop reason and
-// the provenance. The runner stores it as JSON (to_json), and calibration and reports read it
+// a case function. pile_case_fn() is that function for the pile test: it asks the pile service
+// (pile_service.hpp) for the case's pour (scene, overrides, seed, photo settings), so a pile
+// another campaign, a calibration or the loop already poured into the same store is not poured
+// again, and returns a CaseResult: the particle-position angles, the image angle, the stop
+// reason, the provenance and where the run and its photographs are. The case folder keeps the
+// layout campaigns have always had (result.json, and run/ with the run's result.json,
+// final.vtp, frames and images/), its run/ made of links to the pile and photographs in the
+// store. The runner stores the result as JSON (to_json), and calibration and reports read it
 // back with case_result_from_json.
 #pragma once
 
@@ -12,6 +16,7 @@
 #include <string>
 
 #include "experiments/campaign/campaign.hpp"
+#include "experiments/campaign/pile_service.hpp"
 #include "experiments/photos/pile_images.hpp"
 #include "experiments/pile/pile_record.hpp"
 
@@ -19,9 +24,15 @@ namespace reposetwin::experiments {
 
 struct CaseRunSettings {
   bool images = true;   // render and measure the final pile (vision angle)
-  ImageSettings image;  // cameras and resolution
+  ImageSettings image;  // cameras and resolution (the campaign's: 1920 x 1080, 4 side views)
   int threads = 1;      // OpenMP threads per run (the pool runs runs side by side)
+  // The pile service's store; empty: cache/ in the campaign's output folder (beside cases/).
+  std::string store;
 };
+
+/// The pile request of a case: its scene, overrides and seed, photographed with
+/// settings.image (centred on the footprint the run measured) when settings.images.
+PileRequest case_request(const CaseSpec& spec, const CaseRunSettings& settings);
 
 /// What the twin's photographs of a case's pile measured: the side views' mean.
 struct CaseImages {
@@ -31,6 +42,7 @@ struct CaseImages {
   double diameter_m = 0.0;            // D [m]
   double flank_deg = 0.0;             // flank-line angle [deg]
   std::string images = "run/images";  // the photographs' folder, relative to the case folder
+                                      // (a link into the pile service's store)
 };
 
 /// One case's outcome (the "result" of its result.json).
@@ -41,7 +53,8 @@ struct CaseResult {
   RunPerformance performance;
   RunProvenance provenance;
   double psd_fines_fraction = 0.0;  // mass fraction of the PSD below d_min, not simulated [-]
-  std::string run_dir = "run";      // the pile run's folder, relative to the case folder
+  std::string run_dir = "run";      // the pile run's folder, relative to the case folder (its
+                                    // entries are links into the pile service's store)
   std::optional<CaseImages> image;  // absent: not photographed (--no-images, or no pile)
   std::optional<ShapeRecord> shape;  // a clump sample's shapes as run; absent for spheres, so a
                                      // campaign over shape keys says in each case what it ran
@@ -65,10 +78,18 @@ void check_pile_cases(const Campaign& campaign);
 /// True when the case jammed: grains arched in the outlet and no pile formed.
 bool case_made_no_pile(const nlohmann::json& case_result);
 
-/// What a finished case gave, for a campaign's counts: "pile" when it has a headline angle, else
-/// the reason it has none (no_headline_word: "jam", "time_limit", "not_settled", "no_pile",
-/// "physics_stop"). Only "pile" counts as an angle.
-std::string case_outcome(const nlohmann::json& case_result);
+/// What a finished case gave: kPile when it has a headline angle, else the reason it has none.
+/// Only kPile counts as an angle.
+PileStatus case_outcome(const nlohmann::json& case_result);
+
+/// case_outcome's word, for a campaign's counts (RunnerSettings::outcome_of).
+std::string case_outcome_word(const nlohmann::json& case_result);
+
+/// The one angle selector: the angle `measure` of a pile and its photographs [deg]. kImage falls
+/// back to atan(2H/D) from particle positions when the pile was not photographed; kImageFlank
+/// needs the photographs and throws std::runtime_error naming `where` without them.
+double select_angle_deg(const PileMeasure& pile, const std::optional<PhotoMeasure>& photo,
+                        AngleMeasure measure, const std::string& where);
 
 /// The angle `measure` of a finished case [deg]. kImage falls back to atan(2H/D) from particle
 /// positions when the run was not photographed (--no-images); kImageFlank needs the photographs

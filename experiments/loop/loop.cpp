@@ -1,5 +1,7 @@
 #include "experiments/loop/loop.hpp"
 
+#include "experiments/campaign/case_runner.hpp"
+
 #include <Eigen/Core>
 #include <algorithm>
 #include <chrono>
@@ -160,7 +162,8 @@ void Loop::require_pile(std::size_t i, std::size_t j, std::size_t r, const SimOu
   if (o.pile || !fitted(i)) return;
   throw std::runtime_error("test " + data_.tests[i].id + " formed no pile at mu_r " +
                            std::to_string(grid_[j]) + ", seed " + std::to_string(s_.seeds[r]) +
-                           ", in " + std::to_string(s_.max_pours) + " pour(s) (last: " + o.sim_dir +
+                           ", in " + std::to_string(s_.max_pours) + " pour(s) (last: seed " +
+                           std::to_string(o.seed) + ", " + o.sim_dir +
                            (o.no_pile.empty() ? "" : "; its photographs: " + o.no_pile) +
                            "): the loop needs a pile at every grid point");
 }
@@ -477,7 +480,7 @@ LoopProvenance Loop::provenance(const Surface& base) const {
   p.lab_angle_source = lab_angle_source(s_.angle);
   p.mu_grid = grid_;
   p.mu_key = s_.mu_key;
-  p.image = s_.image.key();
+  p.image = to_json(photo_settings(s_.image)).dump();
   p.max_pours = s_.max_pours;
   p.cache = cache_.dir();
   p.finished = utc_now();
@@ -532,21 +535,19 @@ std::string lab_angle_source(AngleMeasure measure) {
 }
 
 double twin_angle(const SimOutcome& o, AngleMeasure measure) {
-  switch (measure) {
-    case AngleMeasure::kImage:
-      return o.angle_deg;
-    case AngleMeasure::kImageFlank:
-      if (o.pile && !std::isfinite(o.flank_deg))
-        throw std::runtime_error(o.image_dir +
-                                 ": this photograph's measurement has no flank angle (made by an "
-                                 "older version); use a fresh --cache");
-      return o.pile ? o.flank_deg : 0.0;
-    case AngleMeasure::kParticles:
-      return o.positions_angle_deg;
-    case AngleMeasure::kSlice:
-      break;
-  }
-  throw std::runtime_error("the loop compares image, image_flank or particles angles, not slice");
+  if (measure == AngleMeasure::kSlice)
+    throw std::runtime_error("the loop compares image, image_flank or particles angles, not slice");
+  if (!o.pile) return 0.0;  // a pour without a measured pile has no angle to compare
+  if (measure == AngleMeasure::kImageFlank && !std::isfinite(o.flank_deg))
+    throw std::runtime_error(o.image_dir +
+                             ": this photograph's measurement has no flank angle (made by an "
+                             "older version); use a fresh --cache");
+  // The campaign's selector (case_runner.hpp), on the loop's record in metres.
+  PileMeasure pile;
+  pile.theta_hd_deg = o.positions_angle_deg;
+  const PhotoMeasure photo{o.angle_deg,          0.0,         1e-3 * o.height_mm,
+                           1e-3 * o.diameter_mm, o.flank_deg, 1e-3 * o.crest_mm};
+  return select_angle_deg(pile, photo, measure, o.image_dir);
 }
 
 std::string grid_bound_name(GridBound g) {

@@ -2,19 +2,15 @@
 // through a chosen camera, cached on disk and run on the campaign pool.
 //
 // Design note. Every simulated quantity of the loop (baseline grid, predictions, fingerprints,
-// refits, synthetic datasets) is a pile run of one lab test's scene with a few extra overrides and
-// a seed, followed by a photograph and its vision measurement. Both steps are campaign runs
-// (run_batch) in one cache folder: a pile run is named by a hash of its scene file text, its
-// resolved overrides and the engine version (engine_version(), a hash of the engine's sources),
-// and by its seed ("sim_<hash>/seed_<n>"), a photograph by the pile run's hash, the image
-// settings and the imaging version ("img_<hash>/seed_<n>"). A killed loop therefore resumes
-// where it stopped and nothing is ever computed twice, also across datasets that share
-// conditions (the tests share one cache) and across commits that leave the engine and the
-// imaging alone (the loop's logic, a report); a changed engine simulates afresh beside the old
-// runs instead of reusing piles it did not make (a change of rounding alone re-draws every
-// pile). Each run's result.json keeps the code version that made it. Measurement effects (camera height, lens distortion) only add
-// photographs of piles that already exist. All rendering and simulation happens in the pool's
-// forked workers, never in the calling process (OpenMP and OSMesa do not survive a fork).
+// refits, synthetic datasets) is a pour of one lab test's scene with a few extra overrides and a
+// seed, photographed and measured by vision: a request to the pile service
+// (campaign/pile_service.hpp), whose store is the loop's cache. SimCache turns the loop's
+// request (a lab test, extra overrides, a seed, an ImageVariant) into the service's PileRequest
+// and its PileOutcome back into the loop's units (mm). A killed loop therefore resumes where it
+// stopped and nothing is ever computed twice, also across datasets that share conditions, and a
+// calibration that poured the same piles into the same store has poured them for the loop.
+// Measurement effects (camera height, lens distortion) only add photographs of piles that
+// already exist.
 //
 // A photograph is taken by the true camera (ImageVariant: height, distortion, distance, noise)
 // and measured with the camera the lab declares (level with the plate and undistorted unless
@@ -35,13 +31,16 @@
 #include <vector>
 
 #include "camera/camera.hpp"
-#include "experiments/io/hash.hpp"
+#include "experiments/campaign/pile_service.hpp"
 #include "experiments/loop/loop_data.hpp"
 #include "experiments/photos/photographs.hpp"
 
 namespace reposetwin::experiments {
 
-/// How a simulated pile is photographed and measured.
+/// How the loop photographs a simulated pile, as measurement effects: the true camera against
+/// the declared one. photo_settings() turns it into the one photo pipeline's PhotoSettings, the
+/// record the pile service keys a photograph by. Its defaults are the loop's (960 x 720, 2 side
+/// views; a campaign's are PhotoSettings' own, 1920 x 1080, 4 views).
 struct ImageVariant {
   int width_px = 960;              // [px]
   int height_px = 720;             // [px]
@@ -66,11 +65,8 @@ struct ImageVariant {
   std::vector<camera::Camera> lab_cameras;
   // Whether make_request takes a test's declared cameras into lab_cameras (reposetwin loop
   // --own-cameras: false, the twin frames its own; the synthetic loop tests, whose premise is a
-  // lab camera other than the loop's). Not part of the key: it only decides lab_cameras.
+  // lab camera other than the loop's). It only decides lab_cameras.
   bool use_lab_cameras = true;
-  /// A short text naming the settings (part of the photograph's cache key; the lab cameras
-  /// enter by a hash of their JSON, so photos through another camera are never reused).
-  std::string key() const;
 };
 
 /// One simulation request: a lab test's scene with extra overrides and a seed, photographed.
@@ -95,7 +91,7 @@ struct SimOutcome {
   // that did not record it.
   double crest_mm = std::numeric_limits<double>::quiet_NaN();
   double positions_angle_deg = 0.0;  // atan(2H/D) from particle positions [deg]
-  std::string sim_dir;        // the pile run's folder
+  std::string sim_dir;        // the pile's folder in the store (its run in sim_dir/run)
   std::string image_dir;      // the photograph's folder
   nlohmann::json views;       // the photograph's views as measured (photograph_pile's record)
   nlohmann::json provenance;  // the run's provenance (scene, seed, dt, softened E, version)
@@ -109,7 +105,7 @@ struct SimCacheSettings {
   bool progress = false;  // progress lines on stderr
 };
 
-/// The on-disk cache of loop simulations (see the design note).
+/// The loop's view of the pile service (see the design note).
 class SimCache {
  public:
   SimCache(std::string dir, SimCacheSettings settings = {});
@@ -117,16 +113,20 @@ class SimCache {
   /// naming the failed runs.
   std::vector<SimOutcome> run(const std::vector<SimRequest>& requests);
   /// Pile runs and photographs this object has started (not found finished).
-  int simulations_started() const { return started_sims_; }
-  int photos_started() const { return started_photos_; }
-  const std::string& dir() const { return dir_; }
+  int simulations_started() const { return service_.simulations_started(); }
+  int photos_started() const { return service_.photos_started(); }
+  const std::string& dir() const { return service_.dir(); }
 
  private:
-  std::string dir_;
-  SimCacheSettings settings_;
-  int started_sims_ = 0;
-  int started_photos_ = 0;
+  PileService service_;
 };
+
+/// The service's request for a loop request: the test's scene, its resolved overrides, the
+/// seed, and the photograph photo_settings(request.image) gives.
+PileRequest pile_request(const SimRequest& request);
+
+/// The loop's record of the service's answer (mm, the views as the loop reads them).
+SimOutcome sim_outcome(const PileOutcome& outcome, const ImageVariant& image, std::uint64_t seed);
 
 /// Seed of the a-th repeat of a pour with seed s: s + a * kRepourSeedStride (far from the seed
 /// lists a user types, so a repeat never lands on another request's seed).
@@ -152,11 +152,6 @@ std::vector<std::vector<std::size_t>> pour_groups(const std::vector<int>& jams);
 /// The resolved overrides of a request: the test's, then the extra ones (later keys win), as
 /// "key=value" strings in application order.
 std::vector<std::string> resolved_overrides(const SimRequest& request);
-
-/// The cache folder of a pile run: "sim_" and a hash of the scene text's hash, the resolved
-/// overrides (in order) and the engine version.
-std::string sim_case_name(const std::string& scene_hash, const std::vector<std::string>& sets,
-                          const std::string& version);
 
 /// The photo pipeline's settings for `variant` (photos/photographs.hpp): the true cameras (the
 /// twin's framing, or the lab's with the measurement effects applied) and the declared ones the

@@ -168,6 +168,45 @@ render::Renderer& thread_renderer() {
 
 }  // namespace
 
+nlohmann::json to_json(const PhotoSettings& s) {
+  const auto opt = [](const std::optional<double>& v) {
+    return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+  };
+  const auto cams = [](const std::vector<camera::Camera>& cs) {
+    nlohmann::json a = nlohmann::json::array();
+    for (const camera::Camera& c : cs) a.push_back(camera::to_json(c));
+    return a;
+  };
+  nlohmann::json shells = nlohmann::json::array();
+  for (const render::Shell& sh : s.shells)
+    shells.push_back({sh.z_bottom_m, sh.z_top_m, sh.r_bottom_m, sh.r_top_m, sh.color.r,
+                      sh.color.g, sh.color.b});
+  return {{"width_px", s.width_px},
+          {"height_px", s.height_px},
+          {"side_views", s.side_views},
+          {"top_view", s.top_view},
+          {"distance_radii", s.distance_radii},
+          {"camera_height_m", s.camera_height_m},
+          {"k1", s.k1},
+          {"aim_at_axis_foot", s.aim_at_axis_foot},
+          {"declared_height_m", opt(s.declared_height_m)},
+          {"declared_k1", opt(s.declared_k1)},
+          {"noise_sd", s.noise_sd},
+          {"noise_seed", s.noise_seed},
+          {"tint_seed", s.tint_seed},
+          {"scale_reference", s.scale_reference},
+          {"write_photos", s.write_photos},
+          {"write_overlays", s.write_overlays},
+          {"views_must_measure", s.views_must_measure},
+          {"lab_look", s.lab_look},
+          {"lab_cameras", cams(s.lab_cameras)},
+          {"declared_cameras", cams(s.declared_cameras)},
+          {"lab_top_camera", s.lab_top_camera ? camera::to_json(*s.lab_top_camera)
+                                              : nlohmann::json(nullptr)},
+          {"shells", shells},
+          {"warning", s.warning}};
+}
+
 PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
                            const std::string& out_dir, const nlohmann::json& provenance,
                            std::optional<Eigen::Vector2d> centre) {

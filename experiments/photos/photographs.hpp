@@ -78,6 +78,9 @@ struct PhotoSettings {
   std::string warning;
 };
 
+/// The settings as JSON, every field (the pile service keys photographs by it).
+nlohmann::json to_json(const PhotoSettings& s);
+
 /// One side view.
 struct SideView {
   double azimuth_deg = 0.0;

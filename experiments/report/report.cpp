@@ -44,7 +44,9 @@ struct CaseRows {
   std::vector<double> image_deg, flank_deg, particle_deg, slice_deg;
   std::vector<std::string> stops;
   std::map<std::string, int> without_pile;  // runs that formed no pile, by reason
-  std::vector<std::string> run_dirs;  // relative to the report's source folder
+  // Per run, relative to the report's source folder: the pile run's folder, its record
+  // (result.json) and its photographs' folder.
+  std::vector<std::string> run_dirs, records, image_dirs;
   json provenance;
 };
 
@@ -75,7 +77,8 @@ json read_json(const fs::path& p) {
 
 // Adds one run's result to its case (made on first sight).
 void add_result(FolderResults& f, const std::string& case_name, const json& overrides,
-                const json& r, const std::string& run_dir, const std::string& scene = "") {
+                const json& r, const std::string& run_dir, const std::string& record,
+                const std::string& image_dir, const std::string& scene = "") {
   auto it = std::find_if(f.cases.begin(), f.cases.end(),
                          [&](const CaseRows& c) { return c.name == case_name; });
   if (it == f.cases.end()) {
@@ -86,6 +89,8 @@ void add_result(FolderResults& f, const std::string& case_name, const json& over
   const std::string reason = r.at("stop").at("reason").get<std::string>();
   c.stops.push_back(reason);
   c.run_dirs.push_back(run_dir);
+  c.records.push_back(record);
+  c.image_dirs.push_back(image_dir);
   c.provenance = r.at("provenance");
   // A run without a headline (a physics stop, a jam, a time limit before the pile settled, no
   // pile: pile/headline.hpp) is listed with its reason, and its angles never enter a mean or a
@@ -114,7 +119,7 @@ void read_single_run(FolderResults& f) {
     rr["image"] = {{"theta_deg", m.at("theta_deg")}, {"flank_deg", m.at("flank_deg")}};
   }
   const std::string name = r["provenance"].value("scene_name", "run");
-  add_result(f, name, json::object(), rr, ".");
+  add_result(f, name, json::object(), rr, ".", "result.json", "images");
   if (f.title.empty()) f.title = name;
 }
 
@@ -130,9 +135,17 @@ void read_campaign_runs(FolderResults& f) {
     const json meta = read_json(p);
     if (!meta.contains("result")) continue;
     const json& spec = meta.at("spec");
-    add_result(f, spec.at("case"), spec.value("overrides", json::object()), meta.at("result"),
-               fs::relative(p.parent_path() / "run", f.dir).string(),
-               spec.value("scene", std::string()));
+    const json& res = meta.at("result");
+    // The run and its photographs are where the case's record says (the pile service's store).
+    const fs::path run = p.parent_path() / res.value("run_dir", std::string("run"));
+    const bool named = res.contains("image") && res["image"].contains("images");
+    const fs::path images = named ? p.parent_path() / res["image"]["images"].get<std::string>()
+                                  : run / "images";
+    const auto rel = [&](const fs::path& x) {
+      return fs::relative(x.lexically_normal(), f.dir).string();
+    };
+    add_result(f, spec.at("case"), spec.value("overrides", json::object()), res, rel(run),
+               rel(p), rel(images), spec.value("scene", std::string()));
   }
   if (fs::exists(f.dir / "campaign.json") && f.title.empty())
     f.title = read_json(f.dir / "campaign.json").value("campaign", "");
@@ -230,8 +243,8 @@ double render_mm_per_px(const fs::path& overlay) {
 }
 
 fs::path overlay_of(const FolderResults& f, const CaseRows& c) {
-  for (const auto& d : c.run_dirs) {
-    const fs::path p = f.dir / d / "images" / "side_az000.measured.png";
+  for (const auto& d : c.image_dirs) {
+    const fs::path p = f.dir / d / "side_az000.measured.png";
     if (fs::exists(p)) return p;
   }
   return {};
@@ -411,11 +424,11 @@ std::string overrides_text(const json& overrides) {
 // folder is still there (committed results keep the records, not the runs).
 std::vector<Link> run_links(const FolderResults& f, const CaseRows& c) {
   std::vector<Link> links;
-  for (const std::string& d : c.run_dirs) {
-    const fs::path run(d);
-    const bool campaign = run.filename() == "run";
-    const fs::path record = campaign ? run.parent_path() / "result.json" : run / "result.json";
-    const std::string seed = campaign ? run.parent_path().filename().string() : "run";
+  for (std::size_t k = 0; k < c.run_dirs.size(); ++k) {
+    const fs::path run(c.run_dirs[k]);
+    const fs::path record(c.records[k]);
+    const bool campaign = record.parent_path().filename().string().rfind("seed_", 0) == 0;
+    const std::string seed = campaign ? record.parent_path().filename().string() : "run";
     if (fs::exists(f.dir / record))
       links.push_back({("../" / record).lexically_normal().string(), seed});
     if (fs::exists(f.dir / run / "series.pvd"))
@@ -475,7 +488,7 @@ std::string cases_section(const FolderResults& f, const fs::path& out) {
   std::vector<Figure> renders;
   for (const CaseRows& c : f.cases) {
     t.rows.push_back(case_row(f, c));
-    const fs::path overlay = f.dir / c.run_dirs.front() / "images" / "side_az000.measured.png";
+    const fs::path overlay = f.dir / c.image_dirs.front() / "side_az000.measured.png";
     const std::string local = c.name + "_side.png";
     if (fs::exists(overlay))
       fs::copy_file(overlay, out / local, fs::copy_options::overwrite_existing);

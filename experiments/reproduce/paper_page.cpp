@@ -75,9 +75,9 @@ std::vector<OurPoint> campaign_points(const PaperItem& item, const fs::path& dir
       it = pts.end() - 1;
     }
     const json& res = (*meta)["result"];
-    const std::string outcome = case_outcome(res);
-    if (outcome != "pile") {
-      ++it->without_pile[outcome];
+    const PileStatus outcome = case_outcome(res);
+    if (outcome != PileStatus::kPile) {
+      ++it->without_pile[pile_status_word(outcome)];
       continue;
     }
     try {

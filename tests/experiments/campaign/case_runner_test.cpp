@@ -32,7 +32,7 @@ TEST(CaseAngle, ImageFirstThenParticles) {
   EXPECT_TRUE(case_made_no_pile(run_result("clogged", "no pile")));
   EXPECT_TRUE(case_made_no_pile(run_result("clogged", "no pile")["result"]));
   EXPECT_FALSE(case_made_no_pile(run_result("settled", "ok")));
-  EXPECT_EQ(case_outcome(run_result("settled", "ok")["result"]), "pile");
+  EXPECT_EQ(case_outcome(run_result("settled", "ok")["result"]), PileStatus::kPile);
 }
 
 // Every run without a headline gives no angle under any measure, and its outcome names why.
@@ -43,12 +43,12 @@ TEST(CaseAngle, ARunWithoutAHeadlineHasNoAngleAndCountsByItsReason) {
                                                        {"physics: nan", "physics_stop"}};
   for (const auto& [stop, outcome] : cases) {
     const nlohmann::json r = run_result(stop, stop == std::string("clogged") ? "no pile" : "ok");
-    EXPECT_EQ(case_outcome(r["result"]), outcome) << stop;
+    EXPECT_EQ(case_outcome_word(r["result"]), outcome) << stop;
     for (AngleMeasure m : {AngleMeasure::kImage, AngleMeasure::kParticles, AngleMeasure::kSlice})
       EXPECT_THROW(case_angle_deg(r, m), std::runtime_error) << stop;
   }
-  EXPECT_EQ(case_outcome(run_result("settled", "no flanks")["result"]), "no_pile");
-  EXPECT_EQ(case_outcome(run_result("settled", "no pile")["result"]), "no_pile");
+  EXPECT_EQ(case_outcome(run_result("settled", "no flanks")["result"]), PileStatus::kNoPile);
+  EXPECT_EQ(case_outcome(run_result("settled", "no pile")["result"]), PileStatus::kNoPile);
   // A case result written for a run that settled carries its headline; one that did not, null.
   CaseResult unsettled;
   unsettled.stop = {StopReason::kSettleTimeLimit, sim::Status::kOk, "still moving", ""};
@@ -105,7 +105,8 @@ RunnerSettings one_worker() {
 }
 
 // What a campaign killed mid-run leaves: started.json with the run's inputs and a pile run
-// stopped (with its checkpoint) after `steps` steps, built as pile_case_fn builds it.
+// stopped (with its checkpoint) after `steps` steps in the pile service's store (OUT/cache), built
+// as pile_case_fn builds it.
 void leave_interrupted_run(const fs::path& out, const CaseSpec& spec, std::int64_t steps,
                            const nlohmann::json& stored_spec) {
   const fs::path dir = out / spec.relative_dir();
@@ -116,7 +117,7 @@ void leave_interrupted_run(const fs::path& out, const CaseSpec& spec, std::int64
   SceneDoc doc = build_case_scene(spec);
   doc.set_seed(spec.seed);
   RunOptions opt;
-  opt.out_dir = (dir / "run").string();
+  opt.out_dir = PileService((out / "cache").string()).pile_dir(case_request(spec, {})) + "/run";
   opt.progress = false;
   opt.stop_after_steps = steps;
   ASSERT_FALSE(run_pile_test(doc.config(), opt).has_value());
@@ -132,12 +133,13 @@ TEST(CampaignPileRun, AnInterruptedRunContinuesFromItsCheckpoint) {
   CaseRunSettings rs;
   rs.images = false;
   const CaseFn fn = pile_case_fn(rs);
-  auto run_json = [&](const fs::path& out) {
-    return nlohmann::json::parse(
-        read_file((out / spec.relative_dir() / "run" / "result.json").string()));
-  };
   auto case_json = [&](const fs::path& out) {
     return nlohmann::json::parse(read_file((out / spec.relative_dir() / "result.json").string()));
+  };
+  auto run_json = [&](const fs::path& out) {  // the pile run the case record points at
+    const fs::path run = out / spec.relative_dir() /
+                         case_json(out)["result"]["run_dir"].get<std::string>() / "result.json";
+    return nlohmann::json::parse(read_file(run.string()));
   };
   auto resumed = [](const nlohmann::json& run) {
     int n = 0;
@@ -172,18 +174,21 @@ TEST(CampaignPileRun, AnInterruptedRunContinuesFromItsCheckpoint) {
   // A damaged checkpoint is not continued: the run starts again and still ends the same.
   const fs::path broken = dir / "broken";
   leave_interrupted_run(broken, spec, 3000, to_json(spec));
-  write_file_atomic((broken / spec.relative_dir() / "run" / "checkpoint.bin").string(), "junk");
+  write_file_atomic(
+      PileService((broken / "cache").string()).pile_dir(case_request(spec, {})) + "/run/checkpoint.bin",
+      "junk");
   EXPECT_EQ(run_campaign(c, broken.string(), fn, one_worker()).finished, 1);
   EXPECT_EQ(resumed(run_json(broken)), 0);
   EXPECT_EQ(run_json(broken)["pile"], a["pile"]);
 
-  // An interrupted attempt at other inputs (another mu_r) is cleared, never continued.
+  // A case folder whose interrupted attempt was at other inputs (another mass) is cleared; the
+  // pour in the store is keyed by what it pours, this case's request, so it is continued.
   const fs::path other = dir / "other";
   nlohmann::json other_spec = to_json(spec);
   other_spec["overrides"]["sample.mass_kg"] = 0.005;
   leave_interrupted_run(other, spec, 3000, other_spec);
   EXPECT_EQ(run_campaign(c, other.string(), fn, one_worker()).finished, 1);
-  EXPECT_EQ(resumed(run_json(other)), 0);
+  EXPECT_EQ(resumed(run_json(other)), 1);
   EXPECT_FALSE(case_json(other).contains("earlier_attempts"));
   EXPECT_EQ(run_json(other)["pile"], a["pile"]);
   fs::remove_all(dir);

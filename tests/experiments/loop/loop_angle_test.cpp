@@ -93,7 +93,7 @@ TEST(LoopAngle, PhotographsCarryTheFlankAngle) {
   img.width_px = 640;
   img.height_px = 480;
   SimCache cache((fs::temp_directory_path() /
-                  ("reposetwin_loop_angle_test_" + fnv1a_hex(code_version())))
+                  ("reposetwin_loop_angle_test_" + sha256_hex(code_version()).substr(0, 16)))
                      .string(),
                  {1, false});
   const SimOutcome o =

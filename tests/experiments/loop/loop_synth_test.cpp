@@ -26,6 +26,7 @@
 //    twin keeps its own framing here (use_lab_cameras = false), since like for like through the
 //    lab's cameras is LoopCamera's test.
 
+#include "experiments/io/hash.hpp"
 #include "experiments/loop/loop_synth.hpp"
 
 #include <gtest/gtest.h>

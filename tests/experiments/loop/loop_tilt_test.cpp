@@ -23,6 +23,7 @@
 #include <string>
 
 #include "camera/camera.hpp"
+#include "experiments/io/hash.hpp"
 #include "experiments/io/csv.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/loop/loop_data.hpp"

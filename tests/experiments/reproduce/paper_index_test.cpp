@@ -190,7 +190,7 @@ TEST(PaperIndex, ATinyIndexRunsEndToEndAndResumes) {
   rs.workers = 2;
   rs.progress = false;
   rs.rank.reset();
-  rs.outcome_of = case_outcome;
+  rs.outcome_of = case_outcome_word;
   const fs::path out = d.path / "out";
   std::atomic<int> runs{0};
   const json first = run_paper(idx, out.string(), counting(runs), rs);
@@ -241,7 +241,7 @@ TEST(PaperIndex, AnUncalibratedSourceIsPredictedAtItsClosestPointOnlyWhenDeclare
   rs.workers = 1;
   rs.progress = false;
   rs.rank.reset();
-  rs.outcome_of = case_outcome;
+  rs.outcome_of = case_outcome_word;
   const fs::path out = d.path / "out";
   const PaperIndex plain = load_paper_index(d.write(index).string());
   // The source: the tiny calibration cannot reach 20 deg (its lowest mu_r piles steeper).
