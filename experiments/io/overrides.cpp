@@ -23,10 +23,12 @@ bool is_index(const std::string& s) {
   return true;
 }
 
+// The type's name with its article ("an integer", "a string").
 std::string type_name(toml::node_type t) {
   std::ostringstream os;
   os << t;
-  return os.str();
+  const std::string name = os.str();
+  return (std::string("aeiou").find(name.front()) != std::string::npos ? "an " : "a ") + name;
 }
 
 // A copy of `value`, converted to float when it is an integer replacing a float.
@@ -42,7 +44,7 @@ void store(const toml::node& value, toml::node_type existing, Sink&& sink) {
 // A value keeps its type: a word where the scene has a number is a typo, not a new experiment.
 std::string type_change(const toml::node& existing, const toml::node& value) {
   std::string why =
-      "the scene has a " + type_name(existing.type()) + " here, not a " + type_name(value.type());
+      "the scene has " + type_name(existing.type()) + " here, not " + type_name(value.type());
   if (value.is_string() && existing.is_number())
     why += " (a value that is not a number is read as a word)";
   return why;
@@ -109,7 +111,7 @@ void apply_override(toml::table& doc, std::string_view dotted_key, const toml::n
                       ? std::string(" and is not a table a scene has (reposetwin keys)")
                       : std::string()));
     if (!next->is_table() && !next->is_array())
-      throw fail("'" + path + "' is a " + type_name(next->type()) + ", not a table");
+      throw fail("'" + path + "' is " + type_name(next->type()) + ", not a table");
     parent = next;
   }
 

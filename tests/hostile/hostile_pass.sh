@@ -118,6 +118,26 @@ sample.psd.passing_percent [0.0,150.0,100.0]
 measure.flank_low 0.9
 measure.sectors 0
 KEYS
+# --- 1b. run --set on a grain-shape mix: every shape's keys as --set writes them.
+{ cat "$TINY"; printf '%s\n' '[[sample.shapes]]' 'name = "rod"' 'kind = "generated"' \
+    'mass_fraction = 0.5' 'elongation = 2.0' 'spheres = 3' '[[sample.shapes]]' 'name = "block"' \
+    'kind = "blocky"' 'mass_fraction = 0.5' 'elongation = 1.5' 'angularity = 0.5'; } > "$W/mix.toml"
+while read -r key vals; do
+  for v in $vals; do
+    hc "run_set_${key}=${v}" "$key|mix.toml|${v}~$(printf '%s' "$v" | sed 's/e300/e+300/')" \
+      "$BIN" run "$W/mix.toml" -o "$W/r_set" --no-images -q --set "$key=$v"
+  done
+done <<'KEYS'
+sample.shapes.0.elongation 0.5 nan 1e300 9
+sample.shapes.0.flatness 1e300 0
+sample.shapes.0.spheres 0 65 1.5
+sample.shapes.0.roundness 0 2
+sample.shapes.0.kind teapot
+sample.shapes.1.angularity 1 -1 nan
+sample.shapes.1.mass_fraction 2 -0.5
+sample.shapes.1.offsets [[0.0,0.0,0.0]]
+KEYS
+hc run_set_shape_index_beyond "sample.shapes.5" "$BIN" run "$W/mix.toml" -o "$W/r_u" --no-images -q --set sample.shapes.5.elongation=2
 hc run_set_unknown_key "numerics.tiem_step_s" "$BIN" run "$TINY" -o "$W/r_u" --no-images -q --set numerics.tiem_step_s=1e-5
 hc run_set_unknown_table "nosuch" "$BIN" run "$TINY" -o "$W/r_u" --no-images -q --set nosuch.key=1
 hc run_set_unused_material_junk "materials.zzz.density_kg_m3|abc" "$BIN" run "$TINY" -o "$W/r_u" --no-images -q --set materials.zzz.density_kg_m3=abc
