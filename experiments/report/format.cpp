@@ -1,7 +1,9 @@
 #include "experiments/report/format.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <set>
 
 namespace reposetwin::experiments::report {
@@ -89,6 +91,36 @@ std::string case_label(const std::string& name, const nlohmann::json& overrides)
       label = name.substr(predict.size(), end - predict.size()) + ": " + label;
   }
   return label;
+}
+
+std::vector<std::string> case_labels(
+    const std::vector<std::pair<std::string, nlohmann::json>>& cases) {
+  // Each label's parts, the prediction's prefix kept apart from the inputs.
+  std::vector<std::string> prefix(cases.size()), out(cases.size());
+  std::vector<std::vector<std::string>> parts(cases.size());
+  std::map<std::string, std::size_t> count;
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    out[i] = case_label(cases[i].first, cases[i].second);
+    std::string rest = out[i];
+    if (const std::size_t colon = rest.find(": "); colon != std::string::npos) {
+      prefix[i] = rest.substr(0, colon + 2);
+      rest = rest.substr(colon + 2);
+    }
+    for (std::size_t at = 0; at <= rest.size();) {
+      const std::size_t end = std::min(rest.find(", ", at), rest.size());
+      parts[i].push_back(rest.substr(at, end - at));
+      at = end + 2;
+    }
+    for (const std::string& p : std::set<std::string>(parts[i].begin(), parts[i].end())) ++count[p];
+  }
+  if (cases.size() < 2) return out;
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    std::string kept;
+    for (const std::string& p : parts[i])
+      if (count[p] < cases.size()) kept += (kept.empty() ? "" : ", ") + p;
+    if (!kept.empty()) out[i] = prefix[i] + kept;
+  }
+  return out;
 }
 
 }  // namespace reposetwin::experiments::report

@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace reposetwin::experiments::report {
 
@@ -47,5 +49,11 @@ std::string short_key(const std::string& key);
 /// by a prediction's name ("sample4: mu_r 0.365" for predict_sample4_rolling_friction_0.365...).
 /// A case without numeric overrides keeps its name.
 std::string case_label(const std::string& name, const nlohmann::json& overrides);
+
+/// The labels of several cases side by side (an axis): each case_label without the "name value"
+/// parts every case shares, which say nothing about the difference (a user's calibration sets
+/// the funnel and mass on every case). A label left empty keeps its case_label.
+std::vector<std::string> case_labels(
+    const std::vector<std::pair<std::string, nlohmann::json>>& cases);
 
 }  // namespace reposetwin::experiments::report

@@ -203,13 +203,17 @@ json case_summary(const FolderResults& f) {
 bool angles_plot(const FolderResults& f, const fs::path& out) {
   // index image_mean image_sd particle_mean particle_sd label flank sd; a case is labelled by
   // its inputs (mu_r 0.399), not by its folder name.
+  std::vector<std::pair<std::string, json>> named;
+  for (const CaseRows& c : f.cases) named.emplace_back(c.name, c.overrides);
+  const std::vector<std::string> labels = case_labels(named);
   std::ostringstream data;
   int k = 0;
   for (const CaseRows& c : f.cases) {
     const CaseStats s = case_stats(c);
-    data << k++ << " " << s.image.mean << " " << s.image.sd << " " << s.particle.mean << " "
-         << s.particle.sd << " \"" << case_label(c.name, c.overrides) << "\" "
+    data << k << " " << s.image.mean << " " << s.image.sd << " " << s.particle.mean << " "
+         << s.particle.sd << " \"" << labels[k] << "\" "
          << (s.flank.n ? s.flank.mean : NAN) << " " << (s.flank.n ? s.flank.sd : NAN) << "\n";
+    ++k;
   }
   write_file_atomic((out / "angles.dat").string(), data.str());
   return run_gnuplot(out / "angles.gp",

@@ -15,6 +15,7 @@
 #include "experiments/io/provenance.hpp"
 #include "experiments/photos/pile_images.hpp"
 #include "experiments/pile/pile_run.hpp"
+#include "experiments/report/format.hpp"
 #include "experiments/report/page_check.hpp"
 #include "experiments/report/report.hpp"
 
@@ -148,6 +149,25 @@ TEST(ReportPages, LoopPageIsRebuiltFromItsLoopJson) {
   EXPECT_NE(html.find("Error before and after"), std::string::npos);
   EXPECT_NE(html.find("<img src='plots/residual_"), std::string::npos);
   EXPECT_EQ(html.find("<pre"), std::string::npos);
+}
+
+// On an axis, a case is labelled by what sets it apart: a user's calibration sets the funnel and
+// the mass on every case, and those parts are dropped; a prediction keeps its name.
+TEST(ReportFormat, AxisLabelsDropTheInputsEveryCaseShares) {
+  const std::string mu = "contacts.rock-rock.rolling_friction";
+  const std::vector<std::pair<std::string, json>> cases = {
+      {"calib_a", {{mu, 0.05}, {"container.bottom_diameter_m", 0.02}, {"sample.mass_kg", 0.006}}},
+      {"calib_b", {{mu, 0.5}, {"container.bottom_diameter_m", 0.02}, {"sample.mass_kg", 0.006}}},
+      {"predict_heavy_rolling_friction_0.2",
+       {{mu, 0.2}, {"container.bottom_diameter_m", 0.02}, {"sample.mass_kg", 0.008}}}};
+  EXPECT_EQ(report::case_labels(cases),
+            (std::vector<std::string>{"mu_r 0.05, mass_kg 0.006", "mu_r 0.5, mass_kg 0.006",
+                                      "heavy: mu_r 0.2, mass_kg 0.008"}));
+  // One case, or cases that differ in nothing numeric, keep their whole labels.
+  EXPECT_EQ(report::case_labels({cases[0]}),
+            std::vector<std::string>{report::case_label(cases[0].first, cases[0].second)});
+  EXPECT_EQ(report::case_labels({cases[0], cases[0]})[0],
+            report::case_label(cases[0].first, cases[0].second));
 }
 
 }  // namespace
