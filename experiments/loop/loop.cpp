@@ -347,7 +347,7 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
   IterationRecord& iter = iterations.emplace_back(trace(it, state, fps));
   rank_candidates(iter.candidates);
   // The acceptance rule names contenders; the joint decision names one, or none when the data
-  // cannot tell them apart or point at the measurement (loop_joint.hpp).
+  // cannot tell them apart or point at the measurement (loop_decision.hpp).
   if (iter.offset)  // else too few tests had a prediction to trace (trace's statement)
     iter.decision =
         decide_trace(iter.candidates, iter.joint, *iter.offset, *iter.mu_only, s_.rule);
@@ -371,7 +371,7 @@ bool Loop::iterate(int it, LoopState& state, const std::vector<FingerprintRecord
   }
   const CandidateScore sc = iter.candidates[static_cast<std::size_t>(best)];
   const CandidateEffect& e = find_effect(sc.name);
-  // A candidate admitted on the joint evidence alone (loop_joint.hpp) is refitted on it: its
+  // A candidate admitted on the joint evidence alone (loop_decision.hpp) is refitted on it: its
   // strength is the joint fit's, and mu_r and the effect are fitted to every traced observable.
   // One that passed on the angle keeps the angle's strength and fit.
   double coef = sc.coef;

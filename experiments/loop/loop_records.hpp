@@ -19,9 +19,9 @@
 #include <vector>
 
 #include "experiments/loop/loop_data.hpp"
-#include "experiments/loop/loop_joint.hpp"
+#include "experiments/loop/loop_decision.hpp"
 #include "experiments/loop/loop_region.hpp"
-#include "experiments/loop/loop_trace.hpp"
+#include "experiments/loop/loop_acceptance.hpp"
 
 namespace reposetwin::experiments {
 

@@ -21,7 +21,7 @@
 
 #include "experiments/calibration/calibration.hpp"
 #include "experiments/loop/loop.hpp"
-#include "experiments/loop/loop_joint.hpp"
+#include "experiments/loop/loop_decision.hpp"
 #include "experiments/loop/loop_records.hpp"
 
 namespace reposetwin::experiments::loop_detail {

@@ -1,7 +1,7 @@
 // The loop's stages from the calibrated baseline to the tracing (loop.hpp's design note): the
 // mu_r grid settled so that mu_r does not sit on its bound, the candidates' fingerprints with
 // their probes scaled until they stand out of the seed noise, and the residual of every test
-// traced on the angle and jointly on every measured observable (loop_joint.hpp).
+// traced on the angle and jointly on every measured observable (loop_decision.hpp).
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
