@@ -51,11 +51,13 @@
 //    error of a prediction, is not chosen (recorded under not_confirmed with the reason).
 //  * Caching and resuming: loop_sim.hpp. loop.json (atomic) is written last; an existing one is
 //    never overwritten without `force`.
-//  * Code. Loop::run (loop.cpp) reads as the list of these stages: check the settings, simulate
-//    the baseline surface, pool the seed noise, calibrate mu_r with its residuals, fingerprint
-//    the candidates, then iterate (trace and select, refit by simulation in loop_refit.cpp,
-//    confirm), and write loop.json. The stages pass the typed records of loop_records.hpp;
-//    loop.json is their to_json, made in one place (loop_stages.hpp holds the stages' model).
+//  * Code. run_loop (loop.cpp) reads as the list of these stages, each a free function of
+//    loop_stages.hpp: check_settings, baseline (simulate, pool the seed noise, calibrate mu_r
+//    with its residuals), settle_grid, fingerprint_candidates, then iterate (trace, decide,
+//    refit_by_simulation, confirm), final_record, photo_pairs, summarise, and write loop.json.
+//    Each takes the immutable LoopContext and returns a typed record of loop_records.hpp; those
+//    that pour piles also take the PileStore. loop.json is the records' to_json, made in one
+//    place.
 #pragma once
 
 #include <cstdint>
