@@ -36,7 +36,7 @@
 //    0.3 / 0.5 / 1.0 deg, 100 trials each, default settings): the 95% interval holds the truth in
 //    96 / 95 / 91% of the calibrations with the confirmation, 86 / 88 / 87% without it; a fixed
 //    grid through calibrate_observations gives 95% (400 trials).
-//  * The loop (loop/loop_model.cpp, Loop::fit_mu) fits mu_r differently on purpose: jointly to
+//  * The loop (loop/loop_model.cpp, fit_mu) fits mu_r differently on purpose: jointly to
 //    many tests on a fixed grid, by weighted least squares with a candidate effect's weight; this
 //    file matches one test's angle. Its comment there says why the two are not one fit.
 // Random numbers: sim::Rng (sim/random.hpp: std::mt19937_64, which is fully specified, with our

@@ -1,7 +1,7 @@
 // Closing the loop: calibrate mu_r on measured lab tests, find the residual, trace it to a
 // candidate effect the base model lacks, add it, refit, and report the error before and after.
 //
-// Design note (see also loop_trace.hpp for the statistics and the acceptance rule).
+// Design note (see also loop_acceptance.hpp for the statistics and the acceptance rule).
 //  * Model. Following Kennedy and O'Hagan, measured angle = twin(conditions, mu_r, effects) +
 //    discrepancy + noise. The twin's angle is the vision angle of its own photographs of the pile,
 //    so measured and simulated angles come through the same measurement, and through the same
@@ -14,7 +14,7 @@
 //    interpolated linearly. Predictions carry the seed standard error sd / sqrt(seeds); the noise
 //    of a residual is sqrt(sd^2 / repeats + sd^2 / seeds), sd the pooled seed spread of one pile.
 //  * Roles and the grid. mu_r is fitted on the calibration tests (one is enough); every test,
-//    the held-out ones included, is traced (loop_joint.hpp's describe_design says what a design
+//    the held-out ones included, is traced (loop_decision.hpp's describe_design says what a design
 //    can decide; too few tests is a statement in loop.json, not an error). A mu_r on an end of
 //    its grid cannot take up what it should, so the grid is extended there (settings.at_bound)
 //    before anything is traced, or the loop says why it traces nothing.
@@ -28,9 +28,9 @@
 //    own noise) is probed again at twice its distance from off, probe_scalings times at most;
 //    one still lost is listed as unavailable with the largest probe tried: it could "explain"
 //    any residual only with an absurd strength.
-//  * Selection: loop_trace.hpp (WLS with the mu_r correction bounded to the grid, leave-one-
+//  * Selection: loop_acceptance.hpp (WLS with the mu_r correction bounded to the grid, leave-one-
 //    test-out ranking, accept when |c| > 3 se and the LOO RMSE gain beats the seed noise) and
-//    loop_joint.hpp (angle, H, D and the crest width jointly: one candidate named only when it
+//    loop_decision.hpp (angle, H, D and the crest width jointly: one candidate named only when it
 //    beats the others by more than the noise allows, else none; a uniform offset beyond mu_r's
 //    reach flagged as a suspected measurement error).
 //  * Refit by simulation. The chosen effect's linear estimate p1 = off + c (probe - off) (clamped
@@ -51,11 +51,13 @@
 //    error of a prediction, is not chosen (recorded under not_confirmed with the reason).
 //  * Caching and resuming: loop_sim.hpp. loop.json (atomic) is written last; an existing one is
 //    never overwritten without `force`.
-//  * Code. Loop::run (loop.cpp) reads as the list of these stages: check the settings, simulate
-//    the baseline surface, pool the seed noise, calibrate mu_r with its residuals, fingerprint
-//    the candidates, then iterate (trace and select, refit by simulation in loop_refit.cpp,
-//    confirm), and write loop.json. The stages pass the typed records of loop_records.hpp;
-//    loop.json is their to_json, made in one place (loop_stages.hpp holds the stages' model).
+//  * Code. run_loop (loop.cpp) reads as the list of these stages, each a free function of
+//    loop_stages.hpp: check_settings, baseline (simulate, pool the seed noise, calibrate mu_r
+//    with its residuals), settle_grid, fingerprint_candidates, then iterate (trace, decide,
+//    refit_by_simulation, confirm), final_record, photo_pairs, summarise, and write loop.json.
+//    Each takes the immutable LoopContext and returns a typed record of loop_records.hpp; those
+//    that pour piles also take the PileStore. loop.json is the records' to_json, made in one
+//    place.
 #pragma once
 
 #include <cstdint>
@@ -69,7 +71,7 @@
 #include "experiments/loop/loop_data.hpp"
 #include "experiments/loop/loop_effects.hpp"
 #include "experiments/loop/loop_sim.hpp"
-#include "experiments/loop/loop_trace.hpp"
+#include "experiments/loop/loop_acceptance.hpp"
 
 namespace reposetwin::experiments {
 
@@ -112,7 +114,7 @@ struct LoopSettings {
   int probe_scalings = 2;                  // doublings of a probe lost in the seed noise
   int max_effects = 2;                     // stop after adding this many effects
   std::string refit;                       // a candidate refitted even when the trace names
-                                           // another or none (--refit; loop_joint.hpp's
+                                           // another or none (--refit; loop_decision.hpp's
                                            // pick_refit); empty: the trace decides
   int max_pours = 3;                       // pours per pile when the funnel jams (new seeds)
   double t_max = 3.0;                      // largest t = (p - off) / (p1 - off) of a refit [-]

@@ -61,69 +61,99 @@ std::string resolve_key(const LabTest& t, const std::string& key) {
 
 }  // namespace
 
-const std::vector<CandidateEffect>& candidate_effects() {
-  static const std::vector<CandidateEffect> k = {
-      {"plate_friction", EffectKind::kPhysics, EffectApply::kSetScene,
-       "contacts.{sample}-{plate}.friction", 0.0, true, 0.15, 0.0, 1.5, "-",
-       "Sliding friction of the sample on the base plate differs from the declared value "
-       "(smooth or dusted board); shows most on small piles and as a step between plates.",
-       {}},
-      {"cohesion", EffectKind::kPhysics, EffectApply::kSetScene,
-       "contacts.{sample}-{sample}.cohesion_energy_density", 0.0, false, 10000.0, 0.0, 1e6,
-       "J/m^3",
-       "Cohesion between particles (simplified JKR, moisture or clay coating); steepens the "
-       "piles beyond what rolling friction reaches (on the loop's 3-5 layer test piles the "
-       "heavier ones most) and, strong enough, makes grains hang in the funnel.",
-       {}},
-      {"rolling_size", EffectKind::kPhysics, EffectApply::kSetScene,
-       "contacts.{sample}-{sample}.rolling_size_exponent", 0.0, false, 1.0, -3.0, 3.0, "-",
-       "Rolling resistance that varies with particle size, mu_r (d / d_ref)^alpha with d_ref "
-       "the calibration tests' typical grain (shape differs between fine and coarse grains); "
-       "shows between samples of different size bands (d_min, d_max).",
-       {{"contacts.{sample}-{sample}.rolling_reference_diameter_m", "{d_ref}"}},
-       false,
-       true},
-      {"restitution", EffectKind::kPhysics, EffectApply::kSetScene,
-       "contacts.{sample}-{sample}.restitution", 0.0, true, 0.4, 0.05, 0.95, "-",
-       "The grains lose more energy per collision than the declared pair restitution: a "
-       "sphere standing in for an angular rock lacks the rocking and corner impacts by which "
-       "the rock dissipates in a flowing pile, so its effective restitution lies below the "
-       "value of a drop test; a lower one lets the collapsing column stop sooner, with a "
-       "higher, more pointed pile (issue 37's study: 0.79 to 0.3 raised sample 4's "
-       "atan(2H/D) by 3.8 deg at mu_r 0.4; the plate's restitution moved it by none).",
-       {},
-       true},
-      {"lift_speed", EffectKind::kPhysics, EffectApply::kFactorScene, "procedure.lift_speed_m_s",
-       1.0, false, 4.0, 0.1, 20.0, "x declared",
-       "The container was lifted faster (or slower) than declared; above a quasi-static "
-       "speed the angle drops.",
-       {}},
-      {"fines", EffectKind::kPhysics, EffectApply::kFactorScene, "sample.d_min_mm", 1.0, false,
-       0.7, 0.2, 1.0, "x declared d_min",
-       "Fines below the simulated cut-off d_min take part (d_min lowered by this factor).", {}},
-      {"camera_height", EffectKind::kMeasurement, EffectApply::kImageHeight,
-       "image.camera_height_m", 0.0, false, 0.005, 0.0, 1.0, "m",
-       "The photographs were taken from above plate level while measured as if level "
-       "(perspective grows with height over distance).",
-       {}},
-      {"camera_pose", EffectKind::kMeasurement, EffectApply::kImagePose,
-       "image.camera_pose_height_m", 0.0, false, 0.01, 0.0, 1.0, "m",
-       "The photographs were taken from above the plate with the camera pitched down at the "
-       "pile's foot, as a person holds a camera, while measured as if level (pitch "
-       "atan(h / distance)).",
-       {},
-       true},
-      {"lens_k1", EffectKind::kMeasurement, EffectApply::kImageK1, "image.k1", 0.0, false, -0.1,
-       -0.25, 0.25, "-",
-       "Radial lens distortion of the lab camera, measured as if undistorted.", {}},
-      {"grain_shape", EffectKind::kPhysics, EffectApply::kShape, "sample.shape.elongation", 1.0,
-       false, 1.5, 1.0, 3.0, "L/I",
-       "The grains are elongated, not round: every grain a rod of four spheres with this "
-       "elongation L/I (sieve size its intermediate extent); the paper names grain shape for "
-       "the gap between sphere piles and its rock.",
-       {},
-       true},
+namespace {
+
+// The rows of the physics the pile test may lack: its contacts, its procedure and its sample's
+// sizes.
+std::vector<CandidateEffect> pile_rows() {
+  using enum EffectApply;
+  return {
+      {.name = "plate_friction", .apply = kSetScene, .key = "contacts.{sample}-{plate}.friction",
+       .off = 0.0, .off_from_scene = true, .probe = 0.15, .lo = 0.0, .hi = 1.5, .units = "-",
+       .description =
+           "Sliding friction of the sample on the base plate differs from the declared value "
+           "(smooth or dusted board); shows most on small piles and as a step between plates."},
+      {.name = "cohesion", .apply = kSetScene,
+       .key = "contacts.{sample}-{sample}.cohesion_energy_density", .off = 0.0, .probe = 10000.0,
+       .lo = 0.0, .hi = 1e6, .units = "J/m^3",
+       .description =
+           "Cohesion between particles (simplified JKR, moisture or clay coating); steepens the "
+           "piles beyond what rolling friction reaches (on the loop's 3-5 layer test piles the "
+           "heavier ones most) and, strong enough, makes grains hang in the funnel."},
+      {.name = "rolling_size", .apply = kSetScene,
+       .key = "contacts.{sample}-{sample}.rolling_size_exponent", .off = 0.0, .probe = 1.0,
+       .lo = -3.0, .hi = 3.0, .units = "-",
+       .description =
+           "Rolling resistance that varies with particle size, mu_r (d / d_ref)^alpha with d_ref "
+           "the calibration tests' typical grain (shape differs between fine and coarse grains); "
+           "shows between samples of different size bands (d_min, d_max).",
+       .companions = {{"contacts.{sample}-{sample}.rolling_reference_diameter_m", "{d_ref}"}},
+       .needs_size_contrast = true},
+      {.name = "restitution", .apply = kSetScene, .key = "contacts.{sample}-{sample}.restitution",
+       .off = 0.0, .off_from_scene = true, .probe = 0.4, .lo = 0.05, .hi = 0.95, .units = "-",
+       .description =
+           "The grains lose more energy per collision than the declared pair restitution: a "
+           "sphere standing in for an angular rock lacks the rocking and corner impacts by which "
+           "the rock dissipates in a flowing pile, so its effective restitution lies below the "
+           "value of a drop test; a lower one lets the collapsing column stop sooner, with a "
+           "higher, more pointed pile (issue 37's study: 0.79 to 0.3 raised sample 4's "
+           "atan(2H/D) by 3.8 deg at mu_r 0.4; the plate's restitution moved it by none).",
+       .opt_in = true},
+      {.name = "lift_speed", .apply = kFactorScene, .key = "procedure.lift_speed_m_s", .off = 1.0,
+       .probe = 4.0, .lo = 0.1, .hi = 20.0, .units = "x declared",
+       .description = "The container was lifted faster (or slower) than declared; above a "
+                      "quasi-static speed the angle drops."},
+      {.name = "fines", .apply = kFactorScene, .key = "sample.d_min_mm", .off = 1.0, .probe = 0.7,
+       .lo = 0.2, .hi = 1.0, .units = "x declared d_min",
+       .description = "Fines below the simulated cut-off d_min take part (d_min lowered by this "
+                      "factor)."},
   };
+}
+
+// The rows of how the lab's photographs may have been taken other than declared.
+std::vector<CandidateEffect> photo_rows() {
+  using enum EffectApply;
+  const EffectKind kind = EffectKind::kMeasurement;
+  return {
+      {.name = "camera_height", .kind = kind, .apply = kImageHeight,
+       .key = "image.camera_height_m", .off = 0.0, .probe = 0.005, .lo = 0.0, .hi = 1.0,
+       .units = "m",
+       .description = "The photographs were taken from above plate level while measured as if "
+                      "level (perspective grows with height over distance)."},
+      {.name = "camera_pose", .kind = kind, .apply = kImagePose,
+       .key = "image.camera_pose_height_m", .off = 0.0, .probe = 0.01, .lo = 0.0, .hi = 1.0,
+       .units = "m",
+       .description =
+           "The photographs were taken from above the plate with the camera pitched down at the "
+           "pile's foot, as a person holds a camera, while measured as if level (pitch "
+           "atan(h / distance)).",
+       .opt_in = true},
+      {.name = "lens_k1", .kind = kind, .apply = kImageK1, .key = "image.k1", .off = 0.0,
+       .probe = -0.1, .lo = -0.25, .hi = 0.25, .units = "-",
+       .description = "Radial lens distortion of the lab camera, measured as if undistorted."},
+  };
+}
+
+// The row of the grains' shape, which spheres lack.
+CandidateEffect shape_row() {
+  return {.name = "grain_shape", .apply = EffectApply::kShape, .key = "sample.shape.elongation",
+          .off = 1.0, .probe = 1.5, .lo = 1.0, .hi = 3.0, .units = "L/I",
+          .description =
+              "The grains are elongated, not round: every grain a rod of four spheres with this "
+              "elongation L/I (sieve size its intermediate extent); the paper names grain shape "
+              "for the gap between sphere piles and its rock.",
+          .opt_in = true};
+}
+
+}  // namespace
+
+const std::vector<CandidateEffect>& candidate_effects() {
+  static const std::vector<CandidateEffect> k = [] {
+    std::vector<CandidateEffect> rows = pile_rows();
+    for (CandidateEffect& e : photo_rows()) rows.push_back(std::move(e));
+    rows.push_back(shape_row());
+    return rows;
+  }();
   return k;
 }
 

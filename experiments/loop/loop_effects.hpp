@@ -79,7 +79,7 @@ struct CandidateEffect {
   std::string description;  // one sentence
   /// Extra keys set together with `key` whenever the effect is on (e.g. the reference size);
   /// the value "{d_ref}" stands for the test's reference_diameter_m [m].
-  std::vector<std::pair<std::string, std::string>> companions;
+  std::vector<std::pair<std::string, std::string>> companions = {};
   /// Tried only when named (--candidates): its simulations cost several times a sphere
   /// pile's, and a dataset must be designed for it.
   bool opt_in = false;

@@ -23,6 +23,88 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// The scan of the joint fit: mu_r on 2001 points of the grid's span, the weight t of `extra` in
+// closed form at each (clamped to [0, t_max]); the lowest weighted SSE wins. Each point's sums
+// go into `profile`.
+MuFit scan_mu(const LoopContext& ctx, const Model& model, const Surface* extra, double t_max,
+              const std::vector<std::size_t>& tests, const std::vector<Channel>& channels,
+              std::vector<ProfileRow>& profile) {
+  const double lo = ctx.grid.front(), hi = ctx.grid.back();
+  const int steps = 2000;
+  const Model alone{{{1.0, extra}}};
+  MuFit best;
+  double best_sse = 1e300;
+  for (int q = 0; q <= steps; ++q) {
+    const double m = lo + (hi - lo) * q / steps;
+    double swdy = 0.0, swdd = 0.0, swyy = 0.0;
+    std::vector<double> y, dd, w;  // residual, extra surface's change, weight 1 / sigma^2
+    for (std::size_t i : tests)
+      for (Channel c : channels) {
+        const double base = model.value(i, m, c);
+        const double di = extra ? alone.value(i, m, c) - base : 0.0;
+        y.push_back(ctx.observed(i, c) - base);
+        dd.push_back(di);
+        w.push_back(1.0 / (ctx.sigma(i, c) * ctx.sigma(i, c)));
+        swdy += w.back() * di * y.back();
+        swdd += w.back() * di * di;
+        swyy += w.back() * y.back() * y.back();
+      }
+    profile.push_back({m, swyy, swdy, swdd});
+    const double t = (extra && swdd > 0.0) ? std::clamp(swdy / swdd, 0.0, t_max) : 0.0;
+    double sse = 0.0;
+    for (std::size_t k = 0; k < y.size(); ++k) sse += w[k] * std::pow(y[k] - t * dd[k], 2);
+    if (sse < best_sse) {
+      best_sse = sse;
+      best.mu = m;
+      best.t = t;
+    }
+  }
+  return best;
+}
+
+// Standard errors from the Jacobian of the prediction in (mu, t) at the fit, each row over its
+// noise; with `extra`, the information matrix in total and per test (for the next tests).
+void add_standard_errors(const LoopContext& ctx, const Model& model, const Surface* extra,
+                         const std::vector<std::size_t>& tests,
+                         const std::vector<Channel>& channels, MuFit& best) {
+  const double lo = ctx.grid.front(), hi = ctx.grid.back();
+  const Model alone{{{1.0, extra}}};
+  const double h = (hi - lo) / 100.0;
+  Eigen::MatrixXd jac(tests.size() * channels.size(), extra ? 2 : 1);
+  Eigen::Index k = 0;
+  for (std::size_t i : tests)
+    for (Channel c : channels) {
+      auto pred = [&](double m) {
+        const double base = model.value(i, m, c);
+        return extra ? base + best.t * (alone.value(i, m, c) - base) : base;
+      };
+      const double a = std::max(lo, best.mu - h), b = std::min(hi, best.mu + h);
+      jac(k, 0) = (pred(b) - pred(a)) / (b - a) / ctx.sigma(i, c);
+      if (extra)
+        jac(k, 1) = (alone.value(i, best.mu, c) - model.value(i, best.mu, c)) / ctx.sigma(i, c);
+      ++k;
+    }
+  const Eigen::MatrixXd info = jac.transpose() * jac;
+  if (extra) {
+    best.info = info;
+    Eigen::Index row = 0;
+    for (std::size_t i : tests) {
+      const Eigen::MatrixXd part = jac.middleRows(row, static_cast<Eigen::Index>(channels.size()));
+      best.test_info.push_back({i, part.transpose() * part});
+      row += static_cast<Eigen::Index>(channels.size());
+    }
+  }
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(info);
+  if (lu.isInvertible()) {
+    const Eigen::MatrixXd cov = lu.inverse();
+    best.mu_se = std::sqrt(std::max(0.0, cov(0, 0)));
+    if (extra) best.t_se = std::sqrt(std::max(0.0, cov(1, 1)));
+  } else {
+    best.mu_se = std::numeric_limits<double>::infinity();
+    best.t_se = std::numeric_limits<double>::infinity();
+  }
+}
+
 }  // namespace
 
 // A surface of weight 0 (a refit whose t came out 0) does not enter the prediction, so its jam
@@ -49,23 +131,6 @@ double Model::value(std::size_t i, double m, Channel channel) const {
   return mix(i, [m, channel](const Curve& c) { return c.lin(c.mean[channel], m); });
 }
 
-double Loop::observed(std::size_t i, Channel channel) const {
-  const LabTest& t = data_.tests[i];
-  switch (channel) {
-    case Channel::kAngle: return t.angle_deg;
-    case Channel::kH: return t.height_mm.value_or(0.0);
-    case Channel::kD: return t.diameter_mm.value_or(0.0);
-    case Channel::kCrest: return t.crest_mm.value_or(0.0);
-  }
-  throw std::logic_error("loop: no channel " + std::to_string(static_cast<int>(channel)));
-}
-
-double Loop::effect_off(const CandidateEffect& e) const {
-  return e.off_from_scene ? scene_value(data_.tests.front(), e.key) : e.off;
-}
-
-double Loop::noise(std::size_t i, Channel channel) const { return sigma_[channel][i]; }
-
 // The loop's joint fit, not calibration::calibrate_batch's: calibrate matches ONE test's angle
 // by inverting a monotone (isotonic) fit it samples adaptively, with a bootstrap interval; the
 // loop fits one mu_r to MANY tests at once on a fixed grid (weighted least squares over the
@@ -73,92 +138,30 @@ double Loop::noise(std::size_t i, Channel channel) const { return sigma_[channel
 // simulated surface, with standard errors from the Jacobian. With one test, no surface and a
 // monotone curve both give the crossing of the interpolated curve, but neither generalises to the
 // other's problem, so they stay two estimators.
-MuFit Loop::fit_mu(const Model& model, const Surface* extra, double t_max,
-                   const std::vector<std::size_t>& tests,
-                   const std::vector<Channel>& channels) const {
-  const double lo = grid_.front(), hi = grid_.back();
-  const int steps = 2000;
-  const Model alone{{{1.0, extra}}};
-  MuFit best;
-  double best_sse = 1e300;
+MuFit fit_mu(const LoopContext& ctx, const Model& model, const Surface* extra, double t_max,
+             const std::vector<std::size_t>& tests, const std::vector<Channel>& channels) {
+  const double lo = ctx.grid.front(), hi = ctx.grid.back();
   std::vector<ProfileRow> profile;  // the likelihood surface, for the joint region
-  for (int q = 0; q <= steps; ++q) {
-    const double m = lo + (hi - lo) * q / steps;
-    double swdy = 0.0, swdd = 0.0, swyy = 0.0;
-    std::vector<double> y, dd, w;  // residual, extra surface's change, weight 1 / sigma^2
-    for (std::size_t i : tests)
-      for (Channel c : channels) {
-        const double base = model.value(i, m, c);
-        const double di = extra ? alone.value(i, m, c) - base : 0.0;
-        y.push_back(observed(i, c) - base);
-        dd.push_back(di);
-        w.push_back(1.0 / (noise(i, c) * noise(i, c)));
-        swdy += w.back() * di * y.back();
-        swdd += w.back() * di * di;
-        swyy += w.back() * y.back() * y.back();
-      }
-    profile.push_back({m, swyy, swdy, swdd});
-    const double t = (extra && swdd > 0.0) ? std::clamp(swdy / swdd, 0.0, t_max) : 0.0;
-    double sse = 0.0;
-    for (std::size_t k = 0; k < y.size(); ++k) sse += w[k] * std::pow(y[k] - t * dd[k], 2);
-    if (sse < best_sse) {
-      best_sse = sse;
-      best.mu = m;
-      best.t = t;
-    }
-  }
+  MuFit best = scan_mu(ctx, model, extra, t_max, tests, channels, profile);
   best.at_edge = best.mu <= lo + 1e-12 || best.mu >= hi - 1e-12;
   const int n_obs = static_cast<int>(tests.size() * channels.size());
   if (extra && n_obs >= 3) best.region = joint_region(profile, 0.0, t_max, n_obs);
-  // Standard errors from the Jacobian of the prediction in (mu, t), each row over its noise.
-  const double h = (hi - lo) / 100.0;
-  Eigen::MatrixXd jac(tests.size() * channels.size(), extra ? 2 : 1);
-  Eigen::Index k = 0;
-  for (std::size_t i : tests)
-    for (Channel c : channels) {
-      auto pred = [&](double m) {
-        const double base = model.value(i, m, c);
-        return extra ? base + best.t * (alone.value(i, m, c) - base) : base;
-      };
-      const double a = std::max(lo, best.mu - h), b = std::min(hi, best.mu + h);
-      jac(k, 0) = (pred(b) - pred(a)) / (b - a) / noise(i, c);
-      if (extra) jac(k, 1) = (alone.value(i, best.mu, c) - model.value(i, best.mu, c)) / noise(i, c);
-      ++k;
-    }
-  const Eigen::MatrixXd info = jac.transpose() * jac;
-  if (extra) {
-    best.info = info;
-    Eigen::Index row = 0;
-    for (std::size_t i : tests) {
-      const Eigen::MatrixXd part = jac.middleRows(row, static_cast<Eigen::Index>(channels.size()));
-      best.test_info.push_back({i, part.transpose() * part});
-      row += static_cast<Eigen::Index>(channels.size());
-    }
-  }
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(info);
-  if (lu.isInvertible()) {
-    const Eigen::MatrixXd cov = lu.inverse();
-    best.mu_se = std::sqrt(std::max(0.0, cov(0, 0)));
-    if (extra) best.t_se = std::sqrt(std::max(0.0, cov(1, 1)));
-  } else {
-    best.mu_se = std::numeric_limits<double>::infinity();
-    best.t_se = std::numeric_limits<double>::infinity();
-  }
+  add_standard_errors(ctx, model, extra, tests, channels, best);
   return best;
 }
 
-std::vector<ResidualRow> Loop::residuals(const Model& model, double m) const {
+std::vector<ResidualRow> residuals(const LoopContext& ctx, const Model& model, double m) {
   std::vector<ResidualRow> rows;
-  for (std::size_t i = 0; i < data_.tests.size(); ++i) {
-    const LabTest& t = data_.tests[i];
+  for (std::size_t i = 0; i < ctx.tests().size(); ++i) {
+    const LabTest& t = ctx.tests()[i];
     ResidualRow r;
     r.id = t.id;
     r.role = t.role;
     r.measured_deg = t.angle_deg;
     r.predicted_deg = model.angle(i, m);
     r.residual_deg = t.angle_deg - r.predicted_deg;
-    r.sigma_deg = sigma_[Channel::kAngle][i];
-    r.predicted_se_deg = seed_se_;
+    r.sigma_deg = ctx.sigma(i, Channel::kAngle);
+    r.predicted_se_deg = ctx.noise.se;
     r.no_pile = model.no_pile(i);
     if (!r.no_pile.empty()) {  // NaN predictions; the lab's H, D and crest have no residual
       r.predicted_h_mm = r.predicted_d_mm = kNaN;
@@ -176,6 +179,12 @@ std::vector<ResidualRow> Loop::residuals(const Model& model, double m) const {
     rows.push_back(r);
   }
   return rows;
+}
+
+double calibration_rmse(const LoopContext& ctx, const Model& model, double mu) {
+  std::vector<double> r;
+  for (std::size_t i : ctx.roles.fitted) r.push_back(ctx.tests()[i].angle_deg - model.angle(i, mu));
+  return rmse(r);
 }
 
 }  // namespace reposetwin::experiments::loop_detail

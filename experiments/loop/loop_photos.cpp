@@ -1,4 +1,4 @@
-// Loop::photo_pairs (loop_stages.hpp): for every test, the lab's photo (when it gave one) and one
+// photo_pairs (loop_stages.hpp): for every test, the lab's photo (when it gave one) and one
 // twin photo of the same test, each with vision's overlay, copied into OUT/photos/<id>/ for the
 // page.
 //
@@ -120,25 +120,23 @@ std::optional<PhotoView> twin_view(const SimOutcome& o, std::size_t camera, cons
                    pick->at("theta_deg").get<double>()};
 }
 
-}  // namespace
-
 // The page's photographs, one request per pair. A photograph that cannot be taken must not
 // lose the loop's finished work: a cache carried to another machine by
 // scripts/collect_results.sh has the piles' result.json but not their particles (final.vtp),
 // so a photo not taken before cannot be taken there. Then each is asked for alone (the ones
 // taken come from the cache) and a request without one gets the reason in `notes`.
-std::vector<std::optional<SimOutcome>> Loop::photograph_for_page(
-    const std::vector<SimRequest>& requests, std::vector<std::string>& notes) {
+std::vector<std::optional<SimOutcome>> photograph_for_page(
+    PileStore& store, const std::vector<SimRequest>& requests, std::vector<std::string>& notes) {
   std::vector<std::optional<SimOutcome>> out(requests.size());
   try {
-    const std::vector<SimOutcome> all = cache_.run(requests);
+    const std::vector<SimOutcome> all = store.cache.run(requests);
     for (std::size_t k = 0; k < all.size(); ++k) out[k] = all[k];
     return out;
   } catch (const std::exception&) {
   }
   for (std::size_t k = 0; k < requests.size(); ++k) {
     try {
-      out[k] = cache_.run({requests[k]}).at(0);
+      out[k] = store.cache.run({requests[k]}).at(0);
     } catch (const std::exception& e) {
       const std::string what = e.what();
       notes[k] =
@@ -152,26 +150,31 @@ std::vector<std::optional<SimOutcome>> Loop::photograph_for_page(
   return out;
 }
 
-std::vector<PhotoPair> Loop::photo_pairs(const LoopState& state) {
+}  // namespace
+
+std::vector<PhotoPair> photo_pairs(const LoopContext& ctx, PileStore& store,
+                                   const LoopState& state) {
+  const LoopSettings& s = ctx.s();
+  const fs::path dir(ctx.out);
   std::vector<PhotoPair> pairs;
   std::vector<std::size_t> cameras;
   std::vector<SimRequest> requests;
   std::vector<std::size_t> asked;  // the pair of each request: a test predicted no pile has none
   const Surface& surf = heaviest(state.model);
-  ImageVariant image = s_.image;
+  ImageVariant image = s.image;
   image.keep_photos = true;
   image.keep_overlays = true;
-  for (std::size_t i = 0; i < data_.tests.size(); ++i) {
-    const LabTest& test = data_.tests[i];
+  for (std::size_t i = 0; i < ctx.tests().size(); ++i) {
+    const LabTest& test = ctx.tests()[i];
     const fs::path rel = fs::path("photos") / test.id;
-    fs::create_directories(fs::path(out_) / rel);
+    fs::create_directories(dir / rel);
     PhotoPair& p = pairs.emplace_back();
     p.id = test.id;
     cameras.push_back(0);
-    if (!test.photos.empty()) p.lab = lab_view(test, data_.file, out_, rel, cameras.back());
+    if (!test.photos.empty()) p.lab = lab_view(test, ctx.data->file, dir, rel, cameras.back());
     p.note = state.model.no_pile(i);
     if (!p.note.empty()) {  // the twin's pours jammed: nothing to photograph
-      for (const char* f : {"twin.png", "twin.measured.png"}) fs::remove(fs::path(out_) / rel / f);
+      for (const char* f : {"twin.png", "twin.measured.png"}) fs::remove(dir / rel / f);
       continue;
     }
     const Curve& c = surf.curve.at(i);
@@ -179,23 +182,23 @@ std::vector<PhotoPair> Loop::photo_pairs(const LoopState& state) {
     p.mu_r = c.mu[j];
     p.seed = surf.raw.at(i).at(j).at(0).seed;  // the pour that made the first seed's pile
     for (const EffectSetting& e : surf.effects) p.effects.emplace_back(e.effect->name, e.value);
-    requests.push_back(make_request(test, s_.mu_key, p.mu_r, p.seed, surf.effects, image));
+    requests.push_back(make_request(test, s.mu_key, p.mu_r, p.seed, surf.effects, image));
     asked.push_back(i);
     // The lab photo's camera picks the twin's view only when the twin photographs through the
     // lab's cameras (else its own framing's first view).
     if (requests.back().image.lab_cameras.empty()) cameras.back() = 0;
   }
   if (requests.empty()) return pairs;
-  say("photographing " + std::to_string(requests.size()) + " twin pile(s) for the page");
+  ctx.say("photographing " + std::to_string(requests.size()) + " twin pile(s) for the page");
   std::vector<std::string> notes(requests.size());
-  const std::vector<std::optional<SimOutcome>> out = photograph_for_page(requests, notes);
+  const std::vector<std::optional<SimOutcome>> out = photograph_for_page(store, requests, notes);
   for (std::size_t k = 0; k < requests.size(); ++k) {
     PhotoPair& p = pairs[asked[k]];
     p.note = notes[k];
     const fs::path rel = fs::path("photos") / p.id;
-    if (out[k]) p.twin = twin_view(*out[k], cameras[asked[k]], out_, rel, p.note);
+    if (out[k]) p.twin = twin_view(*out[k], cameras[asked[k]], dir, rel, p.note);
     if (!p.twin)  // not a stale one of an earlier run beside the note
-      for (const char* f : {"twin.png", "twin.measured.png"}) fs::remove(fs::path(out_) / rel / f);
+      for (const char* f : {"twin.png", "twin.measured.png"}) fs::remove(dir / rel / f);
   }
   return pairs;
 }

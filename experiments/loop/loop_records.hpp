@@ -1,4 +1,4 @@
-// The records of one loop run: what each stage of Loop::run returns, and their JSON.
+// The records of one loop run: what each stage of run_loop returns, and their JSON.
 //
 // Design note. The stages of the loop (loop.cpp) hand each other these plain structs; JSON is
 // made only at the file edge, by one to_json per record, and loop.json is the to_json of a
@@ -19,9 +19,9 @@
 #include <vector>
 
 #include "experiments/loop/loop_data.hpp"
-#include "experiments/loop/loop_joint.hpp"
+#include "experiments/loop/loop_decision.hpp"
 #include "experiments/loop/loop_region.hpp"
-#include "experiments/loop/loop_trace.hpp"
+#include "experiments/loop/loop_acceptance.hpp"
 
 namespace reposetwin::experiments {
 
@@ -95,7 +95,7 @@ struct BaselineRecord {
 
 /// The observables the loop traces: the angle [deg], H, D and the crest width [mm]. A quantity
 /// held per channel is a PerChannel, indexed by the enum, so a new channel is one enumerator
-/// (and its name, unit and value in the functions below and Loop::twin_value).
+/// (and its name, unit and value in the functions below and LoopContext::twin_value).
 enum class Channel { kAngle, kH, kD, kCrest };
 inline constexpr std::size_t kChannelCount = 4;
 inline constexpr std::array<Channel, kChannelCount> kAllChannels = {Channel::kAngle, Channel::kH,

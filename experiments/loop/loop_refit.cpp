@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <utility>
 
 #include "experiments/loop/loop_stages.hpp"
@@ -27,12 +28,22 @@ double secant_value(const std::vector<std::pair<double, double>>& pts, double co
   return next;
 }
 
-}  // namespace
-
-double Loop::calibration_rmse(const Model& model, double mu) const {
-  std::vector<double> r;
-  for (std::size_t i : fit_) r.push_back(data_.tests[i].angle_deg - model.angle(i, mu));
-  return rmse(r);
+// The simulated response at the fingerprints' grid point in units of the fingerprint, over the
+// refit's channels, each over its noise.
+double response_fraction(const LoopContext& ctx, const RefitPlan& plan, const Surface& surf,
+                         const LoopState& state) {
+  const Model alone{{{1.0, &surf}}};
+  const double mu_node = plan.mu_node;
+  double num = 0.0, den = 0.0;
+  for (std::size_t i : ctx.roles.fitted)
+    for (Channel c : plan.channels) {
+      const double f = plan.fingerprint->change[c][i];
+      const double w =
+          c == Channel::kAngle ? 1.0 : std::pow(ctx.sigma(i, Channel::kAngle) / ctx.sigma(i, c), 2);
+      num += w * (alone.value(i, mu_node, c) - state.model.value(i, mu_node, c)) * f;
+      den += w * f * f;
+    }
+  return den > 0.0 ? num / den : 0.0;
 }
 
 // One trial at p, appended to refit.trials. The value may overshoot into piles the measurement
@@ -40,52 +51,45 @@ double Loop::calibration_rmse(const Model& model, double mu) const {
 // calibration test's outlet jams: then it steps back halfway towards off, twice at most. A
 // held-out test that jams at p does not stop the trial: the model predicts no pile for it.
 // Returns false when no attempt could be simulated.
-bool Loop::run_trial(const CandidateEffect& e, double off, double p, const FingerprintRecord& fp,
-                     double mu_node, const LoopState& state, const std::vector<Channel>& channels,
-                     Refit& refit) {
-  std::unique_ptr<Surface> surf;
+bool run_trial(const LoopContext& ctx, PileStore& store, const RefitPlan& plan, double p,
+               const LoopState& state, Refit& refit) {
+  const CandidateEffect& e = *plan.effect;
+  const double off = plan.off;
+  std::optional<Surface> surf;
   for (int attempt = 0; attempt < 3 && !surf; ++attempt) {
     std::vector<EffectSetting> with = state.effects;
     with.push_back({&e, p});
     try {
-      surf = std::make_unique<Surface>(simulate_surface(with));
+      surf = simulate_surface(ctx, store, with);
     } catch (const std::exception& ex) {
       refit.notes +=
           "at " + std::to_string(p) + ": " + std::string(ex.what()).substr(0, 300) + "; ";
-      say("refit at " + std::to_string(p) + " failed; stepping back halfway");
+      ctx.say("refit at " + std::to_string(p) + " failed; stepping back halfway");
       p = off + 0.5 * (p - off);
     }
   }
   if (!surf) return false;
-  surfaces_.push_back(std::move(surf));
   Trial tr;
   tr.p = p;
-  tr.surf = surfaces_.back().get();
-  for (std::size_t i = 0; i < data_.tests.size(); ++i)
-    if (!tr.surf->curve[i].no_pile.empty()) tr.no_pile.push_back(data_.tests[i].id);
-  // The response in units of the fingerprint, over the refit's channels, each over its noise.
-  const Model alone{{{1.0, tr.surf}}};
-  double num = 0.0, den = 0.0;
-  for (std::size_t i : fit_)
-    for (Channel c : channels) {
-      const double f = fp.change[c][i];
-      const double w =
-          c == Channel::kAngle ? 1.0 : std::pow(noise(i, Channel::kAngle) / noise(i, c), 2);
-      num += w * (alone.value(i, mu_node, c) - state.model.value(i, mu_node, c)) * f;
-      den += w * f * f;
-    }
-  tr.fraction = den > 0.0 ? num / den : 0.0;
+  tr.surf = &store.keep(std::move(*surf));
+  for (std::size_t i = 0; i < ctx.tests().size(); ++i)
+    if (!tr.surf->curve[i].no_pile.empty()) tr.no_pile.push_back(ctx.tests()[i].id);
+  tr.fraction = response_fraction(ctx, plan, *tr.surf, state);
   // t may extrapolate beyond the simulated value, but never past the effect's range.
+  const double t_max_setting = ctx.s().t_max;
   const double bound = (p < off ? e.lo : e.hi) - off;
-  const double t_max = p != off ? std::min(s_.t_max, std::max(1.0, bound / (p - off))) : s_.t_max;
-  tr.joint = fit_mu(state.model, tr.surf, t_max, fit_, channels);
+  const double t_max =
+      p != off ? std::min(t_max_setting, std::max(1.0, bound / (p - off))) : t_max_setting;
+  tr.joint = fit_mu(ctx, state.model, tr.surf, t_max, ctx.roles.fitted, plan.channels);
   for (const auto& [w, sf] : state.model.terms)
     tr.model.terms.push_back({(1.0 - tr.joint.t) * w, sf});
   tr.model.terms.push_back({tr.joint.t, tr.surf});
-  tr.rmse = calibration_rmse(tr.model, tr.joint.mu);
+  tr.rmse = calibration_rmse(ctx, tr.model, tr.joint.mu);
   refit.trials.push_back(tr);
   return true;
 }
+
+}  // namespace
 
 // Secant refinement (on the refit's channels: the angle, or every traced observable for a
 // candidate admitted on the joint evidence). The linear estimate p1 assumes the response grows linearly from off to the
@@ -93,16 +97,17 @@ bool Loop::run_trial(const CandidateEffect& e, double off, double p, const Finge
 // the simulated response fraction misses the traced strength `coef` by more than half, the next
 // value interpolates coef between the known responses (off: 0, probe: 1, and the trials), at
 // most twice more.
-Refit Loop::refit_by_simulation(const CandidateEffect& e, double off, double p1, double coef,
-                                const FingerprintRecord& fp, double mu_node,
-                                const LoopState& state, const std::vector<Channel>& channels) {
+Refit refit_by_simulation(const LoopContext& ctx, PileStore& store, const RefitPlan& plan,
+                          const LoopState& state) {
+  const CandidateEffect& e = *plan.effect;
+  const double off = plan.off, coef = plan.coef;
   Refit refit;
   const int kMaxRefinements = 2;
-  if (!run_trial(e, off, p1, fp, mu_node, state, channels, refit)) return refit;
+  if (!run_trial(ctx, store, plan, plan.p1, state, refit)) return refit;
   for (int k = 0; k < kMaxRefinements; ++k) {
     const Trial& last = refit.trials.back();
     if (std::abs(last.fraction - coef) <= 0.5 * std::abs(coef)) break;
-    std::vector<std::pair<double, double>> pts = {{off, 0.0}, {fp.probe, 1.0}};
+    std::vector<std::pair<double, double>> pts = {{off, 0.0}, {plan.fingerprint->probe, 1.0}};
     for (const Trial& tr : refit.trials) pts.push_back({tr.p, tr.fraction});
     std::sort(pts.begin(), pts.end());
     double next = secant_value(pts, coef, last.p);
@@ -112,10 +117,10 @@ Refit Loop::refit_by_simulation(const CandidateEffect& e, double off, double p1,
     for (const auto& [pp, ff] : pts)
       known = known || std::abs(pp - next) <= 1e-3 * std::max(1.0, std::abs(pp));
     if (known) break;
-    say(e.name + ": simulated response " + std::to_string(last.fraction) + " of the probe's at " +
-        std::to_string(last.p) + " (traced " + std::to_string(coef) + "); refining at " +
-        std::to_string(next));
-    if (!run_trial(e, off, next, fp, mu_node, state, channels, refit)) break;
+    ctx.say(e.name + ": simulated response " + std::to_string(last.fraction) +
+            " of the probe's at " + std::to_string(last.p) + " (traced " + std::to_string(coef) +
+            "); refining at " + std::to_string(next));
+    if (!run_trial(ctx, store, plan, next, state, refit)) break;
   }
   return refit;
 }
@@ -124,9 +129,9 @@ Refit Loop::refit_by_simulation(const CandidateEffect& e, double off, double p1,
 // at its off value (t = 0), or the simulated model does not lower the calibration error by more
 // than the seed noise of a prediction, the simulations do not confirm it and it is not chosen.
 // Returns the reason, or an empty string when confirmed.
-std::string Loop::unconfirmed_reason(const Trial& best, const LoopState& state) const {
-  const double rmse_now = calibration_rmse(state.model, state.fit.mu);
-  const double margin = s_.rule.loo_margin_factor * seed_se_;
+std::string unconfirmed_reason(const LoopContext& ctx, const Trial& best, const LoopState& state) {
+  const double rmse_now = calibration_rmse(ctx, state.model, state.fit.mu);
+  const double margin = ctx.s().rule.loo_margin_factor * ctx.noise.se;
   if (best.joint.t <= 0.0)
     return "the joint refit of mu_r and the effect on simulated piles puts the effect at its "
            "off value (t = 0)";

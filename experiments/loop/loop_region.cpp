@@ -23,17 +23,10 @@ double best_t(const ProfileRow& r, double lo, double hi) {
 // The chi^2 quantile with two degrees of freedom: -2 ln(1 - level).
 double chi2_quantile_2dof(double level) { return -2.0 * std::log(1.0 - level); }
 
-}  // namespace
-
-JointRegion joint_region(const std::vector<ProfileRow>& rows, double t_lo, double t_hi,
-                         int observations, double level) {
-  if (rows.size() < 3) throw std::invalid_argument("joint_region: at least 3 mu_r rows needed");
-  if (observations < 3) throw std::invalid_argument("joint_region: at least 3 observations needed");
-  if (!(t_hi > t_lo)) throw std::invalid_argument("joint_region: empty t range");
-  if (!(level > 0.0 && level < 1.0)) throw std::invalid_argument("joint_region: level in (0, 1)");
-  JointRegion g;
-  g.level = level;
-  g.observations = observations;
+// The minimum of chi^2 over the rows, t at its best inside [t_lo, t_hi] on each; returns the
+// row it is on.
+std::size_t find_minimum(const std::vector<ProfileRow>& rows, double t_lo, double t_hi,
+                         JointRegion& g) {
   std::size_t kbest = 0;
   g.chi2_min = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < rows.size(); ++k) {
@@ -46,10 +39,13 @@ JointRegion joint_region(const std::vector<ProfileRow>& rows, double t_lo, doubl
       kbest = k;
     }
   }
-  const int dof = observations - 2;
-  if (dof > 0 && g.chi2_min > dof) g.widening = g.chi2_min / dof;
-  const double limit = g.chi2_min + chi2_quantile_2dof(level) * g.widening;
-  g.chi2_limit = limit;
+  return kbest;
+}
+
+// The region's extent: the rows whose chi^2 dips below g.chi2_limit, and on each the t interval
+// below it (inside [t_lo, t_hi]).
+void find_extent(const std::vector<ProfileRow>& rows, double t_lo, double t_hi, JointRegion& g) {
+  const double limit = g.chi2_limit;
   g.mu_lo = g.t_lo = std::numeric_limits<double>::infinity();
   g.mu_hi = g.t_hi = -std::numeric_limits<double>::infinity();
   const double eps = 1e-9 * std::max(1.0, t_hi - t_lo);
@@ -76,32 +72,37 @@ JointRegion joint_region(const std::vector<ProfileRow>& rows, double t_lo, doubl
     if (k == 0 || k + 1 == rows.size()) g.mu_at_bound = true;
   }
   g.t_at_bound = g.t_lo <= t_lo + eps || g.t_hi >= t_hi - eps;
-  // Curvature at the optimum: d2 chi^2 / dt2 = 2 sdd; along mu_r and across, by differences
-  // over the neighbouring rows (one-sided at an end of the scan).
+}
+
+// The correlation of mu_r and t from the curvature at the optimum (row kbest): d2 chi^2 / dt2 =
+// 2 sdd; along mu_r and across, by differences over the neighbouring rows (one-sided at an end
+// of the scan).
+double correlation_at(const std::vector<ProfileRow>& rows, std::size_t kbest, double t) {
   const std::size_t k0 = kbest == 0 ? 0 : (kbest + 1 == rows.size() ? kbest - 2 : kbest - 1);
   const ProfileRow &r0 = rows[k0], &r1 = rows[k0 + 1], &r2 = rows[k0 + 2];
   const double hm = 0.5 * (r2.mu - r0.mu);
-  const double c0 = chi2_at(r0, g.t), c1 = chi2_at(r1, g.t), c2 = chi2_at(r2, g.t);
+  const double c0 = chi2_at(r0, t), c1 = chi2_at(r1, t), c2 = chi2_at(r2, t);
   const double h_mm = (c2 - 2.0 * c1 + c0) / (hm * hm);
-  const double grad_t0 = -2.0 * r0.sdy + 2.0 * g.t * r0.sdd;
-  const double grad_t2 = -2.0 * r2.sdy + 2.0 * g.t * r2.sdd;
+  const double grad_t0 = -2.0 * r0.sdy + 2.0 * t * r0.sdd;
+  const double grad_t2 = -2.0 * r2.sdy + 2.0 * t * r2.sdd;
   const double h_mt = (grad_t2 - grad_t0) / (r2.mu - r0.mu);
   const double h_tt = 2.0 * rows[kbest].sdd;
   const double det = h_mm * h_tt - h_mt * h_mt;
   if (h_mm > 0.0 && h_tt > 0.0 && det > 0.0)
-    g.correlation = -h_mt / std::sqrt(h_mm * h_tt);  // of the inverse: -H_mt / sqrt(H_mm H_tt)
-  else
-    g.correlation = std::copysign(1.0, -h_mt);  // flat along some direction: not separated
-  g.separated = std::abs(g.correlation) <= 0.9 && !g.mu_at_bound && !g.t_at_bound;
-  const std::string pct = significant(100.0 * level, 3) + "%";
-  g.statement = "the " + pct + " joint region (profile likelihood over the simulated surfaces) "
-                "holds mu_r " + significant(g.mu_lo, 3) + "-" + significant(g.mu_hi, 3) +
-                " and t " + significant(g.t_lo, 3) + "-" + significant(g.t_hi, 3) +
-                ", correlation " + significant(g.correlation, 2);
+    return -h_mt / std::sqrt(h_mm * h_tt);  // of the inverse: -H_mt / sqrt(H_mm H_tt)
+  return std::copysign(1.0, -h_mt);  // flat along some direction: not separated
+}
+
+// The region in words, with why the data do not separate mu_r from the effect when they do not.
+std::string region_statement(const JointRegion& g, int dof) {
+  const std::string pct = significant(100.0 * g.level, 3) + "%";
+  std::string text = "the " + pct + " joint region (profile likelihood over the simulated "
+                     "surfaces) holds mu_r " + significant(g.mu_lo, 3) + "-" +
+                     significant(g.mu_hi, 3) + " and t " + significant(g.t_lo, 3) + "-" +
+                     significant(g.t_hi, 3) + ", correlation " + significant(g.correlation, 2);
   if (g.widening > 1.0)
-    g.statement += "; widened " + significant(std::sqrt(g.widening), 3) +
-                   "x for a chi^2 of " + significant(g.chi2_min, 3) + " on " +
-                   std::to_string(dof) + " degrees of freedom";
+    text += "; widened " + significant(std::sqrt(g.widening), 3) + "x for a chi^2 of " +
+            significant(g.chi2_min, 3) + " on " + std::to_string(dof) + " degrees of freedom";
   if (!g.separated) {
     std::string why;
     if (std::abs(g.correlation) > 0.9) why = "mu_r and the effect move the piles alike";
@@ -109,9 +110,32 @@ JointRegion joint_region(const std::vector<ProfileRow>& rows, double t_lo, doubl
       why += std::string(why.empty() ? "" : ", and ") + "the region reaches mu_r's range bound";
     if (g.t_at_bound)
       why += std::string(why.empty() ? "" : ", and ") + "the region reaches the effect's bound";
-    g.statement += "; the data do not separate mu_r from the effect (" + why +
-                   "): the interval is reported to the bound, widened, not as a value";
+    text += "; the data do not separate mu_r from the effect (" + why +
+            "): the interval is reported to the bound, widened, not as a value";
   }
+  return text;
+}
+
+}  // namespace
+
+
+JointRegion joint_region(const std::vector<ProfileRow>& rows, double t_lo, double t_hi,
+                         int observations, double level) {
+  if (rows.size() < 3) throw std::invalid_argument("joint_region: at least 3 mu_r rows needed");
+  if (observations < 3) throw std::invalid_argument("joint_region: at least 3 observations needed");
+  if (!(t_hi > t_lo)) throw std::invalid_argument("joint_region: empty t range");
+  if (!(level > 0.0 && level < 1.0)) throw std::invalid_argument("joint_region: level in (0, 1)");
+  JointRegion g;
+  g.level = level;
+  g.observations = observations;
+  const std::size_t kbest = find_minimum(rows, t_lo, t_hi, g);
+  const int dof = observations - 2;
+  if (dof > 0 && g.chi2_min > dof) g.widening = g.chi2_min / dof;
+  g.chi2_limit = g.chi2_min + chi2_quantile_2dof(level) * g.widening;
+  find_extent(rows, t_lo, t_hi, g);
+  g.correlation = correlation_at(rows, kbest, g.t);
+  g.separated = std::abs(g.correlation) <= 0.9 && !g.mu_at_bound && !g.t_at_bound;
+  g.statement = region_statement(g, dof);
   return g;
 }
 

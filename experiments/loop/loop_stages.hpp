@@ -1,13 +1,21 @@
-// The stages of the loop and the simulated model they share; internal to loop.cpp (Loop::run,
-// which calls the stages in order, and the stages up to the tracing), loop_model.cpp (the
-// model, its mu_r fit and residuals) and loop_refit.cpp (the refit by simulation). The method
-// is loop.hpp's design note.
+// The loop's stages as free functions, the context they read and the store they simulate into;
+// internal to the loop's .cpp files. run_loop (loop.cpp) calls them in order; the method is
+// loop.hpp's design note.
 //
-// Design note. A Surface is the twin at one setting of the effects: every test's simulated
-// response on the mu_r grid. The current model is a weighted mixture of surfaces (the baseline,
-// then one more per effect refitted), held by pointer into the surfaces the Loop owns, so a
-// model is cheap to copy while trials are compared. Each stage is a member of Loop that takes
-// and returns the records of loop_records.hpp (or a surface); none builds JSON.
+// Design note. What a stage reads is a LoopContext: the data, the settings, the tests by role,
+// the design, the mu_r grid and the seed noise. It is a value, fixed once the grid is settled
+// (settle_grid returns the context on the settled grid, as a stage returns its record), and every
+// stage takes it by const reference, so no stage can change what another one reads. The one
+// mutable thing is the PileStore: the pile service's cache and the surfaces simulated so far. It
+// is passed by reference, and only to the stages that simulate (baseline, settle_grid,
+// fingerprint_candidates, refit_by_simulation, photo_pairs), so a signature says whether a stage
+// pours piles.
+//
+// A Surface is the twin at one setting of the effects: every test's simulated response on the
+// mu_r grid. The current model is a weighted mixture of surfaces (the baseline, then one more per
+// effect refitted), held by pointer into the surfaces the store owns, so a model is cheap to
+// copy while trials are compared. Each stage returns the records of loop_records.hpp (or a
+// surface); none builds JSON.
 #pragma once
 
 #include <algorithm>
@@ -21,20 +29,20 @@
 
 #include "experiments/calibration/calibration.hpp"
 #include "experiments/loop/loop.hpp"
-#include "experiments/loop/loop_joint.hpp"
+#include "experiments/loop/loop_decision.hpp"
 #include "experiments/loop/loop_records.hpp"
 
 namespace reposetwin::experiments::loop_detail {
 
 /// One test's simulated response on the mu_r grid (one model setting).
 struct Curve {
-  std::vector<double> mu;                        // grid [-]
-  MonotoneFit fit;                               // angle against mu_r
+  std::vector<double> mu;  // grid [-]
+  MonotoneFit fit;         // angle against mu_r
   // Per channel: the seed means per grid point [deg or mm]; a crest no photograph recorded is
   // NaN.
   PerChannel<std::vector<double>> mean;
   PerChannel<std::vector<std::vector<double>>> seeds;  // per channel, grid point and seed
-  std::vector<int> clogged;  // per grid point: pours that formed no pile
+  std::vector<int> clogged;                            // per grid point: pours that formed no pile
   // Empty when every pour series formed a pile; else where a held-out test's pours all jammed
   // (a prediction of no pile: the curve has no fit and the model predicts nothing for it).
   std::string no_pile;
@@ -70,6 +78,70 @@ struct Model {
   double mix(std::size_t test, Of of) const;
 };
 
+/// The tests by role (indices into the data's tests).
+struct Roles {
+  std::vector<std::size_t> calibrate, validate;  // by the data's role
+  std::vector<std::size_t> traced;               // the tests traced: all of them
+  std::vector<std::size_t> fitted;               // the tests a refit fits (design.refit_on_all)
+  /// Whether some fit of mu_r uses test i (it must form piles).
+  bool fits(std::size_t i) const;
+};
+
+/// The seed noise every residual and prediction carries (loop.hpp's design note).
+struct SeedNoise {
+  // Per channel: the pooled seed spread of one pile's value [deg or mm] (the crest's 0 when no
+  // test has a measured crest), and per test its residual's 1-sigma noise.
+  PerChannel<double> sd;
+  PerChannel<std::vector<double>> sigma;
+  double se = 0.0;              // seed standard error of a predicted angle [deg]
+  bool crest_measured = false;  // some test has a measured crest width
+};
+
+/// What every stage reads (see the design note). `data` and `settings` outlive the loop.
+struct LoopContext {
+  const LabData* data = nullptr;
+  const LoopSettings* settings = nullptr;
+  std::string out;  // the output folder
+  Roles roles;
+  DesignRecord design;
+  std::vector<double> grid;  // the mu_r grid, extended when mu_r sits on a bound
+  SeedNoise noise;           // from the baseline on this grid
+
+  const std::vector<LabTest>& tests() const { return data->tests; }
+  const LoopSettings& s() const { return *settings; }
+  /// Whether the settings trace `e`: named in them, or, when they name none, not opt-in.
+  bool selected(const CandidateEffect& e) const;
+  /// A progress line on stderr (settings.progress).
+  void say(const std::string& message) const;
+  /// The lab's value of `channel` for test i [deg or mm].
+  double observed(std::size_t i, Channel channel) const;
+  /// The 1-sigma noise of test i's residual on `channel` [deg or mm].
+  double sigma(std::size_t i, Channel channel) const { return noise.sigma[channel][i]; }
+  /// The effect's value in the base model.
+  double effect_off(const CandidateEffect& e) const;
+  /// One pile's value of `channel`: the angle compared (twin_angle), H, D or the crest width.
+  double twin_value(const SimOutcome& o, Channel channel) const;
+  /// The grid point nearest mu_r `mu`.
+  std::size_t nearest_grid_point(double mu) const;
+};
+
+/// The one mutable thing the stages share: the pile service's cache and the surfaces simulated
+/// so far, which models point into.
+struct PileStore {
+  SimCache cache;
+  std::vector<std::unique_ptr<Surface>> surfaces;
+  /// Keeps `surface` for the rest of the loop and returns it.
+  const Surface& keep(Surface surface);
+};
+
+/// The calibrated baseline on a grid: the context on that grid with its seed noise, the surface
+/// and the calibration's record.
+struct Baseline {
+  LoopContext ctx;
+  const Surface* surface = nullptr;
+  BaselineRecord record;
+};
+
 /// What the iterations change: the model, its fit and the effects in it.
 struct LoopState {
   Model model;
@@ -79,14 +151,33 @@ struct LoopState {
   std::vector<ChosenEffect> chosen;  // in the order they were added
 };
 
+/// The fingerprints of the candidates, and those that have none with the reason.
+struct Fingerprints {
+  std::vector<FingerprintRecord> records;
+  std::vector<UnavailableCandidate> unavailable;
+};
+
+/// What a decision hands to the refit: the candidate, its traced strength, the value the
+/// tracing gives and the channels it is refitted on.
+struct RefitPlan {
+  const CandidateEffect* effect = nullptr;
+  const FingerprintRecord* fingerprint = nullptr;
+  double off = 0.0;      // its value in the base model
+  double coef = 0.0;     // traced strength, in units of the fingerprint's probe
+  double p1 = 0.0;       // the linear estimate, clamped to the range
+  double mu_node = 0.0;  // mu_r of the fingerprints' grid point [-]
+  std::vector<Channel> channels;
+  bool declared = false;  // the user's hypothesis picked it (--refit)
+};
+
 /// One refit trial: the effect simulated at p on the whole grid and (mu_r, t) fitted jointly.
 struct Trial {
   double p = 0.0;         // simulated value
   double fraction = 0.0;  // its response at the node, in units of the probe's fingerprint
   const Surface* surf = nullptr;
   MuFit joint;
-  double rmse = 0.0;  // calibration RMSE of the refitted model [deg]
-  Model model;        // the model with this trial mixed in
+  double rmse = 0.0;                 // calibration RMSE of the refitted model [deg]
+  Model model;                       // the model with this trial mixed in
   std::vector<std::string> no_pile;  // held-out tests that formed no pile at p
 };
 
@@ -96,99 +187,57 @@ struct Refit {
   std::string notes;
 };
 
-/// The loop over one dataset; run() names the stages in order.
-class Loop {
- public:
-  Loop(const LabData& data, const std::string& out, const LoopSettings& s);
-  nlohmann::json run();
+// Building blocks (loop_surface.cpp): piles poured through the store, surfaces and seed noise.
+std::vector<SimOutcome> pour(const LoopContext& ctx, PileStore& store,
+                             const std::vector<SimRequest>& requests);
+Surface simulate_surface(const LoopContext& ctx, PileStore& store,
+                         const std::vector<EffectSetting>& effects);
+SeedNoise seed_noise(const LoopContext& ctx, const Surface& base);
 
- private:
-  void say(const std::string& m) const;
-  // The cache's runs, a pour that formed no pile repeated with a new seed (s_.max_pours).
-  std::vector<SimOutcome> pour(const std::vector<SimRequest>& req);
+// The model's fit and residuals (loop_model.cpp). fit_mu fits the tests `tests` on the
+// observables `channels` (each residual over its own noise).
+MuFit fit_mu(const LoopContext& ctx, const Model& model, const Surface* extra, double t_max,
+             const std::vector<std::size_t>& tests,
+             const std::vector<Channel>& channels = {Channel::kAngle});
+std::vector<ResidualRow> residuals(const LoopContext& ctx, const Model& model, double mu);
+double calibration_rmse(const LoopContext& ctx, const Model& model, double mu);
 
-  // Stages (loop.cpp).
-  void check_settings();
-  void check_declared_refit() const;
-  bool selected(const CandidateEffect& e) const;
-  const Surface& simulate_baseline();
-  void set_seed_noise(const Surface& base);
-  BaselineRecord calibrate_baseline(const Surface& base) const;
-  GridRecord settle_grid(const Surface*& base, BaselineRecord& baseline);
-  std::size_t nearest_grid_point(double mu) const;
-  std::vector<const CandidateEffect*> available_candidates(
-      std::vector<UnavailableCandidate>& unavailable);
-  std::vector<FingerprintRecord> fingerprint_candidates(
-      const Surface& base, std::size_t node, std::vector<UnavailableCandidate>& unavailable);
-  bool iterate(int it, LoopState& state, const std::vector<FingerprintRecord>& fps,
-               std::size_t node, std::vector<IterationRecord>& iterations);
-  IterationRecord trace(int it, const LoopState& state,
-                        const std::vector<FingerprintRecord>& fps) const;
-  FinalRecord final_record(const LoopState& state) const;
-  // Per test, the lab's photo (when given) beside a twin photo (loop_photos.cpp).
-  std::vector<PhotoPair> photo_pairs(const LoopState& state);
-  std::vector<std::optional<SimOutcome>> photograph_for_page(
-      const std::vector<SimRequest>& requests, std::vector<std::string>& notes);
-  LoopProvenance provenance(const Surface& base) const;
-  nlohmann::json write(const LoopRecord& rec) const;  // OUT/loop.json and OUT/index.html
-
-  // Building blocks (loop.cpp).
-  Surface simulate_surface(const std::vector<EffectSetting>& effects);
-  std::vector<SimOutcome> pour_surface(const std::vector<EffectSetting>& effects);
-  std::string no_pile_reason(std::size_t i, const std::vector<std::vector<SimOutcome>>& raw) const;
-  bool fitted(std::size_t i) const;  // a test some fit of mu_r uses (it must form piles)
-  // The tests the model predicts a pile for, of the traced ones; the others into left_out.
-  std::vector<std::size_t> traced(const Model& model, std::vector<std::string>& left_out) const;
-  std::vector<std::vector<std::size_t>> pour_groups() const;
-  void require_pile(std::size_t i, std::size_t j, std::size_t r, const SimOutcome& o) const;
-  std::optional<FingerprintRecord> probe_candidate(const CandidateEffect& e, const Surface& base,
-                                                   std::size_t node,
-                                                   std::vector<UnavailableCandidate>& unavailable);
-  FingerprintRecord fingerprint(const CandidateEffect& e, double probe, const Surface& base,
-                                std::size_t node, const std::vector<SimOutcome>& on) const;
-  std::string untraceable(const FingerprintRecord& f) const;
-  JointProblem joint_problem(const LoopState& state, const std::vector<std::size_t>& tests,
-                             std::vector<std::string>& left_out) const;
-  double mu_slope(const LoopState& state, std::size_t i, Channel channel) const;
-  double pooled_seed_sd(const Surface& base, Channel channel) const;
-  double twin_value(const SimOutcome& o, Channel channel) const;  // one pile's [deg or mm]
-
-  // The model's fit and residuals (loop_model.cpp). fit_mu fits the tests `tests` on the
-  // observables `channels` (each residual over its own noise).
-  MuFit fit_mu(const Model& model, const Surface* extra, double t_max,
-               const std::vector<std::size_t>& tests,
-               const std::vector<Channel>& channels = {Channel::kAngle}) const;
-  double observed(std::size_t test, Channel channel) const;  // the lab's value
-  double effect_off(const CandidateEffect& e) const;  // its value in the base model
-  double noise(std::size_t test, Channel channel) const;  // its residual's 1-sigma noise
-  std::vector<ResidualRow> residuals(const Model& model, double mu) const;
-
-  // Refit by simulation (loop_refit.cpp).
-  Refit refit_by_simulation(const CandidateEffect& e, double off, double p1, double coef,
-                            const FingerprintRecord& fp, double mu_node, const LoopState& state,
-                            const std::vector<Channel>& channels);
-  bool run_trial(const CandidateEffect& e, double off, double p, const FingerprintRecord& fp,
-                 double mu_node, const LoopState& state, const std::vector<Channel>& channels,
-                 Refit& refit);
-  std::string unconfirmed_reason(const Trial& best, const LoopState& state) const;
-  double calibration_rmse(const Model& model, double mu) const;
-
-  const LabData& data_;
-  std::string out_;
-  const LoopSettings s_;
-  SimCache cache_;
-  std::vector<double> grid_;            // the mu_r grid, extended when mu_r sits on a bound
-  std::vector<std::size_t> cal_, val_;  // test indices by role
-  std::vector<std::size_t> trace_;      // the tests traced: all of them
-  std::vector<std::size_t> fit_;        // the tests a refit fits (design_.refit_on_all)
-  DesignRecord design_;
-  // Per channel: the pooled seed spread of one pile's value [deg or mm] (the crest's 0 when no
-  // test has a measured crest), and per test its residual's 1-sigma noise.
-  PerChannel<double> noise_sd_;
-  PerChannel<std::vector<double>> sigma_;
-  double seed_se_ = 0.0;                // seed standard error of a predicted angle [deg]
-  bool crest_measured_ = false;         // some test has a measured crest width
-  std::vector<std::unique_ptr<Surface>> surfaces_;
-};
+// The stages, in the order run_loop calls them.
+/// The settings checked and the context on the settings' grid, before any noise is known
+/// (loop_setup.cpp).
+LoopContext check_settings(const LabData& data, const std::string& out,
+                           const LoopSettings& settings);
+/// Every test simulated on the grid without effects, its seed noise and mu_r calibrated
+/// (loop_baseline.cpp).
+Baseline baseline(const LoopContext& ctx, PileStore& store);
+/// The grid extended while mu_r sits on its bound, as the settings allow (loop_baseline.cpp):
+/// `base` is replaced by the baseline on the settled grid, whose context every later stage reads.
+GridRecord settle_grid(Baseline& base, PileStore& store);
+/// Why nothing is traced (the design or mu_r on the grid's bound), or nothing (loop_baseline.cpp).
+std::optional<std::string> not_traced(const LoopContext& ctx, const GridRecord& grid);
+/// The available candidates' fingerprints at grid point `node` (loop_fingerprints.cpp).
+Fingerprints fingerprint_candidates(const LoopContext& ctx, PileStore& store, const Surface& base,
+                                    std::size_t node);
+/// One iteration: trace, decide, refit, confirm; appends its record to `iterations` and
+/// returns whether the loop goes on (loop_iteration.cpp).
+bool iterate(const LoopContext& ctx, PileStore& store, int it, LoopState& state,
+             const std::vector<FingerprintRecord>& fps, std::size_t node,
+             std::vector<IterationRecord>& iterations);
+/// The residual of the current model regressed on every unused fingerprint (loop_iteration.cpp).
+IterationRecord trace(const LoopContext& ctx, int it, const LoopState& state,
+                      const std::vector<FingerprintRecord>& fps);
+/// The accepted candidate simulated on the whole grid at its linear estimate, refined by secant
+/// steps when its response misses the traced strength (loop_refit.cpp).
+Refit refit_by_simulation(const LoopContext& ctx, PileStore& store, const RefitPlan& plan,
+                          const LoopState& state);
+/// Why the simulations do not confirm the best trial, or empty when they do (loop_refit.cpp).
+std::string unconfirmed_reason(const LoopContext& ctx, const Trial& best, const LoopState& state);
+/// The final model's fit, effects and residuals (loop_iteration.cpp).
+FinalRecord final_record(const LoopContext& ctx, const LoopState& state);
+/// Per test, the lab's photo (when given) beside a twin photo (loop_photos.cpp).
+std::vector<PhotoPair> photo_pairs(const LoopContext& ctx, PileStore& store,
+                                   const LoopState& state);
+/// How the loop was made (loop_setup.cpp).
+LoopProvenance provenance(const LoopContext& ctx, const PileStore& store, const Surface& base);
 
 }  // namespace reposetwin::experiments::loop_detail

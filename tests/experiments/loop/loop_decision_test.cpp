@@ -3,7 +3,7 @@
 // apart by H and D (or reported as indistinguishable, never the wrong one alone), a uniform
 // offset beyond mu_r's reach flagged, and what a design of calibration and held-out tests can
 // decide.
-#include "experiments/loop/loop_joint.hpp"
+#include "experiments/loop/loop_decision.hpp"
 
 #include <gtest/gtest.h>
 
@@ -80,8 +80,8 @@ JointProblem problem_of(const Fp& truth, double strength, int channels, std::uin
 }
 
 TEST(LoopJoint, OneChannelMatchesTheAngleFitAndItsLeaveOneOut) {
-  // With the angle alone and no bound, the joint fit is loop_trace's weighted least squares
-  // and its leave-one-out chi^2 is n LOO-RMSE^2 (unit sigmas).
+  // With the angle alone and no bound, the joint fit is loop_acceptance.hpp's weighted least
+  // squares and its leave-one-out chi^2 is n LOO-RMSE^2 (unit sigmas).
   JointProblem p;
   Eigen::VectorXd r(kTests), s(kTests), f(kTests);
   for (int i = 0; i < kTests; ++i) {

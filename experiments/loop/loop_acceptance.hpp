@@ -67,7 +67,7 @@ struct AcceptanceRule {
   double min_t = 3.0;              // |c| / se(c) must exceed this [-]
   double loo_margin_factor = 1.0;  // LOO gain must exceed this x the seed noise [-]
   double min_delta_chi2 = 4.0;     // a candidate is told from another when its joint chi^2 is
-                                   // lower by more than this (loop_joint.hpp) [-]
+                                   // lower by more than this (loop_decision.hpp) [-]
 };
 
 /// The fit y = b s + c f (f optional) with known sigma and b bounded to [lo, hi] (the design

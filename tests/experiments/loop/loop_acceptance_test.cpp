@@ -1,6 +1,6 @@
 // The loop's statistics on synthetic numbers with known answers: WLS against the closed form,
 // leave-one-out against a direct refit, the acceptance rule on a planted effect and on noise.
-#include "experiments/loop/loop_trace.hpp"
+#include "experiments/loop/loop_acceptance.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "experiments/loop/loop_trace.hpp"
+#include "experiments/loop/loop_acceptance.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>

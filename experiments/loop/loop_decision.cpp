@@ -1,4 +1,4 @@
-#include "experiments/loop/loop_joint.hpp"
+#include "experiments/loop/loop_decision.hpp"
 
 #include <algorithm>
 #include <cmath>

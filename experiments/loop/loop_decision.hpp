@@ -10,7 +10,7 @@
 //    candidate's fingerprint has one column per channel. Rows are standardised by sigma, so the
 //    channels share one weighted fit
 //        r_ci / sigma_ci = b s_ci / sigma_ci + c f_ci / sigma_ci + N(0, 1),
-//    one mu_r correction b (bounded as in loop_trace.hpp) and one strength c for all channels.
+//    one mu_r correction b (bounded as in loop_acceptance.hpp) and one strength c for all channels.
 //    A further observable is one more channel; nothing else changes. The crest width (the flat
 //    top's width, vision/crest.hpp) is one where the lab data give it (add_optional_channel): a
 //    fast lift and a rough plate may lower the angle alike while one widens the crest and the
@@ -18,7 +18,7 @@
 //  * Telling candidates apart. With the noise known, chi^2 is -2 log likelihood up to a
 //    constant, and every candidate has the same two coefficients, so chi^2_A - chi^2_B is the
 //    log likelihood ratio of A against B. Among the candidates that meet the acceptance rule
-//    (loop_trace.hpp, on the angle) or its joint form, the one with the lowest joint chi^2 is
+//    (loop_acceptance.hpp, on the angle) or its joint form, the one with the lowest joint chi^2 is
 //    named only when every other is worse by more than min_delta_chi2 (default 4: the named one
 //    at least e^2 = 7.4 times as likely). Otherwise the loop reports them as indistinguishable
 //    with their numbers and names none: which to believe is for a further observable or test to
@@ -54,7 +54,7 @@
 #include <string>
 #include <vector>
 
-#include "experiments/loop/loop_trace.hpp"
+#include "experiments/loop/loop_acceptance.hpp"
 
 namespace reposetwin::experiments {
 
