@@ -257,10 +257,11 @@ PileOutcome PileService::run_one(const PileRequest& r) {
 namespace {
 
 // Runs `jobs` (indices into the requests) on the pool; a job that fails leaves its message in
-// `errors`.
+// `errors`. `done`, when given, is told of each job that ended, in this process.
 void pool_jobs(const std::vector<std::size_t>& jobs, int workers, WorkerMode mode,
                const std::function<void(std::size_t)>& job, const std::string& error_dir,
-               std::map<std::size_t, std::string>& errors) {
+               std::map<std::size_t, std::string>& errors,
+               const std::function<void(std::size_t, bool)>& done = {}) {
   std::mutex m;
   for (std::size_t i : jobs) fs::remove(fs::path(error_dir) / ("error_" + std::to_string(i)));
   run_jobs(
@@ -277,8 +278,9 @@ void pool_jobs(const std::vector<std::size_t>& jobs, int workers, WorkerMode mod
         }
       },
       [&](std::size_t k, const JobExit& exit) {
-        if (exit.ok) return;
         std::lock_guard<std::mutex> g(m);
+        if (done) done(jobs[k], exit.ok);
+        if (exit.ok) return;
         const fs::path f = fs::path(error_dir) / ("error_" + std::to_string(jobs[k]));
         errors[jobs[k]] = fs::exists(f) ? read_file(f.string()) : "worker ended: " + exit.how;
       });
@@ -324,9 +326,15 @@ void PileService::pour_missing(const std::vector<PileRequest>& requests,
       [&](std::size_t i) {
         bool started = false;
         pile_stage(requests[i], pile_dir(requests[i]), s, started);
-        if (s.progress) std::fprintf(stderr, "[piles] %s poured\n", pile_key(requests[i]).c_str());
       },
-      errors_dir(), errors);
+      errors_dir(), errors, [&, ended = std::size_t{0}](std::size_t i, bool ok) mutable {
+        if (!s.progress) return;
+        const PileRequest& r = requests[i];
+        std::fprintf(stderr, "[piles] %zu/%zu %s: %s seed %llu (store key %.12s)\n", ++ended,
+                     piles.size(), ok ? "poured" : "failed",
+                     fs::path(r.scene_path).filename().string().c_str(),
+                     static_cast<unsigned long long>(r.seed), pile_key(r).c_str());
+      });
   started_sims_ += static_cast<int>(piles.size() - (errors.size() - before));
 }
 
