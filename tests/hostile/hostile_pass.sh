@@ -72,13 +72,21 @@ SIDE=$(ls "$W"/base/images/side_*.png 2>/dev/null | grep -v measured | head -n1)
 SIDEJ=${SIDE%.png}.json
 TOP=$W/base/images/top.png
 
-# --- 1. run --set: bad values of every kind of key (the key and the value named).
-while read -r key vals; do
-  for v in $vals; do
-    hc "run_set_${key}=${v}" "$key|tiny.toml|${v}~$(printf '%s' "$v" | sed 's/e300/e+300/')" \
-      "$BIN" run "$TINY" -o "$W/r_set" --no-images -q --set "$key=$v"
+# run_sets SCENE: for each line "KEY VALUE..." on stdin, a run of SCENE with --set KEY=VALUE,
+# whose refusal must name the key, the scene file and the value.
+run_sets() {
+  local scene=$1 key vals v
+  while read -r key vals; do
+    for v in $vals; do
+      hc "run_set_${key}=${v}" \
+        "$key|$(basename "$scene")|${v}~$(printf '%s' "$v" | sed 's/e300/e+300/')" \
+        "$BIN" run "$scene" -o "$W/r_set" --no-images -q --set "$key=$v"
+    done
   done
-done <<'KEYS'
+}
+
+# --- 1. run --set: bad values of every kind of key (the key and the value named).
+run_sets "$TINY" <<'KEYS'
 sample.mass_kg 0 -1 nan inf 1e300 junk
 materials.rock.density_kg_m3 0 nan inf 1e-300 1e300
 materials.rock.youngs_modulus_pa 0 nan inf -5
@@ -122,12 +130,7 @@ KEYS
 { cat "$TINY"; printf '%s\n' '[[sample.shapes]]' 'name = "rod"' 'kind = "generated"' \
     'mass_fraction = 0.5' 'elongation = 2.0' 'spheres = 3' '[[sample.shapes]]' 'name = "block"' \
     'kind = "blocky"' 'mass_fraction = 0.5' 'elongation = 1.5' 'angularity = 0.5'; } > "$W/mix.toml"
-while read -r key vals; do
-  for v in $vals; do
-    hc "run_set_${key}=${v}" "$key|mix.toml|${v}~$(printf '%s' "$v" | sed 's/e300/e+300/')" \
-      "$BIN" run "$W/mix.toml" -o "$W/r_set" --no-images -q --set "$key=$v"
-  done
-done <<'KEYS'
+run_sets "$W/mix.toml" <<'KEYS'
 sample.shapes.0.elongation 0.5 nan 1e300 9
 sample.shapes.0.flatness 1e300 0
 sample.shapes.0.spheres 0 65 1.5
