@@ -360,14 +360,17 @@ Camera read_sidecar(const std::string& path, SidecarView expect) {
   }
   require_complete(j["camera"], path + ": camera");
   Camera cam = from_json(j["camera"], path + ": camera");
-  // A sidecar's principal point lies on the image (pixel centres span [-0.5, W - 0.5]); one far
-  // off it is a typo that would still project, to the wrong pixels.
+  // A sidecar's principal point lies near the image (pixel centres span [-0.5, W - 0.5]). A
+  // shift lens moves it off the image, as does the twin's own pitched camera that keeps the
+  // pile framed (loop-synth's camera case: cy -58 px on a 720 px image); more than an image's
+  // size off is a typo that would still project, to the wrong pixels.
   const Intrinsics& ci = cam.intrinsics;
   for (const auto& [name, c, size] : {std::tuple{"intrinsics.cx_px", ci.cx_px, ci.width_px},
                                       std::tuple{"intrinsics.cy_px", ci.cy_px, ci.height_px}})
-    if (c && !(*c >= -0.5 && *c <= size - 0.5))
+    if (c && !(*c >= -0.5 - size && *c <= 2.0 * size - 0.5))
       fail(path + ": camera", name,
-           "= " + str(*c) + " must lie on the image, in [-0.5, " + str(size - 0.5) + "]");
+           "= " + str(*c) + " must lie within one image size of the image, in [" +
+               str(-0.5 - size) + ", " + str(2.0 * size - 0.5) + "]");
   for (const auto& [name, k] : {std::pair{"intrinsics.k1", cam.intrinsics.k1},
                                 std::pair{"intrinsics.k2", cam.intrinsics.k2}})
     if (!(std::abs(k) <= kMaxDistortion))

@@ -10,7 +10,8 @@
 //  - or it is accepted, and then the file itself holds every field the projection uses (none
 //    taken from a default camera), every value is finite (focal length in pixels positive, the
 //    image size positive, the distortion within +-1, the principal point and the pose finite),
-//    the camera projects its own look-at point to a finite pixel inside the image, and the
+//    the camera projects its own look-at point to a finite pixel within one image size of the
+//    image (a shift lens moves it off the image), and the
 //    sidecar's scale (mm_per_px_at_axis, the marker band), when given, is finite and positive.
 #include <gtest/gtest.h>
 
@@ -113,10 +114,13 @@ std::string check(const fs::path& file, const std::string& text, camera::Sidecar
   const camera::Extrinsics& ex = cam->extrinsics;
   if (!(ex.position.allFinite() && ex.look_at.allFinite() && ex.up.allFinite()))
     return "accepted with a non-finite pose";
+  // The look-at point projects to the principal point, which a shift lens moves off the image
+  // by less than the image's size (camera.cpp says why).
   const auto px = camera::project(*cam, ex.look_at);
-  if (!px || !px->allFinite() || px->x() < -0.5 || px->x() > in.width_px - 0.5 || px->y() < -0.5 ||
-      px->y() > in.height_px - 0.5)
-    return "accepted, but its look-at point does not project into the image";
+  const double w = in.width_px, h = in.height_px;
+  if (!px || !px->allFinite() || px->x() < -0.5 - w || px->x() > 2 * w - 0.5 ||
+      px->y() < -0.5 - h || px->y() > 2 * h - 0.5)
+    return "accepted, but its look-at point projects more than an image's size off the image";
   const vision::ScaleSpec s = vision::scale_from_sidecar(path, view);
   if (s.mm_per_px && !(std::isfinite(*s.mm_per_px) && *s.mm_per_px > 0))
     return "accepted with mm_per_px_at_axis " + std::to_string(*s.mm_per_px);
@@ -198,6 +202,28 @@ TEST(SidecarFuzz, SideViewEveryFieldDeletedOrHostile) {
 
 TEST(SidecarFuzz, TopViewEveryFieldDeletedOrHostile) {
   run_all("top.json", camera::SidecarView::kTop, 1400);
+}
+
+// A shift lens moves the principal point off the image: the twin's own pitched cameras that keep
+// the pile framed (loop-synth's camera case writes cy -58 px on a 720 px image) are read, and
+// the loop then judges the photo against the declared pose. More than an image's size off is
+// refused, naming the field and the value.
+TEST(SidecarFuzz, APrincipalPointOffTheImageByLessThanItsSizeIsRead) {
+  nlohmann::json j = nlohmann::json::parse(slurp(kCorpus / "side.json"));
+  const int h = j["camera"]["intrinsics"]["height_px"].get<int>();
+  const fs::path file = fs::temp_directory_path() / "reposetwin_sidecar_shift.json";
+  j["camera"]["intrinsics"]["cy_px"] = -0.08 * h;
+  { std::ofstream(file, std::ios::trunc) << j.dump(); }
+  EXPECT_NO_THROW((void)camera::read_sidecar(file.string(), camera::SidecarView::kSide));
+  j["camera"]["intrinsics"]["cy_px"] = -1.2 * h;
+  { std::ofstream(file, std::ios::trunc) << j.dump(); }
+  try {
+    (void)camera::read_sidecar(file.string(), camera::SidecarView::kSide);
+    ADD_FAILURE() << "a principal point 1.2 image heights off the image was read";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("intrinsics.cy_px"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("within one image size"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
