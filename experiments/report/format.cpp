@@ -71,54 +71,63 @@ std::string short_key(const std::string& key) {
   return last == "rolling_friction" ? "mu_r" : last;
 }
 
-std::string case_label(const std::string& name, const nlohmann::json& overrides) {
-  std::string label;
-  std::set<std::string> said;  // "name value" already in the label
+namespace {
+
+// A case's label in pieces: a prediction's name ("sample4: ", or "") and its numeric inputs as
+// "name value", each said once, in the overrides' order.
+struct LabelParts {
+  std::string prefix;
+  std::vector<std::string> inputs;
+};
+
+LabelParts label_parts(const std::string& name, const nlohmann::json& overrides) {
+  LabelParts l;
+  std::set<std::string> said;
   std::string first_key;
   for (const auto& [key, value] : overrides.items()) {
     if (!value.is_number()) continue;
     const std::string part = short_key(key) + " " + sig3(value);
     if (!said.insert(part).second) continue;
     if (first_key.empty()) first_key = key.substr(key.rfind('.') + 1);
-    label += (label.empty() ? "" : ", ") + part;
+    l.inputs.push_back(part);
   }
-  if (label.empty()) return name;
   // Campaign cases of a calibration are named predict_<prediction>_<key>_<value>.
   const std::string predict = "predict_";
-  if (name.rfind(predict, 0) == 0) {
+  if (!l.inputs.empty() && name.rfind(predict, 0) == 0) {
     const std::size_t end = name.find("_" + first_key + "_", predict.size());
-    if (end != std::string::npos)
-      label = name.substr(predict.size(), end - predict.size()) + ": " + label;
+    if (end != std::string::npos) l.prefix = name.substr(predict.size(), end - predict.size()) + ": ";
   }
-  return label;
+  return l;
+}
+
+std::string joined(const std::vector<std::string>& parts) {
+  std::string out;
+  for (const std::string& p : parts) out += (out.empty() ? "" : ", ") + p;
+  return out;
+}
+
+}  // namespace
+
+std::string case_label(const std::string& name, const nlohmann::json& overrides) {
+  const LabelParts l = label_parts(name, overrides);
+  return l.inputs.empty() ? name : l.prefix + joined(l.inputs);
 }
 
 std::vector<std::string> case_labels(
     const std::vector<std::pair<std::string, nlohmann::json>>& cases) {
-  // Each label's parts, the prediction's prefix kept apart from the inputs.
-  std::vector<std::string> prefix(cases.size()), out(cases.size());
-  std::vector<std::vector<std::string>> parts(cases.size());
-  std::map<std::string, std::size_t> count;
-  for (std::size_t i = 0; i < cases.size(); ++i) {
-    out[i] = case_label(cases[i].first, cases[i].second);
-    std::string rest = out[i];
-    if (const std::size_t colon = rest.find(": "); colon != std::string::npos) {
-      prefix[i] = rest.substr(0, colon + 2);
-      rest = rest.substr(colon + 2);
-    }
-    for (std::size_t at = 0; at <= rest.size();) {
-      const std::size_t end = std::min(rest.find(", ", at), rest.size());
-      parts[i].push_back(rest.substr(at, end - at));
-      at = end + 2;
-    }
-    for (const std::string& p : std::set<std::string>(parts[i].begin(), parts[i].end())) ++count[p];
+  std::vector<LabelParts> parts;
+  std::map<std::string, std::size_t> count;  // input -> cases that have it
+  for (const auto& [name, overrides] : cases) {
+    parts.push_back(label_parts(name, overrides));
+    for (const std::string& p : parts.back().inputs) ++count[p];
   }
-  if (cases.size() < 2) return out;
+  std::vector<std::string> out;
   for (std::size_t i = 0; i < cases.size(); ++i) {
-    std::string kept;
-    for (const std::string& p : parts[i])
-      if (count[p] < cases.size()) kept += (kept.empty() ? "" : ", ") + p;
-    if (!kept.empty()) out[i] = prefix[i] + kept;
+    std::vector<std::string> kept;
+    for (const std::string& p : parts[i].inputs)
+      if (cases.size() < 2 || count[p] < cases.size()) kept.push_back(p);
+    out.push_back(kept.empty() ? case_label(cases[i].first, cases[i].second)
+                               : parts[i].prefix + joined(kept));
   }
   return out;
 }
