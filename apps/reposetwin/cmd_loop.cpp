@@ -1,6 +1,8 @@
 // reposetwin loop DATA.csv --out DIR: close the loop on measured data (experiments/loop/loop.hpp).
 // reposetwin loop-synth DESIGN.toml --out DIR: a synthetic lab dataset with hidden settings.
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -14,8 +16,11 @@
 #include "experiments/pile/run_folder.hpp"
 #include "experiments/report/loop_report.hpp"
 #include "experiments/io/input_error.hpp"
+#include "experiments/io/provenance.hpp"
 
 namespace reposetwin::cli {
+
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -194,6 +199,7 @@ void add_loop_command(CLI::App& app) {
     std::string design;
     std::string out = "loop_synth";
     std::string cache;
+    std::string truth;
     int workers = 2;
   };
   auto sargs = std::make_shared<SynthArgs>();
@@ -204,14 +210,32 @@ void add_loop_command(CLI::App& app) {
       ->required();
   syn->add_option("--out,-o", sargs->out, "Output folder")->capture_default_str();
   syn->add_option("--cache", sargs->cache, "Simulation cache (default: a hidden folder)");
+  syn->add_option("--truth", sargs->truth,
+                  "Also write the hidden settings as JSON to this file, outside the dataset's "
+                  "folder (for a validation to compare the loop's answer with)");
   syn->add_option("--workers", sargs->workers, "Concurrent simulations")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
   syn->callback([sargs]() {
     const experiments::SynthDesign d = experiments::read_synth_design(sargs->design);
+    // The loop reads the dataset's folder; the truth must not be where it could be read.
+    if (!sargs->truth.empty()) {
+      const fs::path out = fs::weakly_canonical(sargs->out);
+      const fs::path truth = fs::weakly_canonical(sargs->truth);
+      const auto [o, t] = std::mismatch(out.begin(), out.end(), truth.begin(), truth.end());
+      if (o == out.end())
+        throw experiments::InputError("--truth " + sargs->truth + ": inside the dataset's folder " +
+                                      sargs->out + ", where the loop would read it; write it "
+                                      "elsewhere");
+    }
     experiments::SimCache cache(sargs->cache.empty() ? sargs->out + "/.hidden_cache" : sargs->cache,
                                 {sargs->workers, true});
     std::cout << experiments::make_synthetic_dataset(d, sargs->out, cache) << "\n";
+    if (!sargs->truth.empty()) {
+      nlohmann::json truth = experiments::synth_truth_json(d, sargs->design);
+      truth["code_version"] = experiments::code_version();
+      experiments::write_json_atomic(sargs->truth, truth);
+    }
     set_exit_code(ExitCode::kOk);
   });
 }

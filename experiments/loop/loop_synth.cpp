@@ -183,6 +183,25 @@ void write_row(const SynthDesign& d, const LabTest& test, std::size_t i,
 
 }  // namespace
 
+nlohmann::json synth_truth_json(const SynthDesign& d, const std::string& design_path) {
+  nlohmann::json effects = nlohmann::json::array();
+  for (const auto& [name, value] : d.hidden) {
+    const CandidateEffect& e = find_effect(name);
+    effects.push_back({{"name", name}, {"value", value}, {"units", e.units}, {"key", e.key}});
+  }
+  const ImageVariant& c = d.camera;
+  return {{"design", design_path},
+          {"scene", d.scene},
+          {"mu_r", d.mu_r},
+          {"mu_key", d.mu_key},
+          {"hidden", effects},
+          {"seeds", d.seeds},
+          {"camera",
+           {{"width_px", c.width_px}, {"height_px", c.height_px}, {"side_views", c.side_views},
+            {"distance_radii", c.distance_radii}, {"height_m", c.camera_height_m},
+            {"aim_at_axis_foot", c.aim_at_axis_foot}, {"k1", c.k1}, {"noise_sd", c.noise_sd}}}};
+}
+
 std::string make_synthetic_dataset(const SynthDesign& d, const std::string& out_dir,
                                    SimCache& cache) {
   fs::create_directories(fs::path(out_dir) / "photos");

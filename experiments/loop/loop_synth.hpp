@@ -39,6 +39,7 @@
 #pragma once
 
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <map>
 #include <string>
 #include <utility>
@@ -62,6 +63,12 @@ struct SynthDesign {
 
 /// Reads a design file (see the design note). Throws InputError naming the file and key.
 SynthDesign read_synth_design(const std::string& path);
+
+/// The hidden settings as JSON (the truth a validation compares the loop's answer with): the
+/// design file, mu_r and the key it is set by, every hidden effect with its value and units, the
+/// pile seeds and the true camera. Never written into the dataset's folder (reposetwin
+/// loop-synth --truth refuses a path there): the loop must not be able to read it.
+nlohmann::json synth_truth_json(const SynthDesign& design, const std::string& design_path);
 
 /// Runs the hidden twin through `cache` and writes OUT/measured.csv, OUT/scene.toml and
 /// OUT/photos/. Returns the path of the CSV. Throws InputError for unknown effect names or

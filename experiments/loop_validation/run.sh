@@ -39,16 +39,24 @@ command -v jq >/dev/null || { echo "run.sh: jq is needed (scripts/install_deps.s
 # loop must refuse the data before it simulates) | side of its off value the fit must land
 # (below/above/-) | least RMSE cut on the calibration tests | candidates (empty: the loop's
 # default, every registry effect but the opt-in grain_shape) | the loop's seeds (empty:
-# 1001,1002,1003; as many as the design's repeats where a case needs the lower noise)
+# 1001,1002,1003; as many as the design's repeats where a case needs the lower noise) | mu_r's
+# declared range LO,HI (empty: none), which the fitted mu_r must then lie inside.
+# The least cut is 70% wherever an effect is hidden: the refit's RMSE cannot fall below one
+# residual's noise, the seed spread times sqrt(1/n_lab + 1/n_twin) (1.23 deg with three piles a
+# side), so a hidden effect weaker than about three times that cannot show a 70% cut, and such a
+# design does not test the loop. The cohesion and shape designs therefore repeat each test on six
+# piles (floor 0.87 deg) with effects that stand clear of it.
+shape_candidates=grain_shape,plate_friction,lift_speed,cohesion,camera_height
+six=1001,1002,1003,1004,1005,1006
 cases=(
-  "plate|synth_plate.toml|0.1,0.2,0.35|plate_friction|below|0.70|"
-  "lift|synth_lift.toml|0.1,0.2,0.35|lift_speed|above|0.70|"
-  "cohesion|synth_cohesion.toml|0.1,0.2,0.35|cohesion|above|0.45|"
-  "null|synth_null.toml|0.1,0.2,0.35|none|-|0|"
-  "camera|synth_camera.toml|0.1,0.2,0.35|refused|-|0|"
-  "rolling_size|synth_size.toml|0.1,0.25,0.5|rolling_size|above|0.70|"
-  "shape|synth_shape.toml|0.2,0.35,0.5|grain_shape|above|0.45|grain_shape,plate_friction,lift_speed,cohesion,camera_height"
-  "shape_repeats|synth_shape_repeats.toml|0.2,0.35,0.5|grain_shape|above|0.70|grain_shape,plate_friction,lift_speed,cohesion,camera_height|1001,1002,1003,1004,1005,1006"
+  "plate|synth_plate.toml|0.1,0.2,0.35|plate_friction|below|0.70|||"
+  "lift|synth_lift.toml|0.1,0.2,0.35|lift_speed|above|0.70|||"
+  "cohesion|synth_cohesion.toml|0.1,0.2,0.35|cohesion|above|0.70||$six|"
+  "null|synth_null.toml|0.1,0.2,0.35|none|-|0|||"
+  "camera|synth_camera.toml|0.1,0.2,0.35|refused|-|0|||"
+  "rolling_size|synth_size.toml|0.1,0.25,0.5|rolling_size|above|0.70|||"
+  "shape_repeats|synth_shape_repeats.toml|0.2,0.35,0.5|grain_shape|above|0.70|$shape_candidates|$six|"
+  "cohesion_low_mu|synth_cohesion_low_mu.toml|0.1,0.2,0.35|cohesion|above|0.70||$six|0.02,0.4"
 )
 
 mkdir -p "$out"
@@ -60,7 +68,7 @@ done
 # A loop that refuses its data (exit 2: bad input, e.g. photos that contradict their declared
 # camera) leaves DIR/CASE/refused.txt with its message instead of a loop.json.
 run_case() {
-  local name=$1 design=$2 grid=$3 candidates=$4 seeds=${5:-1001,1002,1003}
+  local name=$1 design=$2 grid=$3 candidates=$4 seeds=${5:-1001,1002,1003} range=$6
   local dir=$out/$name
   if [[ ( -f $dir/loop/loop.json || -f $dir/refused.txt ) && $force == 0 ]]; then
     echo "[validation] $name: finished earlier (kept; --force recomputes)"
@@ -68,13 +76,14 @@ run_case() {
   fi
   echo "[validation] $name: dataset from data/loop/$design"
   "$bin" loop-synth "$root/data/loop/$design" --out "$dir/data" --cache "$out/cache" \
-    --workers "$workers" >/dev/null
+    --truth "$dir/truth.json" --workers "$workers" >/dev/null
   echo "[validation] $name: loop"
   rm -f "$dir/refused.txt"
   local rc=0
   "$bin" loop "$dir/data/measured.csv" --out "$dir/loop" --cache "$out/cache" \
     --mu-grid "$grid" --seeds "$seeds" --width 960 --height 720 --views 2 --own-cameras \
     ${candidates:+--candidates "$candidates"} \
+    ${range:+--mu-range "$range" --mu-range-reason "rock in our convention (the case's premise)"} \
     --max-effects 1 --at-bound trace --grid-extensions 0 --workers "$workers" --force --quiet \
     >/dev/null 2>"$dir/loop_stderr.txt" || rc=$?
   if ((rc == 2)); then
@@ -88,9 +97,9 @@ run_case() {
 
 rows=()
 for row in "${cases[@]}"; do
-  IFS='|' read -r name design grid want side cut candidates seeds <<<"$row"
+  IFS='|' read -r name design grid want side cut candidates seeds range <<<"$row"
   if ((${#only[@]})) && [[ " ${only[*]} " != *" $name "* ]]; then continue; fi
-  run_case "$name" "$design" "$grid" "$candidates" "$seeds"
+  run_case "$name" "$design" "$grid" "$candidates" "$seeds" "$range"
   rows+=("$row")
 done
 
@@ -99,7 +108,7 @@ done
 # and by the joint fit of angle, H and D (chi^2 per channel), to show where they part.
 summary=$out/summary.json
 for row in "${rows[@]}"; do
-  IFS='|' read -r name design grid want side cut _ <<<"$row"
+  IFS='|' read -r name design grid want side cut _ _ range <<<"$row"
   if [[ -f $out/$name/refused.txt ]]; then
     jq -n -c --arg name "$name" --arg design "data/loop/$design" --arg grid "$grid" \
       --arg want "$want" --rawfile why "$out/$name/refused.txt" \
@@ -108,12 +117,21 @@ for row in "${rows[@]}"; do
     continue
   fi
   jq -c --arg name "$name" --arg design "data/loop/$design" --arg grid "$grid" \
-    --arg want "$want" --arg side "$side" --argjson cut "$cut" '
-    .summary as $s | (.final.effects[0] // null) as $e |
+    --arg want "$want" --arg side "$side" --argjson cut "$cut" --arg range "$range" \
+    --slurpfile truth "$out/$name/truth.json" '
+    .summary as $s | (.final.effects[0] // null) as $e | $truth[0] as $t |
+    ($e.joint_region // null) as $g |
+    (if $range == "" then null else ($range | split(",") | map(tonumber)) end) as $r |
     {case: $name, design: $design, mu_grid: $grid, expected: $want,
      named: $s.chosen, verdict: $s.verdict,
+     hidden_mu_r: $t.mu_r, hidden_value: ($t.hidden[0].value // null),
      value: ($e.value // null), value_se: ($e.value_se // null), off: ($e.off // null),
-     mu_r: .final.mu_r,
+     mu_r: .final.mu_r, mu_r_range_declared: $r,
+     region_value: ($g.value_range // null), region_mu_r: ($g.mu_r_range // null),
+     region_correlation: ($g.correlation // null), region_separated: ($g.separated // null),
+     hidden_in_region: (if $g == null or $t.hidden[0] == null then null else
+       ($t.hidden[0].value >= $g.value_range[0] and $t.hidden[0].value <= $g.value_range[1] and
+        $t.mu_r >= $g.mu_r_range[0] and $t.mu_r <= $g.mu_r_range[1]) end),
      rmse_calibrate_before_deg: $s.rmse_calibrate_before_deg,
      rmse_calibrate_after_deg: $s.rmse_calibrate_after_deg,
      rmse_validate_before_deg: $s.rmse_validate_before_deg,
@@ -127,15 +145,19 @@ for row in "${rows[@]}"; do
      code_version: .provenance.code_version} |
     .held = (if $want == "none" then .named == null
              else (.named == $want and .cut >= $cut and
-                   (if $side == "below" then .value < .off else .value > .off end)) end)' \
+                   (if $side == "below" then .value < .off else .value > .off end) and
+                   ($r == null or (.mu_r >= $r[0] and .mu_r <= $r[1]))) end)' \
     "$out/$name/loop/loop.json"
 done | jq -s '.' >"$summary.tmp" && mv "$summary.tmp" "$summary"
 jq -r '(["case","expected","named","value","value_se","mu_r","rmse_cal_before_deg",
          "rmse_cal_after_deg","rmse_val_before_deg","rmse_val_after_deg","cut","least_cut",
-         "held","code_version"] | @csv),
+         "hidden_value","region_value_lo","region_value_hi","hidden_mu_r","region_mu_r_lo",
+       "region_mu_r_hi","hidden_in_region","held","code_version"] | @csv),
        (.[] | [.case,.expected,(.named // .verdict),.value,.value_se,.mu_r,.rmse_calibrate_before_deg,
                .rmse_calibrate_after_deg,.rmse_validate_before_deg,.rmse_validate_after_deg,
-               .cut,.least_cut,.held,.code_version] | @csv)' "$summary" >"$out/summary.csv.tmp"
+               .cut,.least_cut,.hidden_value,.region_value[0],.region_value[1],.hidden_mu_r,
+               .region_mu_r[0],.region_mu_r[1],.hidden_in_region,.held,.code_version] | @csv)' \
+  "$summary" >"$out/summary.csv.tmp"
 mv "$out/summary.csv.tmp" "$out/summary.csv"
 column -s, -t <"$out/summary.csv"
 jq -e 'all(.held)' "$summary" >/dev/null || { echo "[validation] some expectations did not hold" >&2; exit 1; }

@@ -205,6 +205,22 @@ TEST(BadInput, LoopRefitOfACandidateNotTracedIsRefused) {
   EXPECT_FALSE(fs::exists(out / "cache" / "cases")) << "a refused loop poured a pile";
 }
 
+// The hidden settings of a synthetic dataset must not be written where the loop reads the data:
+// loop-synth --truth inside --out is refused before any pile is poured.
+TEST(BadInput, LoopSynthTruthInsideTheDatasetIsRefused) {
+  const fs::path dir = fresh_dir("bad_synth_truth");
+  write_text(dir / "design.toml", "scene = \"" + std::string(REPOSETWIN_SOURCE_DIR) +
+                                      "/data/loop/tiny_scene.toml\"\nmu_r = 0.2\nseeds = [7001]\n"
+                                      "[[test]]\nid = \"t1\"\nmass_kg = 0.025\n");
+  const fs::path out = dir / "data";
+  const CliResult r = run_cli("loop-synth " + quoted(dir / "design.toml") + " --out " +
+                              quoted(out) + " --truth " + quoted(out / "sub" / ".." / "t.json"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  expect_mentions(r, {"--truth", "t.json", "inside the dataset's folder"});
+  EXPECT_FALSE(fs::exists(out / "measured.csv"));
+  EXPECT_FALSE(fs::exists(out / "t.json"));
+}
+
 TEST(BadInput, ThinImageIsRefusedNamingTheFile) {
   const fs::path dir = fresh_dir("bad_thin");
   ASSERT_TRUE(cv::imwrite((dir / "thin.png").string(), cv::Mat(20000, 1, CV_8UC1, cv::Scalar(255))));

@@ -27,6 +27,7 @@
 #include "experiments/io/csv.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/loop/loop_data.hpp"
+#include "experiments/loop/loop_effects.hpp"
 #include "experiments/loop/loop_synth.hpp"
 
 namespace reposetwin::experiments {
@@ -54,6 +55,27 @@ std::string design_error(const std::string& name, const std::string& camera_tabl
     return e.what();
   }
   return "";
+}
+
+// The truth a validation compares the loop's answer with (reposetwin loop-synth --truth) is the
+// design file's hidden settings, with each effect's units and key from the registry.
+TEST(LoopSynthTruth, TheTruthIsTheDesignsHiddenSettings) {
+  fs::create_directories(test_dir());
+  const fs::path p = test_dir() / "truth_design.toml";
+  write_file_atomic(p.string(), "scene = \"" + kScene + "\"\nmu_r = 0.15\nseeds = [7001, 7004]\n" +
+                                    "[camera]\nnoise_sd = 3.0\nheight_m = 0.02\n" +
+                                    "[hidden]\ncohesion = 24000.0\n" +
+                                    "[[test]]\nid = \"t1\"\nmass_kg = 0.025\n");
+  const nlohmann::json t = synth_truth_json(read_synth_design(p.string()), p.string());
+  EXPECT_EQ(t.at("design").get<std::string>(), p.string());
+  EXPECT_DOUBLE_EQ(t.at("mu_r").get<double>(), 0.15);
+  ASSERT_EQ(t.at("hidden").size(), 1u);
+  EXPECT_EQ(t.at("hidden")[0].at("name").get<std::string>(), "cohesion");
+  EXPECT_DOUBLE_EQ(t.at("hidden")[0].at("value").get<double>(), 24000.0);
+  EXPECT_EQ(t.at("hidden")[0].at("units").get<std::string>(), find_effect("cohesion").units);
+  EXPECT_EQ(t.at("seeds"), nlohmann::json({7001, 7004}));
+  EXPECT_DOUBLE_EQ(t.at("camera").at("noise_sd").get<double>(), 3.0);
+  EXPECT_DOUBLE_EQ(t.at("camera").at("height_m").get<double>(), 0.02);
 }
 
 TEST(LoopTilt, DesignFileCameraPoseAndItsBadValues) {
