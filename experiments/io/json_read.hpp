@@ -108,7 +108,8 @@ auto nested(const nlohmann::json& j, const char* key, F&& read) {
 /// read(e) of every element e of the array `a`, in order; an error's pointer gets /i.
 template <class F>
 auto elements(const nlohmann::json& a, F&& read) {
-  if (!a.is_array()) throw JsonFieldError("", std::string("is ") + a.type_name() + ", not an array");
+  if (!a.is_array())
+    throw JsonFieldError("", std::string("is ") + a.type_name() + ", not an array");
   std::vector<std::decay_t<decltype(read(a))>> out;
   for (std::size_t i = 0; i < a.size(); ++i)
     out.push_back(json_read_detail::at_token(a[i], std::to_string(i), read));
@@ -124,7 +125,8 @@ auto each(const nlohmann::json& j, const char* key, F&& read) {
 /// A JSON number as a double, null as NaN; JsonFieldError (at the value) for anything else.
 inline double number_value(const nlohmann::json& v) {
   if (v.is_null()) return std::numeric_limits<double>::quiet_NaN();
-  if (!v.is_number()) throw JsonFieldError("", std::string("is ") + v.type_name() + ", not a number");
+  if (!v.is_number())
+    throw JsonFieldError("", std::string("is ") + v.type_name() + ", not a number");
   return v.get<double>();
 }
 

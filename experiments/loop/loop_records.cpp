@@ -383,10 +383,13 @@ UnavailableCandidate unavailable_candidate_from_json(const json& j) {
 
 RefitTrialRecord refit_trial_record_from_json(const json& j) {
   // no_pile absent: none (a loop.json written before the twin could predict no pile).
-  return {number_field(j, "simulated_at"), number_field(j, "response_fraction"),
-          number_field(j, "t"),            number_field(j, "mu_r"),
-          number_field(j, "rmse_calibrate_deg"),
-          optional_field<std::vector<std::string>>(j, "no_pile").value_or(std::vector<std::string>{})};
+  return {
+      number_field(j, "simulated_at"),
+      number_field(j, "response_fraction"),
+      number_field(j, "t"),
+      number_field(j, "mu_r"),
+      number_field(j, "rmse_calibrate_deg"),
+      optional_field<std::vector<std::string>>(j, "no_pile").value_or(std::vector<std::string>{})};
 }
 
 ChosenEffect chosen_effect_from_json(const json& j) {
@@ -502,12 +505,9 @@ SimulationCounts simulation_counts_from_json(const json& j) {
 }
 
 PhotoView photo_view_from_json(const json& j) {
-  return {field<std::string>(j, "photo"),
-          field<std::string>(j, "overlay"),
-          field<std::string>(j, "source"),
-          number_field(j, "mm_per_px"),
-          field<int>(j, "width_px"),
-          field<int>(j, "height_px"),
+  return {field<std::string>(j, "photo"),  field<std::string>(j, "overlay"),
+          field<std::string>(j, "source"), number_field(j, "mm_per_px"),
+          field<int>(j, "width_px"),       field<int>(j, "height_px"),
           number_field(j, "angle_deg")};
 }
 
@@ -519,8 +519,10 @@ PhotoPair photo_pair_from_json(const json& j) {
   p.mu_r = number_field(j, "mu_r");
   p.seed = field<std::uint64_t>(j, "seed");
   nested(j, "effects", [&p](const json& e) {
-    if (!e.is_object()) throw JsonFieldError("", std::string("is ") + e.type_name() + ", not an object");
-    for (const auto& [name, value] : e.items()) p.effects.emplace_back(name, number_field(e, name.c_str()));
+    if (!e.is_object())
+      throw JsonFieldError("", std::string("is ") + e.type_name() + ", not an object");
+    for (const auto& [name, value] : e.items())
+      p.effects.emplace_back(name, number_field(e, name.c_str()));
     return 0;
   });
   p.note = field<std::string>(j, "note");

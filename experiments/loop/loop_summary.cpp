@@ -162,7 +162,8 @@ LoopSummary loop_summary_from_json(const json& j) {
   LoopSummary s;
   s.chosen = text_of("chosen");
   if (!field<json>(j, "verdict").is_null())
-    s.verdict = nested(j, "verdict", [](const json& v) { return parse_verdict(v.get<std::string>()); });
+    s.verdict =
+        nested(j, "verdict", [](const json& v) { return parse_verdict(v.get<std::string>()); });
   s.statement = text_of("statement");
   s.rmse_all_before_deg = number_field(j, "rmse_all_before_deg");
   s.rmse_all_after_deg = number_field(j, "rmse_all_after_deg");
@@ -182,13 +183,13 @@ namespace {
 
 constexpr const char* kRuleText =
     "accept the best-ranked candidate with |c|/se > min_t and a leave-one-"
-                      "test-out RMSE (over every test, the predicted ones included) below the "
-                      "mu_r-only LOO RMSE by more than the seed standard error of a predicted "
-                      "angle; among those, name the one whose joint chi^2 over angle, H and D "
-                      "is lower than every other's by more than min_delta_chi2, else report "
-                      "them as indistinguishable; a significant uniform offset that mu_r cannot "
-                      "take up and no candidate beats is flagged as a suspected measurement "
-                      "error, nothing named";
+    "test-out RMSE (over every test, the predicted ones included) below the "
+    "mu_r-only LOO RMSE by more than the seed standard error of a predicted "
+    "angle; among those, name the one whose joint chi^2 over angle, H and D "
+    "is lower than every other's by more than min_delta_chi2, else report "
+    "them as indistinguishable; a significant uniform offset that mu_r cannot "
+    "take up and no candidate beats is flagged as a suspected measurement "
+    "error, nothing named";
 
 json to_json_array(const auto& records) {
   json a = json::array();
@@ -238,8 +239,7 @@ const char* acceptance_rule_text() { return kRuleText; }
 json to_json(const LoopRecord& loop) {
   const json rule = {{"min_t", loop.rule.min_t},
                      {"loo_margin_deg", loop.rule.loo_margin_factor * loop.baseline.seed_se_deg},
-                     {"text",
-                      kRuleText},
+                     {"text", kRuleText},
                      {"min_delta_chi2", loop.rule.min_delta_chi2}};
   return {{"tests", to_json_array(loop.tests)},
           {"design", to_json(loop.design)},

@@ -210,8 +210,8 @@ TEST(LoopRecordsJson, AMissingFieldIsAnError) {
 }
 
 json committed_loop(const std::string& folder) {
-  return json::parse(read_file(std::string(REPOSETWIN_SOURCE_DIR) + "/results/" + folder +
-                               "/loop.json"));
+  return json::parse(
+      read_file(std::string(REPOSETWIN_SOURCE_DIR) + "/results/" + folder + "/loop.json"));
 }
 
 // A loop.json as the loop writes it, read into the LoopRecord and written again: the same JSON,
@@ -252,8 +252,9 @@ TEST(LoopRecordsJson, ALoopJsonMissingOrMistypingAFieldIsRefusedByPointer) {
   EXPECT_EQ(refusal(j), "results/x/loop.json: /tests/1/angle_deg: is string, not a number");
   j = good;
   j["/iterations/0/candidates/0/accepted"_json_pointer] = 1;
-  EXPECT_EQ(refusal(j),
-            "results/x/loop.json: /iterations/0/candidates/0/accepted: has the wrong type (number)");
+  EXPECT_EQ(
+      refusal(j),
+      "results/x/loop.json: /iterations/0/candidates/0/accepted: has the wrong type (number)");
   j = good;
   j["/summary/verdict"_json_pointer] = "maybe";
   EXPECT_NE(refusal(j).find("results/x/loop.json: /summary/verdict: "), std::string::npos)
