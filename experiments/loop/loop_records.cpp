@@ -5,7 +5,6 @@
 
 #include "experiments/io/json_fields.hpp"
 #include "experiments/io/json_read.hpp"
-#include "experiments/loop/loop_effects.hpp"
 
 namespace reposetwin::experiments {
 using nlohmann::json;
