@@ -8,6 +8,7 @@
 
 #include "experiments/io/format.hpp"
 #include "experiments/io/json_fields.hpp"
+#include "experiments/io/json_read.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -260,27 +261,29 @@ nlohmann::json to_json(const NullScore& s) {
 
 CandidateScore candidate_score_from_json(const nlohmann::json& j) {
   CandidateScore s;
-  s.name = j.at("name").get<std::string>();
-  s.coef = json_number(j.at("coef"));
-  s.coef_se = json_number(j.at("coef_se"));
-  s.t = json_number(j.at("t"));
-  s.mu_shift = json_number(j.at("mu_shift"));
-  s.mu_shift_at_bound = j.at("mu_shift_at_bound").get<bool>();
-  s.rmse_fit = json_number(j.at("rmse_fit_deg"));
-  s.loo_rmse = json_number(j.at("loo_rmse_deg"));
-  s.loo_gain = json_number(j.at("loo_gain_deg"));
-  s.explained = json_number(j.at("explained"));
-  s.significant = j.at("significant").get<bool>();
-  s.predictive = j.at("predictive").get<bool>();
-  s.accepted = j.at("accepted").get<bool>();
-  s.why = j.at("why").get<std::string>();
-  s.out_of_range = json_text(j, "out_of_range");  // absent before the range gate
+  s.name = field<std::string>(j, "name");
+  s.coef = number_field(j, "coef");
+  s.coef_se = number_field(j, "coef_se");
+  s.t = number_field(j, "t");
+  s.mu_shift = number_field(j, "mu_shift");
+  s.mu_shift_at_bound = field<bool>(j, "mu_shift_at_bound");
+  s.rmse_fit = number_field(j, "rmse_fit_deg");
+  s.loo_rmse = number_field(j, "loo_rmse_deg");
+  s.loo_gain = number_field(j, "loo_gain_deg");
+  s.explained = number_field(j, "explained");
+  s.significant = field<bool>(j, "significant");
+  s.predictive = field<bool>(j, "predictive");
+  s.accepted = field<bool>(j, "accepted");
+  s.why = field<std::string>(j, "why");
+  // Absent or null: within the range (a loop.json written before the range gate has none).
+  if (j.contains("out_of_range") && !j["out_of_range"].is_null())
+    s.out_of_range = field<std::string>(j, "out_of_range");
   return s;
 }
 
 NullScore null_score_from_json(const nlohmann::json& j) {
-  return {json_number(j.at("mu_shift")), json_number(j.at("rmse_before_deg")),
-          json_number(j.at("rmse_mu_only_deg")), json_number(j.at("loo_rmse_mu_only_deg"))};
+  return {number_field(j, "mu_shift"), number_field(j, "rmse_before_deg"),
+          number_field(j, "rmse_mu_only_deg"), number_field(j, "loo_rmse_mu_only_deg")};
 }
 
 }  // namespace reposetwin::experiments

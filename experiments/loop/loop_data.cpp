@@ -11,6 +11,7 @@
 #include "experiments/io/csv.hpp"
 #include "experiments/io/format.hpp"
 #include "experiments/io/input_error.hpp"
+#include "experiments/io/json_read.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/scene_overrides.hpp"
 #include "experiments/loop/loop_effects.hpp"
@@ -455,6 +456,56 @@ json to_json(const LabTest& t) {
     for (const camera::Camera& c : t.cameras) j["cameras"].push_back(camera::to_json(c));
   }
   return j;
+}
+
+Role role_from_json(const json& j) {
+  const std::string text = j.get<std::string>();
+  if (const std::optional<Role> r = parse_role(text)) return *r;
+  throw JsonFieldError("", "\"" + text + "\" is not calibrate or validate");
+}
+
+namespace {
+
+// The optional measured values and the photos of a test, as to_json writes them.
+void read_lab_measurements(const json& j, LabTest& t) {
+  auto optional_number = [&j](const char* key) -> std::optional<double> {
+    if (!j.contains(key)) return std::nullopt;
+    return number_field(j, key);
+  };
+  t.height_mm = optional_number("H_mm");
+  t.diameter_mm = optional_number("D_mm");
+  if (j.contains("crest_mm")) {
+    t.crest_mm = number_field(j, "crest_mm");
+    t.crest_source = field<std::string>(j, "crest_source");
+  }
+  t.crest_sigma_mm = optional_number("crest_sigma_mm");
+  t.camera_height_m = optional_number("camera_height_m");
+  t.reference_diameter_m = optional_number("reference_diameter_m").value_or(0.0);
+  if (j.contains("photos")) {
+    t.photos = field<std::vector<std::string>>(j, "photos");
+    t.photo_measurement = field<json>(j, "photo_measurement");
+  }
+  if (j.contains("cameras"))
+    t.cameras = each(j, "cameras", [](const json& c) { return camera::from_json(c); });
+}
+
+}  // namespace
+
+LabTest lab_test_from_json(const json& j) {
+  LabTest t;
+  t.id = field<std::string>(j, "id");
+  t.line = field<int>(j, "line");
+  t.role = nested(j, "role", role_from_json);
+  t.scene_path = field<std::string>(j, "scene");
+  for (const auto& [key, value] : field<std::map<std::string, std::string>>(j, "overrides"))
+    t.overrides.emplace_back(key, value);
+  t.conditions = field<std::map<std::string, double>>(j, "conditions");
+  if (j.contains("text_conditions"))
+    t.text_conditions = field<std::map<std::string, std::string>>(j, "text_conditions");
+  t.angle_deg = number_field(j, "angle_deg");
+  t.repeats = field<int>(j, "repeats");
+  read_lab_measurements(j, t);
+  return t;
 }
 
 }  // namespace reposetwin::experiments

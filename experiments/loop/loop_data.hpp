@@ -116,5 +116,10 @@ const std::vector<SheetColumn>& test_sheet_columns();
 std::string test_sheet_markdown();
 
 nlohmann::json to_json(const LabTest& t);
+/// A test back from its loop.json entry (the fields to_json writes; the CSV's override columns
+/// and photo scale are not among them). Throws JsonFieldError (io/json_read.hpp) at the field.
+LabTest lab_test_from_json(const nlohmann::json& j);
+/// The role `j` names; JsonFieldError for a word other than "calibrate" or "validate".
+Role role_from_json(const nlohmann::json& j);
 
 }  // namespace reposetwin::experiments

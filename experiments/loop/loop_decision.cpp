@@ -6,6 +6,7 @@
 
 #include "experiments/io/format.hpp"
 #include "experiments/io/json_fields.hpp"
+#include "experiments/io/json_read.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -411,41 +412,46 @@ nlohmann::json to_json(const DesignRecord& d) {
 
 JointScore joint_score_from_json(const nlohmann::json& j) {
   JointScore s;
-  s.name = j.at("name").get<std::string>();
-  s.identifiable = j.at("identifiable").get<bool>();
-  s.coef = json_number(j.at("coef"));
-  s.coef_se = json_number(j.at("coef_se"));
-  s.t = json_number(j.at("t"));
-  s.mu_shift = json_number(j.at("mu_shift"));
-  s.mu_shift_at_bound = j.at("mu_shift_at_bound").get<bool>();
-  s.chi2 = json_number(j.at("chi2"));
-  s.loo_chi2 = json_number(j.at("loo_chi2"));
-  s.rows = j.at("values").get<int>();
-  for (const auto& x : j.at("chi2_by_channel")) s.chi2_by_channel.push_back(json_number(x));
-  s.out_of_range = json_text(j, "out_of_range");  // absent before the range gate
+  s.name = field<std::string>(j, "name");
+  s.identifiable = field<bool>(j, "identifiable");
+  s.coef = number_field(j, "coef");
+  s.coef_se = number_field(j, "coef_se");
+  s.t = number_field(j, "t");
+  s.mu_shift = number_field(j, "mu_shift");
+  s.mu_shift_at_bound = field<bool>(j, "mu_shift_at_bound");
+  s.chi2 = number_field(j, "chi2");
+  s.loo_chi2 = number_field(j, "loo_chi2");
+  s.rows = field<int>(j, "values");
+  s.chi2_by_channel = numbers_field(j, "chi2_by_channel");
+  // Absent or null: within the range (a loop.json written before the range gate has none).
+  if (j.contains("out_of_range") && !j["out_of_range"].is_null())
+    s.out_of_range = field<std::string>(j, "out_of_range");
   return s;
 }
 
 TraceDecision trace_decision_from_json(const nlohmann::json& j) {
   TraceDecision d;
-  const std::string v = j.at("verdict").get<std::string>();
-  for (TraceVerdict k : {TraceVerdict::kNothing, TraceVerdict::kNamed,
-                         TraceVerdict::kIndistinguishable, TraceVerdict::kMeasurementSuspected})
-    if (trace_verdict_name(k) == v) d.verdict = k;
-  if (!j.at("named").is_null()) d.named = j.at("named").get<std::string>();
-  d.tied = j.at("indistinguishable").get<std::vector<std::string>>();
-  d.statement = j.at("statement").get<std::string>();
+  d.verdict = nested(j, "verdict", [](const nlohmann::json& v) {
+    const std::string word = v.get<std::string>();
+    for (TraceVerdict k : {TraceVerdict::kNothing, TraceVerdict::kNamed,
+                           TraceVerdict::kIndistinguishable, TraceVerdict::kMeasurementSuspected})
+      if (trace_verdict_name(k) == word) return k;
+    throw JsonFieldError("", "\"" + word + "\" is no trace verdict");
+  });
+  if (!field<nlohmann::json>(j, "named").is_null()) d.named = field<std::string>(j, "named");
+  d.tied = field<std::vector<std::string>>(j, "indistinguishable");
+  d.statement = field<std::string>(j, "statement");
   return d;
 }
 
 DesignRecord design_record_from_json(const nlohmann::json& j) {
   DesignRecord d;
-  d.n_calibrate = j.at("n_calibrate").get<int>();
-  d.n_validate = j.at("n_validate").get<int>();
-  d.can_trace = j.at("can_trace").get<bool>();
-  d.refit_on_all = j.at("refit_on_all_tests").get<bool>();
-  d.can = j.at("can").get<std::vector<std::string>>();
-  d.cannot = j.at("cannot").get<std::vector<std::string>>();
+  d.n_calibrate = field<int>(j, "n_calibrate");
+  d.n_validate = field<int>(j, "n_validate");
+  d.can_trace = field<bool>(j, "can_trace");
+  d.refit_on_all = field<bool>(j, "refit_on_all_tests");
+  d.can = field<std::vector<std::string>>(j, "can");
+  d.cannot = field<std::vector<std::string>>(j, "cannot");
   return d;
 }
 

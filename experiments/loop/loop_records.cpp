@@ -4,7 +4,7 @@
 #include <stdexcept>
 
 #include "experiments/io/json_fields.hpp"
-#include "experiments/loop/loop_effects.hpp"
+#include "experiments/io/json_read.hpp"
 
 namespace reposetwin::experiments {
 using nlohmann::json;
@@ -261,294 +261,270 @@ json to_json(const PhotoPair& p) {
           {"note", p.note}};
 }
 
-json to_json(const LoopRecord& loop) {
-  const json rule = {{"min_t", loop.rule.min_t},
-                     {"loo_margin_deg", loop.rule.loo_margin_factor * loop.baseline.seed_se_deg},
-                     {"text",
-                      "accept the best-ranked candidate with |c|/se > min_t and a leave-one-"
-                      "test-out RMSE (over every test, the predicted ones included) below the "
-                      "mu_r-only LOO RMSE by more than the seed standard error of a predicted "
-                      "angle; among those, name the one whose joint chi^2 over angle, H and D "
-                      "is lower than every other's by more than min_delta_chi2, else report "
-                      "them as indistinguishable; a significant uniform offset that mu_r cannot "
-                      "take up and no candidate beats is flagged as a suspected measurement "
-                      "error, nothing named"},
-                     {"min_delta_chi2", loop.rule.min_delta_chi2}};
-  return {{"tests", to_json_array(loop.tests)},
-          {"design", to_json(loop.design)},
-          {"grid", to_json(loop.grid)},
-          {"not_traced", loop.not_traced ? json(*loop.not_traced) : json()},
-          {"candidate_registry", to_json_array(candidate_effects())},
-          {"unavailable_candidates", to_json_array(loop.unavailable)},
-          {"rule", rule},
-          {"baseline", to_json(loop.baseline)},
-          {"fingerprints", to_json_array(loop.fingerprints)},
-          {"iterations", to_json_array(loop.iterations)},
-          {"final", to_json(loop.final_model)},
-          {"summary", to_json(loop.summary)},
-          {"simulations", to_json(loop.simulations)},
-          {"provenance", to_json(loop.provenance)},
-          {"photo_pairs", to_json_array(loop.photo_pairs)}};
-}
-
 namespace {
-
-double num(const json& j, const char* key) { return json_number(j.at(key)); }
-
-std::optional<double> optional_of(const json& j, const char* key) {
-  const auto it = j.find(key);
-  if (it == j.end() || it->is_null()) return std::nullopt;
-  return it->get<double>();
-}
-
-template <typename T, typename F>
-std::vector<T> array_from_json(const json& a, F from) {
-  std::vector<T> out;
-  for (const json& e : a) out.push_back(from(e));
-  return out;
-}
 
 // The fields ChosenEffect and NotConfirmed share.
 RefitSummary refit_from_json(const json& j) {
   RefitSummary r;
-  r.name = j.at("name").get<std::string>();
-  r.linear_estimate = num(j, "linear_estimate");
-  r.simulated_at = num(j, "simulated_at");
-  r.t = num(j, "t");
-  r.mu_r = num(j, "mu_r");
-  r.trials = array_from_json<RefitTrialRecord>(j.at("trials"), refit_trial_record_from_json);
-  r.refit_notes = j.at("refit_notes").get<std::string>();
+  r.name = field<std::string>(j, "name");
+  r.linear_estimate = number_field(j, "linear_estimate");
+  r.simulated_at = number_field(j, "simulated_at");
+  r.t = number_field(j, "t");
+  r.mu_r = number_field(j, "mu_r");
+  r.trials = each(j, "trials", refit_trial_record_from_json);
+  r.refit_notes = field<std::string>(j, "refit_notes");
   return r;
+}
+
+// j[key] when present and not null.
+template <class T>
+std::optional<T> optional_field(const json& j, const char* key) {
+  if (!j.contains(key) || j.at(key).is_null()) return std::nullopt;
+  return field<T>(j, key);
 }
 
 }  // namespace
 
 ResidualRow residual_row_from_json(const json& j) {
   ResidualRow r;
-  r.id = j.at("id").get<std::string>();
-  const std::string role = j.at("role").get<std::string>();
-  const std::optional<Role> parsed = parse_role(role);
-  if (!parsed)
-    throw std::invalid_argument("residual row: role \"" + role +
-                                "\" is not calibrate or validate");
-  r.role = *parsed;
-  r.measured_deg = num(j, "measured_deg");
-  r.predicted_deg = num(j, "predicted_deg");
-  r.residual_deg = num(j, "residual_deg");
-  r.sigma_deg = num(j, "sigma_deg");
-  r.predicted_se_deg = num(j, "predicted_se_deg");
-  r.predicted_h_mm = num(j, "predicted_H_mm");
-  r.predicted_d_mm = num(j, "predicted_D_mm");
-  r.residual_h_mm = optional_of(j, "residual_H_mm");
-  r.residual_d_mm = optional_of(j, "residual_D_mm");
-  r.predicted_crest_mm = optional_of(j, "predicted_crest_mm");
-  r.residual_crest_mm = optional_of(j, "residual_crest_mm");
-  r.no_pile = j.value("no_pile", std::string());
+  r.id = field<std::string>(j, "id");
+  r.role = nested(j, "role", role_from_json);
+  r.measured_deg = number_field(j, "measured_deg");
+  r.predicted_deg = number_field(j, "predicted_deg");
+  r.residual_deg = number_field(j, "residual_deg");
+  r.sigma_deg = number_field(j, "sigma_deg");
+  r.predicted_se_deg = number_field(j, "predicted_se_deg");
+  r.predicted_h_mm = number_field(j, "predicted_H_mm");
+  r.predicted_d_mm = number_field(j, "predicted_D_mm");
+  r.residual_h_mm = optional_number_field(j, "residual_H_mm");
+  r.residual_d_mm = optional_number_field(j, "residual_D_mm");
+  r.predicted_crest_mm = optional_number_field(j, "predicted_crest_mm");
+  r.residual_crest_mm = optional_number_field(j, "residual_crest_mm");
+  r.no_pile = optional_field<std::string>(j, "no_pile").value_or("");
   return r;
 }
 
 RoleRmse role_rmse_from_json(const json& j) {
   RoleRmse r;
-  r.calibrate_deg = num(j, "calibrate_deg");
-  r.validate_deg = optional_of(j, "validate_deg");
-  r.n_calibrate = j.at("n_calibrate").get<std::size_t>();
-  r.n_validate = j.at("n_validate").get<std::size_t>();
-  r.n_no_pile = j.value("n_no_pile", std::size_t{0});
+  r.calibrate_deg = number_field(j, "calibrate_deg");
+  r.validate_deg = optional_number_field(j, "validate_deg");
+  r.n_calibrate = field<std::size_t>(j, "n_calibrate");
+  r.n_validate = field<std::size_t>(j, "n_validate");
+  // Absent: none left out (a loop.json written before the twin could predict no pile).
+  r.n_no_pile = optional_field<std::size_t>(j, "n_no_pile").value_or(0);
   return r;
 }
 
 BaselineCurve baseline_curve_from_json(const json& j) {
   BaselineCurve c;
-  c.id = j.at("id").get<std::string>();
-  c.mu = j.at("mu_r").get<std::vector<double>>();
-  for (const json& v : j.at("angle_deg")) c.angle_deg.push_back(json_number(v));
-  for (const json& row : j.at("angle_seeds_deg")) {
-    c.angle_seeds_deg.emplace_back();
-    for (const json& v : row) c.angle_seeds_deg.back().push_back(json_number(v));
-  }
-  c.pour_seeds = j.at("pour_seeds").get<std::vector<std::vector<std::uint64_t>>>();
-  c.clogged_pours = j.at("clogged_pours").get<std::vector<int>>();
+  c.id = field<std::string>(j, "id");
+  c.mu = field<std::vector<double>>(j, "mu_r");
+  c.angle_deg = numbers_field(j, "angle_deg");
+  c.angle_seeds_deg = each(j, "angle_seeds_deg", number_values);
+  c.pour_seeds = field<std::vector<std::vector<std::uint64_t>>>(j, "pour_seeds");
+  c.clogged_pours = field<std::vector<int>>(j, "clogged_pours");
   return c;
 }
 
 BaselineRecord baseline_record_from_json(const json& j) {
   BaselineRecord b;
-  b.fit.mu = num(j, "mu_r");
-  b.fit.mu_se = num(j, "mu_r_se");
-  b.fit.at_edge = j.at("mu_r_at_grid_edge").get<bool>();
-  b.seed_sd_deg = num(j, "seed_sd_deg");
-  b.seed_se_deg = num(j, "seed_se_deg");
-  b.residuals = array_from_json<ResidualRow>(j.at("residuals"), residual_row_from_json);
-  b.rmse = role_rmse_from_json(j.at("rmse"));
-  b.curves = array_from_json<BaselineCurve>(j.at("curves"), baseline_curve_from_json);
+  b.fit.mu = number_field(j, "mu_r");
+  b.fit.mu_se = number_field(j, "mu_r_se");
+  b.fit.at_edge = field<bool>(j, "mu_r_at_grid_edge");
+  b.seed_sd_deg = number_field(j, "seed_sd_deg");
+  b.seed_se_deg = number_field(j, "seed_se_deg");
+  b.residuals = each(j, "residuals", residual_row_from_json);
+  b.rmse = nested(j, "rmse", role_rmse_from_json);
+  b.curves = each(j, "curves", baseline_curve_from_json);
   return b;
 }
 
 FingerprintRecord fingerprint_record_from_json(const json& j) {
   FingerprintRecord f;
-  f.name = j.at("name").get<std::string>();
-  f.probe = num(j, "probe");
-  f.mu_r = num(j, "mu_r");
-  auto numbers = [&](const char* key) {
-    std::vector<double> v;
-    for (const json& e : j.at(key)) v.push_back(json_number(e));
-    return v;
-  };
-  f.change[Channel::kAngle] = numbers("angle_deg");
-  f.angle_se_deg = numbers("angle_se_deg");
-  f.change[Channel::kH] = numbers("H_mm");
-  f.change[Channel::kD] = numbers("D_mm");
-  if (j.contains("crest_mm")) f.change[Channel::kCrest] = numbers("crest_mm");
-  if (j.contains("probes_tried")) f.probes_tried = numbers("probes_tried");
+  f.name = field<std::string>(j, "name");
+  f.probe = number_field(j, "probe");
+  f.mu_r = number_field(j, "mu_r");
+  f.change[Channel::kAngle] = numbers_field(j, "angle_deg");
+  f.angle_se_deg = numbers_field(j, "angle_se_deg");
+  f.change[Channel::kH] = numbers_field(j, "H_mm");
+  f.change[Channel::kD] = numbers_field(j, "D_mm");
+  // Absent: no test has a measured crest.
+  if (j.contains("crest_mm")) f.change[Channel::kCrest] = numbers_field(j, "crest_mm");
+  f.probes_tried = numbers_field(j, "probes_tried");
   return f;
 }
 
 GridRecord grid_record_from_json(const json& j) {
   GridRecord g;
-  g.initial = j.at("initial").get<std::vector<double>>();
-  g.final_grid = j.at("final").get<std::vector<double>>();
-  g.added = j.at("added").get<std::vector<double>>();
-  g.policy = j.at("policy").get<std::string>();
-  g.at_bound = j.at("mu_r_at_bound").get<bool>();
-  g.statement = j.at("statement").get<std::string>();
+  g.initial = field<std::vector<double>>(j, "initial");
+  g.final_grid = field<std::vector<double>>(j, "final");
+  g.added = field<std::vector<double>>(j, "added");
+  g.policy = field<std::string>(j, "policy");
+  g.at_bound = field<bool>(j, "mu_r_at_bound");
+  g.statement = field<std::string>(j, "statement");
+  // Absent: mu_r's range was not declared.
   if (j.contains("mu_r_prior")) {
-    const json& p = j.at("mu_r_prior");
-    g.prior = std::make_pair(p.at("range").at(0).get<double>(), p.at("range").at(1).get<double>());
-    g.prior_reason = p.at("reason").get<std::string>();
-    g.beyond_prior = p.at("mu_r_alone_beyond_it").get<bool>();
+    nested(j, "mu_r_prior", [&g](const json& p) {
+      const std::vector<double> range = field<std::vector<double>>(p, "range");
+      if (range.size() != 2) throw JsonFieldError("/range", "is not the two ends of a range");
+      g.prior = std::make_pair(range[0], range[1]);
+      g.prior_reason = field<std::string>(p, "reason");
+      g.beyond_prior = field<bool>(p, "mu_r_alone_beyond_it");
+      return 0;
+    });
   }
   return g;
 }
 
 UnavailableCandidate unavailable_candidate_from_json(const json& j) {
-  return {j.at("name").get<std::string>(), j.at("why").get<std::string>()};
+  return {field<std::string>(j, "name"), field<std::string>(j, "why")};
 }
 
 RefitTrialRecord refit_trial_record_from_json(const json& j) {
-  return {num(j, "simulated_at"), num(j, "response_fraction"), num(j, "t"), num(j, "mu_r"),
-          num(j, "rmse_calibrate_deg"), j.value("no_pile", std::vector<std::string>{})};
+  // no_pile absent: none (a loop.json written before the twin could predict no pile).
+  return {
+      number_field(j, "simulated_at"),
+      number_field(j, "response_fraction"),
+      number_field(j, "t"),
+      number_field(j, "mu_r"),
+      number_field(j, "rmse_calibrate_deg"),
+      optional_field<std::vector<std::string>>(j, "no_pile").value_or(std::vector<std::string>{})};
 }
 
 ChosenEffect chosen_effect_from_json(const json& j) {
   ChosenEffect c;
   c.refit = refit_from_json(j);
-  c.kind = j.at("kind").get<std::string>();
-  c.key = j.at("key").get<std::string>();
-  c.units = j.at("units").get<std::string>();
-  c.off = num(j, "off");
-  c.probe = num(j, "probe");
-  c.value = num(j, "value");
-  c.value_se = num(j, "value_se");
-  c.t_at_limit = j.at("t_at_limit").get<bool>();
-  c.mu_r_se = num(j, "mu_r_se");
-  // Written by a loop that knew declared hypotheses; older loop.json files have none.
-  c.declared = j.value("declared", false);
-  // Written by a loop that reports the joint region; older loop.json files have none.
+  c.kind = field<std::string>(j, "kind");
+  c.key = field<std::string>(j, "key");
+  c.units = field<std::string>(j, "units");
+  c.off = number_field(j, "off");
+  c.probe = number_field(j, "probe");
+  c.value = number_field(j, "value");
+  c.value_se = number_field(j, "value_se");
+  c.t_at_limit = field<bool>(j, "t_at_limit");
+  c.mu_r_se = number_field(j, "mu_r_se");
+  // Absent: chosen by the trace (a loop.json written before declared hypotheses).
+  c.declared = optional_field<bool>(j, "declared").value_or(false);
+  // Absent: no region computed (a loop.json written before the joint region).
   if (j.contains("joint_region")) {
-    c.region = joint_region_from_json(j.at("joint_region"));
-    c.value_lo = j.at("joint_region").at("value_range").at(0).get<double>();
-    c.value_hi = j.at("joint_region").at("value_range").at(1).get<double>();
+    c.region = nested(j, "joint_region", joint_region_from_json);
+    const std::vector<double> range = nested(j, "joint_region", [](const json& r) {
+      const std::vector<double> v = numbers_field(r, "value_range");
+      if (v.size() != 2) throw JsonFieldError("/value_range", "is not the two ends of a range");
+      return v;
+    });
+    c.value_lo = range[0];
+    c.value_hi = range[1];
   }
-  if (j.contains("next_tests"))
-    for (const json& g : j.at("next_tests"))
-      c.next_tests.push_back({g.at("test").get<std::string>(),
-                              g.at("effect_interval_ratio").get<double>(),
-                              g.at("mu_r_interval_ratio").get<double>(),
-                              g.at("region_area_ratio").get<double>()});
+  if (j.contains("next_tests")) c.next_tests = each(j, "next_tests", next_test_gain_from_json);
   return c;
 }
 
 NotConfirmed not_confirmed_from_json(const json& j) {
-  return {refit_from_json(j), num(j, "rmse_calibrate_deg"), j.at("reason").get<std::string>()};
+  return {refit_from_json(j), number_field(j, "rmse_calibrate_deg"),
+          field<std::string>(j, "reason")};
 }
 
 RefitFailed refit_failed_from_json(const json& j) {
-  return {j.at("name").get<std::string>(), j.at("refit_failed").get<std::string>(),
-          num(j, "linear_estimate")};
+  return {field<std::string>(j, "name"), field<std::string>(j, "refit_failed"),
+          number_field(j, "linear_estimate")};
 }
+
+namespace {
+
+// An iteration's joint trace: the channels, the scores and the decision.
+void read_joint_trace(const json& j, IterationRecord& it) {
+  it.channels = field<std::vector<std::string>>(j, "channels");
+  it.channels_left_out = field<std::vector<std::string>>(j, "channels_left_out");
+  // Absent: every test traced (a loop.json written before the twin could predict no pile).
+  if (j.contains("tests_left_out"))
+    it.tests_left_out = field<std::vector<std::string>>(j, "tests_left_out");
+  it.joint = each(j, "joint", joint_score_from_json);
+  if (!field<json>(j, "offset").is_null()) it.offset = nested(j, "offset", joint_score_from_json);
+  if (!field<json>(j, "mu_only").is_null())
+    it.mu_only = nested(j, "mu_only", joint_score_from_json);
+  it.decision = nested(j, "decision", trace_decision_from_json);
+}
+
+}  // namespace
 
 IterationRecord iteration_record_from_json(const json& j) {
   IterationRecord it;
-  it.iteration = j.at("iteration").get<int>();
-  it.mu_r = num(j, "mu_r");
-  it.null = null_score_from_json(j.at("null"));
-  it.candidates = array_from_json<CandidateScore>(j.at("candidates"), candidate_score_from_json);
-  const json& chosen = j.at("chosen");
-  if (chosen.is_object() && chosen.contains("refit_failed")) {
-    it.refit_failed = refit_failed_from_json(chosen);
-  } else if (!chosen.is_null()) {
-    it.chosen = chosen_effect_from_json(chosen);
-  }
-  if (j.contains("stopped")) it.stopped = j.at("stopped").get<std::string>();
-  if (j.contains("declared")) it.declared = j.at("declared").get<std::string>();
-  if (j.contains("not_confirmed")) it.not_confirmed = not_confirmed_from_json(j.at("not_confirmed"));
-  // Written by a loop that traced jointly; older loop.json files have none of these.
-  if (j.contains("channels")) {
-    it.channels = j.at("channels").get<std::vector<std::string>>();
-    it.channels_left_out = j.at("channels_left_out").get<std::vector<std::string>>();
-    it.tests_left_out = j.value("tests_left_out", std::vector<std::string>{});
-    it.joint = array_from_json<JointScore>(j.at("joint"), joint_score_from_json);
-    if (!j.at("offset").is_null()) it.offset = joint_score_from_json(j.at("offset"));
-    if (!j.at("mu_only").is_null()) it.mu_only = joint_score_from_json(j.at("mu_only"));
-    it.decision = trace_decision_from_json(j.at("decision"));
-  }
+  it.iteration = field<int>(j, "iteration");
+  it.mu_r = number_field(j, "mu_r");
+  it.null = nested(j, "null", null_score_from_json);
+  it.candidates = each(j, "candidates", candidate_score_from_json);
+  // `chosen` is null, the refit's failure (it has the field refit_failed) or the chosen effect.
+  const json& chosen = field<json>(j, "chosen");
+  if (chosen.is_object() && chosen.contains("refit_failed"))
+    it.refit_failed = nested(j, "chosen", refit_failed_from_json);
+  else if (!chosen.is_null())
+    it.chosen = nested(j, "chosen", chosen_effect_from_json);
+  it.stopped = optional_field<std::string>(j, "stopped");
+  it.declared = optional_field<std::string>(j, "declared");
+  if (j.contains("not_confirmed"))
+    it.not_confirmed = nested(j, "not_confirmed", not_confirmed_from_json);
+  read_joint_trace(j, it);
   return it;
 }
 
 FinalRecord final_record_from_json(const json& j) {
   FinalRecord f;
-  f.fit.mu = num(j, "mu_r");
-  f.fit.mu_se = num(j, "mu_r_se");
-  f.effects = array_from_json<ChosenEffect>(j.at("effects"), chosen_effect_from_json);
-  f.residuals = array_from_json<ResidualRow>(j.at("residuals"), residual_row_from_json);
-  f.rmse = role_rmse_from_json(j.at("rmse"));
+  f.fit.mu = number_field(j, "mu_r");
+  f.fit.mu_se = number_field(j, "mu_r_se");
+  f.effects = each(j, "effects", chosen_effect_from_json);
+  f.residuals = each(j, "residuals", residual_row_from_json);
+  f.rmse = nested(j, "rmse", role_rmse_from_json);
   return f;
 }
 
 LoopProvenance loop_provenance_from_json(const json& j) {
   LoopProvenance p;
-  p.code_version = j.at("code_version").get<std::string>();
-  p.data = j.at("data").get<std::string>();
-  p.seeds = j.at("seeds").get<std::vector<std::uint64_t>>();
-  p.angle_measure = j.at("angle_measure").get<std::string>();
-  p.angle_method = j.at("angle_method").get<std::string>();
-  p.lab_angle_source = j.at("lab_angle_source").get<std::string>();
-  p.mu_grid = j.at("mu_grid").get<std::vector<double>>();
-  p.mu_key = j.at("mu_key").get<std::string>();
-  p.image = j.at("image").get<std::string>();
-  p.max_pours = j.at("max_pours").get<int>();
-  p.cache = j.at("cache").get<std::string>();
-  p.finished = j.at("finished").get<std::string>();
-  p.scenes = j.at("scenes").get<std::vector<std::string>>();
-  if (j.contains("run")) p.run = j.at("run");
+  p.code_version = field<std::string>(j, "code_version");
+  p.data = field<std::string>(j, "data");
+  p.seeds = field<std::vector<std::uint64_t>>(j, "seeds");
+  p.angle_measure = field<std::string>(j, "angle_measure");
+  p.angle_method = field<std::string>(j, "angle_method");
+  p.lab_angle_source = field<std::string>(j, "lab_angle_source");
+  p.mu_grid = field<std::vector<double>>(j, "mu_grid");
+  p.mu_key = field<std::string>(j, "mu_key");
+  p.image = field<std::string>(j, "image");
+  p.max_pours = field<int>(j, "max_pours");
+  p.cache = field<std::string>(j, "cache");
+  p.finished = field<std::string>(j, "finished");
+  p.scenes = field<std::vector<std::string>>(j, "scenes");
+  // Absent: the baseline has no pile whose run to name.
+  if (j.contains("run")) p.run = field<json>(j, "run");
   return p;
 }
 
 SimulationCounts simulation_counts_from_json(const json& j) {
-  return {j.at("pile_runs_started").get<int>(), j.at("photos_started").get<int>(),
-          num(j, "wall_s")};
+  return {field<int>(j, "pile_runs_started"), field<int>(j, "photos_started"),
+          number_field(j, "wall_s")};
 }
 
 PhotoView photo_view_from_json(const json& j) {
-  return {j.at("photo").get<std::string>(),
-          j.at("overlay").get<std::string>(),
-          j.at("source").get<std::string>(),
-          num(j, "mm_per_px"),
-          j.at("width_px").get<int>(),
-          j.at("height_px").get<int>(),
-          num(j, "angle_deg")};
+  return {field<std::string>(j, "photo"),  field<std::string>(j, "overlay"),
+          field<std::string>(j, "source"), number_field(j, "mm_per_px"),
+          field<int>(j, "width_px"),       field<int>(j, "height_px"),
+          number_field(j, "angle_deg")};
 }
 
 PhotoPair photo_pair_from_json(const json& j) {
   PhotoPair p;
-  p.id = j.at("id").get<std::string>();
-  if (!j.at("lab").is_null()) p.lab = photo_view_from_json(j["lab"]);
-  if (!j.at("twin").is_null()) p.twin = photo_view_from_json(j["twin"]);
-  p.mu_r = num(j, "mu_r");
-  p.seed = j.at("seed").get<std::uint64_t>();
-  for (const auto& [name, value] : j.at("effects").items())
-    p.effects.emplace_back(name, json_number(value));
-  p.note = j.at("note").get<std::string>();
+  p.id = field<std::string>(j, "id");
+  if (!field<json>(j, "lab").is_null()) p.lab = nested(j, "lab", photo_view_from_json);
+  if (!field<json>(j, "twin").is_null()) p.twin = nested(j, "twin", photo_view_from_json);
+  p.mu_r = number_field(j, "mu_r");
+  p.seed = field<std::uint64_t>(j, "seed");
+  nested(j, "effects", [&p](const json& e) {
+    if (!e.is_object())
+      throw JsonFieldError("", std::string("is ") + e.type_name() + ", not an object");
+    for (const auto& [name, value] : e.items())
+      p.effects.emplace_back(name, number_field(e, name.c_str()));
+    return 0;
+  });
+  p.note = field<std::string>(j, "note");
   return p;
 }
 

@@ -351,9 +351,13 @@ nlohmann::json to_json(const PhotoPair& p);
 nlohmann::json to_json(const LoopSummary& s);
 /// loop.json: the records, the candidate registry, the rule and a summary.
 nlohmann::json to_json(const LoopRecord& loop);
+/// The acceptance rule in words, as loop.json's rule.text gives it (the code's words, written
+/// with every loop.json and not read back).
+const char* acceptance_rule_text();
 
 // Each record back from its JSON (loop.json read by a report or a later run). A number written
-// as null (NaN) reads back as NaN; a missing field throws nlohmann::json::exception naming it.
+// as null (NaN) reads back as NaN; a missing or mistyped field throws JsonFieldError
+// (io/json_read.hpp) with its JSON pointer within `j`.
 // BaselineRecord and FinalRecord carry the fit's fields loop.json holds (mu_r, mu_r_se and, for
 // the baseline, mu_r_at_grid_edge); the weight t of a refit is in the chosen effects.
 ResidualRow residual_row_from_json(const nlohmann::json& j);
@@ -374,5 +378,12 @@ SimulationCounts simulation_counts_from_json(const nlohmann::json& j);
 PhotoView photo_view_from_json(const nlohmann::json& j);
 PhotoPair photo_pair_from_json(const nlohmann::json& j);
 LoopSummary loop_summary_from_json(const nlohmann::json& j);
+
+/// The whole of loop.json, read through the readers above; `path` names the file in messages.
+/// Every field a record holds must be there with its type, but for the fields a loop.json
+/// written before them lacks, whose absence has one meaning (each reader says which); the
+/// candidate registry and the rule's text are the code's and not read back. Throws InputError
+/// naming `path`, the JSON pointer of the field and what is wrong with it.
+LoopRecord loop_record_from_json(const nlohmann::json& j, const std::string& path);
 
 }  // namespace reposetwin::experiments

@@ -5,8 +5,10 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <tuple>
 
 #include "experiments/io/format.hpp"
+#include "experiments/io/json_read.hpp"
 
 namespace reposetwin::experiments {
 
@@ -179,24 +181,35 @@ nlohmann::json to_json(const JointRegion& r) {
           {"statement", r.statement}};
 }
 
+namespace {
+
+// The two ends of the range j[key] [lo, hi].
+std::pair<double, double> range_field(const nlohmann::json& j, const char* key) {
+  const std::vector<double> r = numbers_field(j, key);
+  if (r.size() != 2)
+    throw JsonFieldError("/" + std::string(key), "has " + std::to_string(r.size()) +
+                                                     " values, not the two ends of a range");
+  return {r[0], r[1]};
+}
+
+}  // namespace
+
 JointRegion joint_region_from_json(const nlohmann::json& j) {
   JointRegion r;
-  r.level = j.at("level").get<double>();
-  r.mu = j.at("mu_r").get<double>();
-  r.t = j.at("t").get<double>();
-  r.chi2_min = j.at("chi2_min").get<double>();
-  r.observations = j.at("observations").get<int>();
-  r.widening = j.at("widening").get<double>();
-  r.chi2_limit = j.at("chi2_limit").get<double>();
-  r.mu_lo = j.at("mu_r_range").at(0).get<double>();
-  r.mu_hi = j.at("mu_r_range").at(1).get<double>();
-  r.t_lo = j.at("t_range").at(0).get<double>();
-  r.t_hi = j.at("t_range").at(1).get<double>();
-  r.correlation = j.at("correlation").get<double>();
-  r.mu_at_bound = j.at("mu_r_at_bound").get<bool>();
-  r.t_at_bound = j.at("t_at_bound").get<bool>();
-  r.separated = j.at("separated").get<bool>();
-  r.statement = j.at("statement").get<std::string>();
+  r.level = number_field(j, "level");
+  r.mu = number_field(j, "mu_r");
+  r.t = number_field(j, "t");
+  r.chi2_min = number_field(j, "chi2_min");
+  r.observations = field<int>(j, "observations");
+  r.widening = number_field(j, "widening");
+  r.chi2_limit = number_field(j, "chi2_limit");
+  std::tie(r.mu_lo, r.mu_hi) = range_field(j, "mu_r_range");
+  std::tie(r.t_lo, r.t_hi) = range_field(j, "t_range");
+  r.correlation = number_field(j, "correlation");
+  r.mu_at_bound = field<bool>(j, "mu_r_at_bound");
+  r.t_at_bound = field<bool>(j, "t_at_bound");
+  r.separated = field<bool>(j, "separated");
+  r.statement = field<std::string>(j, "statement");
   return r;
 }
 
@@ -205,6 +218,11 @@ nlohmann::json to_json(const NextTestGain& g) {
           {"effect_interval_ratio", g.t_interval_ratio},
           {"mu_r_interval_ratio", g.mu_interval_ratio},
           {"region_area_ratio", g.area_ratio}};
+}
+
+NextTestGain next_test_gain_from_json(const nlohmann::json& j) {
+  return {field<std::string>(j, "test"), number_field(j, "effect_interval_ratio"),
+          number_field(j, "mu_r_interval_ratio"), number_field(j, "region_area_ratio")};
 }
 
 }  // namespace reposetwin::experiments

@@ -92,5 +92,6 @@ std::vector<NextTestGain> rank_next_tests(const Eigen::Matrix2d& info,
 nlohmann::json to_json(const JointRegion& r);
 JointRegion joint_region_from_json(const nlohmann::json& j);
 nlohmann::json to_json(const NextTestGain& g);
+NextTestGain next_test_gain_from_json(const nlohmann::json& j);
 
 }  // namespace reposetwin::experiments

@@ -1,12 +1,17 @@
 // The loop's summary (loop.json's `summary`): summarise decides the verdict and the statement
 // from the finished records; to_json writes them as decided and loop_summary_from_json reads
-// them back (loop_records.hpp).
+// them back (loop_records.hpp). And the whole of loop.json: to_json of a LoopRecord and the one
+// reader, loop_record_from_json, through which the page reads it back.
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
 #include "experiments/io/format.hpp"
+#include "experiments/io/input_error.hpp"
 #include "experiments/io/json_fields.hpp"
+#include "experiments/io/json_read.hpp"
+#include "experiments/loop/loop_effects.hpp"
 #include "experiments/loop/loop_records.hpp"
 
 namespace reposetwin::experiments {
@@ -151,29 +156,133 @@ json to_json(const LoopSummary& s) {
 
 LoopSummary loop_summary_from_json(const json& j) {
   auto text_of = [&](const char* key) -> std::optional<std::string> {
-    const json& v = j.at(key);
-    return v.is_null() ? std::nullopt : std::optional<std::string>(v.get<std::string>());
+    if (field<json>(j, key).is_null()) return std::nullopt;
+    return field<std::string>(j, key);
   };
   LoopSummary s;
   s.chosen = text_of("chosen");
-  if (const std::optional<std::string> v = text_of("verdict")) s.verdict = parse_verdict(*v);
+  if (!field<json>(j, "verdict").is_null())
+    s.verdict =
+        nested(j, "verdict", [](const json& v) { return parse_verdict(v.get<std::string>()); });
   s.statement = text_of("statement");
-  auto num = [&](const char* key) { return json_number(j.at(key)); };
-  auto optional_of = [&](const char* key) -> std::optional<double> {
-    const auto it = j.find(key);
-    if (it == j.end() || it->is_null()) return std::nullopt;
-    return it->get<double>();
-  };
-  s.rmse_all_before_deg = num("rmse_all_before_deg");
-  s.rmse_all_after_deg = num("rmse_all_after_deg");
-  s.effects = j.at("effects").get<std::vector<std::string>>();
-  s.rmse_calibrate_before_deg = num("rmse_calibrate_before_deg");
-  s.rmse_calibrate_after_deg = num("rmse_calibrate_after_deg");
-  s.rmse_validate_before_deg = optional_of("rmse_validate_before_deg");
-  s.rmse_validate_after_deg = optional_of("rmse_validate_after_deg");
-  s.reduction = num("reduction");
-  s.no_pile_predicted = j.value("no_pile_predicted", std::vector<std::string>{});
+  s.rmse_all_before_deg = number_field(j, "rmse_all_before_deg");
+  s.rmse_all_after_deg = number_field(j, "rmse_all_after_deg");
+  s.effects = field<std::vector<std::string>>(j, "effects");
+  s.rmse_calibrate_before_deg = number_field(j, "rmse_calibrate_before_deg");
+  s.rmse_calibrate_after_deg = number_field(j, "rmse_calibrate_after_deg");
+  s.rmse_validate_before_deg = optional_number_field(j, "rmse_validate_before_deg");
+  s.rmse_validate_after_deg = optional_number_field(j, "rmse_validate_after_deg");
+  s.reduction = number_field(j, "reduction");
+  // Absent: none (a loop.json written before the twin could predict no pile).
+  if (j.contains("no_pile_predicted"))
+    s.no_pile_predicted = field<std::vector<std::string>>(j, "no_pile_predicted");
   return s;
+}
+
+namespace {
+
+constexpr const char* kRuleText =
+    "accept the best-ranked candidate with |c|/se > min_t and a leave-one-"
+    "test-out RMSE (over every test, the predicted ones included) below the "
+    "mu_r-only LOO RMSE by more than the seed standard error of a predicted "
+    "angle; among those, name the one whose joint chi^2 over angle, H and D "
+    "is lower than every other's by more than min_delta_chi2, else report "
+    "them as indistinguishable; a significant uniform offset that mu_r cannot "
+    "take up and no candidate beats is flagged as a suspected measurement "
+    "error, nothing named";
+
+json to_json_array(const auto& records) {
+  json a = json::array();
+  for (const auto& r : records) a.push_back(to_json(r));
+  return a;
+}
+
+// loop.json holds the LOO margin in degrees, loo_margin_factor x the baseline's seed standard
+// error; the factor is their quotient, moved by an ulp or two where the division does not undo
+// the product, so that it writes the same margin again.
+AcceptanceRule rule_from_json(const json& j, double seed_se_deg) {
+  AcceptanceRule r;
+  r.min_t = number_field(j, "min_t");
+  r.min_delta_chi2 = number_field(j, "min_delta_chi2");
+  (void)field<std::string>(j, "text");
+  const double margin = number_field(j, "loo_margin_deg");
+  if (seed_se_deg > 0.0) {
+    double f = margin / seed_se_deg;
+    for (int k = 0; k < 4 && f * seed_se_deg != margin; ++k)
+      f = std::nextafter(f, f * seed_se_deg < margin ? std::numeric_limits<double>::infinity()
+                                                     : -std::numeric_limits<double>::infinity());
+    r.loo_margin_factor = f;
+  } else if (margin != 0.0) {
+    throw JsonFieldError("/loo_margin_deg", "is not 0 while the seed standard error is");
+  }
+  return r;
+}
+
+// Every test has its row before and after, in the tests' order.
+void check_rows(const LoopRecord& loop) {
+  for (const auto& [name, rows] : {std::pair{"/baseline/residuals", &loop.baseline.residuals},
+                                   std::pair{"/final/residuals", &loop.final_model.residuals}}) {
+    if (rows->size() != loop.tests.size())
+      throw JsonFieldError(name, "has " + std::to_string(rows->size()) + " rows for " +
+                                     std::to_string(loop.tests.size()) + " tests");
+    for (std::size_t i = 0; i < rows->size(); ++i)
+      if ((*rows)[i].id != loop.tests[i].id)
+        throw JsonFieldError(std::string(name) + "/" + std::to_string(i) + "/id",
+                             "is \"" + (*rows)[i].id + "\", not test " + loop.tests[i].id);
+  }
+}
+
+}  // namespace
+
+const char* acceptance_rule_text() { return kRuleText; }
+
+json to_json(const LoopRecord& loop) {
+  const json rule = {{"min_t", loop.rule.min_t},
+                     {"loo_margin_deg", loop.rule.loo_margin_factor * loop.baseline.seed_se_deg},
+                     {"text", kRuleText},
+                     {"min_delta_chi2", loop.rule.min_delta_chi2}};
+  return {{"tests", to_json_array(loop.tests)},
+          {"design", to_json(loop.design)},
+          {"grid", to_json(loop.grid)},
+          {"not_traced", loop.not_traced ? json(*loop.not_traced) : json()},
+          {"candidate_registry", to_json_array(candidate_effects())},
+          {"unavailable_candidates", to_json_array(loop.unavailable)},
+          {"rule", rule},
+          {"baseline", to_json(loop.baseline)},
+          {"fingerprints", to_json_array(loop.fingerprints)},
+          {"iterations", to_json_array(loop.iterations)},
+          {"final", to_json(loop.final_model)},
+          {"summary", to_json(loop.summary)},
+          {"simulations", to_json(loop.simulations)},
+          {"provenance", to_json(loop.provenance)},
+          {"photo_pairs", to_json_array(loop.photo_pairs)}};
+}
+
+LoopRecord loop_record_from_json(const json& j, const std::string& path) {
+  LoopRecord loop;
+  try {
+    loop.tests = each(j, "tests", lab_test_from_json);
+    loop.design = nested(j, "design", design_record_from_json);
+    loop.grid = nested(j, "grid", grid_record_from_json);
+    if (!field<json>(j, "not_traced").is_null())
+      loop.not_traced = field<std::string>(j, "not_traced");
+    loop.unavailable = each(j, "unavailable_candidates", unavailable_candidate_from_json);
+    loop.baseline = nested(j, "baseline", baseline_record_from_json);
+    const double seed_se = loop.baseline.seed_se_deg;
+    loop.rule = nested(j, "rule", [seed_se](const json& r) { return rule_from_json(r, seed_se); });
+    loop.fingerprints = each(j, "fingerprints", fingerprint_record_from_json);
+    loop.iterations = each(j, "iterations", iteration_record_from_json);
+    loop.final_model = nested(j, "final", final_record_from_json);
+    loop.summary = nested(j, "summary", loop_summary_from_json);
+    loop.simulations = nested(j, "simulations", simulation_counts_from_json);
+    loop.provenance = nested(j, "provenance", loop_provenance_from_json);
+    loop.photo_pairs = each(j, "photo_pairs", photo_pair_from_json);
+    check_rows(loop);
+  } catch (const JsonFieldError& e) {
+    throw InputError(path + ": " + (e.pointer().empty() ? "the document" : e.pointer()) + ": " +
+                     e.problem());
+  }
+  return loop;
 }
 
 }  // namespace reposetwin::experiments

@@ -1,6 +1,7 @@
 #include "experiments/report/format.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -28,6 +29,14 @@ std::string fixed_or_dash(const nlohmann::json& v, int digits) {
 
 std::string sig3(const nlohmann::json& v) {
   return v.is_number() ? printf_double("%.3g", v.get<double>()) : std::string("-");
+}
+
+std::string sig3_or_dash(double v) {
+  return std::isnan(v) ? std::string("-") : printf_double("%.3g", v);
+}
+
+std::string sig3_or_dash(const std::optional<double>& v) {
+  return v ? sig3_or_dash(*v) : std::string("-");
 }
 
 std::string as_printed(const nlohmann::json& v) {

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -23,6 +24,11 @@ std::string fixed_or_dash(const nlohmann::json& v, int digits = 2);
 
 /// Three significant digits ("%.3g"), "-" for a non-number: the loop's statistics.
 std::string sig3(const nlohmann::json& v);
+
+/// sig3 of a number read back from a result file, "-" for NaN (written as null: no value) and
+/// for none.
+std::string sig3_or_dash(double v);
+std::string sig3_or_dash(const std::optional<double>& v);
 
 /// The shortest form of the paper's numbers as printed (0.15, 3.35, 200), "-" for a non-number.
 std::string as_printed(const nlohmann::json& v);

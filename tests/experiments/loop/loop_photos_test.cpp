@@ -15,6 +15,7 @@
 #include "experiments/io/provenance.hpp"
 #include "experiments/loop/loop.hpp"
 #include "experiments/loop/loop_data.hpp"
+#include "experiments/loop/loop_records.hpp"
 #include "experiments/photos/photographs.hpp"
 #include "experiments/report/loop_report.hpp"
 #include "experiments/report/page_check.hpp"
@@ -112,6 +113,10 @@ TEST(LoopPhotos, LoopJsonNamesTheLabAndTwinPhotosOfEachTestWithPhotos) {
   // And opens in a copied folder: every image and link relative and present, no machine path.
   for (const report::PageProblem& q : report::page_problems(out / "index.html"))
     ADD_FAILURE() << report::to_string(q.kind) << ": " << q.what;
+  // The loop.json the page was read from reads back into its LoopRecord and writes the same
+  // JSON: the lab's photos, their measurement and cameras, the photo pairs, every record.
+  const json back = to_json(loop_record_from_json(loop, (out / "loop.json").string()));
+  EXPECT_EQ(back, loop) << json::diff(loop, back).dump(1).substr(0, 2000);
 
   // Again on the same cache: nothing is simulated or photographed anew.
   s.force = true;

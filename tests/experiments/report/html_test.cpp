@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+#include <optional>
+
 #include "experiments/report/format.hpp"
 #include "experiments/report/templates.hpp"
 
@@ -67,6 +70,11 @@ TEST(ReportHtml, FiguresAndNumbers) {
   EXPECT_EQ(fixed_or_dash(nlohmann::json()), "-");
   EXPECT_EQ(sig3(nlohmann::json(0.123456)), "0.123");
   EXPECT_EQ(sig3(nlohmann::json("x")), "-");
+  // A number read back from a result file prints as its JSON does: NaN was null, "-".
+  EXPECT_EQ(sig3_or_dash(24.0), sig3(nlohmann::json(24)));
+  EXPECT_EQ(sig3_or_dash(0.123456), "0.123");
+  EXPECT_EQ(sig3_or_dash(std::numeric_limits<double>::quiet_NaN()), "-");
+  EXPECT_EQ(sig3_or_dash(std::optional<double>()), "-");
   EXPECT_EQ(as_printed(nlohmann::json(200.0)), "200");
   EXPECT_EQ(as_printed(nlohmann::json(3.35)), "3.35");
   EXPECT_EQ(mean_sd(35.0, 0.25), "35.00 \u00b1 0.25");

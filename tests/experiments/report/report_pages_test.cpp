@@ -12,6 +12,7 @@
 
 #include "../../support/scratch.hpp"
 #include "../../support/tiny_scene.hpp"
+#include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/photos/pile_images.hpp"
 #include "experiments/pile/pile_run.hpp"
@@ -140,7 +141,7 @@ TEST(ReportPages, ComparisonOverFoldersLinksEachFolderRelatively) {
 
 TEST(ReportPages, LoopPageIsRebuiltFromItsLoopJson) {
   const fs::path dir = test_support::temp_dir("report_pages_loop");
-  fs::copy_file(kSource / "results" / "paper_loop" / "loop.json", dir / "loop.json");
+  fs::copy_file(kSource / "results" / "paper_loop_image_fines" / "loop.json", dir / "loop.json");
   // The page is where the loop wrote it, so `report --force` guards that one.
   EXPECT_EQ(fs::path(report_page(dir.string())), dir / "index.html");
   build_report(dir.string());
@@ -149,6 +150,20 @@ TEST(ReportPages, LoopPageIsRebuiltFromItsLoopJson) {
   EXPECT_NE(html.find("Error before and after"), std::string::npos);
   EXPECT_NE(html.find("<img src='plots/residual_"), std::string::npos);
   EXPECT_EQ(html.find("<pre"), std::string::npos);
+}
+
+// The first paper loop's loop.json, written before the loop recorded its design, grid and joint
+// trace, is refused by name rather than shown with those sections made up.
+TEST(ReportPages, ALoopJsonOlderThanItsRecordIsRefusedByName) {
+  const fs::path dir = test_support::temp_dir("report_pages_old_loop");
+  fs::copy_file(kSource / "results" / "paper_loop" / "loop.json", dir / "loop.json");
+  try {
+    build_report(dir.string());
+    ADD_FAILURE() << "an old loop.json made a page";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), (dir / "loop.json").string() + ": /design: missing");
+  }
+  EXPECT_FALSE(fs::exists(dir / "index.html"));
 }
 
 // On an axis, a case is labelled by what sets it apart: a user's calibration sets the funnel and
