@@ -11,6 +11,7 @@
 #include <iostream>
 #include <limits>
 #include <set>
+#include <stdexcept>
 
 #include "experiments/io/format.hpp"
 #include "experiments/io/input_error.hpp"
@@ -24,12 +25,21 @@ using nlohmann::json;
 namespace loop_detail {
 namespace {
 
-// OUT/loop.json (atomic) and OUT/index.html, from the records' one to_json.
+// OUT/loop.json (atomic) and OUT/index.html, from the records' one to_json. loop.json first: the
+// page reads its record back, and a page that fails must not lose the loop's result; the error
+// then says so and how to make the page from the file.
 json write(const LoopContext& ctx, const LoopRecord& rec) {
   const json loop = to_json(rec);
   fs::create_directories(ctx.out);
-  if (ctx.s().html) ctx.s().page(loop, ctx.out);
-  write_json_atomic((fs::path(ctx.out) / "loop.json").string(), loop);
+  const std::string path = (fs::path(ctx.out) / "loop.json").string();
+  write_json_atomic(path, loop);
+  if (!ctx.s().html) return loop;
+  try {
+    ctx.s().page(loop, ctx.out);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(path + " is written, but its page is not: " + e.what() +
+                             " (reposetwin report " + ctx.out + " makes it from the file)");
+  }
   return loop;
 }
 
