@@ -45,7 +45,7 @@ command -v jq >/dev/null || { echo "run.sh: jq is needed (scripts/install_deps.s
 # residual's noise, the seed spread times sqrt(1/n_lab + 1/n_twin) (1.23 deg with three piles a
 # side), so a hidden effect weaker than about three times that cannot show a 70% cut, and such a
 # design does not test the loop. The cohesion and shape designs therefore repeat each test on six
-# piles (floor 0.87 deg) with effects that stand clear of it.
+# piles (floor 0.87 deg).
 shape_candidates=grain_shape,plate_friction,lift_speed,cohesion,camera_height
 six=1001,1002,1003,1004,1005,1006
 cases=(
