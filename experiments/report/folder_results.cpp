@@ -1,0 +1,158 @@
+#include "experiments/report/folder_results.hpp"
+
+#include <algorithm>
+#include <utility>
+
+#include "experiments/io/input_error.hpp"
+#include "experiments/io/provenance.hpp"
+#include "experiments/pile/headline.hpp"
+#include "experiments/pile/pile_record.hpp"
+
+namespace reposetwin::experiments::report {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// Adds one run's result to its case (made on first sight).
+void add_result(FolderResults& f, const std::string& case_name, const json& overrides,
+                const json& r, const std::string& run_dir, const std::string& record,
+                const std::string& image_dir, const std::string& scene = "") {
+  auto it = std::find_if(f.cases.begin(), f.cases.end(),
+                         [&](const CaseRows& c) { return c.name == case_name; });
+  if (it == f.cases.end()) {
+    CaseRows made;
+    made.name = case_name;
+    made.scene = scene;
+    made.overrides = overrides;
+    f.cases.push_back(std::move(made));
+    it = f.cases.end() - 1;
+  }
+  CaseRows& c = *it;
+  const std::string reason = r.at("stop").at("reason").get<std::string>();
+  c.stops.push_back(reason);
+  c.run_dirs.push_back(run_dir);
+  c.records.push_back(record);
+  c.image_dirs.push_back(image_dir);
+  c.provenance = r.at("provenance");
+  // A run without a headline (a physics stop, a jam, a time limit before the pile settled, no
+  // pile: pile/headline.hpp) is listed with its reason, and its angles never enter a mean or a
+  // count of results.
+  const json& pile = r.at("pile");
+  if (const auto none = no_headline(stop_from_json(r.at("stop")), pile_measure_from_json(pile))) {
+    ++c.without_pile[no_headline_word(none->reason)];
+    return;
+  }
+  c.particle_deg.push_back(pile.value("theta_hd_deg", 0.0));
+  c.slice_deg.push_back(pile.value("slice_angle_mean_deg", 0.0));
+  if (r.contains("image")) {
+    c.image_deg.push_back(r["image"].at("theta_deg").get<double>());
+    if (r["image"].contains("flank_deg"))
+      c.flank_deg.push_back(r["image"]["flank_deg"].get<double>());
+  }
+}
+
+// A single run folder: result.json, with the image measurement beside it when there is one.
+void read_single_run(FolderResults& f) {
+  const json r = read_json(f.dir / "result.json");
+  if (!r.contains("pile")) throw InputError(f.dir.string() + "/result.json: not a run result");
+  json rr = r;
+  if (fs::exists(f.dir / "images" / "measurement.json")) {
+    const json m = read_json(f.dir / "images" / "measurement.json");
+    rr["image"] = {{"theta_deg", m.at("theta_deg")}, {"flank_deg", m.at("flank_deg")}};
+  }
+  const std::string name = r["provenance"].value("scene_name", "run");
+  add_result(f, name, json::object(), rr, ".", "result.json", "images");
+  if (f.title.empty()) f.title = name;
+}
+
+// A campaign or calibration folder: every finished run below cases/, in path order.
+void read_campaign_runs(FolderResults& f) {
+  std::vector<fs::path> results;
+  for (const auto& e : fs::recursive_directory_iterator(f.dir / "cases"))
+    if (e.path().filename() == "result.json" &&
+        e.path().parent_path().filename().string().rfind("seed_", 0) == 0)
+      results.push_back(e.path());
+  std::sort(results.begin(), results.end());
+  for (const fs::path& p : results) {
+    const json meta = read_json(p);
+    if (!meta.contains("result")) continue;
+    const json& spec = meta.at("spec");
+    const json& res = meta.at("result");
+    // The run and its photographs are where the case's record says (the pile service's store).
+    const fs::path run = p.parent_path() / res.value("run_dir", std::string("run"));
+    const bool named = res.contains("image") && res["image"].contains("images");
+    const fs::path images = named ? p.parent_path() / res["image"]["images"].get<std::string>()
+                                  : run / "images";
+    const auto rel = [&](const fs::path& x) {
+      return fs::relative(x.lexically_normal(), f.dir).string();
+    };
+    add_result(f, spec.at("case"), spec.value("overrides", json::object()), res, rel(run),
+               rel(p), rel(images), spec.value("scene", std::string()));
+  }
+  if (fs::exists(f.dir / "campaign.json") && f.title.empty())
+    f.title = read_json(f.dir / "campaign.json").value("campaign", "");
+}
+
+}  // namespace
+
+bool is_calibration_dir(const fs::path& d) { return fs::is_regular_file(d / "calibration.json"); }
+
+bool holds_results(const fs::path& d) {
+  return fs::is_regular_file(d / "result.json") || fs::is_directory(d / "cases") ||
+         is_calibration_dir(d) || fs::is_regular_file(d / "campaign.json");
+}
+
+json read_json(const fs::path& p) {
+  try {
+    return json::parse(read_file(p.string()));
+  } catch (const json::exception& e) {
+    throw InputError(p.string() + ": not valid JSON (" + e.what() + ")");
+  }
+}
+
+FolderResults read_folder_results(const std::string& dir, const std::string& title) {
+  FolderResults f;
+  f.dir = dir;
+  f.title = title;
+  if (fs::exists(f.dir / "result.json") && !fs::exists(f.dir / "campaign.json"))
+    read_single_run(f);
+  if (fs::exists(f.dir / "cases")) read_campaign_runs(f);
+  if (fs::exists(f.dir / "calibration.json")) f.calibration = read_json(f.dir / "calibration.json");
+  if (fs::is_regular_file(f.dir / "predictions.json"))
+    f.predictions = read_json(f.dir / "predictions.json");
+  if (f.cases.empty() && f.calibration.is_null())
+    throw InputError(dir + ": no run, campaign or calibration results to report");
+  if (f.title.empty()) f.title = f.dir.filename().string();
+  return f;
+}
+
+CaseStats case_stats(const CaseRows& c) {
+  return {sample_stats(c.image_deg), sample_stats(c.particle_deg), sample_stats(c.slice_deg),
+          sample_stats(c.flank_deg)};
+}
+
+json case_summary(const FolderResults& f) {
+  json summary = {{"title", f.title}, {"cases", json::array()}};
+  for (const CaseRows& c : f.cases) {
+    const CaseStats s = case_stats(c);
+    int without = 0;
+    for (const auto& [reason, n] : c.without_pile) without += n;
+    summary["cases"].push_back({{"case", c.name},
+                                {"runs", c.run_dirs.size()},
+                                {"piles", static_cast<int>(c.run_dirs.size()) - without},
+                                {"without_pile", c.without_pile},
+                                {"image_runs", s.image.n},
+                                {"image_theta_mean_deg", s.image.mean},
+                                {"image_theta_sd_deg", s.image.sd},
+                                {"image_flank_mean_deg", s.flank.n ? json(s.flank.mean) : json()},
+                                {"image_flank_sd_deg", s.flank.n ? json(s.flank.sd) : json()},
+                                {"particle_theta_mean_deg", s.particle.mean},
+                                {"particle_theta_sd_deg", s.particle.sd},
+                                {"slice_angle_mean_deg", s.slice.mean},
+                                {"overrides", c.overrides}});
+  }
+  return summary;
+}
+
+}  // namespace reposetwin::experiments::report

@@ -1,0 +1,58 @@
+// What a results folder holds for its report, read once (report.cpp renders it): a single run,
+// a campaign's or a calibration's finished runs grouped by case, the calibration record and the
+// predictions. A run without a headline is counted by its reason and never enters a mean.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "experiments/calibration/calibration.hpp"
+
+namespace reposetwin::experiments::report {
+
+/// One case of the report: its runs' results.
+struct CaseRows {
+  std::string name;
+  std::string scene;  // the scene file of its runs ("" for a single run)
+  nlohmann::json overrides;
+  std::vector<double> image_deg, flank_deg, particle_deg, slice_deg;
+  std::vector<std::string> stops;
+  std::map<std::string, int> without_pile;  // runs that formed no pile, by reason
+  // Per run, relative to the report's source folder: the pile run's folder, its record
+  // (result.json) and its photographs' folder.
+  std::vector<std::string> run_dirs, records, image_dirs;
+  nlohmann::json provenance;
+};
+
+/// Everything a folder holds for its report, read once.
+struct FolderResults {
+  std::filesystem::path dir;
+  std::string title;
+  std::vector<CaseRows> cases;  // in the order first met
+  nlohmann::json calibration;   // calibration.json, or null
+  std::optional<nlohmann::json> predictions;
+};
+
+/// The statistics of a case's angles [deg].
+struct CaseStats {
+  SampleStats image, particle, slice, flank;
+};
+
+/// A folder is a calibration folder when it holds calibration.json.
+bool is_calibration_dir(const std::filesystem::path& d);
+/// The folder holds a run, a campaign or a calibration.
+bool holds_results(const std::filesystem::path& d);
+/// A JSON file, or an InputError naming it.
+nlohmann::json read_json(const std::filesystem::path& p);
+/// Reads every finished run of `dir` (a run, a campaign or a calibration folder); InputError when
+/// it holds none. `title` empty: the campaign's name or the folder's.
+FolderResults read_folder_results(const std::string& dir, const std::string& title);
+CaseStats case_stats(const CaseRows& c);
+/// The cases as summary.json lists them.
+nlohmann::json case_summary(const FolderResults& f);
+
+}  // namespace reposetwin::experiments::report
