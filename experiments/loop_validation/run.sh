@@ -56,7 +56,7 @@ cases=(
   "camera|synth_camera.toml|0.1,0.2,0.35|refused|-|0|||"
   "rolling_size|synth_size.toml|0.1,0.25,0.5|rolling_size|above|0.70|||"
   "shape_repeats|synth_shape_repeats.toml|0.2,0.35,0.5|grain_shape|above|0.70|$shape_candidates|$six|"
-  "cohesion_low_mu|synth_cohesion_low_mu.toml|0.1,0.2,0.35|cohesion|above|0.70||$six|0.02,0.4"
+  "shape_low_mu|synth_shape_low_mu.toml|0.1,0.2,0.35|grain_shape|above|0.70|$shape_candidates|$six|0.02,0.4"
 )
 
 mkdir -p "$out"
