@@ -6,6 +6,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "experiments/io/input_error.hpp"
 #include "experiments/io/json_fields.hpp"
 #include "experiments/io/scene.hpp"
 #include "experiments/pile/headline.hpp"

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "experiments/io/format.hpp"
+#include "experiments/io/toml_reader.hpp"
 
 namespace reposetwin::experiments {
 namespace {

@@ -47,10 +47,13 @@
 #include <string>
 #include <vector>
 
-#include "experiments/io/toml_reader.hpp"
 #include "sim/clump.hpp"
 
 namespace reposetwin::experiments {
+
+// The strict TOML reader (toml_reader.hpp); declared here so that this header, included across
+// experiments/, does not pull toml++ into every file that includes it.
+class TableReader;
 
 /// One grain shape of the sample, resolved to its unit template (sieve size 1).
 struct GrainShape {
