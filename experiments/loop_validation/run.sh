@@ -40,7 +40,8 @@ command -v jq >/dev/null || { echo "run.sh: jq is needed (scripts/install_deps.s
 # (below/above/-) | least RMSE cut on the calibration tests | candidates (empty: the loop's
 # default, every registry effect but the opt-in grain_shape) | the loop's seeds (empty:
 # 1001,1002,1003; as many as the design's repeats where a case needs the lower noise) | mu_r's
-# declared range LO,HI (empty: none), which the fitted mu_r must then lie inside.
+# declared range LO,HI (empty: none), which the fitted mu_r must then lie inside; the grid then
+# reaches the range's end, so that mu_r alone needing more than the range is seen as such.
 # The least cut is 70% wherever an effect is hidden: the refit's RMSE cannot fall below one
 # residual's noise, the seed spread times sqrt(1/n_lab + 1/n_twin) (1.23 deg with three piles a
 # side), so a hidden effect weaker than about three times that cannot show a 70% cut, and such a
@@ -56,7 +57,7 @@ cases=(
   "camera|synth_camera.toml|0.1,0.2,0.35|refused|-|0|||"
   "rolling_size|synth_size.toml|0.1,0.25,0.5|rolling_size|above|0.70|||"
   "shape_repeats|synth_shape_repeats.toml|0.2,0.35,0.5|grain_shape|above|0.70|$shape_candidates|$six|"
-  "shape_low_mu|synth_shape_low_mu.toml|0.1,0.2,0.35|grain_shape|above|0.70|$shape_candidates|$six|0.02,0.4"
+  "shape_low_mu|synth_shape_low_mu.toml|0.1,0.2,0.4|grain_shape|above|0.70|$shape_candidates|$six|0.02,0.4"
 )
 
 mkdir -p "$out"
