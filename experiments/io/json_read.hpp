@@ -83,22 +83,6 @@ T field(const nlohmann::json& j, const char* key) {
   }
 }
 
-/// j[key] as a double, null as NaN (a NaN is written as null).
-inline double number_field(const nlohmann::json& j, const char* key) {
-  const nlohmann::json& v = json_read_detail::member(j, key);
-  if (v.is_null()) return std::numeric_limits<double>::quiet_NaN();
-  if (!v.is_number())
-    throw JsonFieldError("/" + JsonFieldError::escaped(key),
-                         std::string("is ") + v.type_name() + ", not a number");
-  return v.get<double>();
-}
-
-/// j[key] as a double when present and not null.
-inline std::optional<double> optional_number_field(const nlohmann::json& j, const char* key) {
-  if (!j.contains(key) || j.at(key).is_null()) return std::nullopt;
-  return number_field(j, key);
-}
-
 /// read(j[key]): a sub-record, whose errors' pointers get /key in front.
 template <class F>
 auto nested(const nlohmann::json& j, const char* key, F&& read) {
@@ -128,6 +112,17 @@ inline double number_value(const nlohmann::json& v) {
   if (!v.is_number())
     throw JsonFieldError("", std::string("is ") + v.type_name() + ", not a number");
   return v.get<double>();
+}
+
+/// j[key] as a double, null as NaN (a NaN is written as null).
+inline double number_field(const nlohmann::json& j, const char* key) {
+  return nested(j, key, number_value);
+}
+
+/// j[key] as a double when present and not null.
+inline std::optional<double> optional_number_field(const nlohmann::json& j, const char* key) {
+  if (!j.contains(key) || j.at(key).is_null()) return std::nullopt;
+  return number_field(j, key);
 }
 
 /// The array j[key] of numbers, null as NaN.
