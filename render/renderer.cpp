@@ -1,6 +1,5 @@
 #include "render/renderer.hpp"
 
-#define GL_GLEXT_PROTOTYPES 1
 #include <GL/glcorearb.h>
 
 #include <algorithm>
@@ -8,8 +7,8 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <optional>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>

@@ -36,11 +36,11 @@ std::string bracket(std::size_t i) {
   return s.str();
 }
 
-[[noreturn]] void fail(const std::string& message) {
+[[noreturn]] void psd_error(const std::string& message) {
   throw std::invalid_argument("PSD: " + message);
 }
 
-double sphere_mass(double d, double density) {
+double mass_of_diameter(double d, double density) {
   return density * std::numbers::pi / 6.0 * d * d * d;
 }
 
@@ -63,45 +63,46 @@ std::string to_string(FinesPolicy policy) {
 void validate_sieve_table(const SieveTable& table) {
   const std::size_t n = table.size.size();
   if (table.passing.size() != n) {
-    fail("sieve table has " + std::to_string(n) + " sieve sizes but " +
-         std::to_string(table.passing.size()) + " percent-passing values (must be equal)");
+    psd_error("sieve table has " + std::to_string(n) + " sieve sizes but " +
+              std::to_string(table.passing.size()) + " percent-passing values (must be equal)");
   }
   if (n < 2) {
-    fail("sieve table has " + std::to_string(n) + " sieve(s); at least 2 are needed");
+    psd_error("sieve table has " + std::to_string(n) + " sieve(s); at least 2 are needed");
   }
   for (std::size_t i = 0; i < n; ++i) {
     const double d = table.size[i];
     const std::string at = bracket(i);
     if (!std::isfinite(d) || d <= 0.0) {
-      fail("sieve size" + at + " = " + format_size(d) + " must be positive and finite");
+      psd_error("sieve size" + at + " = " + format_size(d) + " must be positive and finite");
     }
     if (i > 0 && !(d > table.size[i - 1])) {
-      fail("sieve size" + at + " = " + format_size(d) + " is not larger than sieve size[" +
-           std::to_string(i - 1) + "] = " + format_size(table.size[i - 1]) +
-           " (sizes must be strictly increasing)");
+      psd_error("sieve size" + at + " = " + format_size(d) + " is not larger than sieve size[" +
+                std::to_string(i - 1) + "] = " + format_size(table.size[i - 1]) +
+                " (sizes must be strictly increasing)");
     }
     const double p = table.passing[i];
     if (!std::isfinite(p) || p < 0.0 || p > 100.0) {
-      fail("percent passing" + at + " = " + format_number(p) + " % is outside [0, 100]");
+      psd_error("percent passing" + at + " = " + format_number(p) + " % is outside [0, 100]");
     }
     if (i > 0 && p < table.passing[i - 1]) {
-      fail("percent passing" + at + " = " + format_number(p) + " % is below percent passing[" +
-           std::to_string(i - 1) + "] = " + format_number(table.passing[i - 1]) +
-           " % (the cumulative curve must be non-decreasing)");
+      psd_error("percent passing" + at + " = " + format_number(p) + " % is below percent passing[" +
+                std::to_string(i - 1) + "] = " + format_number(table.passing[i - 1]) +
+                " % (the cumulative curve must be non-decreasing)");
     }
   }
   if (std::abs(table.passing.back() - 100.0) > kFullPassingTolerance) {
-    fail("percent passing[" + std::to_string(n - 1) + "] = " + format_number(table.passing.back()) +
-         " % at the largest sieve " + format_size(table.size.back()) +
-         ": the table must reach 100 % (add the sieve that passes everything)");
+    psd_error("percent passing[" + std::to_string(n - 1) +
+              "] = " + format_number(table.passing.back()) + " % at the largest sieve " +
+              format_size(table.size.back()) +
+              ": the table must reach 100 % (add the sieve that passes everything)");
   }
 }
 
 double percent_passing(const SieveTable& table, double d) {
   const auto& s = table.size;
   if (!(d >= s.front() * (1.0 - kSizeSlack) && d <= s.back() * (1.0 + kSizeSlack))) {
-    fail("size " + format_size(d) + " is outside the sieve table [" + format_size(s.front()) +
-         ", " + format_size(s.back()) + "]");
+    psd_error("size " + format_size(d) + " is outside the sieve table [" + format_size(s.front()) +
+              ", " + format_size(s.back()) + "]");
   }
   if (d <= s.front()) return table.passing.front();
   if (d >= s.back()) return table.passing.back();
@@ -118,33 +119,35 @@ ResolvedPsd resolve_psd(const PsdSpec& spec) {
   r.fines = spec.fines;
   if (!std::isfinite(spec.interval_sd_fraction) || spec.interval_sd_fraction <= 0.0 ||
       spec.interval_sd_fraction > 1.0) {
-    fail("interval_sd_fraction = " + format_number(spec.interval_sd_fraction) +
-         " must lie in (0, 1]");
+    psd_error("interval_sd_fraction = " + format_number(spec.interval_sd_fraction) +
+              " must lie in (0, 1]");
   }
   r.interval_sd_fraction = spec.interval_sd_fraction;
-  if (!std::isfinite(spec.d_max)) fail("d_max = " + format_number(spec.d_max) + " is not finite");
-  if (!std::isfinite(spec.d_min)) fail("d_min = " + format_number(spec.d_min) + " is not finite");
+  if (!std::isfinite(spec.d_max))
+    psd_error("d_max = " + format_number(spec.d_max) + " is not finite");
+  if (!std::isfinite(spec.d_min))
+    psd_error("d_min = " + format_number(spec.d_min) + " is not finite");
   r.d_max = spec.d_max > 0.0 ? spec.d_max : s.back();
   r.d_min = spec.d_min > 0.0 ? spec.d_min : s.front();
   if (r.d_max > s.back() * (1.0 + kSizeSlack)) {
-    fail("d_max = " + format_size(r.d_max) + " is above the largest sieve size " +
-         format_size(s.back()) + ": the table does not describe material that coarse");
+    psd_error("d_max = " + format_size(r.d_max) + " is above the largest sieve size " +
+              format_size(s.back()) + ": the table does not describe material that coarse");
   }
   if (r.d_min < s.front() * (1.0 - kSizeSlack)) {
-    fail("d_min = " + format_size(r.d_min) + " is below the smallest sieve size " +
-         format_size(s.front()) + ": the table does not describe material that fine");
+    psd_error("d_min = " + format_size(r.d_min) + " is below the smallest sieve size " +
+              format_size(s.front()) + ": the table does not describe material that fine");
   }
   r.d_max = std::min(r.d_max, s.back());
   r.d_min = std::max(r.d_min, s.front());
   if (!(r.d_min < r.d_max)) {
-    fail("d_min = " + format_size(r.d_min) + " must be below d_max = " + format_size(r.d_max));
+    psd_error("d_min = " + format_size(r.d_min) + " must be below d_max = " + format_size(r.d_max));
   }
   const double p_max = percent_passing(spec.table, r.d_max);
   const double p_min = percent_passing(spec.table, r.d_min);
   if (!(p_max > p_min)) {
-    fail("no material between d_min = " + format_size(r.d_min) + " (" + format_number(p_min) +
-         " % passing) and d_max = " + format_size(r.d_max) + " (" + format_number(p_max) +
-         " % passing)");
+    psd_error("no material between d_min = " + format_size(r.d_min) + " (" + format_number(p_min) +
+              " % passing) and d_max = " + format_size(r.d_max) + " (" + format_number(p_max) +
+              " % passing)");
   }
   r.scalped_fraction = 1.0 - p_max / 100.0;
   r.fines_fraction = p_min / p_max;
@@ -183,10 +186,10 @@ double clipped_normal_mean_cube(double lower, double upper, double sd_fraction) 
 
 double expected_particle_count(const PsdSpec& spec, double target_mass, double density) {
   if (!(target_mass > 0.0) || !std::isfinite(target_mass)) {
-    fail("target mass = " + format_number(target_mass) + " kg must be positive");
+    psd_error("target mass = " + format_number(target_mass) + " kg must be positive");
   }
   if (!(density > 0.0) || !std::isfinite(density)) {
-    fail("density = " + format_number(density) + " kg/m^3 must be positive");
+    psd_error("density = " + format_number(density) + " kg/m^3 must be positive");
   }
   const ResolvedPsd r = resolve_psd(spec);
   const double simulated = target_mass * r.simulated_mass_factor;
@@ -212,26 +215,26 @@ PsdSample sample_psd(const PsdSpec& spec, double target_mass, double density, Rn
 PsdSample sample_psd_shapes(const PsdSpec& spec, double target_mass, double density,
                             const std::vector<PsdShape>& shapes, Rng& rng) {
   if (!(target_mass > 0.0) || !std::isfinite(target_mass)) {
-    fail("target mass = " + format_number(target_mass) + " kg must be positive");
+    psd_error("target mass = " + format_number(target_mass) + " kg must be positive");
   }
   if (!(density > 0.0) || !std::isfinite(density)) {
-    fail("density = " + format_number(density) + " kg/m^3 must be positive");
+    psd_error("density = " + format_number(density) + " kg/m^3 must be positive");
   }
-  if (shapes.empty()) fail("no grain shapes");
+  if (shapes.empty()) psd_error("no grain shapes");
   double fraction_sum = 0.0, mean_volume = 0.0;
   for (std::size_t s = 0; s < shapes.size(); ++s) {
     const PsdShape& sh = shapes[s];
     if (!(sh.volume_per_cube > 0.0) || !std::isfinite(sh.volume_per_cube))
-      fail("shape " + std::to_string(s) + " volume per cube = " +
-           format_number(sh.volume_per_cube) + " must be positive");
+      psd_error("shape " + std::to_string(s) +
+                " volume per cube = " + format_number(sh.volume_per_cube) + " must be positive");
     if (!(sh.mass_fraction >= 0.0) || !std::isfinite(sh.mass_fraction))
-      fail("shape " + std::to_string(s) + " mass fraction = " + format_number(sh.mass_fraction) +
-           " must not be negative");
+      psd_error("shape " + std::to_string(s) +
+                " mass fraction = " + format_number(sh.mass_fraction) + " must not be negative");
     fraction_sum += sh.mass_fraction;
     mean_volume += sh.mass_fraction / sh.volume_per_cube;
   }
   if (std::abs(fraction_sum - 1.0) > 1e-9)
-    fail("shape mass fractions sum to " + format_number(fraction_sum) + ", not 1");
+    psd_error("shape mass fractions sum to " + format_number(fraction_sum) + ", not 1");
   const ResolvedPsd r = resolve_psd(spec);
   const std::size_t k_count = r.intervals.size(), s_count = shapes.size();
 
@@ -261,9 +264,9 @@ PsdSample sample_psd_shapes(const PsdSpec& spec, double target_mass, double dens
                           (std::numbers::pi / 6.0) * mean_volume;
   constexpr double kMaxParticles = 2e8;
   if (expected > kMaxParticles) {
-    fail("target mass = " + format_number(target_mass) + " kg would need about " +
-         format_number(expected) + " particles (limit " + format_number(kMaxParticles) +
-         "); raise d_min");
+    psd_error("target mass = " + format_number(target_mass) + " kg would need about " +
+              format_number(expected) + " particles (limit " + format_number(kMaxParticles) +
+              "); raise d_min");
   }
   out.diameter.reserve(static_cast<std::size_t>(expected * 1.01) + 16);
   out.shape.reserve(out.diameter.capacity());
@@ -286,7 +289,7 @@ PsdSample sample_psd_shapes(const PsdSpec& spec, double target_mass, double dens
     const std::size_t k = best / s_count, s = best % s_count;
     const PsdInterval& in = r.intervals[k];
     const double d = draw_clipped_normal(in.lower, in.upper, r.interval_sd_fraction, rng);
-    const double m = shapes[s].sphere ? sphere_mass(d, density)
+    const double m = shapes[s].sphere ? mass_of_diameter(d, density)
                                       : density * shapes[s].volume_per_cube * d * d * d;
     out.diameter.push_back(d);
     out.shape.push_back(static_cast<std::int32_t>(s));

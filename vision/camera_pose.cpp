@@ -1,17 +1,19 @@
 #include "vision/camera_pose.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgproc.hpp>
 #include <numbers>
+#include <opencv2/imgproc.hpp>
 #include <vector>
+
+#include "vision/text_detail.hpp"
 
 namespace reposetwin::vision {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+using detail::kRadToDeg;
 
 // The declared camera's optical axis below the horizontal [rad].
 double declared_pitch(const camera::Camera& cam) {

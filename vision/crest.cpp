@@ -1,18 +1,19 @@
 #include "vision/crest.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
-#include <algorithm>
-#include <utility>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
+
+#include "vision/text_detail.hpp"
 
 namespace reposetwin::vision {
 namespace {
 
-// Standard deviation of a uniform error over one pixel [px].
-const double kQuantisationPx = 1.0 / std::sqrt(12.0);
+using detail::kQuantisationPx;
 
 // The point where a flank line through `q` (direction `flank`, up the flank) reaches `rise`
 // pixels higher above the plate line.

@@ -12,14 +12,12 @@
 #include <stdexcept>
 #include <vector>
 
+#include "vision/text_detail.hpp"
+
 namespace reposetwin::vision {
 namespace {
 
-std::string str(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
+using detail::str;
 
 // Monomials x^i y^j with i + j <= degree, ordered by degree, at normalised coordinates.
 void monomials(double x, double y, int degree, float* out) {

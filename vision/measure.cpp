@@ -20,22 +20,16 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "vision/text_detail.hpp"
+
 namespace reposetwin::vision {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+using detail::kRadToDeg;
 
-std::string str(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
+using detail::str;
 
-std::string fixed(double v, int digits) {
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(digits) << v;
-  return os.str();
-}
+using detail::fixed;
 
 Eigen::Vector2d ev(const cv::Point2d& p) { return {p.x, p.y}; }
 

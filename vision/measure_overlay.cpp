@@ -5,15 +5,12 @@
 #include <sstream>
 
 #include "vision/measure.hpp"
+#include "vision/text_detail.hpp"
 
 namespace reposetwin::vision {
 namespace {
 
-std::string fixed(double v, int digits) {
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(digits) << v;
-  return os.str();
-}
+using detail::fixed;
 
 }  // namespace
 

@@ -15,18 +15,13 @@
 
 #include "numeric/median.hpp"
 #include "vision/side_view.hpp"
+#include "vision/text_detail.hpp"
 
 namespace reposetwin::vision::side_detail {
 
-inline constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-// Standard deviation of a uniform error over one pixel [px].
-inline const double kQuantisationPx = 1.0 / std::sqrt(12.0);
-
-inline std::string str(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
+using detail::kQuantisationPx;
+using detail::kRadToDeg;
+using detail::str;
 
 using numeric::median;
 

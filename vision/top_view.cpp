@@ -8,15 +8,12 @@
 #include <stdexcept>
 
 #include "vision/image.hpp"
+#include "vision/text_detail.hpp"
 
 namespace reposetwin::vision {
 namespace {
 
-std::string str(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
+using detail::str;
 
 // Bilinear sample of a CV_32F image (clamped at the border).
 double sample(const cv::Mat& img, double x, double y) {

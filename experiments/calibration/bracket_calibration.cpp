@@ -12,8 +12,6 @@
 namespace reposetwin::experiments {
 namespace {
 
-std::string num(double v) { return significant(v, 6); }
-
 constexpr double kOvershoot = 1.25;  // a secant step is stretched by this to land past the target
 
 // The driver's state: every pour so far and the callback that adds to it.
@@ -38,9 +36,9 @@ class PourLog {
       p.seed = batch[i].second;
       if (p.outcome == PourOutcome::kPile &&
           (!std::isfinite(p.angle_deg) || p.angle_deg < 0.0 || p.angle_deg > 90.0))
-        throw std::runtime_error("calibration: pour at mu_r = " + num(p.mu_r) + ", seed " +
+        throw std::runtime_error("calibration: pour at mu_r = " + significant(p.mu_r) + ", seed " +
                                  std::to_string(p.seed) + " formed a pile with angle " +
-                                 num(p.angle_deg) + " outside [0, 90] deg");
+                                 significant(p.angle_deg) + " outside [0, 90] deg");
       pours.push_back(std::move(p));
     }
   }
@@ -225,9 +223,10 @@ std::optional<double> step_out(const MonotoneFit& fit, const Target& target,
     if (jam && next >= *jam) {
       next = 0.5 * (end.mu_r + *jam);
       if (*jam - end.mu_r < s.mu_r_tolerance) {
-        why = "the pours jam at mu_r " + num(*jam) + " (jam rate above " + num(s.max_jam_rate) +
+        why = "the pours jam at mu_r " + significant(*jam) + " (jam rate above " +
+              significant(s.max_jam_rate) +
               ") before the angle reaches the target; the highest usable point, mu_r " +
-              num(end.mu_r) + ", reaches " + num(end.fitted_deg) + " deg";
+              significant(end.mu_r) + ", reaches " + significant(end.fitted_deg) + " deg";
         return std::nullopt;
       }
     }
@@ -237,7 +236,8 @@ std::optional<double> step_out(const MonotoneFit& fit, const Target& target,
   }
   for (const PourPoint& q : points)
     if (q.mu_r == next) {
-      why = "the range end mu_r " + num(next) + " reaches only " + num(end.fitted_deg) + " deg";
+      why = "the range end mu_r " + significant(next) + " reaches only " +
+            significant(end.fitted_deg) + " deg";
       return std::nullopt;
     }
   return next;
@@ -248,7 +248,7 @@ std::optional<double> step_below_jams(const std::vector<PourPoint>& points,
                                       const BracketSettings& s, std::string& why) {
   const double lowest = points.front().mu_r;
   if (lowest - s.mu_r_lo < s.mu_r_tolerance) {
-    why = "every pour jammed, down to mu_r " + num(lowest);
+    why = "every pour jammed, down to mu_r " + significant(lowest);
     return std::nullopt;
   }
   return 0.5 * (s.mu_r_lo + lowest);
@@ -278,9 +278,9 @@ void finish(BracketCalibration& c, const Target& target, const BracketSettings& 
        (unsettled > 0 ? std::to_string(unsettled) + " not settled, " : std::string()) +
        std::to_string(stops) + " stopped by the engine)";
   if (c.bracketed)
-    m += "; mu_r uncertainty " + num(c.mu_r_uncertainty) + " (seed spread " + num(c.mu_r_seed_se) +
-         ", interpolation " + num(c.mu_r_interpolation) + ") against the tolerance " +
-         num(s.mu_r_tolerance);
+    m += "; mu_r uncertainty " + significant(c.mu_r_uncertainty) + " (seed spread " +
+         significant(c.mu_r_seed_se) + ", interpolation " + significant(c.mu_r_interpolation) +
+         ") against the tolerance " + significant(s.mu_r_tolerance);
   c.result.message = m;
 }
 
@@ -354,11 +354,11 @@ BracketCalibration calibrate_bracket(const PourBatchFn& pour, const Target& targ
              noise ? CalibrationStatus::kSeedNoiseLimited : CalibrationStatus::kBudgetSpent,
              next ? "budget of " + std::to_string(s.max_runs) +
                         " pile runs spent before the mu_r tolerance of " +
-                        num(s.mu_r_tolerance) + " was met" +
+                        significant(s.mu_r_tolerance) + " was met" +
                         (why.empty() ? std::string() : " (" + why + ")")
                   : "stopped after " + std::to_string(log.runs()) + " of " +
                         std::to_string(s.max_runs) + " pile runs before the mu_r tolerance of " +
-                        num(s.mu_r_tolerance) + " was met: " + why);
+                        significant(s.mu_r_tolerance) + " was met: " + why);
       return c;
     }
     log.run({*next}, s.seeds);

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "experiments/io/format.hpp"
 #include "experiments/io/hash.hpp"
 #include "experiments/io/overrides.hpp"
 #include "experiments/io/provenance.hpp"

@@ -9,10 +9,11 @@
 
 #include "experiments/io/campaign_file_detail.hpp"
 #include "experiments/io/campaign_keys.hpp"
+#include "experiments/io/format.hpp"
 #include "experiments/io/hash.hpp"
 #include "experiments/io/overrides.hpp"
-#include "experiments/io/toml_edit.hpp"
 #include "experiments/io/provenance.hpp"
+#include "experiments/io/toml_edit.hpp"
 
 namespace reposetwin::experiments {
 namespace fs = std::filesystem;
@@ -423,12 +424,6 @@ std::string sanitize_name(std::string_view text) {
     out.push_back(
         std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-' ? c : '_');
   return out;
-}
-
-std::string shortest_text(double x) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, x);
-  return std::string(buf, r.ptr);
 }
 
 Campaign read_campaign_file(const std::string& path) {

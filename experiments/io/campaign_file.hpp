@@ -202,7 +202,4 @@ bool is_safe_name(std::string_view name);
 /// from keys and values).
 std::string sanitize_name(std::string_view text);
 
-/// The shortest text that reads back as exactly `x` ("0.1", "0.25"), for run names.
-std::string shortest_text(double x);
-
 }  // namespace reposetwin::experiments

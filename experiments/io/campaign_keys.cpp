@@ -6,8 +6,6 @@
 namespace reposetwin::experiments {
 namespace {
 
-std::string num(double v) { return significant(v, 6); }
-
 std::vector<SceneKey> build() {
   const CalibrationSettings cs;
   const BracketSettings bs;
@@ -21,7 +19,8 @@ std::vector<SceneKey> build() {
        "run seeds: a list, or a count n meaning 1..n"},
       {"overrides", "table", "-", "-",
        "dotted scene keys set for every run, e.g. { \"sample.mass_kg\" = 0.2 }; a "
-       "sample.psd_file here replaces the scene's sieve table" + paths},
+       "sample.psd_file here replaces the scene's sieve table" +
+           paths},
       {"case[].name", "string", "required", "-", "a case of [[case]], safe as a folder name"},
       {"case[].description", "string", "-", "-", "free text"},
       {"case[].scene", "string", "the campaign's", "-", "the case's own scene" + paths},
@@ -29,8 +28,8 @@ std::vector<SceneKey> build() {
       {"sweep.key", "string", "required", "-", "the dotted scene key swept (instead of cases)"},
       {"sweep.values", "array", "required", "-", "its values, one case each"},
       {"sweep.name", "string", "the key's leaf", "-", "prefix of the case names"},
-      {"calibration.key", "string or array of strings", "contacts.rock-rock.rolling_friction",
-       "-", "the scene key(s) set to the calibrated mu_r"},
+      {"calibration.key", "string or array of strings", "contacts.rock-rock.rolling_friction", "-",
+       "the scene key(s) set to the calibrated mu_r"},
       {"calibration.target_deg", "number", "required*", "deg",
        "the lab's measured angle atan(2H/D), in (0, 90); *or target_photos"},
       {"calibration.target_sd_deg", "number", "-", "deg",
@@ -39,7 +38,8 @@ std::vector<SceneKey> build() {
        "the lab's side photos of the pile, measured by vision as the twin's renders" + paths},
       {"calibration.target_photo_camera", "string", "-", "-",
        "a camera sidecar JSON for every photo (else mm_per_px, a STEM.json beside each photo, "
-       "or the scale marker)" + paths},
+       "or the scale marker)" +
+           paths},
       {"calibration.target_mm_per_px", "number", "-", "mm/px",
        "the photos' scale at the pile axis (orthographic view assumed)"},
       {"calibration.mu_r_range", "array of 2 numbers", "required", "-",
@@ -49,17 +49,18 @@ std::vector<SceneKey> build() {
       {"calibration.method", "string", "sequential", "-",
        "\"sequential\" (range ends, secant, confirmation seeds) or \"bracket\" (few runs, jams "
        "counted as a jam rate)"},
-      {"calibration.seeds_per_point", "integer", std::to_string(cs.seeds_per_point) + " (bracket: 2)",
-       "-", "runs per mu_r point, seeds first_seed, first_seed + 1, ..."},
+      {"calibration.seeds_per_point", "integer",
+       std::to_string(cs.seeds_per_point) + " (bracket: 2)", "-",
+       "runs per mu_r point, seeds first_seed, first_seed + 1, ..."},
       {"calibration.first_seed", "integer", std::to_string(cs.first_seed), "-", "first run seed"},
       {"calibration.max_simulations", "integer",
        std::to_string(cs.max_simulations) + " (bracket: 3 x seeds_per_point)", "-",
        "budget of pile runs of the calibration"},
-      {"calibration.bootstrap_replicates", "integer", std::to_string(cs.bootstrap.replicates),
-       "-", "bootstrap replicates of the 95% interval"},
+      {"calibration.bootstrap_replicates", "integer", std::to_string(cs.bootstrap.replicates), "-",
+       "bootstrap replicates of the 95% interval"},
       {"calibration.table1_sample", "integer", "-", "-",
        "the paper's Table 1 sample it calibrates on (reports)"},
-      {"calibration.tolerance_deg", "number", num(cs.tolerance_deg), "deg",
+      {"calibration.tolerance_deg", "number", significant(cs.tolerance_deg), "deg",
        "sequential only: the angle tolerance (95% level)"},
       {"calibration.confirm", "boolean", cs.confirm_bracket ? "true" : "false", "-",
        "sequential only: finish with fresh seeds at the bracket points"},
@@ -68,11 +69,11 @@ std::vector<SceneKey> build() {
       {"calibration.ends_first", "boolean", bs.ends_first ? "true" : "false", "-",
        "bracket only: run both range ends first, so a target out of reach is known after two "
        "points (a calibration from the lab's sheets does)"},
-      {"calibration.slope_guess_deg", "number", num(bs.slope_guess_deg), "deg per unit mu_r",
-       "bracket only: expected d(angle)/d(mu_r) before two points exist"},
-      {"calibration.mu_r_tolerance", "number", num(bs.mu_r_tolerance), "-",
+      {"calibration.slope_guess_deg", "number", significant(bs.slope_guess_deg),
+       "deg per unit mu_r", "bracket only: expected d(angle)/d(mu_r) before two points exist"},
+      {"calibration.mu_r_tolerance", "number", significant(bs.mu_r_tolerance), "-",
        "bracket only: stop when the mu_r uncertainty is below"},
-      {"calibration.max_jam_rate", "number", num(bs.max_jam_rate), "-",
+      {"calibration.max_jam_rate", "number", significant(bs.max_jam_rate), "-",
        "bracket only: a point whose pours jam more often is beyond the usable range"},
       {"predict[].name", "string", "required", "-",
        "a [[predict]] test run at the calibrated mu_r, safe as a folder name"},

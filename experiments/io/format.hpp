@@ -16,6 +16,13 @@ inline std::string significant(double v, int digits = 6) {
   return b;
 }
 
+/// `v` through one printf conversion (`pattern`, e.g. "%.1f"), for fixed layouts in messages.
+inline std::string printf_text(const char* pattern, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, pattern, v);
+  return b;
+}
+
 /// The shortest text that reads back to the same double ("0.1", "1e-30", "1000000000000"): a
 /// value quoted back to the user as they typed it, not to seventeen digits.
 inline std::string shortest_text(double v) {

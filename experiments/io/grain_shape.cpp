@@ -11,8 +11,6 @@
 namespace reposetwin::experiments {
 namespace {
 
-std::string num(double v) { return significant(v); }
-
 // Lines of the overlap grid for a shape's mass properties: the engine's default, whose stated
 // error (sim/clump.hpp: 2e-9 to 3e-7 relative) is far below a sieve class's width.
 const sim::MassPropertySettings kMass{};
@@ -47,7 +45,7 @@ sim::ClumpShape read_template(TableReader& t, const std::string& name) {
   for (std::size_t i = 0; i < shape.radii.size(); ++i)
     if (!(shape.radii[i] > 0) || !std::isfinite(shape.radii[i]))
       t.fail("radii[" + std::to_string(i) + "]",
-             "= " + num(shape.radii[i]) + " must be a positive radius");
+             "= " + significant(shape.radii[i]) + " must be a positive radius");
   return shape;
 }
 
@@ -61,10 +59,11 @@ sim::ClumpShape generate_shape(TableReader& t, GrainShape& g) {
   for (const char* key : {"elongation", "flatness"}) {
     const double v = std::string(key) == "elongation" ? g.elongation : g.flatness;
     if (!(v >= 1.0) || !std::isfinite(v))
-      t.fail(key, "= " + num(v) + " must be at least 1 (a ratio of the longer extent to the shorter)");
+      t.fail(key, "= " + significant(v) +
+                      " must be at least 1 (a ratio of the longer extent to the shorter)");
   }
   if (!(g.roundness > 0 && g.roundness <= 1))
-    t.fail("roundness", "= " + num(g.roundness) + " must lie in (0, 1]");
+    t.fail("roundness", "= " + significant(g.roundness) + " must lie in (0, 1]");
   const int rows = g.flatness > 1.0 ? 2 : 1;
   if (n < rows || n > 64 || n % rows != 0)
     t.fail("spheres", "= " + std::to_string(n) +
@@ -73,17 +72,18 @@ sim::ClumpShape generate_shape(TableReader& t, GrainShape& g) {
   const int per_row = static_cast<int>(n) / rows;
   if (per_row == 1 && g.elongation > 1.0)
     t.fail("spheres", "= " + std::to_string(n) + " (one per row) cannot make an elongation of " +
-                          num(g.elongation) + "; use at least " + std::to_string(2 * rows));
+                          significant(g.elongation) + "; use at least " + std::to_string(2 * rows));
   // In one row, neighbours stand (L - 2 roundness r) / (n - 1) apart with radii at most r:
   // farther than 2 r, the grain is in pieces, and the elongation is the key to blame.
   if (rows == 1 && per_row > 1 && g.elongation > per_row - 1 + g.roundness) {
     const double needed = std::ceil(g.elongation + 1.0 - g.roundness);
-    t.fail("elongation", "= " + num(g.elongation) + " with spheres = " + std::to_string(n) +
+    t.fail("elongation", "= " + significant(g.elongation) + " with spheres = " + std::to_string(n) +
                              " leaves gaps between the spheres (the grain would fall in pieces); "
-                             "use an elongation of at most " + num(per_row - 1 + g.roundness) +
-                             (needed <= 64 ? ", or spheres = " + num(needed)
+                             "use an elongation of at most " +
+                             significant(per_row - 1 + g.roundness) +
+                             (needed <= 64 ? ", or spheres = " + significant(needed)
                                            : " (64 spheres, the most, allow " +
-                                                 num(63 + g.roundness) + ")"));
+                                                 significant(63 + g.roundness) + ")"));
   }
   g.spheres = static_cast<int>(n);
   const double r = 0.5, length = g.elongation * g.flatness;
@@ -114,11 +114,12 @@ sim::ClumpShape blocky_shape(TableReader& t, GrainShape& g) {
   for (const char* key : {"elongation", "flatness"}) {
     const double v = std::string(key) == "elongation" ? g.elongation : g.flatness;
     if (!(v >= 1.0) || !std::isfinite(v) || v > 10.0)
-      t.fail(key, "= " + num(v) + " must lie in [1, 10] (a ratio of the longer extent to the "
-                                  "shorter)");
+      t.fail(key, "= " + significant(v) +
+                      " must lie in [1, 10] (a ratio of the longer extent to the "
+                      "shorter)");
   }
   if (!(g.angularity >= 0.0 && g.angularity < 1.0))
-    t.fail("angularity", "= " + num(g.angularity) +
+    t.fail("angularity", "= " + significant(g.angularity) +
                              " must lie in [0, 1) (0: edges rounded with half the shortest "
                              "extent; towards 1: sharper edges, more spheres)");
   const std::array<double, 3> extent = {g.elongation, 1.0, 1.0 / g.flatness};
@@ -131,7 +132,7 @@ sim::ClumpShape blocky_shape(TableReader& t, GrainShape& g) {
     total *= count[a];
   }
   if (total > 64)
-    t.fail("angularity", "= " + num(g.angularity) + " needs " + std::to_string(total) +
+    t.fail("angularity", "= " + significant(g.angularity) + " needs " + std::to_string(total) +
                              " spheres for this box (at most 64): lower it");
   g.spheres = total;
   sim::ClumpShape shape;
@@ -160,7 +161,7 @@ GrainShape read_shape(TableReader t, const std::string& key, std::size_t index, 
   if (!single && !t.has("mass_fraction"))
     t.fail("mass_fraction", "is required when several shapes are mixed");
   if (!(g.mass_fraction >= 0 && g.mass_fraction <= 1))
-    t.fail("mass_fraction", "= " + num(g.mass_fraction) + " must lie in [0, 1]");
+    t.fail("mass_fraction", "= " + significant(g.mass_fraction) + " must lie in [0, 1]");
   sim::ClumpShape shape;
   if (g.kind == "template") {
     shape = read_template(t, g.name);
@@ -250,10 +251,10 @@ std::vector<GrainShape> read_grain_shapes(TableReader& sample) {
   std::string each;
   for (const GrainShape& g : shapes) {
     sum += g.mass_fraction;
-    each += (each.empty() ? "" : " + ") + num(g.mass_fraction);
+    each += (each.empty() ? "" : " + ") + significant(g.mass_fraction);
   }
   if (std::abs(sum - 1.0) > 1e-9)
-    sample.fail(key, "mass_fraction values " + each + " sum to " + num(sum) + ", not 1");
+    sample.fail(key, "mass_fraction values " + each + " sum to " + significant(sum) + ", not 1");
   return shapes;
 }
 
@@ -263,10 +264,11 @@ void check_shapes_pass_outlet(const std::vector<GrainShape>& shapes, double d_ma
     const double across = g.outlet_diameter * d_max;
     if (across >= w)
       throw InputError(file + ": " + g.key + " (\"" + g.name +
-                       "\"): a grain of the sieve size d_max = " + num(1e3 * d_max) +
-                       " mm is " + num(1e3 * across) +
+                       "\"): a grain of the sieve size d_max = " + significant(1e3 * d_max) +
+                       " mm is " + significant(1e3 * across) +
                        " mm across its long axis and does not pass the outlet "
-                       "container.bottom_diameter_m = " + num(w) + " m");
+                       "container.bottom_diameter_m = " +
+                       significant(w) + " m");
   }
 }
 

@@ -40,8 +40,6 @@ constexpr double kMaxSteps = 1e11;   // max_time / dt: 1e11 steps of one grain a
 constexpr double kMaxFrames = 1e4;   // max_time / frame_interval: .vtp frame sets written [-]
 constexpr double kMaxParticles = 1e10;  // no machine holds more; the plan's limit is far lower [-]
 
-std::string num(double v) { return significant(v); }
-
 sim::Material read_material(TableReader t, const std::string& name) {
   sim::Material m;
   m.name = name;
@@ -49,13 +47,14 @@ sim::Material read_material(TableReader t, const std::string& name) {
   m.youngs_modulus = t.number("youngs_modulus_pa", m.youngs_modulus);
   m.poisson_ratio = t.number("poisson_ratio", m.poisson_ratio);
   if (!(m.density >= kMinDensity && m.density <= kMaxDensity))
-    t.fail("density_kg_m3", "= " + num(m.density) + " must be in [" + num(kMinDensity) + ", " +
-                                num(kMaxDensity) + "] kg/m^3 (rock is about 2700)");
+    t.fail("density_kg_m3", "= " + significant(m.density) + " must be in [" +
+                                significant(kMinDensity) + ", " + significant(kMaxDensity) +
+                                "] kg/m^3 (rock is about 2700)");
   if (!(m.youngs_modulus > 0 && m.youngs_modulus <= kMaxModulus))
-    t.fail("youngs_modulus_pa", "= " + num(m.youngs_modulus) + " must be in (0, " +
-                                    num(kMaxModulus) + "] Pa (rock is about 5e10)");
+    t.fail("youngs_modulus_pa", "= " + significant(m.youngs_modulus) + " must be in (0, " +
+                                    significant(kMaxModulus) + "] Pa (rock is about 5e10)");
   if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5))
-    t.fail("poisson_ratio", "= " + num(m.poisson_ratio) + " must lie in (-1, 0.5)");
+    t.fail("poisson_ratio", "= " + significant(m.poisson_ratio) + " must lie in (-1, 0.5)");
   t.finish();
   return m;
 }
@@ -80,27 +79,29 @@ sim::PairParams read_contact(TableReader t) {
   p.rolling_reference_diameter =
       t.number("rolling_reference_diameter_m", p.rolling_reference_diameter);
   if (!(p.cohesion_energy_density >= 0 && std::isfinite(p.cohesion_energy_density)))
-    t.fail("cohesion_energy_density",
-           "= " + num(p.cohesion_energy_density) + " must be finite and not negative [J/m^3]");
+    t.fail("cohesion_energy_density", "= " + significant(p.cohesion_energy_density) +
+                                          " must be finite and not negative [J/m^3]");
   if (!std::isfinite(p.rolling_size_exponent))
-    t.fail("rolling_size_exponent", "= " + num(p.rolling_size_exponent) + " must be finite");
+    t.fail("rolling_size_exponent",
+           "= " + significant(p.rolling_size_exponent) + " must be finite");
   if (!(p.rolling_reference_diameter >= 0 && std::isfinite(p.rolling_reference_diameter)))
-    t.fail("rolling_reference_diameter_m",
-           "= " + num(p.rolling_reference_diameter) + " must be finite and not negative [m]");
+    t.fail("rolling_reference_diameter_m", "= " + significant(p.rolling_reference_diameter) +
+                                               " must be finite and not negative [m]");
   if (p.rolling_size_exponent != 0 && !(p.rolling_reference_diameter > 0))
-    t.fail("rolling_reference_diameter_m", "= " + num(p.rolling_reference_diameter) +
+    t.fail("rolling_reference_diameter_m", "= " + significant(p.rolling_reference_diameter) +
                                                " must be positive when " +
                                                t.where("rolling_size_exponent") + " = " +
-                                               num(p.rolling_size_exponent) + " is not 0");
+                                               significant(p.rolling_size_exponent) + " is not 0");
   if (!(p.restitution > 0 && p.restitution <= 1))
-    t.fail("restitution", "= " + num(p.restitution) + " must lie in (0, 1]");
+    t.fail("restitution", "= " + significant(p.restitution) + " must lie in (0, 1]");
   if (!(p.friction >= 0 && p.friction <= kMaxFriction))
-    t.fail("friction", "= " + num(p.friction) + " must be in [0, " + num(kMaxFriction) + "]");
+    t.fail("friction",
+           "= " + significant(p.friction) + " must be in [0, " + significant(kMaxFriction) + "]");
   if (!(p.rolling_friction >= 0 && p.rolling_friction <= kMaxFriction))
-    t.fail("rolling_friction",
-           "= " + num(p.rolling_friction) + " must be in [0, " + num(kMaxFriction) + "]");
+    t.fail("rolling_friction", "= " + significant(p.rolling_friction) + " must be in [0, " +
+                                   significant(kMaxFriction) + "]");
   if (!(p.rolling_damping >= 0))
-    t.fail("rolling_damping", "= " + num(p.rolling_damping) + " must not be negative");
+    t.fail("rolling_damping", "= " + significant(p.rolling_damping) + " must not be negative");
   t.finish();
   return p;
 }
@@ -193,7 +194,7 @@ void read_materials(TableReader t, SceneConfig& s) {
 void read_sample(TableReader t, SceneConfig& s, const toml::table& doc,
                  const std::filesystem::path& dir, const std::string& file) {
   s.mass = t.number("mass_kg");
-  if (!(s.mass > 0)) t.fail("mass_kg", "= " + num(s.mass) + " must be positive");
+  if (!(s.mass > 0)) t.fail("mass_kg", "= " + significant(s.mass) + " must be positive");
   s.sample_material = t.string("material", s.sample_material);
   material_index(s, s.sample_material, t.where("material"));
   const bool has_file = t.has("psd_file"), has_inline = t.has("psd");
@@ -227,7 +228,8 @@ void read_sample(TableReader t, SceneConfig& s, const toml::table& doc,
   for (const char* key : {"d_min_mm", "d_max_mm"}) {
     if (!t.has(key)) continue;
     const double d = t.number(key);
-    if (!(d > 0 && std::isfinite(d))) t.fail(key, "= " + num(d) + " must be a positive size");
+    if (!(d > 0 && std::isfinite(d)))
+      t.fail(key, "= " + significant(d) + " must be a positive size");
     (std::string(key) == "d_min_mm" ? s.psd.spec.d_min : s.psd.spec.d_max) = 1e-3 * d;
   }
   s.shapes = read_grain_shapes(t);
@@ -243,7 +245,7 @@ void read_sample(TableReader t, SceneConfig& s, const toml::table& doc,
     for (const char* key : {"d_min_mm", "d_max_mm"}) {
       const std::string name = std::string(key).substr(0, 5);  // "d_min", "d_max"
       if (t.has(key) && what.find(name + " =") != std::string::npos) {
-        keys += (keys.empty() ? "" : ", ") + t.where(key) + " = " + num(t.number(key));
+        keys += (keys.empty() ? "" : ", ") + t.where(key) + " = " + significant(t.number(key));
         if (first.empty()) first = t.where(key);
       }
     }
@@ -255,10 +257,11 @@ void read_sample(TableReader t, SceneConfig& s, const toml::table& doc,
   const double density = s.materials[material_index(s, s.sample_material, "")].density;
   const double grain = density * std::numbers::pi / 6.0 * std::pow(resolved.d_max, 3);
   if (s.mass < kMinGrains * grain)
-    t.fail("mass_kg", "= " + num(s.mass) + " kg is " + num(s.mass / grain) +
-                          " grains of the largest size (" + num(1e3 * resolved.d_max) + " mm, " +
-                          num(grain) + " kg each, from sample.psd's sieve sizes or " +
-                          "sample.d_max_mm); a pile needs at least " + num(kMinGrains));
+    t.fail("mass_kg", "= " + significant(s.mass) + " kg is " + significant(s.mass / grain) +
+                          " grains of the largest size (" + significant(1e3 * resolved.d_max) +
+                          " mm, " + significant(grain) +
+                          " kg each, from sample.psd's sieve sizes or " +
+                          "sample.d_max_mm); a pile needs at least " + significant(kMinGrains));
 }
 
 // [contacts]: one table per pair of declared materials, "a-b" (both orders set).
@@ -292,34 +295,36 @@ void read_container(TableReader t, SceneConfig& s, const std::string& file) {
   if (c.kind == "funnel") c.top_diameter = t.number("top_diameter_m", c.top_diameter);
   c.height = t.number("height_m", c.height);
   c.gap = t.number("gap_m", c.gap);
-  const std::string most = num(kMaxContainerSize) + "] m";
+  const std::string most = significant(kMaxContainerSize) + "] m";
   if (!(c.bottom_diameter > 0 && c.bottom_diameter <= kMaxContainerSize))
-    t.fail("bottom_diameter_m", "= " + num(c.bottom_diameter) + " must be in (0, " + most);
+    t.fail("bottom_diameter_m", "= " + significant(c.bottom_diameter) + " must be in (0, " + most);
   if (!(c.top_diameter >= c.bottom_diameter))
-    t.fail("top_diameter_m", "= " + num(c.top_diameter) + " must not be below the outlet " +
-                                 t.where("bottom_diameter_m") + " = " + num(c.bottom_diameter));
+    t.fail("top_diameter_m", "= " + significant(c.top_diameter) + " must not be below the outlet " +
+                                 t.where("bottom_diameter_m") + " = " +
+                                 significant(c.bottom_diameter));
   if (!(c.top_diameter <= kMaxContainerSize))
-    t.fail("top_diameter_m", "= " + num(c.top_diameter) + " must be at most " + most);
+    t.fail("top_diameter_m", "= " + significant(c.top_diameter) + " must be at most " + most);
   if (!(c.height > 0 && c.height <= kMaxContainerSize))
-    t.fail("height_m", "= " + num(c.height) + " must be in (0, " + most);
+    t.fail("height_m", "= " + significant(c.height) + " must be in (0, " + most);
   if (!(c.gap >= 0 && c.gap <= kMaxContainerSize))
-    t.fail("gap_m", "= " + num(c.gap) + " must be in [0, " + most);
+    t.fail("gap_m", "= " + significant(c.gap) + " must be in [0, " + most);
   t.finish();
   const sim::ResolvedPsd psd = sim::resolve_psd(s.psd.spec);
   if (psd.d_max >= c.bottom_diameter) {
-    throw InputError(file + ": sample d_max = " + num(psd.d_max * 1e3) +
+    throw InputError(file + ": sample d_max = " + significant(psd.d_max * 1e3) +
                      " mm does not pass the outlet container.bottom_diameter_m = " +
-                     num(c.bottom_diameter) + " m");
+                     significant(c.bottom_diameter) + " m");
   }
   check_shapes_pass_outlet(s.shapes, psd.d_max, c.bottom_diameter, file);
   const double density = s.materials[material_index(s, s.sample_material, "sample")].density;
   const double bulk = s.mass / (density * 0.6);  // loose bulk volume (solid fraction 0.6)
   if (bulk > container_volume(c)) {
-    throw InputError(file + ": sample.mass_kg = " + num(s.mass) + " needs about " +
-                     num(bulk * 1e6) + " cm^3 of bulk volume, more than the container's " +
-                     num(container_volume(c) * 1e6) + " cm^3 (container.bottom_diameter_m = " +
-                     num(c.bottom_diameter) + ", container.top_diameter_m = " +
-                     num(c.top_diameter) + ", container.height_m = " + num(c.height) + ")");
+    throw InputError(file + ": sample.mass_kg = " + significant(s.mass) + " needs about " +
+                     significant(bulk * 1e6) + " cm^3 of bulk volume, more than the container's " +
+                     significant(container_volume(c) * 1e6) +
+                     " cm^3 (container.bottom_diameter_m = " + significant(c.bottom_diameter) +
+                     ", container.top_diameter_m = " + significant(c.top_diameter) +
+                     ", container.height_m = " + significant(c.height) + ")");
   }
 }
 
@@ -355,28 +360,30 @@ void read_procedure(TableReader t, ProcedureConfig& p) {
   p.fill_jitter = t.number("fill_jitter", p.fill_jitter);
   p.fill_max_speed = t.number("fill_max_speed_m_s", p.fill_max_speed);
   if (!(p.fill_max_speed > 0))
-    t.fail("fill_max_speed_m_s", "= " + num(p.fill_max_speed) + " must be positive");
+    t.fail("fill_max_speed_m_s", "= " + significant(p.fill_max_speed) + " must be positive");
   if (!(p.lift_speed > 0 && p.lift_speed <= kMaxLiftSpeed))
-    t.fail("lift_speed_m_s", "= " + num(p.lift_speed) + " m/s must be in (0, " +
-                                 num(kMaxLiftSpeed) + "] (the lab lifts at 0.01)");
+    t.fail("lift_speed_m_s", "= " + significant(p.lift_speed) + " m/s must be in (0, " +
+                                 significant(kMaxLiftSpeed) + "] (the lab lifts at 0.01)");
   if (!(p.settle_speed > 0 && p.settle_speed <= kMaxSettleSpeed))
-    t.fail("settle_speed_m_s", "= " + num(p.settle_speed) + " m/s must be in (0, " +
-                                   num(kMaxSettleSpeed) + "]");
+    t.fail("settle_speed_m_s", "= " + significant(p.settle_speed) + " m/s must be in (0, " +
+                                   significant(kMaxSettleSpeed) + "]");
   if (!(p.fill_settle_max > 0))
-    t.fail("fill_settle_max_s", "= " + num(p.fill_settle_max) + " must be positive");
+    t.fail("fill_settle_max_s", "= " + significant(p.fill_settle_max) + " must be positive");
   if (!(p.final_settle_max > 0))
-    t.fail("final_settle_max_s", "= " + num(p.final_settle_max) + " must be positive");
+    t.fail("final_settle_max_s", "= " + significant(p.final_settle_max) + " must be positive");
   if (!(p.max_time > 0 && p.max_time <= kMaxMaxTime))
-    t.fail("max_time_s", "= " + num(p.max_time) + " s must be in (0, " + num(kMaxMaxTime) + "]");
+    t.fail("max_time_s",
+           "= " + significant(p.max_time) + " s must be in (0, " + significant(kMaxMaxTime) + "]");
   if (!(p.clog_window > 0))
-    t.fail("clog_window_s", "= " + num(p.clog_window) + " must be positive");
+    t.fail("clog_window_s", "= " + significant(p.clog_window) + " must be positive");
   if (!(p.max_retained_fraction >= 0 && p.max_retained_fraction < 1))
-    t.fail("max_retained_fraction", "= " + num(p.max_retained_fraction) + " must be in [0, 1)");
+    t.fail("max_retained_fraction",
+           "= " + significant(p.max_retained_fraction) + " must be in [0, 1)");
   if (!(p.lattice_gap >= 0 && p.lattice_gap <= kMaxLatticeGap))
-    t.fail("lattice_gap", "= " + num(p.lattice_gap) + " must be in [0, " + num(kMaxLatticeGap) +
-                              "] (fill spacing d_max (1 + this))");
+    t.fail("lattice_gap", "= " + significant(p.lattice_gap) + " must be in [0, " +
+                              significant(kMaxLatticeGap) + "] (fill spacing d_max (1 + this))");
   if (!(p.fill_jitter >= 0 && p.fill_jitter <= 1))
-    t.fail("fill_jitter", "= " + num(p.fill_jitter) +
+    t.fail("fill_jitter", "= " + significant(p.fill_jitter) +
                               " must be in [0, 1] (the fraction of a grain's free room in its "
                               "lattice cell)");
   t.finish();
@@ -397,30 +404,31 @@ void read_numerics(TableReader t, sim::Settings& n) {
   n.max_overlap_ratio = t.number("max_overlap_ratio", n.max_overlap_ratio);
   n.initial_overlap_tolerance = t.number("initial_overlap_tolerance", n.initial_overlap_tolerance);
   n.escape_distance = t.number("escape_distance_m", n.escape_distance);
-  if (n.time_step < 0) t.fail("time_step_s", "= " + num(n.time_step) + " must not be negative");
+  if (n.time_step < 0)
+    t.fail("time_step_s", "= " + significant(n.time_step) + " must not be negative");
   // The stability guard (max_rayleigh_fraction) is the engine's, not a scene key.
   if (!(n.rayleigh_fraction > 0 && n.rayleigh_fraction <= n.max_rayleigh_fraction))
-    t.fail("rayleigh_fraction", "= " + num(n.rayleigh_fraction) + " must be in (0, " +
-                                    num(n.max_rayleigh_fraction) +
+    t.fail("rayleigh_fraction", "= " + significant(n.rayleigh_fraction) + " must be in (0, " +
+                                    significant(n.max_rayleigh_fraction) +
                                     "]: above it the explicit integration is unstable");
   const double g = -n.gravity.z();
   // A pile forms only under gravity pulling the grains onto the plate: without it (0, or
   // upward) there is no pile physics and no angle to report.
   if (!(std::isfinite(g) && g > 0 && g <= kMaxGravity))
-    t.fail("gravity_m_s2", "= " + num(g) + " must be positive (downward) and at most " +
-                               num(kMaxGravity) + " m/s^2 (the lab's is 9.81)");
+    t.fail("gravity_m_s2", "= " + significant(g) + " must be positive (downward) and at most " +
+                               significant(kMaxGravity) + " m/s^2 (the lab's is 9.81)");
   if (!(n.initial_overlap_tolerance >= 0 && std::isfinite(n.initial_overlap_tolerance)))
     t.fail("initial_overlap_tolerance",
-           "= " + num(n.initial_overlap_tolerance) + " must not be negative");
+           "= " + significant(n.initial_overlap_tolerance) + " must not be negative");
   if (!(n.max_overlap_ratio > 0 && n.max_overlap_ratio <= 1))
-    t.fail("max_overlap_ratio", "= " + num(n.max_overlap_ratio) + " must be in (0, 1]");
+    t.fail("max_overlap_ratio", "= " + significant(n.max_overlap_ratio) + " must be in (0, 1]");
   if (!(n.escape_distance > 0 && std::isfinite(n.escape_distance)))
-    t.fail("escape_distance_m", "= " + num(n.escape_distance) + " must be positive");
+    t.fail("escape_distance_m", "= " + significant(n.escape_distance) + " must be positive");
   if (!(n.skin >= 0 && std::isfinite(n.skin)))
-    t.fail("skin_m", "= " + num(n.skin) + " must not be negative");
+    t.fail("skin_m", "= " + significant(n.skin) + " must not be negative");
   if (!(n.softened_youngs_modulus >= 0 && n.softened_youngs_modulus <= kMaxModulus))
-    t.fail("softened_youngs_modulus_pa", "= " + num(n.softened_youngs_modulus) +
-                                             " must be in [0, " + num(kMaxModulus) +
+    t.fail("softened_youngs_modulus_pa", "= " + significant(n.softened_youngs_modulus) +
+                                             " must be in [0, " + significant(kMaxModulus) +
                                              "] Pa (0: each material's own)");
   t.finish();
 }
@@ -432,11 +440,13 @@ void read_output(TableReader t, OutputConfig& o) {
   o.progress_interval = t.number("progress_interval_s", o.progress_interval);
   o.contact_forces = t.boolean("contact_forces", o.contact_forces);
   if (o.frame_interval < 0)
-    t.fail("frame_interval_s", "= " + num(o.frame_interval) + " must not be negative");
+    t.fail("frame_interval_s", "= " + significant(o.frame_interval) + " must not be negative");
   if (!(o.checkpoint_interval > 0))
-    t.fail("checkpoint_interval_s", "= " + num(o.checkpoint_interval) + " must be positive");
+    t.fail("checkpoint_interval_s",
+           "= " + significant(o.checkpoint_interval) + " must be positive");
   if (o.progress_interval < 0)
-    t.fail("progress_interval_s", "= " + num(o.progress_interval) + " must not be negative");
+    t.fail("progress_interval_s",
+           "= " + significant(o.progress_interval) + " must not be negative");
   t.finish();
 }
 
@@ -455,7 +465,8 @@ void read_measure(TableReader t, sim::PileGeometrySettings& m) {
   m.flank_high = t.number("flank_high", m.flank_high);
   m.sectors = count("sectors", m.sectors, 4, kMaxSectors);
   if (!(m.flank_low >= 0 && m.flank_low < m.flank_high && m.flank_high <= 1))
-    t.fail("flank_low", "= " + num(m.flank_low) + " / measure.flank_high = " + num(m.flank_high) +
+    t.fail("flank_low", "= " + significant(m.flank_low) +
+                            " / measure.flank_high = " + significant(m.flank_high) +
                             " must satisfy 0 <= flank_low < flank_high <= 1");
   t.finish();
 }
@@ -469,31 +480,34 @@ void check_run_bounds(const SceneConfig& s, double dt) {
                                     "softened_youngs_modulus_pa or materials' youngs_modulus_pa)"
                                     " and density";
   if (!(dt > 0 && std::isfinite(dt)))
-    throw InputError(s.file + ": the time step from " + dt_keys + " is " + num(dt) +
+    throw InputError(s.file + ": the time step from " + dt_keys + " is " + significant(dt) +
                          " s; it must be positive and finite",
                      "numerics.time_step_s");
   const double steps = s.procedure.max_time / dt;
   if (!(steps <= kMaxSteps))
-    throw InputError(s.file + ": procedure.max_time_s = " + num(s.procedure.max_time) +
-                         " s at a time step of " + num(dt) + " s (from " + dt_keys + ") is " +
-                         num(steps) + " steps, above the limit of " + num(kMaxSteps) +
-                         "; lower the stiffness or procedure.max_time_s",
+    throw InputError(s.file + ": procedure.max_time_s = " + significant(s.procedure.max_time) +
+                         " s at a time step of " + significant(dt) + " s (from " + dt_keys +
+                         ") is " + significant(steps) + " steps, above the limit of " +
+                         significant(kMaxSteps) + "; lower the stiffness or procedure.max_time_s",
                      "procedure.max_time_s");
   const double density = s.materials[material_index(s, s.sample_material, "")].density;
   const double count = sim::expected_particle_count(s.psd.spec, s.mass, density);
   if (!(count <= kMaxParticles))
-    throw InputError(s.file + ": sample.mass_kg = " + num(s.mass) + " kg down to the cut-off " +
-                         "sample.d_min_mm = " + num(1e3 * sim::resolve_psd(s.psd.spec).d_min) +
-                         " mm is about " + num(count) + " particles, above the limit of " +
-                         num(kMaxParticles) + "; raise sample.d_min_mm or lower sample.mass_kg",
-                     "sample.d_min_mm");
+    throw InputError(
+        s.file + ": sample.mass_kg = " + significant(s.mass) + " kg down to the cut-off " +
+            "sample.d_min_mm = " + significant(1e3 * sim::resolve_psd(s.psd.spec).d_min) +
+            " mm is about " + significant(count) + " particles, above the limit of " +
+            significant(kMaxParticles) + "; raise sample.d_min_mm or lower sample.mass_kg",
+        "sample.d_min_mm");
   const double every = s.output.frame_interval;
   if (every > 0 && !(s.procedure.max_time / every <= kMaxFrames))
-    throw InputError(s.file + ": output.frame_interval_s = " + num(every) + " s writes up to " +
-                         num(s.procedure.max_time / std::max(every, dt)) +
+    throw InputError(s.file + ": output.frame_interval_s = " + significant(every) +
+                         " s writes up to " +
+                         significant(s.procedure.max_time / std::max(every, dt)) +
                          " frames (each two or more .vtp files) in procedure.max_time_s = " +
-                         num(s.procedure.max_time) + " s, above the limit of " + num(kMaxFrames) +
-                         "; raise it to at least " + num(s.procedure.max_time / kMaxFrames) +
+                         significant(s.procedure.max_time) + " s, above the limit of " +
+                         significant(kMaxFrames) + "; raise it to at least " +
+                         significant(s.procedure.max_time / kMaxFrames) +
                          " s, lower max_time_s, or set 0 for the final state only",
                      "output.frame_interval_s");
 }

@@ -27,8 +27,6 @@ void check_sizes(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const Eigen
                                   "] = " + std::to_string(sigma[i]) + " must be positive");
 }
 
-std::string fmt(double v, int digits = 3) { return significant(v, digits); }
-
 Eigen::MatrixXd columns(const Eigen::VectorXd& a, const Eigen::VectorXd* b) {
   Eigen::MatrixXd x(a.size(), b ? 2 : 1);
   x.col(0) = a;
@@ -213,9 +211,9 @@ CandidateScore score_candidate(const TraceProblem& p, const std::string& name,
   s.significant = s.t > rule.min_t;
   s.predictive = s.loo_gain > margin;
   s.accepted = s.significant && s.predictive;
-  s.why = "|c|/se = " + fmt(s.t) + (s.significant ? " > " : " <= ") + fmt(rule.min_t) +
-          "; LOO gain " + fmt(s.loo_gain) + " deg" + (s.predictive ? " > " : " <= ") +
-          "seed noise " + fmt(margin) + " deg";
+  s.why = "|c|/se = " + significant(s.t, 3) + (s.significant ? " > " : " <= ") +
+          significant(rule.min_t, 3) + "; LOO gain " + significant(s.loo_gain, 3) + " deg" +
+          (s.predictive ? " > " : " <= ") + "seed noise " + significant(margin, 3) + " deg";
   return s;
 }
 

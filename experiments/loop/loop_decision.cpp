@@ -11,8 +11,6 @@
 namespace reposetwin::experiments {
 namespace {
 
-std::string fmt(double v, int digits = 3) { return significant(v, digits); }
-
 // The standardised rows of every channel, test-major within each channel: row c n + i.
 struct Stacked {
   Eigen::VectorXd y, s, f;
@@ -179,9 +177,9 @@ std::string trace_verdict_name(TraceVerdict v) {
 namespace {
 
 std::string describe(const JointScore& s) {
-  return s.name + " (c = " + fmt(s.coef) + " +- " + fmt(s.coef_se) + ", joint chi^2 " +
-         fmt(s.chi2) + " over " + std::to_string(s.rows) + " values, leave-one-out " +
-         fmt(s.loo_chi2) + ")";
+  return s.name + " (c = " + significant(s.coef, 3) + " +- " + significant(s.coef_se, 3) +
+         ", joint chi^2 " + significant(s.chi2, 3) + " over " + std::to_string(s.rows) +
+         " values, leave-one-out " + significant(s.loo_chi2, 3) + ")";
 }
 
 }  // namespace
@@ -192,9 +190,10 @@ std::string outside_range(double coef, double coef_se, double off, double probe,
   const double band = 2.0 * coef_se * std::abs(probe - off);
   if (value + band >= lo && value - band <= hi) return "";
   const bool below = value + band < lo;
-  return "c = " + fmt(coef) + " +- " + fmt(coef_se) + " puts it at " + fmt(value) + " +- " +
-         fmt(0.5 * band) + " " + units + ", " + (below ? "below" : "above") + " its range's end " +
-         fmt(below ? lo : hi) + " " + units;
+  return "c = " + significant(coef, 3) + " +- " + significant(coef_se, 3) + " puts it at " +
+         significant(value, 3) + " +- " + significant(0.5 * band, 3) + " " + units + ", " +
+         (below ? "below" : "above") + " its range's end " + significant(below ? lo : hi, 3) + " " +
+         units;
 }
 
 bool accepted_jointly(const JointScore& j, const JointScore& mu_only, const AcceptanceRule& rule) {
@@ -252,19 +251,20 @@ TraceDecision decide_among(const Contenders& c, const JointScore& offset, const 
                            mu_only.chi2 - offset.chi2 > rule.min_delta_chi2;
   TraceDecision d;
   const std::string offset_words =
-      "a uniform offset of " + fmt(offset.coef) + " +- " + fmt(offset.coef_se) +
-      " deg on every test (|c|/se " + fmt(offset.t) + "), beyond mu_r's reach (joint chi^2 " +
-      fmt(offset.chi2) + " against " + fmt(mu_only.chi2) + " with the mu_r correction alone" +
+      "a uniform offset of " + significant(offset.coef, 3) + " +- " +
+      significant(offset.coef_se, 3) + " deg on every test (|c|/se " + significant(offset.t, 3) +
+      "), beyond mu_r's reach (joint chi^2 " + significant(offset.chi2, 3) + " against " +
+      significant(mu_only.chi2, 3) + " with the mu_r correction alone" +
       (offset.mu_shift_at_bound ? ", which stops at the grid's bound)" : ")");
   if (offset_flag &&
       (contenders.empty() || offset.chi2 - contenders.front()->chi2 <= rule.min_delta_chi2)) {
     d.verdict = TraceVerdict::kMeasurementSuspected;
-    d.statement =
-        "suspected measurement or declared-condition error, no physical effect named: " +
-        offset_words +
-        (contenders.empty() ? std::string("; no candidate meets the acceptance rule")
-                            : "; the best candidate, " + describe(*contenders.front()) +
-                                  ", does not beat it by more than " + fmt(rule.min_delta_chi2));
+    d.statement = "suspected measurement or declared-condition error, no physical effect named: " +
+                  offset_words +
+                  (contenders.empty() ? std::string("; no candidate meets the acceptance rule")
+                                      : "; the best candidate, " + describe(*contenders.front()) +
+                                            ", does not beat it by more than " +
+                                            significant(rule.min_delta_chi2, 3));
     return d;
   }
   if (contenders.empty()) {
@@ -280,7 +280,7 @@ TraceDecision decide_among(const Contenders& c, const JointScore& offset, const 
     d.statement = "indistinguishable within the noise, none named:";
     for (const JointScore* x : contenders)
       if (x->chi2 - best <= rule.min_delta_chi2) d.statement += " " + describe(*x) + ";";
-    d.statement += " their joint chi^2 differ by " + fmt(rule.min_delta_chi2) +
+    d.statement += " their joint chi^2 differ by " + significant(rule.min_delta_chi2, 3) +
                    " or less; a further observable or test must decide";
     return d;
   }
@@ -290,11 +290,12 @@ TraceDecision decide_among(const Contenders& c, const JointScore& offset, const 
   d.statement = "named " + describe(*contenders.front());
   if (std::find(c.joint_only.begin(), c.joint_only.end(), d.named) != c.joint_only.end())
     d.statement += " (accepted on the joint fit, not on the angle alone: leave-one-out " +
-                   fmt(contenders.front()->loo_chi2) + " against " + fmt(mu_only.loo_chi2) +
-                   " with the mu_r correction alone)";
+                   significant(contenders.front()->loo_chi2, 3) + " against " +
+                   significant(mu_only.loo_chi2, 3) + " with the mu_r correction alone)";
   if (contenders.size() > 1)
     d.statement += "; next " + describe(*contenders[1]) + ", worse by " +
-                   fmt(contenders[1]->chi2 - best) + " > " + fmt(rule.min_delta_chi2);
+                   significant(contenders[1]->chi2 - best, 3) + " > " +
+                   significant(rule.min_delta_chi2, 3);
   if (offset_flag) d.statement += "; it beats " + offset_words;
   return d;
 }

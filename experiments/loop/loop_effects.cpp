@@ -17,8 +17,6 @@ using nlohmann::json;
 
 namespace {
 
-std::string num(double v) { return toml_float(v, 12); }
-
 std::vector<std::string> sets_of(const LabTest& t) {
   std::vector<std::string> s;
   for (const auto& [k, v] : t.overrides) s.push_back(k + "=" + v);
@@ -243,12 +241,13 @@ SimRequest make_request(const LabTest& test, const std::string& mu_key, double m
     r.image.camera_height_m = *test.camera_height_m;
     r.image.declared_height_m = *test.camera_height_m;
   }
-  for (const std::string& k : split_keys(mu_key)) r.extra.emplace_back(resolve_key(test, k), num(mu_r));
+  for (const std::string& k : split_keys(mu_key))
+    r.extra.emplace_back(resolve_key(test, k), toml_float(mu_r, 12));
   for (const EffectSetting& s : effects) {
     const CandidateEffect& e = *s.effect;
     switch (e.apply) {
       case EffectApply::kSetScene:
-        r.extra.emplace_back(resolve_key(test, e.key), num(s.value));
+        r.extra.emplace_back(resolve_key(test, e.key), toml_float(s.value, 12));
         for (const auto& [k, v] : e.companions) {
           if (v != "{d_ref}") {
             r.extra.emplace_back(resolve_key(test, k), v);
@@ -256,11 +255,12 @@ SimRequest make_request(const LabTest& test, const std::string& mu_key, double m
           }
           const double d_ref = test.reference_diameter_m > 0.0 ? test.reference_diameter_m
                                                                 : median_grain_diameter(test);
-          r.extra.emplace_back(resolve_key(test, k), num(d_ref));
+          r.extra.emplace_back(resolve_key(test, k), toml_float(d_ref, 12));
         }
         break;
       case EffectApply::kFactorScene:
-        r.extra.emplace_back(resolve_key(test, e.key), num(s.value * scene_value(test, e.key)));
+        r.extra.emplace_back(resolve_key(test, e.key),
+                             toml_float(s.value * scene_value(test, e.key), 12));
         break;
       case EffectApply::kImageHeight:
         r.image.camera_height_m = r.image.declared_height_m + s.value;
@@ -274,9 +274,11 @@ SimRequest make_request(const LabTest& test, const std::string& mu_key, double m
         r.image.k1 = r.image.declared_k1 + s.value;
         break;
       case EffectApply::kShape:
-        r.extra.emplace_back("sample.shape", "{name = \"elongated\", kind = \"generated\", "
-                                             "elongation = " + num(s.value) + ", spheres = " +
-                                             std::to_string(kShapeSpheres) + "}");
+        r.extra.emplace_back("sample.shape",
+                             "{name = \"elongated\", kind = \"generated\", "
+                             "elongation = " +
+                                 toml_float(s.value, 12) +
+                                 ", spheres = " + std::to_string(kShapeSpheres) + "}");
         break;
     }
   }

@@ -13,12 +13,6 @@ namespace {
 
 json optional_number(const std::optional<double>& v) { return v ? json(*v) : json(); }
 
-json to_json_array(const auto& records) {
-  json a = json::array();
-  for (const auto& r : records) a.push_back(to_json(r));
-  return a;
-}
-
 }  // namespace
 
 RoleRmse rmse_by_role(const std::vector<ResidualRow>& rows) {

@@ -351,6 +351,14 @@ nlohmann::json to_json(const PhotoPair& p);
 nlohmann::json to_json(const LoopSummary& s);
 /// loop.json: the records, the candidate registry, the rule and a summary.
 nlohmann::json to_json(const LoopRecord& loop);
+
+/// The records of a list as a JSON array, each written by its to_json.
+nlohmann::json to_json_array(const auto& records) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const auto& r : records) a.push_back(to_json(r));
+  return a;
+}
+
 /// The acceptance rule in words, as loop.json's rule.text gives it (the code's words, written
 /// with every loop.json and not read back).
 const char* acceptance_rule_text();

@@ -191,12 +191,6 @@ constexpr const char* kRuleText =
     "take up and no candidate beats is flagged as a suspected measurement "
     "error, nothing named";
 
-json to_json_array(const auto& records) {
-  json a = json::array();
-  for (const auto& r : records) a.push_back(to_json(r));
-  return a;
-}
-
 // loop.json holds the LOO margin in degrees, loo_margin_factor x the baseline's seed standard
 // error; the factor is their quotient, moved by an ulp or two where the division does not undo
 // the product, so that it writes the same margin again.

@@ -4,16 +4,11 @@
 #include <cstdio>
 #include <numbers>
 
+#include "experiments/io/format.hpp"
 #include "sim/psd.hpp"
 
 namespace reposetwin::experiments {
 namespace {
-
-std::string fmt(const char* pattern, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, pattern, v);
-  return buf;
-}
 
 std::size_t at(RepresentativenessCheck c) { return static_cast<std::size_t>(c); }
 
@@ -31,14 +26,14 @@ void check_height(Representativeness& r) {
   if (!low_predicted && !low_measured) return;
   std::string w = "the pile is low for its grains: ";
   if (r.measured_height_m)
-    w += "H = " + fmt("%.1f", 1e3 * *r.measured_height_m) + " mm measured (" +
-         fmt("%.1f", *r.measured_height_m / r.d_max_m) + " d_max), predicted ";
+    w += "H = " + printf_text("%.1f", 1e3 * *r.measured_height_m) + " mm measured (" +
+         printf_text("%.1f", *r.measured_height_m / r.d_max_m) + " d_max), predicted ";
   else
     w += "predicted H = ";
-  w += fmt("%.0f", 1e3 * r.height_lo_m) + "-" + fmt("%.0f", 1e3 * r.height_hi_m) +
-       " mm (a cone of the simulated mass at " + fmt("%.0f", k.angle_lo_deg) + "-" +
-       fmt("%.0f", k.angle_hi_deg) + " deg), against " + fmt("%g", k.min_height_over_d_max) +
-       " d_max = " + fmt("%.0f", 1e3 * limit) +
+  w += printf_text("%.0f", 1e3 * r.height_lo_m) + "-" + printf_text("%.0f", 1e3 * r.height_hi_m) +
+       " mm (a cone of the simulated mass at " + printf_text("%.0f", k.angle_lo_deg) + "-" +
+       printf_text("%.0f", k.angle_hi_deg) + " deg), against " +
+       printf_text("%g", k.min_height_over_d_max) + " d_max = " + printf_text("%.0f", 1e3 * limit) +
        " mm; an angle from a pile a few grains high is not the material's. Raise sample.mass_kg "
        "(H grows as its cube root) or simulate smaller grains";
   r.warnings[at(RepresentativenessCheck::kPileHeight)] = w;
@@ -87,20 +82,22 @@ Representativeness representativeness(const SceneConfig& scene,
   check_height(r);
   if (r.not_simulated_fraction > rules.max_not_simulated)
     r.warnings[at(RepresentativenessCheck::kMassNotSimulated)] =
-        fmt("%.0f", 100.0 * r.not_simulated_fraction) +
-        "% of the sieve sheet's mass is not simulated (" + fmt("%.0f", 100.0 * r.fines_fraction) +
-        "% finer than d_min = " + fmt("%.3g", 1e3 * psd.d_min) + " mm, " +
-        fmt("%.0f", 100.0 * r.scalped_fraction) +
-        "% above d_max = " + fmt("%.3g", 1e3 * psd.d_max) + " mm), above " +
-        fmt("%.0f", 100.0 * rules.max_not_simulated) +
+        printf_text("%.0f", 100.0 * r.not_simulated_fraction) +
+        "% of the sieve sheet's mass is not simulated (" +
+        printf_text("%.0f", 100.0 * r.fines_fraction) +
+        "% finer than d_min = " + printf_text("%.3g", 1e3 * psd.d_min) + " mm, " +
+        printf_text("%.0f", 100.0 * r.scalped_fraction) +
+        "% above d_max = " + printf_text("%.3g", 1e3 * psd.d_max) + " mm), above " +
+        printf_text("%.0f", 100.0 * rules.max_not_simulated) +
         "%: the pile is of the simulated sizes only. Lower sample.d_min_mm to simulate more of "
         "the fines (the particle count grows about as d_min^-3)";
   if (r.outlet_over_d_max < rules.min_outlet_over_d_max)
     r.warnings[at(RepresentativenessCheck::kOutletWidth)] =
-        "the outlet is narrow for the grains: W / d_max = " + fmt("%.2f", r.outlet_over_d_max) +
-        " (W = container.bottom_diameter_m = " + fmt("%.3g", 1e3 * r.outlet_m) +
-        " mm, d_max = " + fmt("%.3g", 1e3 * r.d_max_m) + " mm), below " +
-        fmt("%g", rules.min_outlet_over_d_max) +
+        "the outlet is narrow for the grains: W / d_max = " +
+        printf_text("%.2f", r.outlet_over_d_max) +
+        " (W = container.bottom_diameter_m = " + printf_text("%.3g", 1e3 * r.outlet_m) +
+        " mm, d_max = " + printf_text("%.3g", 1e3 * r.d_max_m) + " mm), below " +
+        printf_text("%g", rules.min_outlet_over_d_max) +
         ", where the paper's Fig. 10 funnel flow arches and the outlet may jam";
   return r;
 }
@@ -131,13 +128,14 @@ nlohmann::json to_json(const Representativeness& r) {
       {"outlet_over_d_max", r.outlet_over_d_max},
       {"min_outlet_over_d_max", k.min_outlet_over_d_max},
       {"warnings", warnings},
-      {"rules", "H below " + fmt("%g", k.min_height_over_d_max) +
+      {"rules", "H below " + printf_text("%g", k.min_height_over_d_max) +
                     " d_max (H predicted as the cone of the simulated mass at solid fraction " +
-                    fmt("%g", k.solid_fraction) + " and " + fmt("%g", k.angle_lo_deg) + "-" +
-                    fmt("%g", k.angle_hi_deg) + " deg, and measured); more than " +
-                    fmt("%g", 100.0 * k.max_not_simulated) +
+                    printf_text("%g", k.solid_fraction) + " and " +
+                    printf_text("%g", k.angle_lo_deg) + "-" + printf_text("%g", k.angle_hi_deg) +
+                    " deg, and measured); more than " +
+                    printf_text("%g", 100.0 * k.max_not_simulated) +
                     "% of the sieve sheet's mass outside the simulated sizes; W / d_max below " +
-                    fmt("%g", k.min_outlet_over_d_max) + " (the paper's Fig. 10)"}};
+                    printf_text("%g", k.min_outlet_over_d_max) + " (the paper's Fig. 10)"}};
   if (r.measured_height_m) j["measured_height_m"] = *r.measured_height_m;
   return j;
 }

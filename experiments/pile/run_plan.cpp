@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <numbers>
 
+#include "experiments/io/format.hpp"
 #include "experiments/io/input_error.hpp"
 #include "sim/psd.hpp"
 
@@ -33,12 +34,6 @@ double fill_height(const ContainerConfig& c, double volume) {
   if (v(hi) <= volume) return hi;
   for (int i = 0; i < 60; ++i) (v(0.5 * (lo + hi)) < volume ? lo : hi) = 0.5 * (lo + hi);
   return 0.5 * (lo + hi);
-}
-
-std::string fmt(const char* pattern, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, pattern, v);
-  return buf;
 }
 
 }  // namespace
@@ -83,16 +78,17 @@ RunPlan plan_run(const SceneConfig& scene, int threads, const PlanSettings& sett
 
 std::string plan_text(const RunPlan& p, const PlanSettings& s) {
   std::string t = "plan: " + std::to_string(p.particles) + " particles (d " +
-                  fmt("%.3g", p.d_min_mm) + "-" + fmt("%.3g", p.d_max_mm) + " mm); " +
-                  fmt("%.1f", 100.0 * p.fines_fraction) +
+                  printf_text("%.3g", p.d_min_mm) + "-" + printf_text("%.3g", p.d_max_mm) +
+                  " mm); " + printf_text("%.1f", 100.0 * p.fines_fraction) +
                   "% of the mass is finer than d_min and not simulated\n";
-  t += "plan: dt " + fmt("%.3g", p.time_step_s) + " s, about " + fmt("%.2g", p.simulated_time_s) +
-       " s simulated (fill height " + fmt("%.0f", 1e3 * p.fill_height_m) + " mm), " +
-       std::to_string(p.steps) + " steps\n";
+  t += "plan: dt " + printf_text("%.3g", p.time_step_s) + " s, about " +
+       printf_text("%.2g", p.simulated_time_s) + " s simulated (fill height " +
+       printf_text("%.0f", 1e3 * p.fill_height_m) + " mm), " + std::to_string(p.steps) + " steps\n";
   t += "plan: estimated wall time " + duration_text(p.wall_s) + " at " +
-       fmt("%.2g", p.particle_steps_per_s) + " particle-steps/s (" +
-       fmt("%.2g", s.particle_steps_per_s_per_thread) + " per thread, measured on whole pile " +
-       "runs, x " + std::to_string(p.threads) + " thread(s))\n";
+       printf_text("%.2g", p.particle_steps_per_s) + " particle-steps/s (" +
+       printf_text("%.2g", s.particle_steps_per_s_per_thread) +
+       " per thread, measured on whole pile " + "runs, x " + std::to_string(p.threads) +
+       " thread(s))\n";
   return t + representativeness_text(p.representative);
 }
 
@@ -111,9 +107,9 @@ std::string refusal(const std::string& subject, std::int64_t particles, double w
   if (why.empty()) return "";
   const double bigger = 2.0 * d_min_mm;
   const std::string example =
-      bigger < 0.9 * d_max_mm ? ", e.g. --set sample.d_min_mm=" + fmt("%.3g", bigger) : "";
+      bigger < 0.9 * d_max_mm ? ", e.g. --set sample.d_min_mm=" + printf_text("%.3g", bigger) : "";
   return subject + " is too large to start unasked: " + why +
-         ". Raise the cut-off sample.d_min_mm (now " + fmt("%.3g", d_min_mm) +
+         ". Raise the cut-off sample.d_min_mm (now " + printf_text("%.3g", d_min_mm) +
          " mm; the count grows about as d_min^-3)" + example +
          ", or lower sample.mass_kg; or pass --yes to run it anyway";
 }

@@ -20,25 +20,14 @@ std::string file_name(const json& v) {
   return v.is_string() ? fs::path(v.get<std::string>()).filename().string() : std::string("-");
 }
 
-bool open_end(const json& cal, std::size_t i) {
-  const json& o = cal.value("interval_open", json());
-  return o.is_array() && o.size() > i && o[i].is_boolean() && o[i].get<bool>();
-}
-
 std::string mu_r_text(const json& cal) {
   if (!cal.value("mu_r", json()).is_number()) return "none (" + cal.value("status", std::string("-")) + ")";
   std::string t = fixed(cal["mu_r"].get<double>(), 3);
   if (cal.contains("mu_r_interval") && cal["mu_r_interval"].is_array())
-    t += " [" + std::string(open_end(cal, 0) ? "\u2264" : "") +
+    t += " [" + std::string(interval_open_at(cal, 0) ? "\u2264" : "") +
          fixed_or_dash(cal["mu_r_interval"][0], 3) + ", " +
-         fixed_or_dash(cal["mu_r_interval"][1], 3) + (open_end(cal, 1) ? "+" : "") + "]";
+         fixed_or_dash(cal["mu_r_interval"][1], 3) + (interval_open_at(cal, 1) ? "+" : "") + "]";
   return t;
-}
-
-TableRow row(const std::string& what, const std::string& value) {
-  Cell w(what), v(value);
-  w.left = v.left = true;
-  return {{w, v}};
 }
 
 std::string range_text(const json& v, int digits, const std::string& unit) {
@@ -54,36 +43,37 @@ Table summary_table(const json& cal) {
   for (const json& k : cal.value("keys", json::array()))
     keys += (keys.empty() ? "" : ", ") + k.get<std::string>();
   t.rows = {
-      row("calibrated mu_r [95% interval]", mu_r_text(cal)),
-      row("status", cal.value("status", std::string("-"))),
-      row("target angle [deg]", fixed_or_dash(target.value("angle_deg", json())) + " \u00b1 " +
-                                    fixed_or_dash(target.value("sd_deg", json()))),
-      row("angle matched", cal.value("angle", std::string("-")) + ": " +
-                               cal.value("angle_method", std::string("-"))),
-      row("fitted angle at mu_r [deg]",
-          fixed_or_dash(cal.value("fitted_angle_deg", json())) + " \u00b1 " +
-              fixed_or_dash(cal.value("fitted_angle_halfwidth_deg", json())) +
-              " (95% half-width of the fitted mean)"),
-      row("angles reachable in the mu_r range [deg]",
-          range_text(cal.value("reachable_deg", json()), 2, "")),
-      row("mu_r range searched", range_text(cal.value("mu_r_range", json()), 3, "")),
-      row("pile runs (simulations)", std::to_string(cal.value("simulations", 0)) + ", " +
-                                         std::to_string(cal.value("seeds_per_point", 0)) +
-                                         " seed(s) per point, tolerance " +
-                                         fixed_or_dash(cal.value("tolerance_deg", json())) +
-                                         " deg"),
-      row("fit", cal.value("fit", json::object()).value("method", std::string("-")) +
-                     "; seed noise sd " +
-                     fixed_or_dash(cal.value("fit", json::object()).value("noise_sd_deg", json())) +
-                     " deg"),
-      row("keys set to mu_r", keys.empty() ? cal.value("key", std::string("-")) : keys),
-      row("rolling model",
-          cal.value("rolling_model", json::object()).value("keyword", std::string("-"))),
-      row("campaign, scene", file_name(cal.value("campaign", json())) + ", " +
-                                 file_name(cal.value("scene", json()))),
-      row("code version, created (UTC)", cal.value("code_version", std::string("-")) + ", " +
-                                             cal.value("created_utc", std::string("-"))),
-      row("message", cal.value("message", std::string("-")))};
+      text_row("calibrated mu_r [95% interval]", mu_r_text(cal)),
+      text_row("status", cal.value("status", std::string("-"))),
+      text_row("target angle [deg]", fixed_or_dash(target.value("angle_deg", json())) + " \u00b1 " +
+                                         fixed_or_dash(target.value("sd_deg", json()))),
+      text_row("angle matched", cal.value("angle", std::string("-")) + ": " +
+                                    cal.value("angle_method", std::string("-"))),
+      text_row("fitted angle at mu_r [deg]",
+               fixed_or_dash(cal.value("fitted_angle_deg", json())) + " \u00b1 " +
+                   fixed_or_dash(cal.value("fitted_angle_halfwidth_deg", json())) +
+                   " (95% half-width of the fitted mean)"),
+      text_row("angles reachable in the mu_r range [deg]",
+               range_text(cal.value("reachable_deg", json()), 2, "")),
+      text_row("mu_r range searched", range_text(cal.value("mu_r_range", json()), 3, "")),
+      text_row("pile runs (simulations)", std::to_string(cal.value("simulations", 0)) + ", " +
+                                              std::to_string(cal.value("seeds_per_point", 0)) +
+                                              " seed(s) per point, tolerance " +
+                                              fixed_or_dash(cal.value("tolerance_deg", json())) +
+                                              " deg"),
+      text_row("fit",
+               cal.value("fit", json::object()).value("method", std::string("-")) +
+                   "; seed noise sd " +
+                   fixed_or_dash(cal.value("fit", json::object()).value("noise_sd_deg", json())) +
+                   " deg"),
+      text_row("keys set to mu_r", keys.empty() ? cal.value("key", std::string("-")) : keys),
+      text_row("rolling model",
+               cal.value("rolling_model", json::object()).value("keyword", std::string("-"))),
+      text_row("campaign, scene", file_name(cal.value("campaign", json())) + ", " +
+                                      file_name(cal.value("scene", json()))),
+      text_row("code version, created (UTC)", cal.value("code_version", std::string("-")) + ", " +
+                                                  cal.value("created_utc", std::string("-"))),
+      text_row("message", cal.value("message", std::string("-")))};
   return t;
 }
 

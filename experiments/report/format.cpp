@@ -27,6 +27,11 @@ std::string fixed_or_dash(const nlohmann::json& v, int digits) {
   return v.is_number() ? fixed(v.get<double>(), digits) : std::string("-");
 }
 
+bool interval_open_at(const nlohmann::json& result, std::size_t i) {
+  const nlohmann::json& o = result.value("interval_open", nlohmann::json());
+  return o.is_array() && o.size() > i && o[i].is_boolean() && o[i].get<bool>();
+}
+
 std::string sig3(const nlohmann::json& v) {
   return v.is_number() ? printf_double("%.3g", v.get<double>()) : std::string("-");
 }

@@ -22,6 +22,10 @@ std::string fixed(double v, int digits = 2);
 /// fixed() of a JSON number, "-" otherwise.
 std::string fixed_or_dash(const nlohmann::json& v, int digits = 2);
 
+/// Whether a result's mu_r interval (`interval_open`, a pair of booleans) is open at end i
+/// (0 low, 1 high): the search stopped at the grid's end there.
+bool interval_open_at(const nlohmann::json& result, std::size_t i);
+
 /// Three significant digits ("%.3g"), "-" for a non-number: the loop's statistics.
 std::string sig3(const nlohmann::json& v);
 

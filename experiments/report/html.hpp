@@ -43,6 +43,13 @@ struct TableRow {
   bool shaded = false;  // set apart (a prediction among calibrations)
 };
 
+/// A row of two left-aligned cells: a name and its value in words.
+inline TableRow text_row(const std::string& key, const std::string& value) {
+  Cell k(key), v(value);
+  k.left = v.left = true;
+  return {{k, v}};
+}
+
 struct Table {
   std::vector<std::string> header;
   std::vector<TableRow> rows;

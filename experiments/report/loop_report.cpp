@@ -108,7 +108,7 @@ mustache::data photo_pair_data(const PhotoPair& p, const fs::path& dir) {
   return x;
 }
 
-std::string photos_section(const LoopRecord& loop, const fs::path& dir) {
+std::string loop_photos_section(const LoopRecord& loop, const fs::path& dir) {
   if (loop.photo_pairs.empty()) return "";
   mustache::data list(mustache::data::type::list);
   for (const PhotoPair& p : loop.photo_pairs) list.push_back(photo_pair_data(p, dir));
@@ -401,7 +401,7 @@ void write_loop_page(const LoopRecord& loop, const std::string& out_dir) {
       "ReposeTwin loop",
       "Closing the loop",
       {intro_section(loop), error_section(loop), effects_section(loop), iterations_section(loop),
-       notes_section(loop), residuals_section(loop, plot_dir), photos_section(loop, out_dir)}};
+       notes_section(loop), residuals_section(loop, plot_dir), loop_photos_section(loop, out_dir)}};
   write_file_atomic((fs::path(out_dir) / "index.html").string(), render_page(page));
 }
 

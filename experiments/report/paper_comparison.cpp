@@ -362,12 +362,6 @@ json paper_comparison(const std::vector<std::string>& dirs, const std::string& p
 namespace report {
 namespace {
 
-// Whether the mu_r interval of a comparison row is open at end i (0 low, 1 high).
-bool open_end(const json& r, std::size_t i) {
-  const json& o = r.value("interval_open", json());
-  return o.is_array() && o.size() > i && o[i].is_boolean() && o[i].get<bool>();
-}
-
 std::string int_or_dash(const json& v) {
   return v.is_number() ? std::to_string(v.get<int>()) : std::string("-");
 }
@@ -378,9 +372,9 @@ Cell our_mu_r(const json& r) {
     return r.contains("status") ? Cell(r.value("status", std::string())) : Cell("-");
   std::string mu = fixed(r["mu_r"].get<double>(), 3);
   if (r["mu_r_interval"].is_array())
-    mu += " [" + std::string(open_end(r, 0) ? "\u2264" : "") +
+    mu += " [" + std::string(interval_open_at(r, 0) ? "\u2264" : "") +
           fixed(r["mu_r_interval"][0].get<double>(), 3) + ", " +
-          fixed(r["mu_r_interval"][1].get<double>(), 3) + (open_end(r, 1) ? "+" : "") + "]";
+          fixed(r["mu_r_interval"][1].get<double>(), 3) + (interval_open_at(r, 1) ? "+" : "") + "]";
   return mu;
 }
 

@@ -76,7 +76,7 @@ std::string measures_section(const PileRun& run, const std::optional<Headline>& 
   return render(templates::kRunTable, d);
 }
 
-std::string photos_section(const RunSummaryInputs& in) {
+std::string run_photos_section(const RunSummaryInputs& in) {
   std::vector<Figure> figs;
   if (in.images) {
     for (const json& v : in.images->value("side_views", json::array())) {
@@ -99,12 +99,6 @@ std::string photos_section(const RunSummaryInputs& in) {
   d.set("photos", to_data(figs));
   d.set("none", text_or_false(in.images ? std::string() : "No photographs: " + in.images_note));
   return render(templates::kRunPhotos, d);
-}
-
-TableRow row(const std::string& key, const std::string& value) {
-  Cell k(key), v(value);
-  k.left = v.left = true;
-  return {{k, v}};
 }
 
 // A row of links to files of the run folder (relative, so a copied folder keeps them).
@@ -140,46 +134,47 @@ std::string inputs_section(const PileRun& run, const SceneConfig& scene,
         rolling += " (" + std::string(m.keyword) + ")";
   }
   return table_section(
-      "Inputs",
-      {row("scene", scene.name + " (" + path_for_page(scene.file) + ")"),
-       row("description", scene.description),
-       row("overrides (--set)", sets.empty() ? "none" : sets),
-       row("sample", fixed(scene.mass * 1e3, 1) + " g of " + scene.sample_material + ", seed " +
-                         std::to_string(scene.seed)),
-       row("sieve table", psd.name + " (" + path_for_page(psd.source) + ")"),
-       row("simulated sizes", fixed(psd.d_min_drawn_mm, 2) + "-" + fixed(psd.d_max_drawn_mm, 2) +
-                                  " mm; " + fixed(100 * psd.fines_fraction_not_simulated, 1) +
-                                  "% of the mass finer than d_min = " + fixed(psd.d_min_mm, 2) +
-                                  " mm not simulated"),
-       row("container", scene.container.kind + ", outlet " +
-                            mm(scene.container.bottom_diameter, 0) + " mm, top " +
-                            mm(scene.container.top_diameter, 0) + " mm, height " +
-                            mm(scene.container.height, 0) + " mm, lifted at " +
-                            fixed(scene.procedure.lift_speed, 3) + " m/s"),
-       row("rolling friction (sample on sample)", rolling), files_row({"scene.resolved.toml"})});
+      "Inputs", {text_row("scene", scene.name + " (" + path_for_page(scene.file) + ")"),
+                 text_row("description", scene.description),
+                 text_row("overrides (--set)", sets.empty() ? "none" : sets),
+                 text_row("sample", fixed(scene.mass * 1e3, 1) + " g of " + scene.sample_material +
+                                        ", seed " + std::to_string(scene.seed)),
+                 text_row("sieve table", psd.name + " (" + path_for_page(psd.source) + ")"),
+                 text_row("simulated sizes",
+                          fixed(psd.d_min_drawn_mm, 2) + "-" + fixed(psd.d_max_drawn_mm, 2) +
+                              " mm; " + fixed(100 * psd.fines_fraction_not_simulated, 1) +
+                              "% of the mass finer than d_min = " + fixed(psd.d_min_mm, 2) +
+                              " mm not simulated"),
+                 text_row("container", scene.container.kind + ", outlet " +
+                                           mm(scene.container.bottom_diameter, 0) + " mm, top " +
+                                           mm(scene.container.top_diameter, 0) + " mm, height " +
+                                           mm(scene.container.height, 0) + " mm, lifted at " +
+                                           fixed(scene.procedure.lift_speed, 3) + " m/s"),
+                 text_row("rolling friction (sample on sample)", rolling),
+                 files_row({"scene.resolved.toml"})});
 }
 
 std::string provenance_section(const PileRun& run, const RunSummaryInputs& in) {
   const RunProvenance& p = run.provenance;
   std::vector<TableRow> rows = {
-      row("code version", p.code_version),
-      row("created (UTC)", p.created_utc),
-      row("stop",
-          stop_reason_text(run.stop) + (run.stop.detail.empty() ? "" : ": " + run.stop.detail)),
-      row("particles", std::to_string(run.particles.final) + " in the pile's world (" +
-                           std::to_string(run.particles.initial) + " filled)"),
-      row("time step", significant(p.time_step_s) + " s (Rayleigh time " +
-                           significant(p.rayleigh_time_s) + " s)"),
-      row("Young's modulus", p.softened_youngs_modulus_pa
-                                 ? significant(*p.softened_youngs_modulus_pa) +
-                                       " Pa (softened; real " +
-                                       significant(p.youngs_modulus_real_pa) + " Pa)"
-                                 : significant(p.youngs_modulus_real_pa) + " Pa"),
-      row("steps, simulation wall time", std::to_string(run.performance.steps) + " steps, " +
-                                             duration_text(run.performance.wall_s) + " with " +
-                                             std::to_string(p.threads) + " thread(s)"),
-      row("command wall time (photographs included)", duration_text(in.wall_s))};
-  if (in.images) rows.push_back(row("renderer", in.images->value("gl", std::string("-"))));
+      text_row("code version", p.code_version),
+      text_row("created (UTC)", p.created_utc),
+      text_row("stop", stop_reason_text(run.stop) +
+                           (run.stop.detail.empty() ? "" : ": " + run.stop.detail)),
+      text_row("particles", std::to_string(run.particles.final) + " in the pile's world (" +
+                                std::to_string(run.particles.initial) + " filled)"),
+      text_row("time step", significant(p.time_step_s) + " s (Rayleigh time " +
+                                significant(p.rayleigh_time_s) + " s)"),
+      text_row("Young's modulus", p.softened_youngs_modulus_pa
+                                      ? significant(*p.softened_youngs_modulus_pa) +
+                                            " Pa (softened; real " +
+                                            significant(p.youngs_modulus_real_pa) + " Pa)"
+                                      : significant(p.youngs_modulus_real_pa) + " Pa"),
+      text_row("steps, simulation wall time", std::to_string(run.performance.steps) + " steps, " +
+                                                  duration_text(run.performance.wall_s) + " with " +
+                                                  std::to_string(p.threads) + " thread(s)"),
+      text_row("command wall time (photographs included)", duration_text(in.wall_s))};
+  if (in.images) rows.push_back(text_row("renderer", in.images->value("gl", std::string("-"))));
   std::vector<std::string> files = {"result.json", "series.pvd", "final.vtp"};
   if (in.images) files.push_back("images/measurement.json");
   rows.push_back(files_row(files));
@@ -241,7 +236,7 @@ std::string run_summary_html(const PileRun& run, const SceneConfig& scene,
       "ReposeTwin run: " + scene.name,
       "ReposeTwin run: " + scene.name,
       {headline_section(run, s, in), representativeness_section(run_representativeness(run, scene)),
-       photos_section(in), measures_section(run, s.headline, in.images),
+       run_photos_section(in), measures_section(run, s.headline, in.images),
        inputs_section(run, scene, in), provenance_section(run, in)}};
   return render_page(page);
 }
