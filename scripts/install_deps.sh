@@ -4,7 +4,7 @@
 set -euo pipefail
 
 PACKAGES=(
-  build-essential cmake pkg-config
+  build-essential cmake ninja-build pkg-config
   libeigen3-dev            # vector math (sim/)
   libosmesa6-dev           # offscreen OpenGL (render/)
   libopencv-dev            # image measurement (vision/): core, imgproc, imgcodecs
