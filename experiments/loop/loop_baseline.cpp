@@ -49,34 +49,20 @@ Baseline calibrated(LoopContext ctx, const Surface& surface) {
 
 // mu_r on an end of its grid cannot take up what it should, and the tracing would hand the rest
 // to the effects (an unbounded mu_r correction is no answer: beyond the grid a constant offset is
-// not a mu_r change). So the grid grows by one point beyond that end, the spacing of its last
-// step, at most grid_extensions times (never below 0 nor above mu_max); the baseline is
+// not a mu_r change). So the grid grows beyond that end (next_grid_point); the baseline is
 // simulated there (the other points come from the cache) and mu_r calibrated again. Returns
 // what stopped the growth short of the bound, or empty.
 std::string extend_grid(Baseline& b, PileStore& store, std::vector<double>& added) {
-  const LoopSettings& s = b.ctx.s();
-  const int allowed = s.at_bound == GridBound::kExtend ? s.grid_extensions : 0;
-  const MuPrior& prior = s.mu_prior;
-  const double floor = prior.declared() ? prior.lo : 0.0;
-  const double ceiling = prior.declared() ? std::min(prior.hi, s.mu_max) : s.mu_max;
-  while (b.record.fit.at_edge && static_cast<int>(added.size()) < allowed) {
+  while (b.record.fit.at_edge) {
     const std::vector<double>& grid = b.ctx.grid;
     const bool low = b.record.fit.mu <= grid.front() + 1e-12;
-    double next = low ? grid.front() - (grid[1] - grid[0])
-                      : grid.back() + (grid.back() - grid[grid.size() - 2]);
-    next = low ? std::max(floor, next) : std::min(ceiling, next);
-    if ((low && grid.front() <= floor) || (!low && grid.back() >= ceiling)) {
-      const bool at_prior = prior.declared() && (low ? grid.front() <= prior.lo + 1e-12
-                                                     : grid.back() >= prior.hi - 1e-12);
-      return at_prior ? "the declared range's end"
-             : low    ? "mu_r cannot go below 0"
-                      : "mu_max " + significant(s.mu_max, 3) + " reached";
-    }
+    const GridGrowth g = next_grid_point(grid, low, static_cast<int>(added.size()), b.ctx.s());
+    if (!g.next) return g.stop;
     b.ctx.say("mu_r " + std::to_string(b.record.fit.mu) + " on the grid's " +
-              (low ? "low" : "high") + " end: adding mu_r = " + std::to_string(next));
+              (low ? "low" : "high") + " end: adding mu_r = " + std::to_string(*g.next));
     LoopContext wider = b.ctx;
-    wider.grid.insert(low ? wider.grid.begin() : wider.grid.end(), next);
-    added.push_back(next);
+    wider.grid.insert(low ? wider.grid.begin() : wider.grid.end(), *g.next);
+    added.push_back(*g.next);
     const Surface& surface = store.keep(simulate_surface(wider, store, {}));
     b = calibrated(std::move(wider), surface);
   }
@@ -111,6 +97,28 @@ std::string grid_statement(const Baseline& b, const GridRecord& g, const std::st
 }
 
 }  // namespace
+
+GridGrowth next_grid_point(const std::vector<double>& grid, bool low, int added,
+                           const LoopSettings& s) {
+  const MuPrior& prior = s.mu_prior;
+  const double floor = prior.declared() ? prior.lo : 0.0;
+  const double ceiling = prior.declared() ? std::min(prior.hi, s.mu_max) : s.mu_max;
+  const double end = low ? grid.front() : grid.back();
+  if (low ? end <= floor + 1e-12 : end >= ceiling - 1e-12) {
+    const bool at_prior =
+        prior.declared() && (low ? end <= prior.lo + 1e-12 : end >= prior.hi - 1e-12);
+    return {std::nullopt, at_prior ? "the declared range's end"
+                          : low    ? "mu_r cannot go below 0"
+                                   : "mu_max " + significant(s.mu_max, 3) + " reached"};
+  }
+  const int allowed = s.at_bound == GridBound::kExtend ? s.grid_extensions : 0;
+  if (added < allowed && grid.size() >= 2) {
+    const double step = low ? grid[1] - grid[0] : grid.back() - grid[grid.size() - 2];
+    return {low ? std::max(floor, end - step) : std::min(ceiling, end + step), ""};
+  }
+  if (prior.declared()) return {low ? floor : ceiling, ""};
+  return {std::nullopt, ""};
+}
 
 Baseline baseline(const LoopContext& ctx, PileStore& store) {
   ctx.say("baseline: " + std::to_string(ctx.tests().size()) + " tests x " +

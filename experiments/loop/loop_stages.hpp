@@ -213,6 +213,18 @@ Baseline baseline(const LoopContext& ctx, PileStore& store);
 /// The grid extended while mu_r sits on its bound, as the settings allow (loop_baseline.cpp):
 /// `base` is replaced by the baseline on the settled grid, whose context every later stage reads.
 GridRecord settle_grid(Baseline& base, PileStore& store);
+/// The next mu_r the grid grows by while mu_r sits on its `low` or high end, `added` points
+/// added so far, or none with the reason it stops there ("" when the settings stop it)
+/// (loop_baseline.cpp): the last step's spacing beyond that end while --at-bound extend allows
+/// (grid_extensions), never below 0 (or the declared range's low end) nor above mu_max (or its
+/// high end); then, with a declared range whose end the grid has not reached, that end itself,
+/// whatever --at-bound says, so that mu_r alone needing more than the range is seen as such.
+struct GridGrowth {
+  std::optional<double> next;  // [-]
+  std::string stop;            // why not, when next is empty
+};
+GridGrowth next_grid_point(const std::vector<double>& grid, bool low, int added,
+                           const LoopSettings& s);
 /// Why nothing is traced (the design or mu_r on the grid's bound), or nothing (loop_baseline.cpp).
 std::optional<std::string> not_traced(const LoopContext& ctx, const GridRecord& grid);
 /// The available candidates' fingerprints at grid point `node` (loop_fingerprints.cpp).
