@@ -66,6 +66,8 @@ CaseResult case_result_from_json(const json& j) {
     return r;
   } catch (const json::exception& e) {
     throw std::invalid_argument(std::string("not a pile case's result: ") + e.what());
+  } catch (const JsonFieldError& e) {  // a field of the wrong type, at its JSON pointer
+    throw std::invalid_argument(std::string("not a pile case's result: ") + e.what());
   }
 }
 

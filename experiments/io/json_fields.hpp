@@ -1,24 +1,20 @@
-// Reading numbers back from result files. JSON has no NaN: nlohmann writes a NaN (an angle
-// vision could not fit, say) as null, so a reader must take null back as NaN, or a result that
-// was written could not be read again.
+// Reading fields back from result files that may predate them. JSON has no NaN: nlohmann writes
+// a NaN (an angle vision could not fit, say) as null, so a reader must take null back as NaN,
+// or a result that was written could not be read again; json_read.hpp's number_value does.
 #pragma once
 
-#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "experiments/io/json_read.hpp"
+
 namespace reposetwin::experiments {
 
-/// A JSON number as a double: NaN for null.
-inline double json_number(const nlohmann::json& v) {
-  return v.is_null() ? std::numeric_limits<double>::quiet_NaN() : v.get<double>();
-}
-
-/// j[key] as a double: NaN for null, `fallback` when the key is absent.
+/// j[key] as a double as json_read.hpp's number_field reads it (null as NaN; anything but a
+/// number a JsonFieldError at /key), or `fallback` when the key is absent: a result file older
+/// than the field.
 inline double json_number(const nlohmann::json& j, const char* key, double fallback = 0.0) {
-  const auto it = j.find(key);
-  if (it == j.end()) return fallback;
-  return it->is_null() ? std::numeric_limits<double>::quiet_NaN() : it->get<double>();
+  return j.contains(key) ? number_field(j, key) : fallback;
 }
 
 /// A text that may be absent, as JSON: null when empty.

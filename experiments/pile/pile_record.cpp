@@ -526,6 +526,8 @@ PileRun pile_run_from_json(const json& j) {
     return r;
   } catch (const json::exception& e) {
     throw std::invalid_argument(std::string("not a pile run's result: ") + e.what());
+  } catch (const JsonFieldError& e) {  // a field of the wrong type, at its JSON pointer
+    throw std::invalid_argument(std::string("not a pile run's result: ") + e.what());
   }
 }
 

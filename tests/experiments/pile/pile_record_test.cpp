@@ -115,6 +115,23 @@ TEST(PileRecord, APileRunRoundTripsThroughItsJson) {
   EXPECT_THROW(pile_run_from_json({{"stop", {{"reason", "settled"}}}}), std::invalid_argument);
 }
 
+// A field of the wrong type is refused with its name (through json_read.hpp's number reader),
+// where a missing one takes the default a file older than the field had.
+TEST(PileRecord, AMistypedNumberIsRefusedByNameAndAMissingOneDefaults) {
+  json j = to_json(sample_run());
+  j["pile"]["height_m"] = "tall";
+  try {
+    (void)pile_run_from_json(j);
+    FAIL() << "a string height was read";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("/height_m: is string, not a number"), std::string::npos)
+        << e.what();
+  }
+  json c = to_json(sample_run());
+  c["procedure"].erase("lift_start_s");
+  EXPECT_EQ(pile_run_from_json(c).procedure.lift_start_s, -1.0);
+}
+
 TEST(PileRecord, ACaseResultRoundTripsThroughItsJson) {
   const PileRun run = sample_run();
   CaseResult r;
