@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
-#include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 

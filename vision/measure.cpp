@@ -17,7 +17,6 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
-#include <sstream>
 #include <stdexcept>
 
 #include "vision/text_detail.hpp"

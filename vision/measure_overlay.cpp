@@ -2,7 +2,6 @@
 // toes, apex and a block of the numbers), for a person to check what vision read.
 #include <iomanip>
 #include <opencv2/imgproc.hpp>
-#include <sstream>
 
 #include "vision/measure.hpp"
 #include "vision/text_detail.hpp"

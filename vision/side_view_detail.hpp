@@ -6,10 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <opencv2/core.hpp>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 

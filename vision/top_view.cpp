@@ -4,7 +4,6 @@
 #include <cmath>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
-#include <sstream>
 #include <stdexcept>
 
 #include "vision/image.hpp"
