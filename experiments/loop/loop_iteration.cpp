@@ -286,14 +286,6 @@ void add_region(const LoopContext& ctx, const CandidateEffect& e, const Trial& b
             significant(100.0 * c.next_tests.front().mu_interval_ratio, 3) + "%)");
 }
 
-// The trial with the lowest calibration RMSE (the first of equals).
-const Trial& best_trial(const Refit& refit) {
-  std::size_t pick = 0;
-  for (std::size_t q = 1; q < refit.trials.size(); ++q)
-    if (refit.trials[q].rmse < refit.trials[pick].rmse) pick = q;
-  return refit.trials[pick];
-}
-
 // The confirmation the simulations must give (unconfirmed_reason): the chosen effect with its
 // value, or nothing with the record's reason.
 std::optional<ChosenEffect> confirm(const LoopContext& ctx, const RefitPlan& plan,

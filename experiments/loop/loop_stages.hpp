@@ -239,9 +239,18 @@ bool iterate(const LoopContext& ctx, PileStore& store, int it, LoopState& state,
 IterationRecord trace(const LoopContext& ctx, int it, const LoopState& state,
                       const std::vector<FingerprintRecord>& fps);
 /// The accepted candidate simulated on the whole grid at its linear estimate, refined by secant
-/// steps when its response misses the traced strength (loop_refit.cpp).
+/// steps when its response misses the traced strength, then simulated where the joint fit lands
+/// until it lands on a simulated value (loop_refit.cpp).
 Refit refit_by_simulation(const LoopContext& ctx, PileStore& store, const RefitPlan& plan,
                           const LoopState& state);
+/// The trial with the lowest calibration RMSE (the first of equals); refit.trials not empty
+/// (loop_refit.cpp).
+const Trial& best_trial(const Refit& refit);
+/// The value the refit simulates next: where the best trial's joint fit lands, off + t (p - off)
+/// clamped to [lo, hi]; none when that t is within `tolerance` of 1 (the value is the trial's
+/// own), when the value is off or one simulated already, or when there is no trial.
+std::optional<double> follow_up_value(const Refit& refit, double off, double lo, double hi,
+                                      double tolerance);
 /// Why the simulations do not confirm the best trial, or empty when they do (loop_refit.cpp).
 std::string unconfirmed_reason(const LoopContext& ctx, const Trial& best, const LoopState& state);
 /// The final model's fit, effects and residuals (loop_iteration.cpp).
