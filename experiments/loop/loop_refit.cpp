@@ -49,11 +49,12 @@ double response_fraction(const LoopContext& ctx, const RefitPlan& plan, const Su
 
 // One trial at p, appended to refit.trials. The value may overshoot into piles the measurement
 // cannot see (a smooth plate spreads a small sample into a monolayer) or into pours a
-// calibration test's outlet jams: then it steps back halfway towards off, twice at most. A
-// held-out test that jams at p does not stop the trial: the model predicts no pile for it.
-// Returns false when no attempt could be simulated.
+// calibration test's outlet jams: then it steps back halfway towards `toward` (off, or the best
+// trial's value for a follow-up), twice at most; every value that failed is kept in
+// refit.failed. A held-out test that jams at p does not stop the trial: the model predicts no
+// pile for it. Returns false when no attempt could be simulated.
 bool run_trial(const LoopContext& ctx, PileStore& store, const RefitPlan& plan, double p,
-               const LoopState& state, Refit& refit) {
+               double toward, const LoopState& state, Refit& refit) {
   const CandidateEffect& e = *plan.effect;
   const double off = plan.off;
   std::optional<Surface> surf;
@@ -66,7 +67,8 @@ bool run_trial(const LoopContext& ctx, PileStore& store, const RefitPlan& plan, 
       refit.notes +=
           "at " + std::to_string(p) + ": " + std::string(ex.what()).substr(0, 300) + "; ";
       ctx.say("refit at " + std::to_string(p) + " failed; stepping back halfway");
-      p = off + 0.5 * (p - off);
+      refit.failed.push_back(p);
+      p = toward + 0.5 * (p - toward);
     }
   }
   if (!surf) return false;
@@ -90,13 +92,13 @@ bool run_trial(const LoopContext& ctx, PileStore& store, const RefitPlan& plan, 
   return true;
 }
 
-// Whether p is off or a value a trial has simulated already.
-bool simulated_already(const Refit& refit, double off, double p) {
+// Whether p is off, a value a trial has simulated already or one that failed to simulate.
+bool tried_already(const Refit& refit, double off, double p) {
   const auto same = [p](double q) { return std::abs(q - p) <= 1e-3 * std::max(1.0, std::abs(q)); };
   if (same(off)) return true;
   for (const Trial& tr : refit.trials)
     if (same(tr.p)) return true;
-  return false;
+  return std::any_of(refit.failed.begin(), refit.failed.end(), same);
 }
 
 }  // namespace
@@ -114,7 +116,7 @@ std::optional<double> follow_up_value(const Refit& refit, double off, double lo,
   const Trial& best = best_trial(refit);
   if (std::abs(best.joint.t - 1.0) <= tolerance) return std::nullopt;
   const double next = std::clamp(off + best.joint.t * (best.p - off), lo, hi);
-  if (simulated_already(refit, off, next)) return std::nullopt;
+  if (tried_already(refit, off, next)) return std::nullopt;
   return next;
 }
 
@@ -130,7 +132,7 @@ Refit refit_by_simulation(const LoopContext& ctx, PileStore& store, const RefitP
   const double off = plan.off, coef = plan.coef;
   Refit refit;
   const int kMaxRefinements = 2;
-  if (!run_trial(ctx, store, plan, plan.p1, state, refit)) return refit;
+  if (!run_trial(ctx, store, plan, plan.p1, off, state, refit)) return refit;
   for (int k = 0; k < kMaxRefinements; ++k) {
     const Trial& last = refit.trials.back();
     if (std::abs(last.fraction - coef) <= 0.5 * std::abs(coef)) break;
@@ -147,7 +149,7 @@ Refit refit_by_simulation(const LoopContext& ctx, PileStore& store, const RefitP
     ctx.say(e.name + ": simulated response " + std::to_string(last.fraction) +
             " of the probe's at " + std::to_string(last.p) + " (traced " + std::to_string(coef) +
             "); refining at " + std::to_string(next));
-    if (!run_trial(ctx, store, plan, next, state, refit)) break;
+    if (!run_trial(ctx, store, plan, next, off, state, refit)) break;
   }
   // The value is read off the chord from off to the best trial, value = off + t (p - off). A
   // response that bends (a cohesion that saturates, an exponent whose effect grows faster than
@@ -160,10 +162,11 @@ Refit refit_by_simulation(const LoopContext& ctx, PileStore& store, const RefitP
   for (int k = 0; k < kMaxFollowUps; ++k) {
     const std::optional<double> next = follow_up_value(refit, off, e.lo, e.hi, kFollowTolerance);
     if (!next) break;
-    const Trial& best = best_trial(refit);
-    ctx.say(e.name + ": the fit lands at t " + std::to_string(best.joint.t) + " of the trial at " +
-            std::to_string(best.p) + "; simulating where it lands, " + std::to_string(*next));
-    if (!run_trial(ctx, store, plan, *next, state, refit)) break;
+    const double best_p = best_trial(refit).p;  // the next trial may move refit.trials
+    ctx.say(e.name + ": the fit lands at t " + std::to_string(best_trial(refit).joint.t) +
+            " of the trial at " + std::to_string(best_p) + "; simulating where it lands, " +
+            std::to_string(*next));
+    if (!run_trial(ctx, store, plan, *next, best_p, state, refit)) break;
   }
   return refit;
 }

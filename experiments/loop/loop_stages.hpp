@@ -184,6 +184,7 @@ struct Trial {
 /// The refit of one accepted candidate: its trials and the failures on the way.
 struct Refit {
   std::vector<Trial> trials;
+  std::vector<double> failed;  // values that could not be simulated (no pile, no photo)
   std::string notes;
 };
 
@@ -248,7 +249,8 @@ Refit refit_by_simulation(const LoopContext& ctx, PileStore& store, const RefitP
 const Trial& best_trial(const Refit& refit);
 /// The value the refit simulates next: where the best trial's joint fit lands, off + t (p - off)
 /// clamped to [lo, hi]; none when that t is within `tolerance` of 1 (the value is the trial's
-/// own), when the value is off or one simulated already, or when there is no trial.
+/// own), when the value is off, one simulated already or one that failed, or when there is no
+/// trial.
 std::optional<double> follow_up_value(const Refit& refit, double off, double lo, double hi,
                                       double tolerance);
 /// Why the simulations do not confirm the best trial, or empty when they do (loop_refit.cpp).

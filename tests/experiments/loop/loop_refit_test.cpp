@@ -108,6 +108,28 @@ TEST(LoopRefit, TheFollowUpStaysInTheRangeAndNeverRepeatsAValue) {
   EXPECT_FALSE(follow_up_value(Refit{}, off, 0.0, 0.5, 0.1));
 }
 
+TEST(LoopRefit, AValueThatFailedIsNotAskedAgain) {
+  // A smooth plate: off 0.5 (declared), the best trial at 0.192 lands at 0.094, where the small
+  // piles spread too thin to photograph; the trial there stepped back to a value between.
+  const double off = 0.5;
+  Refit refit;
+  Trial tr;
+  tr.p = 0.192;
+  tr.joint.t = 1.317;
+  tr.rmse = 0.535;
+  refit.trials.push_back(tr);
+  const auto next = follow_up_value(refit, off, 0.0, 1.5, 0.1);
+  ASSERT_TRUE(next);
+  EXPECT_NEAR(*next, off + 1.317 * (0.192 - off), 1e-12);
+  refit.failed.push_back(*next);
+  Trial between = tr;
+  between.p = 0.5 * (*next + 0.192);
+  between.joint.t = 0.8;
+  between.rmse = 0.9;
+  refit.trials.push_back(between);
+  EXPECT_FALSE(follow_up_value(refit, off, 0.0, 1.5, 0.1));
+}
+
 TEST(LoopRefit, TheBestTrialIsTheLowestRmseAndTheFirstOfEquals) {
   Refit refit;
   for (double rmse : {1.2, 0.7, 0.9, 0.7}) {
