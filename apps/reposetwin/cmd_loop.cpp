@@ -81,6 +81,11 @@ void add_loop_command(CLI::App& app) {
                   "Stop after this many effects (0: trace and rank only, no refit)")
       ->check(CLI::Range(0, 10))
       ->capture_default_str();
+  cmd->add_option("--refit-follow-ups", args->settings.refit_follow_ups,
+                  "Trials a refit adds where its fit lands, until it lands on a simulated value "
+                  "(0: the effect's value may be read off a chord beyond the trials)")
+      ->check(CLI::Range(0, 10))
+      ->capture_default_str();
   cmd->add_option("--max-pours", args->settings.max_pours,
                   "Pours per pile: a pour that forms no pile (the funnel jammed) is repeated with "
                   "a new seed, as a lab repeats it, up to this many pours in all")

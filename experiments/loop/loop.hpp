@@ -118,6 +118,7 @@ struct LoopSettings {
                                            // pick_refit); empty: the trace decides
   int max_pours = 3;                       // pours per pile when the funnel jams (new seeds)
   double t_max = 3.0;                      // largest t = (p - off) / (p1 - off) of a refit [-]
+  int refit_follow_ups = 3;                // trials where a refit's fit lands (loop_refit.cpp)
   int workers = 2;                         // concurrent simulations
   bool progress = true;                    // progress lines on stderr
   bool force = false;                      // overwrite a finished loop.json

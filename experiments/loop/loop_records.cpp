@@ -227,6 +227,7 @@ json to_json(const LoopProvenance& p) {
             {"cache", p.cache},
             {"finished", p.finished},
             {"scenes", p.scenes}};
+  if (p.refit_follow_ups) j["refit_follow_ups"] = *p.refit_follow_ups;
   if (p.run) j["run"] = *p.run;
   return j;
 }
@@ -484,6 +485,7 @@ LoopProvenance loop_provenance_from_json(const json& j) {
   p.mu_key = field<std::string>(j, "mu_key");
   p.image = field<std::string>(j, "image");
   p.max_pours = field<int>(j, "max_pours");
+  p.refit_follow_ups = optional_field<int>(j, "refit_follow_ups");
   p.cache = field<std::string>(j, "cache");
   p.finished = field<std::string>(j, "finished");
   p.scenes = field<std::vector<std::string>>(j, "scenes");

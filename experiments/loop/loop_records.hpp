@@ -237,6 +237,7 @@ struct LoopProvenance {
   std::vector<double> mu_grid;
   std::string mu_key, image, cache, finished;
   int max_pours = 0;
+  std::optional<int> refit_follow_ups;  // absent from a loop.json written before they were made
   std::optional<nlohmann::json> run;  // the first baseline pile run's provenance
   std::vector<std::string> scenes;    // sorted, unique
 };

@@ -156,10 +156,9 @@ Refit refit_by_simulation(const LoopContext& ctx, PileStore& store, const RefitP
   // linearly) puts a value read far along that chord off the truth: on the validation's rods a
   // trial at L/I 1.59 fitted t 1.76 and read L/I 2.04 for a hidden 2.6. So the refit simulates
   // where the fit lands, until the best trial's t is within kFollowTolerance of 1 (the value is
-  // then a simulated one, not an extrapolation), kMaxFollowUps times at most.
-  const int kMaxFollowUps = 3;
+  // then a simulated one, not an extrapolation), refit_follow_ups times at most.
   const double kFollowTolerance = 0.1;
-  for (int k = 0; k < kMaxFollowUps; ++k) {
+  for (int k = 0; k < ctx.s().refit_follow_ups; ++k) {
     const std::optional<double> next = follow_up_value(refit, off, e.lo, e.hi, kFollowTolerance);
     if (!next) break;
     const double best_p = best_trial(refit).p;  // the next trial may move refit.trials

@@ -173,6 +173,7 @@ LoopProvenance provenance(const LoopContext& ctx, const PileStore& store, const 
   p.mu_key = s.mu_key;
   p.image = to_json(photo_settings(s.image)).dump();
   p.max_pours = s.max_pours;
+  p.refit_follow_ups = s.refit_follow_ups;
   p.cache = store.cache.dir();
   p.finished = utc_now();
   if (!base.raw.empty() && !base.raw[0].empty() && !base.raw[0][0].empty())

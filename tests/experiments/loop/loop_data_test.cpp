@@ -224,6 +224,9 @@ TEST(LoopHeldOut, AHeldOutTestWhoseTwinJamsIsPredictedNoPileAndTheRefitGoesOn) {
   // two apart).
   s.refit = "lift_speed";
   s.max_effects = 1;
+  // The first trial is what this test is about; the follow-ups (LoopRefit.*) would pour three
+  // more surfaces, one of them stepping back from a lift so fast that test b forms no pile.
+  s.refit_follow_ups = 0;
   s.probe_scalings = 1;  // the lift's fingerprint stands out at twice its probe
   s.html = true;
   s.page = write_loop_html;
