@@ -17,22 +17,22 @@
 #
 # The contact law, matched as closely as the two engines allow: Hertz normal spring
 # (4/3 E* sqrt(R*) delta^1.5), Mindlin no-slip tangential spring 8 G* sqrt(R* delta) on an
-# incremental displacement with a Coulomb cap mu_s |F_n|, Tsuji's viscous damping from e
-# (-2 sqrt(5/6) beta sqrt(2 E* sqrt(R* delta) m*)), no rolling resistance on either side (Yade's
-# Law2_ScGeom_MindlinPhys_Mindlin has none; the twin runs with rolling model "none"), no global
-# damping, the same E (softened 46.8 MPa), nu 0.19, density 2760, e 0.79, mu_s 0.466 (plate too),
-# dt 4.10e-6 s. Yade's inputs are adjusted where its defaults differ (collapse.py says how): the
-# plate's E so that Yade's wall contact (R* = r/2) gets the twin's Hertz spring and damping, the
-# clump members' mass so that m* is the bodies' as in the twin. What remains different:
-#  - tangential damping: Yade uses the normal coefficient (c_t = c_n), the twin sqrt(S_t m*)
-#    (c_t = 0.946 c_n at nu 0.19); the twin drops the tangential dashpot in slip;
-#  - the plate's tangential spring is 1.207 x the twin's in Yade (its Ip2 averages the plate's
-#    and the grain's shear moduli, and takes R* = r/2);
+# incremental displacement with a Coulomb cap mu_s |F_n|, Tsuji's viscous dashpots from e
+# (2 sqrt(5/6) |beta| sqrt(S m*), normal and tangential), no rolling resistance on either side
+# (Yade's Law2_ScGeom_MindlinPhys_Mindlin has none; the twin runs with rolling model "none"), no
+# global damping, the same E (softened 46.8 MPa), nu 0.19, density 2760, e 0.79, mu_s 0.466
+# (plate too), dt 4.10e-6 s. Yade's inputs are adjusted where its defaults differ (collapse.py
+# says how; the springs and dashpots were checked on one Yade contact against the closed forms):
+# the plate's E so that Yade's wall contact (R* = r/2) gets the twin's springs, beta_n = beta_s
+# so that its dashpots are the twin's (its en = e gives 5% more), the clump members' mass so that
+# m* is the bodies' as in the twin. What remains different:
 #  - the contact springs of the settled bed: the twin keeps them, Yade starts them at zero;
+#  - the end of a contact and slip: the twin lets the normal dashpot make the force slightly
+#    attractive and drops the tangential dashpot in slip; Yade's Law2 follows its own rules there;
 #  - the integrators (the twin's velocity Verlet with its free-rotor drift for bodies, Yade's
-#    leap-frog NewtonIntegrator with exactAsphericalRot), the spring rotation and the lever arms
-#    (both r - delta/2), so trajectories part within the first collisions and only the seed
-#    statistics can agree.
+#    leap-frog NewtonIntegrator with exactAsphericalRot) and the relative velocity at the contact
+#    (Yade's mid-step incident velocity), so trajectories part within the first collisions and
+#    only the seed statistics can agree.
 # Not CI: it installs the Debian package yade if it is missing (no GUI recommends).
 #
 # Usage: scripts/verify_yade_clumps.sh [--seeds 1,2,3,4,5] [--clumps 400] [--container-mm 7]
