@@ -22,7 +22,8 @@
 # (Yade's Law2_ScGeom_MindlinPhys_Mindlin has none; the twin runs with rolling model "none"), no
 # global damping, the same E (softened 46.8 MPa), nu 0.19, density 2760, e 0.79, mu_s 0.466
 # (plate too), dt 4.10e-6 s. Yade's inputs are adjusted where its defaults differ (collapse.py
-# says how; the springs and dashpots were checked on one Yade contact against the closed forms):
+# says how; scripts/yade_contact_check.py checks the springs and dashpots on single Yade contacts
+# against the twin's closed forms before the runs):
 # the plate's E so that Yade's wall contact (R* = r/2) gets the twin's springs, beta_n = beta_s
 # so that its dashpots are the twin's (its en = e gives 5% more), the clump members' mass so that
 # m* is the bodies' as in the twin. What remains different:
@@ -106,7 +107,18 @@ for s in "${seed_list[@]}"; do
   grep -E '^COLLAPSE' "${d}.twin.log" | sed "s/^/  seed ${s}: /"
 done
 
-# 2. Yade on the same beds, --jobs runs at a time, one thread each.
+# 2. Yade's contact law, checked on single contacts against the twin's closed forms with the
+#    first collapse.py's parameters (scripts/yade_contact_check.py), then Yade on the same beds,
+#    --jobs runs at a time, one thread each.
+first="${out}/seed_${seed_list[0]}/clumps"
+(cd "${first}" && COLLAPSE_PY=collapse.py OMP_NUM_THREADS=1 \
+  yade -j1 -n -x "${root}/scripts/yade_contact_check.py" > contact_check.log 2>&1) ||
+  { echo "verify_yade_clumps.sh: Yade's contacts are not the twin's law:" >&2
+    grep -E 'CHECK|Error' "${first}/contact_check.log" >&2; exit 1; }
+grep -E '^YADE_CONTACT_CHECK ok' "${first}/contact_check.log" > /dev/null ||
+  { echo "verify_yade_clumps.sh: ${first}/contact_check.log: the contact check did not finish" >&2; exit 1; }
+echo "  Yade's contacts (sphere-plate, sphere-sphere, clump-clump) follow the twin's closed forms" \
+  "($(grep -c '^CHECK' "${first}/contact_check.log") checks, ${first}/contact_check.log)"
 run_yade() {  # run_yade DIR
   (cd "$1" && OMP_NUM_THREADS=1 yade -j1 -n -x collapse.py > yade.log 2>&1) ||
     { echo "verify_yade_clumps.sh: Yade failed in $1 (see $1/yade.log)" >&2; tail -5 "$1/yade.log" >&2; return 1; }
@@ -184,7 +196,9 @@ python3 - "${csv}" "${out}/summary.json" "${commit}" "${yade_version}" "${clumps
   "${container_mm}" "${steps}" <<'PY'
 import csv, json, math, os, sys
 rows = list(csv.DictReader(open(sys.argv[1])))
-metrics = ['H_mm', 'D_mm', 'theta_hd_deg', 'slice_angle_deg']
+metrics = ['H_mm', 'D_mm', 'theta_hd_deg', 'slice_angle_deg', 'pile_fraction']
+for r in rows:  # the share of the spheres in the pile: the rest ran out as strays
+    r['pile_fraction'] = str(float(r['pile_spheres']) / float(r['spheres']))
 def stats(v):
     v = [x for x in v if not math.isnan(x)]
     n = len(v)
@@ -225,11 +239,11 @@ print()
 out['trend'] = {}
 for e in ('twin', 'yade'):
     t = out['trend'][e] = {}
-    for k in ('theta_hd_deg', 'slice_angle_deg'):
+    for k in ('H_mm', 'theta_hd_deg', 'slice_angle_deg', 'pile_fraction'):
         a, b = out['cases']['clumps'][k][e], out['cases']['spheres'][k][e]
         d, se = a['mean'] - b['mean'], se_diff(a, b)
         t[k] = {'clumps_minus_spheres': d, 'se': se}
-        print('trend %-4s %-15s clumps - spheres %+6.2f deg (se %.2f)' % (e, k, d, se))
+        print('trend %-4s %-15s clumps - spheres %+7.3f (se %.3f)' % (e, k, d, se))
 tmp = sys.argv[2] + '.tmp'
 json.dump(out, open(tmp, 'w'), indent=2)
 os.replace(tmp, sys.argv[2])
