@@ -227,14 +227,25 @@ for case in ('clumps', 'spheres'):
         d = s['twin']['mean'] - s['yade']['mean']
         se = se_diff(s['twin'], s['yade'])
         z = d / se if se > 0 else float('nan')
+        # Paired by seed: both engines start from the same bed, so the per-seed difference
+        # removes the beds' share of the spread.
+        by = {(r['seed'], r['engine']): float(r[k]) for r in rows if r['case'] == case}
+        p = stats([by[(sd, 'twin')] - by[(sd, 'yade')] for sd in sorted({r['seed'] for r in rows})
+                   if (sd, 'twin') in by and (sd, 'yade') in by])
+        p['se'] = p['sd'] / math.sqrt(p['n']) if p['n'] > 1 else float('nan')
+        pz = p['mean'] / p['se'] if p['se'] > 0 else float('nan')
         c[k] = {'twin': s['twin'], 'yade': s['yade'], 'difference': d, 'se': se,
-                'difference_in_se': z}
+                'difference_in_se': z, 'paired': dict(p, difference_in_se=pz)}
         verdict = ('agree within 2 se' if abs(d) <= 2 * se else 'DIFFER beyond 2 se') \
             if se > 0 else 'no spread to compare with'
         print('%-7s %-15s twin %7.2f +- %5.2f  yade %7.2f +- %5.2f  (n %d, %d)  difference %+6.2f '
               '(se %.2f, %+.1f se): %s' % (case, k, s['twin']['mean'], s['twin']['sd'],
               s['yade']['mean'], s['yade']['sd'], s['twin']['n'], s['yade']['n'], d, se, z,
               verdict))
+        print('%-7s %-15s paired by seed: %+6.2f (se %.2f, %+.1f se, n %d): %s' % (
+              case, '', p['mean'], p['se'], pz, p['n'],
+              ('agree within 2 se' if abs(pz) <= 2 else 'DIFFER beyond 2 se')
+              if p['se'] > 0 else 'no spread to compare with'))
 print()
 out['trend'] = {}
 for e in ('twin', 'yade'):
