@@ -38,8 +38,10 @@
 #
 # Usage: scripts/verify_yade_clumps.sh [--seeds 1,2,3,4,5] [--clumps 400] [--container-mm 7]
 #                                      [--steps 70000] [--jobs 2] [--out DIR] [--build DIR]
-# Results: DIR/summary.csv (one row per seed, case and engine), DIR/summary.json (means, sd,
-# differences) and the table on stdout. Runs that already wrote their dump are not run again.
+# Results: DIR/summary.csv (one row per seed, case and engine; its ke_end_J is the twin's
+# translational + rotational energy but Yade's translational only), DIR/summary.json (means, sd,
+# differences unpaired and paired by seed, trends) and the table on stdout. Runs that already
+# wrote their output are not run again.
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -60,7 +62,7 @@ while [[ $# -gt 0 ]]; do
     --jobs) need "$@"; jobs="$2"; shift 2 ;;
     --out) need "$@"; out="$2"; shift 2 ;;
     --build) need "$@"; build="$2"; shift 2 ;;
-    -h|--help) sed -n '2,41p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,44p' "$0"; exit 0 ;;
     *) echo "verify_yade_clumps.sh: unknown option '$1'" >&2; exit 2 ;;
   esac
 done
