@@ -32,10 +32,19 @@
 // bed (the Yade comparison needs only the clumps). Each thread count's times are also printed as
 // one machine-readable line, "TIMING threads=T clump_seconds=.. clump_cpu_seconds=.. ...".
 //
+// With --collapse DIR (scripts/verify_yade_clumps.sh, the physics check against Yade) nothing is
+// timed: each settled bed is released on the plate, its container removed at t = 0 (a column
+// collapse), for --collapse-steps steps on one thread and written as DIR/WHAT/twin.vtp; the same
+// bed goes to DIR/WHAT/bed.txt with DIR/WHAT/collapse.py, the Yade script of the same release,
+// which writes DIR/WHAT/initial.dump and DIR/WHAT/final.dump (WHAT: clumps, spheres). Yade's
+// Mindlin has no rolling resistance, so the check runs with --rolling-friction 0 (no rolling model
+// at all in this engine).
+//
 // Usage: bench_clumps [--quick | --issue] [--clumps N] [--container-mm R] [--steps N]
 //                     [--threads 1,2] [--settle N] [--relax N] [--settle-gravity G]
 //                     [--settle-threads N] [--seed S] [--beds PREFIX] [--no-spheres]
-//                     [--write-yade DIR]
+//                     [--write-yade DIR] [--rolling-friction MU_R]
+//                     [--collapse DIR [--collapse-steps N]]
 #include <omp.h>
 #include <time.h>
 
@@ -51,6 +60,7 @@
 #include <string>
 #include <vector>
 
+#include "experiments/io/vtk_output.hpp"
 #include "sim/checkpoint.hpp"
 #include "sim/model.hpp"
 #include "sim/random.hpp"
@@ -78,9 +88,21 @@ struct Options {
   std::string beds;
   bool no_spheres = false;
   std::string yade_dir;
+  double rolling_friction = 0.15;  // EPSD mu_r of every pair; 0: no rolling resistance [-]
+  std::string collapse_dir;
+  int collapse_steps = 60000;
 };
 
-Model make_model(double gravity_factor, double container_radius) {
+/// The contact of every pair: the paper's e 0.79, mu_s 0.466, and EPSD rolling resistance mu_r
+/// (0.15 by default), or none at all when mu_r = 0 (the Yade collapse: Mindlin has none).
+PairParams bench_pair(double rolling_friction) {
+  PairParams pair;
+  pair.rolling_friction = rolling_friction;
+  if (rolling_friction == 0.0) pair.rolling_model = RollingModel::kNone;
+  return pair;
+}
+
+Model make_model(double gravity_factor, double container_radius, double rolling_friction) {
   Model m;
   Material rock;
   rock.youngs_modulus = 46.8e9;
@@ -90,7 +112,7 @@ Model make_model(double gravity_factor, double container_radius) {
   m.settings.softened_youngs_modulus = 46.8e6;
   m.settings.gravity = Vec3(0, 0, -9.81 * gravity_factor);
   m.settings.max_overlap_ratio = 0.15;
-  PairParams pair;  // the paper's e 0.79, mu_s 0.466, EPSD mu_r 0.15
+  const PairParams pair = bench_pair(rolling_friction);
   m.set_pair(0, 0, pair);
   m.set_pair(0, 1, pair);
   m.set_pair(1, 1, pair);
@@ -160,7 +182,7 @@ double touching_per_sphere(const World& w) {
 void settle(World& world, const Options& o, const char* what) {
   const auto t0 = std::chrono::steady_clock::now();
   omp_set_num_threads(o.settle_threads);
-  World heavy(make_model(o.settle_gravity, 1e-3 * o.container_mm));
+  World heavy(make_model(o.settle_gravity, 1e-3 * o.container_mm, o.rolling_friction));
   heavy.state() = world.state();
   for (int s = 0; s < o.settle; ++s) heavy.step();
   world.state() = heavy.state();
@@ -227,33 +249,173 @@ Timing timed(const World& settled, int steps, int threads, const char* what) {
   return t;
 }
 
-/// The settled clump bed as Yade input (design note): bed.txt and run.py in `dir`.
-void write_yade(const World& w, const Options& o, const std::string& dir) {
-  namespace fs = std::filesystem;
-  fs::create_directories(dir);
+/// A settled bed as text for Yade: one line per grain (a clump, or a free sphere as a grain of
+/// one): velocity, angular velocity, mass, principal moments, the number of spheres n, then n
+/// times the sphere's centre and radius (world frame, SI).
+void write_bed(const World& w, const std::string& path, const char* option) {
   const Particles& p = w.state().particles;
   const Bodies& b = w.state().bodies;
   std::vector<std::vector<std::size_t>> members(b.size());
   for (std::size_t i = 0; i < p.size(); ++i)
     if (p.body[i] >= 0) members[static_cast<std::size_t>(p.body[i])].push_back(i);
-  {
-    std::ofstream f(fs::path(dir) / "bed.txt");
-    f << std::setprecision(17);
-    f << "# bench_clumps settled bed: " << b.size() << " clumps. Per line: vx vy vz wx wy wz mass "
-         "I1 I2 I3 n, then n times x y z r (world frame, SI)\n";
-    for (std::size_t k = 0; k < b.size(); ++k) {
-      f << b.v[k].x() << " " << b.v[k].y() << " " << b.v[k].z() << " " << b.w[k].x() << " "
-        << b.w[k].y() << " " << b.w[k].z() << " " << b.mass[k] << " " << b.inertia[k].x() << " "
-        << b.inertia[k].y() << " " << b.inertia[k].z() << " " << members[k].size();
-      for (std::size_t i : members[k])
-        f << " " << p.x[i].x() << " " << p.x[i].y() << " " << p.x[i].z() << " " << p.radius[i];
-      f << "\n";
-    }
-    if (!f) throw std::runtime_error("--write-yade: cannot write " + dir + "/bed.txt");
+  std::ofstream f(path);
+  f << std::setprecision(17);
+  f << "# bench_clumps settled bed: " << b.size() << " clumps, " << p.size()
+    << " spheres. Per line: vx vy vz wx wy wz mass I1 I2 I3 n, then n times x y z r (world "
+       "frame, SI)\n";
+  const auto sphere = [&](std::size_t i) {
+    f << " " << p.x[i].x() << " " << p.x[i].y() << " " << p.x[i].z() << " " << p.radius[i];
+  };
+  for (std::size_t k = 0; k < b.size(); ++k) {
+    f << b.v[k].x() << " " << b.v[k].y() << " " << b.v[k].z() << " " << b.w[k].x() << " "
+      << b.w[k].y() << " " << b.w[k].z() << " " << b.mass[k] << " " << b.inertia[k].x() << " "
+      << b.inertia[k].y() << " " << b.inertia[k].z() << " " << members[k].size();
+    for (std::size_t i : members[k]) sphere(i);
+    f << "\n";
   }
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.body[i] >= 0) continue;
+    f << p.v[i].x() << " " << p.v[i].y() << " " << p.v[i].z() << " " << p.w[i].x() << " "
+      << p.w[i].y() << " " << p.w[i].z() << " " << p.mass[i] << " " << p.inertia[i] << " "
+      << p.inertia[i] << " " << p.inertia[i] << " 1";
+    sphere(i);
+    f << "\n";
+  }
+  if (!f) throw std::runtime_error(std::string(option) + ": cannot write " + path);
+}
+
+/// The column collapse (design note): the settled bed `bed` written for Yade (DIR/bed.txt and
+/// DIR/collapse.py, which removes the container and runs --collapse-steps steps), then the same
+/// run in this engine on one thread, its final state written as DIR/twin.vtp (write_vtp, which
+/// `reposetwin measure-particles` reads).
+void collapse(const World& bed, const Options& o, const std::string& dir, const char* what) {
+  namespace fs = std::filesystem;
+  fs::create_directories(dir);
+  write_bed(bed, (fs::path(dir) / "bed.txt").string(), "--collapse");
+  const Model& m = bed.model();
+  const Material& rock = m.materials[0];
+  const PairParams pair = bench_pair(o.rolling_friction);
+  {
+    std::ofstream f(fs::path(dir) / "collapse.py");
+    f << std::setprecision(17);
+    f << "# Yade script written by bench_clumps --collapse: its settled bed (bed.txt) released\n"
+         "# on the plate (the container removed at t = 0), Hertz-Mindlin as the twin's (README of\n"
+         "# results/studies/clump_yade_check lists what differs); writes final.dump (x y z\n"
+         "# radius of every sphere). Run in this folder: yade -j1 -n -x collapse.py\n"
+         "import math, os, time\n"
+         "E, NU, DENSITY, E_REST, MU_S, MU_S_PLATE = "
+      << m.youngs_modulus_used(0) << ", " << rock.poisson_ratio << ", " << rock.density << ", "
+      << pair.restitution << ", " << pair.friction << ", " << pair.friction
+      << "\nDT, SKIN, STEPS = " << m.dt << ", " << bed.state().neighbors.skin << ", "
+      << o.collapse_steps << "\n"
+      << R"PY(here = os.getcwd()  # run in its folder: Yade's __file__ names the yade binary
+rock = O.materials.append(FrictMat(young=E, poisson=NU, density=DENSITY,
+                                   frictionAngle=math.atan(MU_S), label='rock'))
+# Yade's wall contact takes the wall as a sphere of the grain's radius (R* = r/2, the twin's
+# plate R* = r). A plate of E_w = (1 + sqrt 2) E gives Yade's Ip2 the twin's E* sqrt(R*), hence
+# the twin's Hertz spring; its tangential spring then also equals the twin's 8 G* sqrt(R* delta)
+# (both checked on one contact against the closed forms).
+plate_mat = O.materials.append(FrictMat(young=(1 + math.sqrt(2)) * E, poisson=NU,
+                                        density=DENSITY, frictionAngle=math.atan(MU_S_PLATE),
+                                        label='plate'))
+O.bodies.append(wall((0, 0, 0), axis=2, sense=1, material=plate_mat))
+# The twin's damping (EDEM, Tsuji): c = 2 sqrt(5/6) |beta| sqrt(S m*) with S = 2 E* sqrt(R* delta)
+# normal and 8 G* sqrt(R* delta) tangential, beta = ln e / sqrt(ln^2 e + pi^2). Yade's Law2 damps
+# with 2 beta_n sqrt(k_n m*) and 2 beta_s sqrt(k_s m*), k_n = 3/2 kno sqrt(delta) = S_n and
+# k_s = S_t, so beta_n = beta_s = sqrt(5/6) |beta| gives the same dashpots. (Its en = e would
+# give beta_n 0.0719 at e 0.79, 5% above the twin's 0.0683.)
+LOG_E = math.log(E_REST)
+BETA = math.sqrt(5.0 / 6.0) * -LOG_E / math.sqrt(LOG_E ** 2 + math.pi ** 2)
+clumps = spheres = 0
+with open(os.path.join(here, 'bed.txt')) as bed:
+    for line in bed:
+        if line.startswith('#'):
+            continue
+        v = [float(t) for t in line.split()]
+        n = int(v[10])
+        balls = [sphere((v[11 + 4 * i], v[12 + 4 * i], v[13 + 4 * i]), v[14 + 4 * i],
+                        material=rock) for i in range(n)]
+        if n == 1:
+            O.bodies.append(balls[0])
+            s = balls[0].state
+        else:
+            cid, ids = O.bodies.appendClumped(balls)
+            s = O.bodies[cid].state
+            # The twin's contact damping uses m* of the bodies (a component carries its clump's
+            # mass); Yade's Law2 reads the member's own state.mass, which nothing else uses once
+            # the clump is built, so the members are given the clump's mass.
+            for i in ids:
+                O.bodies[i].state.mass = v[6]
+            clumps += 1
+        # Mass and principal moments of the union of the spheres, as the twin's (Yade's default
+        # sums the members' own, counting overlaps twice); a tetrahedral clump's inertia is
+        # isotropic up to the integration error, so the principal frame Yade chose does not matter.
+        s.mass = v[6]
+        s.inertia = Vector3(v[7], v[8], v[9])
+        s.vel = Vector3(v[0], v[1], v[2])
+        s.angVel = Vector3(v[3], v[4], v[5])
+        spheres += n
+O.engines = [
+    ForceResetter(),
+    InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()], verletDist=SKIN),
+    InteractionLoop(
+        [Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom()],
+        [Ip2_FrictMat_FrictMat_MindlinPhys(betan=BETA, betas=BETA)],
+        [Law2_ScGeom_MindlinPhys_Mindlin()]),
+    NewtonIntegrator(damping=0.0, gravity=(0, 0, -9.81)),
+]
+O.dt = DT
+def dump(name):  # every sphere as a LAMMPS-style dump "x y z radius", written atomically
+    rows = ['%.17g %.17g %.17g %.17g' % (b.state.pos[0], b.state.pos[1], b.state.pos[2],
+                                         b.shape.radius)
+            for b in O.bodies if isinstance(b.shape, Sphere)]
+    with open(os.path.join(here, name + '.tmp'), 'w') as f:
+        f.write('ITEM: TIMESTEP\n%d\nITEM: NUMBER OF ATOMS\n%d\nITEM: ATOMS x y z radius\n'
+                % (O.iter, len(rows)))
+        f.write('\n'.join(rows) + '\n')
+    os.replace(os.path.join(here, name + '.tmp'), os.path.join(here, name))
+dump('initial.dump')  # Yade's bed as built, to check it against bed.txt
+t0, c0 = time.perf_counter(), time.process_time()
+O.run(STEPS, True)
+seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+dump('final.dump')
+ke = sum(0.5 * b.state.mass * b.state.vel.squaredNorm() for b in O.bodies
+         if b.isClump or (isinstance(b.shape, Sphere) and not b.isClumpMember))
+print('YADE_COLLAPSE clumps=%d spheres=%d steps=%d seconds=%.6g cpu_seconds=%.6g ke_end=%.6g'
+      % (clumps, spheres, O.iter, seconds, cpu, ke))
+)PY";
+    if (!f) throw std::runtime_error("--collapse: cannot write " + dir + "/collapse.py");
+  }
+  World w = bed;
+  w.set_wall_enabled(1, false);
+  omp_set_num_threads(1);
+  const auto t0 = std::chrono::steady_clock::now();
+  const double c0 = process_cpu_seconds();
+  for (int s = 0; s < o.collapse_steps; ++s) w.step();
+  const double cpu = process_cpu_seconds() - c0;
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  namespace ex = reposetwin::experiments;
+  ex::FrameInfo info;
+  info.time_s = w.state().time;
+  info.phase = "done";
+  ex::write_vtp((fs::path(dir) / "twin.vtp").string(), w.state().particles, info,
+                &w.state().bodies);
+  const Diagnostics d = w.diagnose();
+  std::cout << std::setprecision(6) << "COLLAPSE bed=" << what
+            << " bodies=" << w.state().bodies.size() << " spheres=" << w.state().particles.size()
+            << " steps=" << o.collapse_steps << " seconds=" << wall << " cpu_seconds=" << cpu
+            << " ke_end=" << d.kinetic_energy << " status=" << status_name(d.status) << std::endl;
+  if (d.status != Status::kOk) throw std::runtime_error(std::string("collapse: ") + d.detail);
+}
+
+/// The settled clump bed as Yade input (design note): bed.txt and run.py in `dir`.
+void write_yade(const World& w, const Options& o, const std::string& dir) {
+  namespace fs = std::filesystem;
+  fs::create_directories(dir);
+  write_bed(w, (fs::path(dir) / "bed.txt").string(), "--write-yade");
   const Model& m = w.model();
   const Material& rock = m.materials[0];
-  const PairParams pair;  // every pair of make_model has the defaults
+  const PairParams pair = bench_pair(o.rolling_friction);  // every pair of make_model
   std::ofstream f(fs::path(dir) / "run.py");
   f << std::setprecision(17);
   f << "# Yade script written by bench_clumps: its settled clump bed (bed.txt), the same walls,\n"
@@ -343,6 +505,14 @@ int main(int argc, char** argv) {
   app.add_option("--beds", o.beds, "read or write the settled beds as PREFIX.*.ckpt");
   app.add_flag("--no-spheres", o.no_spheres, "time the clump bed only");
   app.add_option("--write-yade", o.yade_dir, "also write the settled clump bed for Yade here");
+  app.add_option("--rolling-friction", o.rolling_friction,
+                 "EPSD mu_r of every pair (0: no rolling resistance, as Yade's Mindlin)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--collapse", o.collapse_dir,
+                 "release each settled bed on the plate (container removed) here and in a Yade "
+                 "script; DIR/clumps and DIR/spheres (scripts/verify_yade_clumps.sh)");
+  app.add_option("--collapse-steps", o.collapse_steps, "steps of the collapse")
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   const auto preset = [&](int clumps, double container_mm, int settle, int relax, int steps) {
     if (app.count("--clumps") == 0) o.clumps = clumps;
@@ -357,7 +527,7 @@ int main(int argc, char** argv) {
     if (app.count("--settle-gravity") == 0) o.settle_gravity = 20.0;
   }
   try {
-    const Model model = make_model(1.0, 1e-3 * o.container_mm);
+    const Model model = make_model(1.0, 1e-3 * o.container_mm, o.rolling_friction);
     double reach = 0.0;
     for (const ClumpTemplate& t : model.clumps) reach = std::max(reach, t.reach);
     std::cout << "bench_clumps: " << o.clumps << " tetrahedral clumps of 4 spheres (reach up to "
@@ -382,6 +552,11 @@ int main(int argc, char** argv) {
       }
       settle(*bed, o, what);
       if (!o.beds.empty()) write_checkpoint(*bed, file);
+    }
+    if (!o.collapse_dir.empty()) {
+      for (auto [bed, what] : beds)
+        collapse(*bed, o, (std::filesystem::path(o.collapse_dir) / what).string(), what);
+      return 0;  // a physics check, not a timing
     }
     if (!o.yade_dir.empty()) {
       write_yade(clumps, o, o.yade_dir);
