@@ -222,7 +222,8 @@ mustache::data refit_data(const IterationRecord& it) {
   if (!it.not_confirmed && it.refit_failed) {
     const RefitFailed& f = *it.refit_failed;
     d.set("text", "Refit: " + f.name + " (linear estimate " + sig3_or_dash(f.linear_estimate) +
-                      ") could not be simulated: " + f.refit_failed + ". Nothing chosen.");
+                      ") could not be simulated: " + paths_for_page(f.refit_failed) +
+                      ". Nothing chosen.");
     return d;
   }
   const RefitSummary* r = it.not_confirmed ? &it.not_confirmed->refit
@@ -240,7 +241,7 @@ mustache::data refit_data(const IterationRecord& it) {
             sig3_or_dash(c.value_se) + (c.units == "-" ? "" : " " + c.units) + " at mu_r " +
             sig3_or_dash(r->mu_r) + ".";
   }
-  if (!r->refit_notes.empty()) text += " Notes: " + r->refit_notes;
+  if (!r->refit_notes.empty()) text += " Notes: " + paths_for_page(r->refit_notes);
   d.set("text", text);
   if (!t.rows.empty()) d.set("trials", to_data(t));
   return d;
