@@ -284,6 +284,42 @@ void write_bed(const World& w, const std::string& path, const char* option) {
   if (!f) throw std::runtime_error(std::string(option) + ": cannot write " + path);
 }
 
+// The bed reader both Yade scripts share (write_bed's bed.txt: per body its velocity, angular
+// velocity, mass, principal moments, component count and each component's centre and radius):
+// read_bed(path, material, members_carry_clump_mass) builds every body and returns the counts of
+// clumps and spheres. A body of one component is a plain sphere.
+constexpr const char* kYadeReadBed = R"PY(def read_bed(path, material, members_carry_clump_mass):
+    clumps = spheres = 0
+    with open(path) as bed:
+        for line in bed:
+            if line.startswith('#'):
+                continue
+            v = [float(t) for t in line.split()]
+            n = int(v[10])
+            balls = [sphere((v[11 + 4 * i], v[12 + 4 * i], v[13 + 4 * i]), v[14 + 4 * i],
+                            material=material) for i in range(n)]
+            if n == 1:
+                O.bodies.append(balls[0])
+                s = balls[0].state
+            else:
+                cid, ids = O.bodies.appendClumped(balls)
+                s = O.bodies[cid].state
+                if members_carry_clump_mass:
+                    for i in ids:
+                        O.bodies[i].state.mass = v[6]
+                clumps += 1
+            # Mass and principal moments of the union of the spheres, as the twin's (Yade's
+            # default sums the members' own, counting overlaps twice); a tetrahedral clump's
+            # inertia is isotropic up to the integration error, so the principal frame Yade
+            # chose does not matter.
+            s.mass = v[6]
+            s.inertia = Vector3(v[7], v[8], v[9])
+            s.vel = Vector3(v[0], v[1], v[2])
+            s.angVel = Vector3(v[3], v[4], v[5])
+            spheres += n
+    return clumps, spheres
+)PY";
+
 /// The column collapse (design note): the settled bed `bed` written for Yade (DIR/bed.txt and
 /// DIR/collapse.py, which removes the container and runs --collapse-steps steps), then the same
 /// run in this engine on one thread, its final state written as DIR/twin.vtp (write_vtp, which
@@ -308,6 +344,7 @@ void collapse(const World& bed, const Options& o, const std::string& dir, const 
       << pair.restitution << ", " << pair.friction << ", " << pair.friction
       << "\nDT, SKIN, STEPS = " << m.dt << ", " << bed.state().neighbors.skin << ", "
       << o.collapse_steps << "\n"
+      << kYadeReadBed
       << R"PY(here = os.getcwd()  # run in its folder: Yade's __file__ names the yade binary
 rock = O.materials.append(FrictMat(young=E, poisson=NU, density=DENSITY,
                                    frictionAngle=math.atan(MU_S), label='rock'))
@@ -326,35 +363,10 @@ O.bodies.append(wall((0, 0, 0), axis=2, sense=1, material=plate_mat))
 # give beta_n 0.0719 at e 0.79, 5% above the twin's 0.0683.)
 LOG_E = math.log(E_REST)
 BETA = math.sqrt(5.0 / 6.0) * -LOG_E / math.sqrt(LOG_E ** 2 + math.pi ** 2)
-clumps = spheres = 0
-with open(os.path.join(here, 'bed.txt')) as bed:
-    for line in bed:
-        if line.startswith('#'):
-            continue
-        v = [float(t) for t in line.split()]
-        n = int(v[10])
-        balls = [sphere((v[11 + 4 * i], v[12 + 4 * i], v[13 + 4 * i]), v[14 + 4 * i],
-                        material=rock) for i in range(n)]
-        if n == 1:
-            O.bodies.append(balls[0])
-            s = balls[0].state
-        else:
-            cid, ids = O.bodies.appendClumped(balls)
-            s = O.bodies[cid].state
-            # The twin's contact damping uses m* of the bodies (a component carries its clump's
-            # mass); Yade's Law2 reads the member's own state.mass, which nothing else uses once
-            # the clump is built, so the members are given the clump's mass.
-            for i in ids:
-                O.bodies[i].state.mass = v[6]
-            clumps += 1
-        # Mass and principal moments of the union of the spheres, as the twin's (Yade's default
-        # sums the members' own, counting overlaps twice); a tetrahedral clump's inertia is
-        # isotropic up to the integration error, so the principal frame Yade chose does not matter.
-        s.mass = v[6]
-        s.inertia = Vector3(v[7], v[8], v[9])
-        s.vel = Vector3(v[0], v[1], v[2])
-        s.angVel = Vector3(v[3], v[4], v[5])
-        spheres += n
+# The twin's contact damping uses m* of the bodies (a component carries its clump's mass);
+# Yade's Law2 reads the member's own state.mass, which nothing else uses once the clump is
+# built, so the members are given the clump's mass.
+clumps, spheres = read_bed(os.path.join(here, 'bed.txt'), rock, members_carry_clump_mass=True)
 O.engines = [
     ForceResetter(),
     InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()], verletDist=SKIN),
@@ -425,11 +437,11 @@ void write_yade(const World& w, const Options& o, const std::string& dir) {
        "import math, os, time\n"
        "from yade import geom\n"
        "E, NU, DENSITY, E_REST, MU_S = "
-    << m.youngs_modulus_used(0) << ", " << rock.poisson_ratio << ", " << rock.density
-    << ", " << pair.restitution << ", " << pair.friction << "\n"
-    << "DT, SKIN, STEPS, CONTAINER_R, CONTAINER_TOP = " << m.dt << ", "
-    << w.state().neighbors.skin << ", " << o.steps << ", " << m.walls[1].r_bottom << ", "
-    << m.walls[1].z_top << "\n"
+    << m.youngs_modulus_used(0) << ", " << rock.poisson_ratio << ", " << rock.density << ", "
+    << pair.restitution << ", " << pair.friction << "\n"
+    << "DT, SKIN, STEPS, CONTAINER_R, CONTAINER_TOP = " << m.dt << ", " << w.state().neighbors.skin
+    << ", " << o.steps << ", " << m.walls[1].r_bottom << ", " << m.walls[1].z_top << "\n"
+    << kYadeReadBed
     << R"PY(here = os.getcwd()  # run in its folder: Yade's __file__ names the yade binary
 mat = O.materials.append(FrictMat(young=E, poisson=NU, density=DENSITY,
                                   frictionAngle=math.atan(MU_S), label='rock'))
@@ -437,25 +449,7 @@ mat = O.materials.append(FrictMat(young=E, poisson=NU, density=DENSITY,
 O.bodies.append(wall((0, 0, 0), axis=2, sense=1, material=mat))
 O.bodies.append(geom.facetCylinder((0, 0, 0.5 * CONTAINER_TOP), CONTAINER_R, CONTAINER_TOP,
                                    segmentsNumber=128, wallMask=4, material=mat))
-clumps = 0
-with open(os.path.join(here, 'bed.txt')) as bed:
-    for line in bed:
-        if line.startswith('#'):
-            continue
-        v = [float(t) for t in line.split()]
-        n = int(v[10])
-        spheres = [sphere((v[11 + 4 * i], v[12 + 4 * i], v[13 + 4 * i]), v[14 + 4 * i],
-                          material=mat) for i in range(n)]
-        cid, _ = O.bodies.appendClumped(spheres)
-        s = O.bodies[cid].state
-        # Mass and principal moments of the union of the spheres, as ours (Yade's default sums
-        # the members' own, counting overlaps twice); a tetrahedral clump's inertia is isotropic
-        # up to the integration error, so the principal frame Yade chose does not matter.
-        s.mass = v[6]
-        s.inertia = Vector3(v[7], v[8], v[9])
-        s.vel = Vector3(v[0], v[1], v[2])
-        s.angVel = Vector3(v[3], v[4], v[5])
-        clumps += 1
+clumps, _ = read_bed(os.path.join(here, 'bed.txt'), mat, members_carry_clump_mass=False)
 O.engines = [
     ForceResetter(),
     InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Facet_Aabb(), Bo1_Wall_Aabb()],
