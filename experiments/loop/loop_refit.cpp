@@ -14,6 +14,11 @@ namespace reposetwin::experiments::loop_detail {
 
 namespace {
 
+// Two effect values the refit takes for one: within 1e-3 of the known one (relative above 1).
+bool same_value(double known, double p) {
+  return std::abs(known - p) <= 1e-3 * std::max(1.0, std::abs(known));
+}
+
 // The next value to simulate: c interpolated between the known responses `pts` (value,
 // response fraction; sorted), preferring the bracket next to the last trial's value. NaN when no
 // bracket holds c.
@@ -94,7 +99,7 @@ bool run_trial(const LoopContext& ctx, PileStore& store, const RefitPlan& plan, 
 
 // Whether p is off, a value a trial has simulated already or one that failed to simulate.
 bool tried_already(const Refit& refit, double off, double p) {
-  const auto same = [p](double q) { return std::abs(q - p) <= 1e-3 * std::max(1.0, std::abs(q)); };
+  const auto same = [p](double q) { return same_value(q, p); };
   if (same(off)) return true;
   for (const Trial& tr : refit.trials)
     if (same(tr.p)) return true;
@@ -142,9 +147,8 @@ Refit refit_by_simulation(const LoopContext& ctx, PileStore& store, const RefitP
     double next = secant_value(pts, coef, last.p);
     if (!std::isfinite(next)) break;
     next = std::clamp(next, e.lo, e.hi);
-    bool known = false;
-    for (const auto& [pp, ff] : pts)
-      known = known || std::abs(pp - next) <= 1e-3 * std::max(1.0, std::abs(pp));
+    const bool known = std::any_of(pts.begin(), pts.end(),
+                                   [next](const auto& pf) { return same_value(pf.first, next); });
     if (known) break;
     ctx.say(e.name + ": simulated response " + std::to_string(last.fraction) +
             " of the probe's at " + std::to_string(last.p) + " (traced " + std::to_string(coef) +
