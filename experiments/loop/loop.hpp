@@ -21,9 +21,11 @@
 //  * Fingerprints. At the grid point nearest the calibrated mu_r, each available candidate is
 //    switched on at its probe value with the baseline's seeds; the fingerprint is the mean change
 //    of angle (and of H, D and, where the lab measured it, the crest width). Measurement
-//    candidates re-photograph the same piles. Fingerprints
-//    are computed once, on the baseline model, and reused in later iterations (first order): the
-//    residual after adding an effect is regressed on the same columns. A fingerprint lost in the
+//    candidates re-photograph the same piles. The probe found there is then simulated at every
+//    other grid point too: the fingerprint's surface, on which the trace fits the candidate
+//    jointly with mu_r (loop_joint_surface.hpp), so an effect that mu_r partly mimics is not
+//    judged where mu_r alone landed. Fingerprints are computed once, on the baseline model, and
+//    reused in later iterations (first order). A fingerprint lost in the
 //    seed noise (below the seed standard error of a predicted angle, or not standing out of its
 //    own noise) is probed again at twice its distance from off, probe_scalings times at most;
 //    one still lost is listed as unavailable with the largest probe tried: it could "explain"
@@ -43,7 +45,7 @@
 //    (a pile too flat to photograph), the simulated value steps back halfway towards off, twice
 //    at most.
 //    A threshold effect (a plate that slides only below some friction) breaks the linear
-//    estimate: when the simulated response at the fingerprint's grid point misses the traced
+//    estimate: when the simulated response where the strength was fitted misses the traced
 //    strength by more than half, the value is refined by secant steps between the known responses
 //    (off, probe, trials), twice at most, and the trial with the lowest calibration RMSE is kept.
 //    The simulations must confirm the tracing: an effect whose joint refit lands at t = 0, or

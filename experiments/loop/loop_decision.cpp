@@ -9,82 +9,6 @@
 #include "experiments/io/json_read.hpp"
 
 namespace reposetwin::experiments {
-namespace {
-
-// The standardised rows of every channel, test-major within each channel: row c n + i.
-struct Stacked {
-  Eigen::VectorXd y, s, f;
-  bool has_f = false;
-};
-
-Stacked stack(const JointProblem& p, const std::vector<Eigen::VectorXd>& fp) {
-  const Eigen::Index n = p.channels.front().residual.size();
-  const Eigen::Index rows = n * static_cast<Eigen::Index>(p.channels.size());
-  Stacked st;
-  st.y.resize(rows);
-  st.s.resize(rows);
-  st.has_f = !fp.empty();
-  if (st.has_f) st.f.resize(rows);
-  for (std::size_t c = 0; c < p.channels.size(); ++c) {
-    const TraceChannel& ch = p.channels[c];
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const Eigen::Index r = static_cast<Eigen::Index>(c) * n + i;
-      st.y[r] = ch.residual[i] / ch.sigma[i];
-      st.s[r] = ch.mu_sensitivity[i] / ch.sigma[i];
-      if (st.has_f) st.f[r] = fp[c][i] / ch.sigma[i];
-    }
-  }
-  return st;
-}
-
-void check(const JointProblem& p, const std::vector<Eigen::VectorXd>& fp, const std::string& name) {
-  if (p.channels.empty()) throw std::invalid_argument("joint trace: no channel");
-  const Eigen::Index n = p.channels.front().residual.size();
-  if (n < 3) throw std::invalid_argument("joint trace: at least 3 tests, got " + std::to_string(n));
-  for (const TraceChannel& ch : p.channels)
-    if (ch.residual.size() != n || ch.sigma.size() != n || ch.mu_sensitivity.size() != n)
-      throw std::invalid_argument("joint trace: channel " + ch.name + " has a different size");
-  if (!fp.empty() && fp.size() != p.channels.size())
-    throw std::invalid_argument("joint trace: " + name + " has " + std::to_string(fp.size()) +
-                                " fingerprint columns for " + std::to_string(p.channels.size()) +
-                                " channels");
-  for (const Eigen::VectorXd& f : fp)
-    if (f.size() != n) throw std::invalid_argument("joint trace: " + name + "'s column size");
-}
-
-// Leave-one-test-out: every row of test i is predicted by the fit on the other tests.
-double loo_chi2(const Stacked& st, Eigen::Index n, std::size_t channels, double lo, double hi) {
-  const Eigen::Index k = static_cast<Eigen::Index>(channels);
-  double sum = 0.0;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    Eigen::VectorXd y((n - 1) * k), s((n - 1) * k), f((n - 1) * k);
-    Eigen::Index q = 0;
-    for (Eigen::Index r = 0; r < n * k; ++r) {
-      if (r % n == i) continue;
-      y[q] = st.y[r];
-      s[q] = st.s[r];
-      if (st.has_f) f[q] = st.f[r];
-      ++q;
-    }
-    double b = 0.0, c = 0.0;
-    try {
-      const BoundedFit fit =
-          bounded_fit(s, st.has_f ? &f : nullptr, y, Eigen::VectorXd::Ones(y.size()), lo, hi);
-      b = fit.b;
-      c = fit.c;
-    } catch (const std::invalid_argument&) {
-      // Without test i the columns are degenerate: the model cannot predict it.
-    }
-    for (Eigen::Index ch = 0; ch < k; ++ch) {
-      const Eigen::Index r = ch * n + i;
-      const double e = st.y[r] - b * st.s[r] - (st.has_f ? c * st.f[r] : 0.0);
-      sum += e * e;
-    }
-  }
-  return sum;
-}
-
-}  // namespace
 
 bool add_optional_channel(JointProblem& p, const OptionalChannel& obs,
                           std::vector<std::string>& left_out) {
@@ -112,52 +36,6 @@ bool add_optional_channel(JointProblem& p, const OptionalChannel& obs,
   }
   p.channels.push_back(ch);
   return true;
-}
-
-JointScore score_joint(const JointProblem& p, const std::string& name,
-                       const std::vector<Eigen::VectorXd>& fp) {
-  check(p, fp, name);
-  const Eigen::Index n = p.channels.front().residual.size();
-  const Stacked st = stack(p, fp);
-  const Eigen::VectorXd ones = Eigen::VectorXd::Ones(st.y.size());
-  JointScore out;
-  out.name = name;
-  out.rows = static_cast<int>(st.y.size());
-  BoundedFit fit;
-  try {
-    fit = bounded_fit(st.s, st.has_f ? &st.f : nullptr, st.y, ones, p.mu_shift_lo, p.mu_shift_hi);
-  } catch (const std::invalid_argument&) {
-    out.identifiable = false;
-    fit = bounded_fit(st.s, nullptr, st.y, ones, p.mu_shift_lo, p.mu_shift_hi);
-  }
-  const bool with_f = st.has_f && out.identifiable;
-  out.mu_shift = fit.b;
-  out.mu_shift_at_bound = fit.at_bound;
-  out.coef = with_f ? fit.c : 0.0;
-  out.coef_se = with_f ? fit.c_se : 0.0;
-  out.t = with_f && fit.c_se > 0.0 ? std::abs(fit.c) / fit.c_se : 0.0;
-  out.chi2 = fit.chi2;
-  for (std::size_t c = 0; c < p.channels.size(); ++c) {
-    double x = 0.0;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const Eigen::Index r = static_cast<Eigen::Index>(c) * n + i;
-      const double e = st.y[r] - out.mu_shift * st.s[r] - (with_f ? out.coef * st.f[r] : 0.0);
-      x += e * e;
-    }
-    out.chi2_by_channel.push_back(x);
-  }
-  Stacked loo = st;
-  loo.has_f = with_f;
-  out.loo_chi2 = loo_chi2(loo, n, p.channels.size(), p.mu_shift_lo, p.mu_shift_hi);
-  return out;
-}
-
-JointScore score_offset(const JointProblem& p) {
-  if (p.channels.empty()) throw std::invalid_argument("joint trace: no channel");
-  const Eigen::Index n = p.channels.front().residual.size();
-  std::vector<Eigen::VectorXd> fp(p.channels.size(), Eigen::VectorXd::Zero(n));
-  fp[0].setOnes();
-  return score_joint(p, "offset", fp);
 }
 
 std::string trace_verdict_name(TraceVerdict v) {

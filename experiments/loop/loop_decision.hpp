@@ -10,7 +10,10 @@
 //    candidate's fingerprint has one column per channel. Rows are standardised by sigma, so the
 //    channels share one weighted fit
 //        r_ci / sigma_ci = b s_ci / sigma_ci + c f_ci / sigma_ci + N(0, 1),
-//    one mu_r correction b (bounded as in loop_acceptance.hpp) and one strength c for all channels.
+//    one mu_r correction b (inside the grid) and one strength c for all channels. The loop
+//    fits it on simulated surfaces rather than this linear form (loop_joint_surface.hpp: the
+//    model and the fingerprint at every mu_r, not their slope and value at one grid point);
+//    the JointScore below is that fit's record.
 //    A further observable is one more channel; nothing else changes. The crest width (the flat
 //    top's width, vision/crest.hpp) is one where the lab data give it (add_optional_channel): a
 //    fast lift and a rough plate may lower the angle alike while one widens the crest and the
@@ -104,15 +107,6 @@ struct JointScore {
   std::string out_of_range;  // set by the caller (outside_range): why c lies outside the
                              // effect's range; empty inside it
 };
-
-/// Fits the hypothesis with one fingerprint column per channel (`fingerprint[c]` has n rows),
-/// or the mu_r correction alone when `fingerprint` is empty. Throws std::invalid_argument for
-/// mismatched sizes or fewer than 3 tests.
-JointScore score_joint(const JointProblem& p, const std::string& name,
-                       const std::vector<Eigen::VectorXd>& fingerprint);
-
-/// The offset hypothesis: ones on the first channel (the angle), zeros on the others.
-JointScore score_offset(const JointProblem& p);
 
 /// What the tracing concludes.
 enum class TraceVerdict {

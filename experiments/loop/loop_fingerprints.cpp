@@ -1,11 +1,15 @@
 // The fingerprints of the candidate effects (loop.hpp's design note): at the grid point nearest
 // the calibrated mu_r, each available candidate switched on at its probe with the baseline's
-// seeds, its probe scaled until the fingerprint stands out of the seed noise.
+// seeds, its probe scaled until the fingerprint stands out of the seed noise; then that probe at
+// every other grid point, so the trace fits the candidate jointly with mu_r across the grid
+// (loop_joint_surface.hpp).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 
+#include "experiments/loop/loop_joint_surface.hpp"
 #include "experiments/loop/loop_stages.hpp"
 
 namespace reposetwin::experiments::loop_detail {
@@ -172,20 +176,67 @@ std::optional<FingerprintRecord> probe_candidate(const LoopContext& ctx, PileSto
   return std::nullopt;
 }
 
+// The candidate's probe at every grid point, each paired with the baseline's piles there; the
+// node the probe was chosen at is `f` itself. A grid point whose pours fail keeps the reason and
+// no change: the trace interpolates across it (interpolate_on_nodes).
+void fingerprint_surface(const LoopContext& ctx, PileStore& store, const CandidateEffect& e,
+                         const Surface& base, std::size_t node, FingerprintRecord& f) {
+  for (std::size_t k = 0; k < ctx.grid.size(); ++k) {
+    FingerprintNode n;
+    n.mu_r = ctx.grid[k];
+    if (k == node) {
+      n.change = f.change;
+      f.surface.push_back(std::move(n));
+      continue;
+    }
+    std::vector<SimRequest> req;
+    for (std::size_t i = 0; i < ctx.tests().size(); ++i)
+      if (base.curve[i].no_pile.empty())
+        for (const SimOutcome& o : base.raw[i][k])
+          req.push_back(make_request(ctx.tests()[i], ctx.s().mu_key, ctx.grid[k], o.seed,
+                                     {{&e, f.probe}}, ctx.s().image));
+    try {
+      const std::vector<SimOutcome> got = pour(ctx, store, req);
+      for (const SimOutcome& o : got)
+        if (!o.pile) throw std::runtime_error("a run formed no pile");
+      n.change = fingerprint(ctx, e, f.probe, base, k, got).change;
+    } catch (const std::exception& ex) {
+      n.missing = std::string(ex.what()).substr(0, 300);
+      ctx.say("candidate " + e.name + ": no fingerprint at mu_r = " + std::to_string(n.mu_r) +
+              ": " + n.missing);
+    }
+    f.surface.push_back(std::move(n));
+  }
+}
+
 }  // namespace
 
-// Fingerprints at the grid point nearest the calibrated mu_r, with the baseline's seeds.
+// Fingerprints at the grid point nearest the calibrated mu_r, with the baseline's seeds, and
+// their probes at every grid point.
 Fingerprints fingerprint_candidates(const LoopContext& ctx, PileStore& store, const Surface& base,
                                     std::size_t node) {
   Fingerprints fps;
   const std::vector<const CandidateEffect*> cands = available_candidates(ctx, fps.unavailable);
   ctx.say("fingerprints: " + std::to_string(cands.size()) +
-          " candidates at mu_r = " + std::to_string(ctx.grid[node]));
+          " candidates at mu_r = " + std::to_string(ctx.grid[node]) + ", then across the grid");
   for (const CandidateEffect* e : cands)
-    if (auto f = probe_candidate(ctx, store, *e, base, node, fps.unavailable))
+    if (auto f = probe_candidate(ctx, store, *e, base, node, fps.unavailable)) {
+      fingerprint_surface(ctx, store, *e, base, node, *f);
       fps.records.push_back(std::move(*f));
+    }
   return fps;
 }
 
+double fingerprint_at(const FingerprintRecord& f, Channel c, std::size_t test, double mu) {
+  if (f.surface.empty()) return f.change[c].at(test);
+  std::vector<double> nodes, values;
+  for (const FingerprintNode& n : f.surface) {
+    nodes.push_back(n.mu_r);
+    values.push_back(n.missing.empty() && test < n.change[c].size()
+                         ? n.change[c][test]
+                         : std::numeric_limits<double>::quiet_NaN());
+  }
+  return interpolate_on_nodes(nodes, values, mu);
+}
 
 }  // namespace reposetwin::experiments::loop_detail

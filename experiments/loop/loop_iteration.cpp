@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "experiments/io/format.hpp"
+#include "experiments/loop/loop_joint_surface.hpp"
 #include "experiments/loop/loop_stages.hpp"
 
 namespace reposetwin::experiments::loop_detail {
@@ -122,24 +123,76 @@ void drop_unrecorded_crest(const LoopContext& ctx, const LoopState& state,
   }
 }
 
-// Every unused fingerprint scored against the residual: on the angle (the acceptance rule) and
-// jointly, with the strength each fit asks for against what the effect can do.
+// The mu_r samples the joint fits run over: the grid's span in steps of at most a two-hundredth
+// of it, every grid point among them.
+std::vector<double> mu_samples(const std::vector<double>& grid) {
+  const int kPerSpan = 200;
+  std::vector<double> mu = {grid.front()};
+  const double span = grid.back() - grid.front();
+  for (std::size_t q = 1; q < grid.size(); ++q) {
+    const double a = grid[q - 1], b = grid[q];
+    const int steps = std::max(1, static_cast<int>(std::ceil(kPerSpan * (b - a) / span)));
+    for (int k = 1; k <= steps; ++k) mu.push_back(k == steps ? b : a + (b - a) * k / steps);
+  }
+  return mu;
+}
+
+// The traced channels on the surfaces: the lab's values, their noise and the current model at
+// every mu_r sample (loop_joint_surface.hpp).
+SurfaceProblem surface_problem(const LoopContext& ctx, const LoopState& state,
+                               const std::vector<std::size_t>& tests, const JointProblem& joint) {
+  SurfaceProblem sp;
+  sp.mu = mu_samples(ctx.grid);
+  sp.mu_fit = state.fit.mu;
+  const Eigen::Index n = static_cast<Eigen::Index>(tests.size());
+  const Eigen::Index k = static_cast<Eigen::Index>(sp.mu.size());
+  for (const TraceChannel& ch : joint.channels) {
+    const Channel c = channel_from_name(ch.name);
+    SurfaceChannel sc{ch.name, Eigen::VectorXd(n), ch.sigma, Eigen::MatrixXd(k, n)};
+    for (Eigen::Index i = 0; i < n; ++i) {
+      sc.observed[i] = ctx.observed(tests[static_cast<std::size_t>(i)], c);
+      for (Eigen::Index q = 0; q < k; ++q)
+        sc.predicted(q, i) = state.model.value(tests[static_cast<std::size_t>(i)],
+                                               sp.mu[static_cast<std::size_t>(q)], c);
+    }
+    sp.channels.push_back(std::move(sc));
+  }
+  return sp;
+}
+
+// A fingerprint on the surface problem's samples (fingerprint_at).
+SurfaceFingerprint surface_fingerprint(const FingerprintRecord& f, const SurfaceProblem& sp,
+                                       const std::vector<std::size_t>& tests) {
+  const Eigen::Index n = static_cast<Eigen::Index>(tests.size());
+  const Eigen::Index k = static_cast<Eigen::Index>(sp.mu.size());
+  SurfaceFingerprint out;
+  for (const SurfaceChannel& ch : sp.channels) {
+    const Channel c = channel_from_name(ch.name);
+    Eigen::MatrixXd m(k, n);
+    for (Eigen::Index q = 0; q < k; ++q)
+      for (Eigen::Index i = 0; i < n; ++i)
+        m(q, i) = fingerprint_at(f, c, tests[static_cast<std::size_t>(i)],
+                                 sp.mu[static_cast<std::size_t>(q)]);
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+// Every unused fingerprint scored against the residual: on the angle at its grid point (the
+// acceptance rule) and jointly with mu_r on the surfaces, with the strength each fit asks for
+// against what the effect can do.
 void score_fingerprints(const LoopContext& ctx, const LoopState& state,
                         const std::vector<FingerprintRecord>& fps,
-                        const std::vector<std::size_t>& tests, const JointProblem& joint,
+                        const std::vector<std::size_t>& tests, const SurfaceProblem& sp,
                         const TraceProblem& p, IterationRecord& rec) {
   const Eigen::Index n = p.residual.size();
   for (const FingerprintRecord& f : fps) {
     if (state.used.count(f.name)) continue;
-    std::vector<Eigen::VectorXd> cols;
-    for (const TraceChannel& ch : joint.channels) {
-      const std::vector<double>& v = f.change[channel_from_name(ch.name)];
-      Eigen::VectorXd col(n);
-      for (Eigen::Index k = 0; k < n; ++k) col[k] = v[tests[k]];
-      cols.push_back(col);
-    }
-    rec.candidates.push_back(score_candidate(p, f.name, cols[0], rec.null, ctx.s().rule));
-    rec.joint.push_back(score_joint(joint, f.name, cols));
+    Eigen::VectorXd angle(n);
+    for (Eigen::Index k = 0; k < n; ++k)
+      angle[k] = f.change[Channel::kAngle][tests[static_cast<std::size_t>(k)]];
+    rec.candidates.push_back(score_candidate(p, f.name, angle, rec.null, ctx.s().rule));
+    rec.joint.push_back(score_joint_on_surfaces(sp, f.name, surface_fingerprint(f, sp, tests)));
     const CandidateEffect& e = find_effect(f.name);
     const double off = ctx.effect_off(e);
     CandidateScore& a = rec.candidates.back();
@@ -180,9 +233,10 @@ IterationRecord trace(const LoopContext& ctx, int it, const LoopState& state,
   p.mu_shift_lo = joint.mu_shift_lo;
   p.mu_shift_hi = joint.mu_shift_hi;
   rec.null = score_null(p);
-  score_fingerprints(ctx, state, fps, tests, joint, p, rec);
-  rec.offset = score_offset(joint);
-  rec.mu_only = score_joint(joint, "mu_r only", {});
+  const SurfaceProblem sp = surface_problem(ctx, state, tests, joint);
+  score_fingerprints(ctx, state, fps, tests, sp, p, rec);
+  rec.offset = score_offset_on_surfaces(sp);
+  rec.mu_only = score_joint_on_surfaces(sp, "mu_r only", {});
   return rec;
 }
 
@@ -231,17 +285,27 @@ std::optional<RefitPlan> plan_refit(const LoopContext& ctx, const RefitPick& cho
   RefitPlan plan{.effect = &e,
                  .off = ctx.effect_off(e),
                  .coef = sc.coef,
-                 .mu_node = mu_node,
+                 .mu_at = mu_node,
                  .channels = {Channel::kAngle},
                  .declared = choice.declared.has_value()};
-  if (!sc.accepted) {
-    for (const JointScore& j : iter.joint)
-      if (j.name == sc.name) plan.coef = j.coef;
-    for (const std::string& ch : iter.channels)
-      if (const Channel c = channel_from_name(ch); c != Channel::kAngle) plan.channels.push_back(c);
-  }
   plan.fingerprint =
       &*std::find_if(fps.begin(), fps.end(), [&](const auto& f) { return f.name == e.name; });
+  plan.column = plan.fingerprint->change;
+  if (!sc.accepted) {
+    // The joint fit's strength, at the mu_r it was fitted at on the surfaces.
+    for (const JointScore& j : iter.joint)
+      if (j.name == sc.name) {
+        plan.coef = j.coef;
+        plan.mu_at = iter.mu_r + j.mu_shift;
+      }
+    for (const std::string& ch : iter.channels)
+      if (const Channel c = channel_from_name(ch); c != Channel::kAngle) plan.channels.push_back(c);
+    for (Channel c : plan.channels) {
+      plan.column[c].assign(ctx.tests().size(), std::numeric_limits<double>::quiet_NaN());
+      for (std::size_t i = 0; i < ctx.tests().size(); ++i)
+        plan.column[c][i] = fingerprint_at(*plan.fingerprint, c, i, plan.mu_at);
+    }
+  }
   // c is in units of the probe the fingerprint was simulated at (scaled when the registry's
   // probe was lost in the seed noise).
   const double off = plan.off;

@@ -108,6 +108,21 @@ json to_json(const FingerprintRecord& f) {
             {"D_mm", f.change[Channel::kD]},
             {"probes_tried", f.probes_tried}};
   if (!f.change[Channel::kCrest].empty()) j["crest_mm"] = f.change[Channel::kCrest];
+  if (f.surface.empty()) return j;
+  json nodes = json::array();
+  for (const FingerprintNode& n : f.surface) {
+    json node = {{"mu_r", n.mu_r}};
+    if (!n.missing.empty()) {
+      node["missing"] = n.missing;
+    } else {
+      node["angle_deg"] = n.change[Channel::kAngle];
+      node["H_mm"] = n.change[Channel::kH];
+      node["D_mm"] = n.change[Channel::kD];
+      if (!n.change[Channel::kCrest].empty()) node["crest_mm"] = n.change[Channel::kCrest];
+    }
+    nodes.push_back(std::move(node));
+  }
+  j["surface"] = std::move(nodes);
   return j;
 }
 
@@ -346,6 +361,21 @@ FingerprintRecord fingerprint_record_from_json(const json& j) {
   // Absent: no test has a measured crest.
   if (j.contains("crest_mm")) f.change[Channel::kCrest] = numbers_field(j, "crest_mm");
   f.probes_tried = numbers_field(j, "probes_tried");
+  // Absent: written before the loop simulated fingerprints at every grid point.
+  if (j.contains("surface"))
+    f.surface = each(j, "surface", [](const json& n) {
+      FingerprintNode node;
+      node.mu_r = number_field(n, "mu_r");
+      if (n.contains("missing")) {
+        node.missing = field<std::string>(n, "missing");
+        return node;
+      }
+      node.change[Channel::kAngle] = numbers_field(n, "angle_deg");
+      node.change[Channel::kH] = numbers_field(n, "H_mm");
+      node.change[Channel::kD] = numbers_field(n, "D_mm");
+      if (n.contains("crest_mm")) node.change[Channel::kCrest] = numbers_field(n, "crest_mm");
+      return node;
+    });
   return f;
 }
 

@@ -118,15 +118,26 @@ const char* channel_unit(Channel c);
 Channel channel_from_name(const std::string& name);
 
 /// A candidate's simulated change of every test's angle, H, D and crest at its probe value.
+/// A fingerprint at one grid point of its surface.
+struct FingerprintNode {
+  double mu_r = 0.0;                       // [-]
+  PerChannel<std::vector<double>> change;  // per channel, per test [deg or mm]; empty if missing
+  std::string missing;                     // why it has none (its pours failed); empty: it has
+};
+
 struct FingerprintRecord {
   std::string name;
   double probe = 0.0;  // effect value simulated
-  double mu_r = 0.0;   // grid point simulated at [-]
+  double mu_r = 0.0;   // grid point the probe was chosen at (nearest the calibration) [-]
   // Per channel, per test: the mean change [deg or mm]. The crest's is empty when no test has a
   // measured crest.
   PerChannel<std::vector<double>> change;
   std::vector<double> angle_se_deg;  // per test: the angle change's standard error [deg]
   std::vector<double> probes_tried;  // every probe simulated, the one used last
+  // The probe at every grid point (mu_r's above included), so that the candidate is fitted
+  // jointly with mu_r across the grid (loop_joint_surface.hpp). Empty in a loop.json written
+  // before the loop simulated it.
+  std::vector<FingerprintNode> surface;
 };
 
 /// The mu_r grid as the loop settled it: extended beyond a bound mu_r landed on, or left.
@@ -152,7 +163,7 @@ struct UnavailableCandidate {
 /// One simulated refit value and the joint fit it gave.
 struct RefitTrialRecord {
   double simulated_at = 0.0;        // effect value simulated on the grid
-  double response_fraction = 0.0;   // response at the fingerprint's grid point / fingerprint
+  double response_fraction = 0.0;   // response where the strength was fitted / fingerprint
   double t = 0.0;                   // joint fit's weight [-]
   double mu_r = 0.0;                // joint fit's mu_r [-]
   double rmse_calibrate_deg = 0.0;  // calibration RMSE of the refitted model [deg]

@@ -34,19 +34,21 @@ double secant_value(const std::vector<std::pair<double, double>>& pts, double co
   return next;
 }
 
-// The simulated response at the fingerprints' grid point in units of the fingerprint, over the
-// refit's channels, each over its noise.
+// The simulated response where the strength was fitted (plan.mu_at) in units of the fingerprint
+// there, over the refit's channels, each over its noise.
 double response_fraction(const LoopContext& ctx, const RefitPlan& plan, const Surface& surf,
                          const LoopState& state) {
   const Model alone{{{1.0, &surf}}};
-  const double mu_node = plan.mu_node;
+  const double mu = plan.mu_at;
   double num = 0.0, den = 0.0;
   for (std::size_t i : ctx.roles.fitted)
     for (Channel c : plan.channels) {
-      const double f = plan.fingerprint->change[c][i];
+      const double f = plan.column[c][i];
+      const double change = alone.value(i, mu, c) - state.model.value(i, mu, c);
+      if (!std::isfinite(f) || !std::isfinite(change)) continue;
       const double w =
           c == Channel::kAngle ? 1.0 : std::pow(ctx.sigma(i, Channel::kAngle) / ctx.sigma(i, c), 2);
-      num += w * (alone.value(i, mu_node, c) - state.model.value(i, mu_node, c)) * f;
+      num += w * change * f;
       den += w * f * f;
     }
   return den > 0.0 ? num / den : 0.0;

@@ -165,7 +165,11 @@ struct RefitPlan {
   double off = 0.0;      // its value in the base model
   double coef = 0.0;     // traced strength, in units of the fingerprint's probe
   double p1 = 0.0;       // the linear estimate, clamped to the range
-  double mu_node = 0.0;  // mu_r of the fingerprints' grid point [-]
+  // Where the strength was fitted: the fingerprints' grid point for the angle's linear fit, the
+  // joint fit's mu_r on the surfaces; and the fingerprint there, per channel and test [-; deg or
+  // mm].
+  double mu_at = 0.0;
+  PerChannel<std::vector<double>> column;
   std::vector<Channel> channels;
   bool declared = false;  // the user's hypothesis picked it (--refit)
 };
@@ -173,7 +177,7 @@ struct RefitPlan {
 /// One refit trial: the effect simulated at p on the whole grid and (mu_r, t) fitted jointly.
 struct Trial {
   double p = 0.0;         // simulated value
-  double fraction = 0.0;  // its response at the node, in units of the probe's fingerprint
+  double fraction = 0.0;  // its response at plan.mu_at, in units of the fingerprint there
   const Surface* surf = nullptr;
   MuFit joint;
   double rmse = 0.0;                 // calibration RMSE of the refitted model [deg]
@@ -228,9 +232,13 @@ GridGrowth next_grid_point(const std::vector<double>& grid, bool low, int added,
                            const LoopSettings& s);
 /// Why nothing is traced (the design or mu_r on the grid's bound), or nothing (loop_baseline.cpp).
 std::optional<std::string> not_traced(const LoopContext& ctx, const GridRecord& grid);
-/// The available candidates' fingerprints at grid point `node` (loop_fingerprints.cpp).
+/// The available candidates' fingerprints at grid point `node`, and their probes' at every grid
+/// point (loop_fingerprints.cpp).
 Fingerprints fingerprint_candidates(const LoopContext& ctx, PileStore& store, const Surface& base,
                                     std::size_t node);
+/// The fingerprint's change of `c` for `test` at mu_r `mu`, interpolated on its surface (the
+/// record's own grid point when it has none) [deg or mm]; NaN where no grid point has it.
+double fingerprint_at(const FingerprintRecord& f, Channel c, std::size_t test, double mu);
 /// One iteration: trace, decide, refit, confirm; appends its record to `iterations` and
 /// returns whether the loop goes on (loop_iteration.cpp).
 bool iterate(const LoopContext& ctx, PileStore& store, int it, LoopState& state,

@@ -122,6 +122,23 @@ TEST(LoopRecordsJson, BaselineAndFingerprintRoundTrip) {
   EXPECT_EQ(fingerprint_record_from_json(to_json(f)).change[Channel::kCrest],
             f.change[Channel::kCrest]);
   EXPECT_EQ(fingerprint_record_from_json(to_json(f)).probes_tried, f.probes_tried);
+  // Its surface: a grid point with changes, one whose pours failed.
+  FingerprintNode at;
+  at.mu_r = 0.1;
+  at.change[Channel::kAngle] = {2.0, std::numeric_limits<double>::quiet_NaN()};
+  at.change[Channel::kH] = {0.7, 0.2};
+  at.change[Channel::kD] = {-1.0, 1.5};
+  FingerprintNode failed;
+  failed.mu_r = 0.2;
+  failed.missing = "a run formed no pile";
+  f.surface = {at, failed};
+  expect_round_trip(f, fingerprint_record_from_json);
+  const FingerprintRecord back_f = fingerprint_record_from_json(to_json(f));
+  ASSERT_EQ(back_f.surface.size(), 2u);
+  EXPECT_EQ(back_f.surface[0].change[Channel::kH], at.change[Channel::kH]);
+  EXPECT_TRUE(std::isnan(back_f.surface[0].change[Channel::kAngle][1]));
+  EXPECT_EQ(back_f.surface[1].missing, failed.missing);
+  EXPECT_TRUE(back_f.surface[1].change[Channel::kAngle].empty());
 }
 
 TEST(LoopRecordsJson, EffectsAndIterationsRoundTrip) {
