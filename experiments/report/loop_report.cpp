@@ -247,16 +247,18 @@ mustache::data refit_data(const IterationRecord& it) {
   return d;
 }
 
-// The joint trace's table: each candidate, then the offset and the mu_r-only hypotheses.
+// The joint trace's table: each candidate, then the offset and the mu_r-only hypotheses, with
+// the mu_r each was fitted at jointly.
 mustache::data joint_data(const IterationRecord& it) {
-  Table j = numeric_table({"hypothesis", "c", "se", "|c|/se", "joint chi2", "LOO chi2", "values"});
+  Table j = numeric_table(
+      {"hypothesis", "c", "se", "|c|/se", "mu_r", "joint chi2", "LOO chi2", "values"});
   std::vector<JointScore> rows = it.joint;
   if (it.offset) rows.push_back(*it.offset);
   if (it.mu_only) rows.push_back(*it.mu_only);
   for (const JointScore& c : rows)
     j.rows.push_back({{left(c.name), sig3_or_dash(c.coef), sig3_or_dash(c.coef_se),
-                       sig3_or_dash(c.t), sig3_or_dash(c.chi2), sig3_or_dash(c.loo_chi2),
-                       sig3_or_dash(static_cast<double>(c.rows))}});
+                       sig3_or_dash(c.t), sig3_or_dash(it.mu_r + c.mu_shift), sig3_or_dash(c.chi2),
+                       sig3_or_dash(c.loo_chi2), sig3_or_dash(static_cast<double>(c.rows))}});
   std::string channels;
   for (const std::string& c : it.channels) channels += (channels.empty() ? "" : ", ") + c;
   mustache::data jd = to_data(j);
