@@ -36,6 +36,12 @@ Eigen::MatrixXd columns(const Eigen::VectorXd& a, const Eigen::VectorXd* b) {
 
 }  // namespace
 
+double chi2_95(double dof) {
+  if (!(dof > 0.0)) throw std::invalid_argument("chi2_95: dof must be > 0");
+  const double a = 2.0 / (9.0 * dof);
+  return dof * std::pow(1.0 - a + 1.645 * std::sqrt(a), 3);
+}
+
 BoundedFit bounded_fit(const Eigen::VectorXd& s, const Eigen::VectorXd* f, const Eigen::VectorXd& y,
                        const Eigen::VectorXd& sigma, double lo, double hi) {
   BoundedFit out;

@@ -62,6 +62,10 @@ WlsFit weighted_least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& y
 /// than columns + 1.
 double loo_rmse(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const Eigen::VectorXd& sigma);
 
+/// The 95% point of chi^2 with `dof` degrees of freedom (> 0), by Wilson and Hilferty's cube-root
+/// approximation (2.5% low at 1 degree of freedom, within 1% from 5).
+double chi2_95(double dof);
+
 /// The acceptance rule's thresholds (see the design note).
 struct AcceptanceRule {
   double min_t = 3.0;              // |c| / se(c) must exceed this [-]

@@ -128,6 +128,7 @@ TraceDecision decide_among(const Contenders& c, const JointScore& offset, const 
   const bool offset_flag = offset.identifiable && offset.t > rule.min_t &&
                            mu_only.chi2 - offset.chi2 > rule.min_delta_chi2;
   TraceDecision d;
+  for (const JointScore* x : contenders) d.contenders.push_back(x->name);
   const std::string offset_words =
       "a uniform offset of " + significant(offset.coef, 3) + " +- " +
       significant(offset.coef_se, 3) + " deg on every test (|c|/se " + significant(offset.t, 3) +
@@ -277,10 +278,12 @@ nlohmann::json to_json(const JointScore& s) {
 }
 
 nlohmann::json to_json(const TraceDecision& d) {
-  return {{"verdict", trace_verdict_name(d.verdict)},
-          {"named", text_or_null(d.named)},
-          {"indistinguishable", d.tied},
-          {"statement", d.statement}};
+  nlohmann::json j = {{"verdict", trace_verdict_name(d.verdict)},
+                      {"named", text_or_null(d.named)},
+                      {"indistinguishable", d.tied},
+                      {"statement", d.statement}};
+  if (!d.contenders.empty()) j["contenders"] = d.contenders;  // absent: none met the rule
+  return j;
 }
 
 nlohmann::json to_json(const DesignRecord& d) {
@@ -319,6 +322,8 @@ TraceDecision trace_decision_from_json(const nlohmann::json& j) {
   });
   if (!field<nlohmann::json>(j, "named").is_null()) d.named = field<std::string>(j, "named");
   d.tied = field<std::vector<std::string>>(j, "indistinguishable");
+  // Absent: none met the rule, or written before the decision listed them.
+  if (j.contains("contenders")) d.contenders = field<std::vector<std::string>>(j, "contenders");
   d.statement = field<std::string>(j, "statement");
   return d;
 }

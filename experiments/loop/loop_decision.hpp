@@ -121,6 +121,7 @@ struct TraceDecision {
   TraceVerdict verdict = TraceVerdict::kNothing;
   std::string named;                 // kNamed: the candidate
   std::vector<std::string> tied;     // kIndistinguishable: the candidates (best first)
+  std::vector<std::string> contenders;  // every candidate that met the rule, by joint chi^2
   std::string statement;             // in words, with the numbers
 };
 

@@ -69,8 +69,7 @@ std::string untraceable(const LoopContext& ctx, const FingerprintRecord& f) {
   for (std::size_t i : tests) se2 += f.angle_se_deg[i] * f.angle_se_deg[i];
   const double n = static_cast<double>(tests.size());
   se2 /= n;
-  const double a = 2.0 / (9.0 * n);
-  const double chi2_95_per_n = std::pow(1.0 - a + 1.645 * std::sqrt(a), 3);
+  const double chi2_95_per_n = chi2_95(n) / n;
   if (rms * rms < chi2_95_per_n * se2) {
     std::snprintf(why, sizeof why,
                   "its fingerprint at the probe (RMS %.3g deg over the traced tests) "

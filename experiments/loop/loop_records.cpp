@@ -217,6 +217,7 @@ json to_json(const IterationRecord& it) {
   if (it.stopped) j["stopped"] = *it.stopped;
   if (it.declared) j["declared"] = *it.declared;
   if (it.not_confirmed) j["not_confirmed"] = to_json(*it.not_confirmed);
+  if (it.set_aside) j["set_aside"] = to_json(*it.set_aside);
   return j;
 }
 
@@ -489,6 +490,7 @@ IterationRecord iteration_record_from_json(const json& j) {
   it.declared = optional_field<std::string>(j, "declared");
   if (j.contains("not_confirmed"))
     it.not_confirmed = nested(j, "not_confirmed", not_confirmed_from_json);
+  if (j.contains("set_aside")) it.set_aside = nested(j, "set_aside", not_confirmed_from_json);
   read_joint_trace(j, it);
   return it;
 }

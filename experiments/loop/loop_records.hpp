@@ -231,6 +231,9 @@ struct IterationRecord {
   std::optional<ChosenEffect> chosen;
   std::optional<NotConfirmed> not_confirmed;
   std::optional<RefitFailed> refit_failed;
+  // The named candidate's refit, set aside because its simulations still misfit the calibration
+  // tests beyond their noise while the next contender's refit fits them better (iterate).
+  std::optional<NotConfirmed> set_aside;
 };
 
 /// The model at the end of the loop.

@@ -79,6 +79,9 @@ std::string iterations_statement(const std::vector<IterationRecord>& iterations)
   for (const IterationRecord& it : iterations) {
     text += (text.empty() ? "" : " | ") + ("iteration " + std::to_string(it.iteration) + ": ") +
             it.decision.statement + (it.declared ? "; " + *it.declared : "");
+    if (it.set_aside)
+      text +=
+          "; " + it.set_aside->refit.name + "'s simulated refit set aside: " + it.set_aside->reason;
     if (it.not_confirmed)
       text += "; " + it.not_confirmed->refit.name +
               " not confirmed by the simulated refit: " + it.not_confirmed->reason;

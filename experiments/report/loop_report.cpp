@@ -242,6 +242,9 @@ mustache::data refit_data(const IterationRecord& it) {
             sig3_or_dash(r->mu_r) + ".";
   }
   if (!r->refit_notes.empty()) text += " Notes: " + paths_for_page(r->refit_notes);
+  if (it.set_aside)
+    text = "The trace named " + it.set_aside->refit.name +
+           "; its simulated refit was set aside: " + it.set_aside->reason + ". " + text;
   d.set("text", text);
   if (!t.rows.empty()) d.set("trials", to_data(t));
   return d;

@@ -172,5 +172,14 @@ TEST(LoopTrace, AnOffsetBeyondTheMuRangeIsNotAMuShift) {
   EXPECT_THROW(score_null(p), std::invalid_argument);
 }
 
+// The 95% points of chi^2 in the tables: 3.841 (1), 11.070 (5), 18.307 (10), 43.773 (30).
+TEST(LoopTrace, ChiSquare95PointMatchesTheTables) {
+  EXPECT_NEAR(chi2_95(1), 3.841, 0.025 * 3.841);
+  EXPECT_NEAR(chi2_95(5), 11.070, 0.01 * 11.070);
+  EXPECT_NEAR(chi2_95(10), 18.307, 0.005 * 18.307);
+  EXPECT_NEAR(chi2_95(30), 43.773, 0.002 * 43.773);
+  EXPECT_THROW(chi2_95(0), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace reposetwin::experiments

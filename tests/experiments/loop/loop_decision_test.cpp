@@ -172,6 +172,8 @@ TEST(LoopJoint, AngleAlikeCandidatesAreToldApartByHAndD) {
         accepted({"B", "A"}), {score_joint(all, "A", a.cols(3)), score_joint(all, "B", b.cols(3))},
         score_offset(all), score_joint(all, "mu", {}), {});
     EXPECT_NE(d3.named, "B") << d3.statement;
+    // Both contend, ranked by joint chi^2: the refit may need the runner-up (iterate).
+    EXPECT_EQ(d3.contenders, (std::vector<std::string>{"A", "B"})) << d3.statement;
     if (d3.verdict == TraceVerdict::kNamed) ++named_a;
     if (d3.verdict == TraceVerdict::kIndistinguishable) ++tied;
   }

@@ -173,6 +173,18 @@ TEST(LoopRecordsJson, EffectsAndIterationsRoundTrip) {
   const IterationRecord back = iteration_record_from_json(to_json(with));
   EXPECT_EQ(back.declared, with.declared);
   EXPECT_TRUE(back.chosen->declared);
+  // A named candidate's refit set aside for the next contender's, and the ranked contenders.
+  with.declared.reset();
+  with.chosen->declared = false;
+  with.decision.verdict = TraceVerdict::kNamed;
+  with.decision.named = "plate_friction";
+  with.decision.contenders = {"plate_friction", "grain_shape"};
+  with.set_aside = NotConfirmed{refit(), 2.45, "chi^2 55 over 5 degrees of freedom"};
+  expect_round_trip(with, iteration_record_from_json);
+  const IterationRecord aside = iteration_record_from_json(to_json(with));
+  ASSERT_TRUE(aside.set_aside.has_value());
+  EXPECT_EQ(aside.set_aside->reason, with.set_aside->reason);
+  EXPECT_EQ(aside.decision.contenders, with.decision.contenders);
   // A loop.json written before declared hypotheses reads as trace-chosen.
   nlohmann::json old = to_json(chosen());
   old.erase("declared");
