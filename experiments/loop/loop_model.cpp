@@ -146,6 +146,8 @@ MuFit fit_mu(const LoopContext& ctx, const Model& model, const Surface* extra, d
   best.at_edge = best.mu <= lo + 1e-12 || best.mu >= hi - 1e-12;
   const int n_obs = static_cast<int>(tests.size() * channels.size());
   if (extra && n_obs >= 3) best.region = joint_region(profile, 0.0, t_max, n_obs);
+  best.t_max = t_max;
+  best.profile = std::move(profile);
   add_standard_errors(ctx, model, extra, tests, channels, best);
   return best;
 }

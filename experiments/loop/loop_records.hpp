@@ -38,6 +38,10 @@ struct MuFit {
   // and each fitted test's share of it (its channels), in the order of the tests fitted.
   Eigen::Matrix2d info = Eigen::Matrix2d::Zero();
   std::vector<std::pair<std::size_t, Eigen::Matrix2d>> test_info;
+  // With an extra surface: the scan the region was read from, and t's cap, so that the region
+  // can be read over several refit trials at one likelihood (value_region). Not in loop.json.
+  std::vector<ProfileRow> profile;
+  double t_max = 0.0;
 };
 
 /// One test's residual under a model at a mu_r.

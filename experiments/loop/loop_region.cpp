@@ -44,38 +44,6 @@ std::size_t find_minimum(const std::vector<ProfileRow>& rows, double t_lo, doubl
   return kbest;
 }
 
-// The region's extent: the rows whose chi^2 dips below g.chi2_limit, and on each the t interval
-// below it (inside [t_lo, t_hi]).
-void find_extent(const std::vector<ProfileRow>& rows, double t_lo, double t_hi, JointRegion& g) {
-  const double limit = g.chi2_limit;
-  g.mu_lo = g.t_lo = std::numeric_limits<double>::infinity();
-  g.mu_hi = g.t_hi = -std::numeric_limits<double>::infinity();
-  const double eps = 1e-9 * std::max(1.0, t_hi - t_lo);
-  for (std::size_t k = 0; k < rows.size(); ++k) {
-    const ProfileRow& r = rows[k];
-    double a, b;  // the row's t interval inside the region
-    if (r.sdd > 0.0) {
-      const double tu = r.sdy / r.sdd;
-      const double floor = r.syy - r.sdy * tu;  // chi^2 at tu
-      if (floor > limit) continue;
-      const double half = std::sqrt((limit - floor) / r.sdd);
-      a = std::max(t_lo, tu - half);
-      b = std::min(t_hi, tu + half);
-      if (a > b) continue;
-    } else {
-      if (r.syy > limit) continue;
-      a = t_lo;
-      b = t_hi;
-    }
-    g.mu_lo = std::min(g.mu_lo, r.mu);
-    g.mu_hi = std::max(g.mu_hi, r.mu);
-    g.t_lo = std::min(g.t_lo, a);
-    g.t_hi = std::max(g.t_hi, b);
-    if (k == 0 || k + 1 == rows.size()) g.mu_at_bound = true;
-  }
-  g.t_at_bound = g.t_lo <= t_lo + eps || g.t_hi >= t_hi - eps;
-}
-
 // The correlation of mu_r and t from the curvature at the optimum (row kbest): d2 chi^2 / dt2 =
 // 2 sdd; along mu_r and across, by differences over the neighbouring rows (one-sided at an end
 // of the scan).
@@ -134,11 +102,83 @@ JointRegion joint_region(const std::vector<ProfileRow>& rows, double t_lo, doubl
   const int dof = observations - 2;
   if (dof > 0 && g.chi2_min > dof) g.widening = g.chi2_min / dof;
   g.chi2_limit = g.chi2_min + chi2_quantile_2dof(level) * g.widening;
-  find_extent(rows, t_lo, t_hi, g);
+  // The optimum's own row is inside its limit, so the extent exists.
+  const RegionExtent e = *region_extent(rows, t_lo, t_hi, g.chi2_limit);
+  g.mu_lo = e.mu_lo;
+  g.mu_hi = e.mu_hi;
+  g.t_lo = e.t_lo;
+  g.t_hi = e.t_hi;
+  g.mu_at_bound = e.mu_at_bound;
+  g.t_at_bound = e.t_at_bound;
   g.correlation = correlation_at(rows, kbest, g.t);
   g.separated = std::abs(g.correlation) <= 0.9 && !g.mu_at_bound && !g.t_at_bound;
   g.statement = region_statement(g, dof);
   return g;
+}
+
+// The rows whose chi^2 dips below the limit, and on each the t interval below it.
+std::optional<RegionExtent> region_extent(const std::vector<ProfileRow>& rows, double t_lo,
+                                          double t_hi, double chi2_limit) {
+  RegionExtent g;
+  g.mu_lo = g.t_lo = std::numeric_limits<double>::infinity();
+  g.mu_hi = g.t_hi = -std::numeric_limits<double>::infinity();
+  const double eps = 1e-9 * std::max(1.0, t_hi - t_lo);
+  bool any = false;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const ProfileRow& r = rows[k];
+    double a, b;  // the row's t interval inside the region
+    if (r.sdd > 0.0) {
+      const double tu = r.sdy / r.sdd;
+      const double floor = r.syy - r.sdy * tu;  // chi^2 at tu
+      if (floor > chi2_limit) continue;
+      const double half = std::sqrt((chi2_limit - floor) / r.sdd);
+      a = std::max(t_lo, tu - half);
+      b = std::min(t_hi, tu + half);
+      if (a > b) continue;
+    } else {
+      if (r.syy > chi2_limit) continue;
+      a = t_lo;
+      b = t_hi;
+    }
+    any = true;
+    g.mu_lo = std::min(g.mu_lo, r.mu);
+    g.mu_hi = std::max(g.mu_hi, r.mu);
+    g.t_lo = std::min(g.t_lo, a);
+    g.t_hi = std::max(g.t_hi, b);
+    if (k == 0 || k + 1 == rows.size()) g.mu_at_bound = true;
+  }
+  if (!any) return std::nullopt;
+  g.t_at_bound = g.t_lo <= t_lo + eps || g.t_hi >= t_hi - eps;
+  return g;
+}
+
+ValueRegion value_region(const std::vector<ChordScan>& chords, double off) {
+  if (chords.empty()) throw std::invalid_argument("value_region: no chord");
+  const ChordScan* best = &chords.front();
+  for (const ChordScan& c : chords)
+    if (c.region.chi2_min < best->region.chi2_min) best = &c;
+  // The quantile as the best chord's region used it, widened for the lowest chi2_min.
+  const JointRegion& r = best->region;
+  const double q = (r.chi2_limit - r.chi2_min) / r.widening;
+  const int dof = r.observations - 2;
+  const double widening = dof > 0 && r.chi2_min > dof ? r.chi2_min / dof : 1.0;
+  ValueRegion v;
+  v.chi2_limit = r.chi2_min + q * widening;
+  v.value_lo = v.mu_lo = std::numeric_limits<double>::infinity();
+  v.value_hi = v.mu_hi = -std::numeric_limits<double>::infinity();
+  for (const ChordScan& c : chords) {
+    const std::optional<RegionExtent> e = region_extent(c.rows, 0.0, c.t_max, v.chi2_limit);
+    if (!e) continue;
+    ++v.chords;
+    const double a = off + e->t_lo * (c.p - off), b = off + e->t_hi * (c.p - off);
+    v.value_lo = std::min({v.value_lo, a, b});
+    v.value_hi = std::max({v.value_hi, a, b});
+    v.mu_lo = std::min(v.mu_lo, e->mu_lo);
+    v.mu_hi = std::max(v.mu_hi, e->mu_hi);
+    v.mu_at_bound = v.mu_at_bound || e->mu_at_bound;
+    v.t_at_bound = v.t_at_bound || e->t_at_bound;
+  }
+  return v;
 }
 
 std::vector<NextTestGain> rank_next_tests(const Eigen::Matrix2d& info,

@@ -27,6 +27,7 @@
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -62,6 +63,43 @@ struct JointRegion {
 /// fewer than 3 observations or an empty t range.
 JointRegion joint_region(const std::vector<ProfileRow>& rows, double t_lo, double t_hi,
                          int observations, double level = 0.95);
+
+/// The region's extent over `rows` at the chi^2 limit `chi2_limit`, t inside [t_lo, t_hi]; none
+/// when no row dips below the limit. joint_region reads its own extent so; a refit's other
+/// simulated chords are read at the best one's limit (value_region).
+struct RegionExtent {
+  double mu_lo = 0.0, mu_hi = 0.0;  // [-]
+  double t_lo = 0.0, t_hi = 0.0;    // [-]
+  bool mu_at_bound = false;         // a row at an end of the scan is inside
+  bool t_at_bound = false;          // t reaches t_lo or t_hi
+};
+std::optional<RegionExtent> region_extent(const std::vector<ProfileRow>& rows, double t_lo,
+                                          double t_hi, double chi2_limit);
+
+/// One simulated chord of a refit: the effect at value p mixed in with weight t in [0, t_max],
+/// its scan over mu_r and its own region.
+struct ChordScan {
+  double p = 0.0;
+  double t_max = 0.0;
+  std::vector<ProfileRow> rows;
+  JointRegion region;
+};
+
+/// The joint region of (mu_r, the effect's value) over every simulated chord at one likelihood:
+/// the limit is the lowest chi2_min among the chords plus the quantile, widened as joint_region
+/// widens it; each chord's t range inside that limit is mapped to values off + t (p - off), and
+/// the ranges are joined. A refit whose trials land at different (mu_r, value) pairs with
+/// chi^2 alike has a region that holds them all, not only the best trial's chord.
+struct ValueRegion {
+  double value_lo = 0.0, value_hi = 0.0;  // [effect's units]
+  double mu_lo = 0.0, mu_hi = 0.0;        // [-]
+  double chi2_limit = 0.0;                // [-]
+  int chords = 0;                         // chords with a part inside the limit
+  bool mu_at_bound = false;
+  bool t_at_bound = false;  // some chord's part reaches its t bound
+};
+/// Throws std::invalid_argument when `chords` is empty.
+ValueRegion value_region(const std::vector<ChordScan>& chords, double off);
 
 /// One added lab test that could be poured next: its name and the Fisher information it adds,
 /// the sum over its observations of j j^T, j = (d prediction / d mu_r, d prediction / d t) over

@@ -166,6 +166,42 @@ TEST(LoopRegion, ClosedFormIntervalWhenMuDoesNotMatter) {
   EXPECT_NEAR(w.t_hi - w.t, 2.0 * half, 1e-12);
 }
 
+// The region over several refit trials (value_region), on hand-made chords: the closed-form
+// case above as one chord at p = 2 from off 1 (value = 1 + t), a second chord at p = 3 whose
+// best fit is as good, and a third whose fit is far worse.
+TEST(LoopRegion, RegionOverTrialsJoinsTheChordsAtOneLikelihood) {
+  auto chord = [](double p, double syy, double sdy, double sdd) {
+    ChordScan c;
+    c.p = p;
+    c.t_max = 3.0;
+    for (int k = 0; k < 5; ++k) c.rows.push_back({0.1 * k, syy, sdy, sdd});
+    c.region = joint_region(c.rows, 0.0, c.t_max, 4);
+    return c;
+  };
+  const double half = std::sqrt(-2.0 * std::log(0.05) / 16.0);
+  // One chord: its own region, t mapped to values 1 + t.
+  const ChordScan a = chord(2.0, 16.32, 16.0, 16.0);
+  const ValueRegion one = value_region({a}, 1.0);
+  EXPECT_NEAR(one.value_lo, 1.0 + (1.0 - half), 1e-12);
+  EXPECT_NEAR(one.value_hi, 1.0 + (1.0 + half), 1e-12);
+  EXPECT_EQ(one.chords, 1);
+  EXPECT_NEAR(one.chi2_limit, a.region.chi2_limit, 1e-12);
+  // A second chord at p = 3 (value = 1 + 2t) with its optimum at t = 0.75 (value 2.5) and the
+  // same chi2_min: its t interval is as wide, twice as wide in value, and holds the first's.
+  const ChordScan b = chord(3.0, 0.32 + 16.0 * 0.75 * 0.75, 16.0 * 0.75, 16.0);
+  EXPECT_NEAR(b.region.chi2_min, 0.32, 1e-12);
+  const ValueRegion two = value_region({a, b}, 1.0);
+  EXPECT_EQ(two.chords, 2);
+  EXPECT_NEAR(two.value_lo, 1.0 + 2.0 * (0.75 - half), 1e-12);
+  EXPECT_NEAR(two.value_hi, 1.0 + 2.0 * (0.75 + half), 1e-12);
+  // A chord whose best chi^2 is 50 lies outside the limit and adds nothing.
+  const ChordScan far = chord(5.0, 50.0 + 16.0, 16.0, 16.0);
+  const ValueRegion three = value_region({a, b, far}, 1.0);
+  EXPECT_EQ(three.chords, 2);
+  EXPECT_DOUBLE_EQ(three.value_hi, two.value_hi);
+  EXPECT_THROW(value_region({}, 1.0), std::invalid_argument);
+}
+
 // What would separate them (loop_region.hpp): with the shape case's information, a test whose
 // response to the effect differs from its response to mu_r shrinks the effect's interval more
 // than a repeat of a test like the others.
