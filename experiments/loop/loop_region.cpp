@@ -25,6 +25,12 @@ double best_t(const ProfileRow& r, double lo, double hi) {
 // The chi^2 quantile with two degrees of freedom: -2 ln(1 - level).
 double chi2_quantile_2dof(double level) { return -2.0 * std::log(1.0 - level); }
 
+// The quasi-likelihood widening (design note): chi2_min / (n - 2) when above 1, else 1.
+double widening_for(double chi2_min, int observations) {
+  const int dof = observations - 2;
+  return dof > 0 && chi2_min > dof ? chi2_min / dof : 1.0;
+}
+
 // The minimum of chi^2 over the rows, t at its best inside [t_lo, t_hi] on each; returns the
 // row it is on.
 std::size_t find_minimum(const std::vector<ProfileRow>& rows, double t_lo, double t_hi,
@@ -100,7 +106,7 @@ JointRegion joint_region(const std::vector<ProfileRow>& rows, double t_lo, doubl
   g.observations = observations;
   const std::size_t kbest = find_minimum(rows, t_lo, t_hi, g);
   const int dof = observations - 2;
-  if (dof > 0 && g.chi2_min > dof) g.widening = g.chi2_min / dof;
+  g.widening = widening_for(g.chi2_min, observations);
   g.chi2_limit = g.chi2_min + chi2_quantile_2dof(level) * g.widening;
   // The optimum's own row is inside its limit, so the extent exists.
   const RegionExtent e = *region_extent(rows, t_lo, t_hi, g.chi2_limit);
@@ -157,13 +163,10 @@ ValueRegion value_region(const std::vector<ChordScan>& chords, double off) {
   const ChordScan* best = &chords.front();
   for (const ChordScan& c : chords)
     if (c.region.chi2_min < best->region.chi2_min) best = &c;
-  // The quantile as the best chord's region used it, widened for the lowest chi2_min.
-  const JointRegion& r = best->region;
-  const double q = (r.chi2_limit - r.chi2_min) / r.widening;
-  const int dof = r.observations - 2;
-  const double widening = dof > 0 && r.chi2_min > dof ? r.chi2_min / dof : 1.0;
+  // The limit of the chord with the lowest chi2_min: its minimum plus the quantile, widened
+  // for that minimum (joint_region), is the limit over all of them.
   ValueRegion v;
-  v.chi2_limit = r.chi2_min + q * widening;
+  v.chi2_limit = best->region.chi2_limit;
   v.value_lo = v.mu_lo = std::numeric_limits<double>::infinity();
   v.value_hi = v.mu_hi = -std::numeric_limits<double>::infinity();
   for (const ChordScan& c : chords) {

@@ -86,10 +86,10 @@ struct ChordScan {
 };
 
 /// The joint region of (mu_r, the effect's value) over every simulated chord at one likelihood:
-/// the limit is the lowest chi2_min among the chords plus the quantile, widened as joint_region
-/// widens it; each chord's t range inside that limit is mapped to values off + t (p - off), and
-/// the ranges are joined. A refit whose trials land at different (mu_r, value) pairs with
-/// chi^2 alike has a region that holds them all, not only the best trial's chord.
+/// the limit is that of the chord with the lowest chi2_min (its minimum plus the quantile,
+/// widened as joint_region widens it); each chord's t range inside that limit is mapped to values
+/// off + t (p - off), and the ranges are joined. A refit whose trials land at different (mu_r,
+/// value) pairs with chi^2 alike has a region that holds them all, not only the best trial's chord.
 struct ValueRegion {
   double value_lo = 0.0, value_hi = 0.0;  // [effect's units]
   double mu_lo = 0.0, mu_hi = 0.0;        // [-]
