@@ -120,6 +120,26 @@ FingerprintRecord fingerprint(const LoopContext& ctx, const CandidateEffect& e, 
   return f;
 }
 
+// The effect at `probe` poured at grid point k, paired with the baseline's piles there. Each pair
+// starts from the seed of the baseline pile it is compared with (a repeated pour's seed if the
+// first one jammed), so a measurement effect re-photographs that pile. A held-out test the twin
+// predicts no pile for has none. Throws when a run forms no pile.
+std::vector<SimOutcome> pour_probe(const LoopContext& ctx, PileStore& store,
+                                   const CandidateEffect& e, const Surface& base, std::size_t k,
+                                   double probe) {
+  std::vector<SimRequest> req;
+  for (std::size_t i = 0; i < ctx.tests().size(); ++i)
+    if (base.curve[i].no_pile.empty())
+      for (const SimOutcome& o : base.raw[i][k])
+        req.push_back(make_request(ctx.tests()[i], ctx.s().mu_key, ctx.grid[k], o.seed,
+                                   {{&e, probe}}, ctx.s().image));
+  std::vector<SimOutcome> got = pour(ctx, store, req);
+  for (const SimOutcome& o : got)
+    if (!o.pile)
+      throw std::runtime_error("a run formed no pile with the effect at " + std::to_string(probe));
+  return got;
+}
+
 // One candidate's fingerprint, its probe doubled (away from the off value, inside the range)
 // while the fingerprint does not stand out of the seed noise, probe_scalings times at most.
 // One batch per probe, so that a candidate whose runs or photographs fail (a lens model that
@@ -140,20 +160,9 @@ std::optional<FingerprintRecord> probe_candidate(const LoopContext& ctx, PileSto
       ctx.say("candidate " + e.name + ": " + why + "; probing at " + std::to_string(next));
       probe = next;
     }
-    // Each pair starts from the seed of the baseline pile it is compared with (a repeated
-    // pour's seed if the first one jammed), so a measurement effect re-photographs that pile.
-    std::vector<SimRequest> req;
-    for (std::size_t i = 0; i < ctx.tests().size(); ++i)
-      if (base.curve[i].no_pile.empty())  // a held-out test the twin predicts no pile for
-        for (const SimOutcome& o : base.raw[i][node])
-          req.push_back(make_request(ctx.tests()[i], s.mu_key, ctx.grid[node], o.seed,
-                                     {{&e, probe}}, s.image));
     std::vector<SimOutcome> got;
     try {
-      got = pour(ctx, store, req);
-      for (const SimOutcome& o : got)
-        if (!o.pile) throw std::runtime_error("a run formed no pile with the effect at " +
-                                              std::to_string(probe));
+      got = pour_probe(ctx, store, e, base, node, probe);
     } catch (const std::exception& ex) {
       const std::string failed = std::string("failed at probe ") + std::to_string(probe) + ": " +
                                  ex.what();
@@ -188,16 +197,8 @@ void fingerprint_surface(const LoopContext& ctx, PileStore& store, const Candida
       f.surface.push_back(std::move(n));
       continue;
     }
-    std::vector<SimRequest> req;
-    for (std::size_t i = 0; i < ctx.tests().size(); ++i)
-      if (base.curve[i].no_pile.empty())
-        for (const SimOutcome& o : base.raw[i][k])
-          req.push_back(make_request(ctx.tests()[i], ctx.s().mu_key, ctx.grid[k], o.seed,
-                                     {{&e, f.probe}}, ctx.s().image));
     try {
-      const std::vector<SimOutcome> got = pour(ctx, store, req);
-      for (const SimOutcome& o : got)
-        if (!o.pile) throw std::runtime_error("a run formed no pile");
+      const std::vector<SimOutcome> got = pour_probe(ctx, store, e, base, k, f.probe);
       n.change = fingerprint(ctx, e, f.probe, base, k, got).change;
     } catch (const std::exception& ex) {
       n.missing = std::string(ex.what()).substr(0, 300);
