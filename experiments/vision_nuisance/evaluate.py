@@ -25,6 +25,7 @@ import hashlib
 import json
 import math
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -97,6 +98,18 @@ def run_measure(binary, photo, sidecar, timeout):
     return res
 
 
+def message_kind(msg):
+    """A refusal message without its photo path and numbers, cut at its first parenthesis or
+    colon after the first clause: the kind of refusal."""
+    m = re.sub(r"^reposetwin: error: ", "", msg or "")
+    m = re.sub(r"^\S+\.(png|jpg|json): ", "", m)
+    m = re.sub(r"[-+]?\d+(\.\d+)?", "#", m)
+    for stop in (" (", "; "):
+        if stop in m:
+            m = m[:m.index(stop)]
+    return m[:110]
+
+
 def fmt(v, p=3):
     if v is None or v == "":
         return ""
@@ -118,6 +131,7 @@ def main():
     ap.add_argument("--out-dir", default=os.path.join(ROOT, "results", "vision_nuisance"))
     ap.add_argument("--timeout", type=int, default=300)
     ap.add_argument("--command", default="", help="the command line to record as provenance")
+    ap.add_argument("--note", action="append", default=[], help="a line for the provenance")
     a = ap.parse_args()
     if not os.access(a.bin, os.X_OK):
         sys.exit("evaluate.py: %s: no such executable" % a.bin)
@@ -218,11 +232,17 @@ def main():
       "and as not covered; a pile whose reference photo is not measured has no reference value, so "
       "all its photos count as outside.")
     P("")
-    P("| pile | reference theta (deg) | H (mm) | D (mm) | sigma (deg) |")
-    P("|---|---|---|---|---|")
+    P("Per pile: the reference photo's reading, and the spread of the readings of the pile's "
+      "other photos expected measured that were measured (informative: it needs no reference).")
+    P("")
+    P("| pile | reference theta (deg) | H (mm) | D (mm) | sigma (deg) | others measured | their theta min / median / max (deg) |")
+    P("|---|---|---|---|---|---|---|")
     for o in refs:
-        P("| %s | %s | %s | %s | %s |" % (o["pile"], fmt(o["theta_deg"], 2) or o["outcome"],
-          fmt(o["H_mm"], 1), fmt(o["D_mm"], 1), fmt(o["sigma_theta_deg"], 2)))
+        th = sorted(x["theta_deg"] for x in pile_photos if x["pile"] == o["pile"] and x["outcome"] == "measured")
+        n_p = sum(1 for x in pile_photos if x["pile"] == o["pile"])
+        P("| %s | %s | %s | %s | %s | %d/%d | %s |" % (o["pile"], fmt(o["theta_deg"], 2) or o["outcome"],
+          fmt(o["H_mm"], 1), fmt(o["D_mm"], 1), fmt(o["sigma_theta_deg"], 2), len(th), n_p,
+          "%.2f / %.2f / %.2f" % (th[0], statistics.median(th), th[-1]) if th else ""))
     P("")
     P("| nuisance | photos | measured | within 1 deg | within 2 deg | 95% covers | median abs dtheta (deg) | max abs dtheta (deg) | as expected |")
     P("|---|---|---|---|---|---|---|---|---|")
@@ -248,12 +268,27 @@ def main():
     for k in sorted(counts):
         P("| %s | %d |" % (k, counts[k]))
     P("")
+    P("Refusal messages by kind (the path and the numbers left out), with the nuisances they met:")
+    P("")
+    P("| message | photos | nuisances |")
+    P("|---|---|---|")
+    kinds = {}
+    for o in out_rows:
+        if o["outcome"].startswith("refused") or o["outcome"] == "error":
+            kinds.setdefault(message_kind(o["message"]), []).append(o["nuisance"])
+    for k, v in sorted(kinds.items(), key=lambda kv: -len(kv[1])):
+        c = {}
+        for x in v:
+            c[x] = c.get(x, 0) + 1
+        P("| %s | %d | %s |" % (k.replace("|", "/"), len(v),
+          ", ".join("%s %d" % (x, n) for x, n in sorted(c.items(), key=lambda t: -t[1]))))
+    P("")
     P("Planted failures:")
     P("")
     P("| photo | expected | outcome | message |")
     P("|---|---|---|---|")
     for o in planted:
-        msg = (o["message"] or ("theta %.2f deg, H %.1f mm, D %.1f mm" % (o["theta_deg"], o["H_mm"], o["D_mm"])
+        msg = (re.sub(r"^reposetwin: error: \S+\.(png|jpg): ", "", o["message"]) or ("theta %.2f deg, H %.1f mm, D %.1f mm" % (o["theta_deg"], o["H_mm"], o["D_mm"])
                if o["outcome"] == "measured" else "")).replace("|", "/")
         P("| %s | %s | %s | %s |" % (o["id"], o["expected"], o["outcome"], msg[:160]))
     walls = [float(o["wall_s"]) for o in out_rows if o["wall_s"] != ""]
@@ -276,6 +311,7 @@ def main():
             "- manifest: experiments/vision_nuisance/manifest.csv (sha256 %s...), %d photos; "
             "set scripts at %s" % (man_sha, len(rows), git or "(uncommitted)"),
             "- sidecar \"plate\" key: %s" % plate_note,
+            ] + ["- " + n for n in a.note] + [
             "- rows: results/vision_nuisance/%s.csv" % a.label, "", table, ""]
     with open(os.path.join(a.out_dir, a.label + ".md"), "w") as f:
         f.write("\n".join(prov))

@@ -74,8 +74,12 @@ mkdir -p "${work}/photos"
 "${py[@]}" "${here}/make_set.py" check --out "${work}" | tee "${work}/camera_check.txt"
 t0=$(date +%s)
 "${py[@]}" "${here}/make_set.py" render --manifest "${here}/manifest.csv" --out "${work}/photos" \
-  "${force[@]}" | tee "${work}/render.log"
+  "${force[@]}" | tee -a "${work}/render.log"
 echo "render: $(( $(date +%s) - t0 )) s wall"
+notes=(--note "$(tail -n 1 "${work}/camera_check.txt")")
+rendered="$(grep '^rendered ' "${work}/render.log" || true)"
+[[ -n "${rendered}" ]] && notes+=(--note "${rendered}")
 "${py[@]}" "${here}/evaluate.py" --bin "${bin}" --manifest "${here}/manifest.csv" \
   --photos "${work}/photos" --label "${label}" --out-dir "${root}/results/vision_nuisance" \
-  --command "experiments/vision_nuisance/run.sh --bin ${bin} --label ${label}"
+  --command "experiments/vision_nuisance/run.sh --bin ${bin} --label ${label} --work ${work}" \
+  "${notes[@]}"
