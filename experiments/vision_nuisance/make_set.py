@@ -18,6 +18,7 @@ The rules (README.md says the same in words):
     measured ("measure"); the planted failures are expected refused by the check named.
 """
 import argparse
+import concurrent.futures
 import csv
 import math
 import os
@@ -234,18 +235,18 @@ def cmd_render(a):
     os.makedirs(a.out, exist_ok=True)
     cache_dir = os.path.join(a.out, "renders")
     os.makedirs(cache_dir, exist_ok=True)
-    piles = {}
-    times = []
-    # One render per distinct scene (render_key); the post-processed photos share it.
+    # One render per distinct scene (render_key); the post-processed photos share it. Each
+    # POV-Ray runs on one thread (its multithreaded antialiasing is not reproducible pixel for
+    # pixel), and `--jobs` of them at once.
     by_key = {}
     for r in rows:
         by_key.setdefault(r["render_key"], []).append(r)
-    t_all = time.time()
-    for n, (key, group) in enumerate(by_key.items()):
+    piles = {p: render.read_pile(os.path.join(PILES_DIR, p + ".csv"))
+             for p in {r["pile"] for r in rows if r["pile"] != "none"}}
+
+    def one(n, group):
         row = group[0]
-        if row["pile"] != "none" and row["pile"] not in piles:
-            piles[row["pile"]] = render.read_pile(os.path.join(PILES_DIR, row["pile"] + ".csv"))
-        grains, prov = piles.get(row["pile"], ([], ""))
+        grains, _ = piles.get(row["pile"], ([], ""))
         native = dict(row)
         if row["post"] == "half":
             native["width_px"], native["height_px"] = "1920", "1080"
@@ -254,9 +255,8 @@ def cmd_render(a):
         done = all(os.path.exists(os.path.join(a.out, r["id"] + (".jpg" if r["post"].startswith("jpeg") else ".png")))
                    and os.path.exists(os.path.join(a.out, r["id"] + ".json")) for r in group)
         if done and not a.force:
-            continue
+            return None
         dt = render.povray(pov, src, cam.width_px, cam.height_px, aa=True, threads=a.threads)
-        times.append(dt)
         for r in group:
             tmp = src + "." + r["id"] + ".png"
             with open(src, "rb") as fi, open(tmp, "wb") as fo:
@@ -272,9 +272,17 @@ def cmd_render(a):
         os.remove(src)
         print("render %3d/%d %-34s %5.1f s (%d photo%s)" % (n + 1, len(by_key), group[0]["id"], dt,
               len(group), "" if len(group) == 1 else "s"), flush=True)
+        return dt
+
+    t_all = time.time()
+    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
+        futures = [pool.submit(one, n, g) for n, g in enumerate(by_key.values())]
+        times = [f.result() for f in futures]
+    times = [t for t in times if t is not None]
     if times:
-        print("rendered %d scenes in %.0f s (POV-Ray %.0f s, mean %.1f s, max %.1f s)"
-              % (len(times), time.time() - t_all, sum(times), sum(times) / len(times), max(times)))
+        print("rendered %d scenes in %.0f s (%d at once; POV-Ray %.0f s, mean %.1f s, max %.1f s)"
+              % (len(times), time.time() - t_all, max(1, a.jobs), sum(times),
+                 sum(times) / len(times), max(times)))
 
 
 def cmd_check(a):
@@ -298,7 +306,8 @@ def main():
     r.add_argument("--manifest", default=os.path.join(HERE, "manifest.csv"))
     r.add_argument("--out", required=True)
     r.add_argument("--only", default="")
-    r.add_argument("--threads", type=int, default=2)
+    r.add_argument("--threads", type=int, default=1, help="POV-Ray threads per render")
+    r.add_argument("--jobs", type=int, default=2, help="renders at once")
     r.add_argument("--force", action="store_true")
     c = sub.add_parser("check")
     c.add_argument("--out", required=True)

@@ -218,7 +218,7 @@ def scene_pov(cam, look, grains, extras):
         # Two lights beside the camera and one above, shadows soft and faint: even light.
         for dx, dz, w in ((-0.8, 0.6, 0.45), (0.8, 0.6, 0.45), (0.0, 1.5, 0.35)):
             s.append("light_source { <%.3f,%.3f,%.3f> rgb %.3f area_light <0.3,0,0>, <0,0,0.3>, 3, 3"
-                     " adaptive 0 jitter }\n" % (cp[0] + dx, cp[1] - 0.2, max(cp[2], 0) + dz, w * gain))
+                     " adaptive 0 }\n" % (cp[0] + dx, cp[1] - 0.2, max(cp[2], 0) + dz, w * gain))
         s.append("light_source { <0,-0.6,2.5> rgb %.3f shadowless }\n" % (0.25 * gain))
     else:
         sx = -1.0 if light == "side_left" else 1.0
@@ -266,14 +266,14 @@ def box_pov(x0, x1, y0, y1, height):
             % (x0, y0, -PLATE_THICKNESS_M, x1, y1, -PLATE_THICKNESS_M + height))
 
 
-def povray(pov_text, out_png, width, height, aa=True, threads=2):
+def povray(pov_text, out_png, width, height, aa=True, threads=1):
     """Renders a scene to a PNG; returns the wall time [s]."""
     pov_path = out_png[:-4] + ".pov"
     with open(pov_path, "w") as f:
         f.write(pov_text)
     cmd = ["nice", "-n", "19", "povray", "-D", "-V", "+I" + pov_path, "+O" + out_png, "+FN8",
            "+W%d" % width, "+H%d" % height, "+WT%d" % threads, "+Q9"]
-    cmd += ["+A0.3", "+AM2", "+R2"] if aa else ["-A"]
+    cmd += ["+A0.3", "+AM2", "+R2", "-J"] if aa else ["-A"]
     t0 = time.time()
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0 or not os.path.exists(out_png):

@@ -77,7 +77,7 @@ t0=$(date +%s)
   "${force[@]}" | tee -a "${work}/render.log"
 echo "render: $(( $(date +%s) - t0 )) s wall"
 notes=(--note "$(tail -n 1 "${work}/camera_check.txt")")
-rendered="$(grep '^rendered ' "${work}/render.log" || true)"
+rendered="$(grep '^rendered ' "${work}/render.log" | tail -n 1 || true)"
 [[ -n "${rendered}" ]] && notes+=(--note "${rendered}")
 "${py[@]}" "${here}/evaluate.py" --bin "${bin}" --manifest "${here}/manifest.csv" \
   --photos "${work}/photos" --label "${label}" --out-dir "${root}/results/vision_nuisance" \
