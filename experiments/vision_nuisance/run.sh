@@ -31,7 +31,7 @@ while [[ $# -gt 0 ]]; do
     --force) force=(--force); shift ;;
     --piles) piles=1; shift ;;
     --manifest) manifest=1; shift ;;
-    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
     *) echo "run.sh: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
