@@ -288,7 +288,7 @@ namespace {
 // A sidecar's top-level keys: the camera and what a render writes beside it.
 const std::set<std::string> kSidecarKeys = {"camera",          "view",  "image",
                                             "mm_per_px_at_axis", "scale_point_m",
-                                            "scale_reference", "look",  "provenance"};
+                                            "scale_reference", "look",  "provenance", "plate"};
 // The largest radial distortion coefficient a sidecar may declare: a real lens's k1 is within
 // +-0.5 (the loop's synthetic lenses are held there too); 1e6 is a typo, not a lens.
 constexpr double kMaxDistortion = 1.0;
@@ -346,7 +346,25 @@ Camera read_sidecar(const std::string& path, SidecarView expect) {
       throw std::invalid_argument(path + ": field \"" + it.key() +
                                   "\" is not a sidecar field (known: camera, view, image, "
                                   "mm_per_px_at_axis, scale_point_m, scale_reference, look, "
-                                  "provenance)");
+                                  "provenance, plate)");
+  // The plate, when declared: a square board centred on the axis, top at z = 0. A lab may
+  // record it beside the camera; vision finds the pile's base from the camera alone (a bench or
+  // shelf behind the plate made its far edge no line to check against), so it is only checked
+  // here, so that a typo is an error.
+  if (j.contains("plate")) {
+    const nlohmann::json& pl = j["plate"];
+    if (!pl.is_object()) throw std::invalid_argument(path + ": plate must be an object");
+    for (auto it = pl.begin(); it != pl.end(); ++it) {
+      if (it.key() != "size_m" && it.key() != "thickness_m")
+        throw std::invalid_argument(path + ": plate." + it.key() +
+                                    " is not a plate field (known: size_m, thickness_m)");
+      if (!it.value().is_number() || !(it.value().get<double>() > 0.0) ||
+          !std::isfinite(it.value().get<double>()))
+        throw std::invalid_argument(path + ": plate." + it.key() +
+                                    " must be a positive number of metres, got " +
+                                    it.value().dump());
+    }
+  }
   if (j.contains("view")) {
     const nlohmann::json& v = j["view"];
     if (v != "side" && v != "top")

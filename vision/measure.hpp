@@ -32,12 +32,14 @@
 #include <Eigen/Core>
 #include <nlohmann/json_fwd.hpp>
 #include <opencv2/core.hpp>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "camera/camera.hpp"
+#include "vision/admission.hpp"
 #include "vision/camera_pose.hpp"
 #include "vision/crest.hpp"
 #include "vision/scale_marker.hpp"
@@ -84,9 +86,12 @@ ScaleSpec scale_from_sidecar(const std::string& path,
 /// Thrown by measure_side when the photo's own pose contradicts its declared camera
 /// (ScaleSpec::check_pose): the photo could be read, but the camera it was declared with is
 /// wrong, so the caller refuses the photo rather than skip it as unreadable.
-class PoseContradiction : public std::runtime_error {
+class PoseContradiction : public Refusal {
  public:
-  using std::runtime_error::runtime_error;
+  explicit PoseContradiction(const std::string& message,
+                             double measured = std::numeric_limits<double>::quiet_NaN(),
+                             double limit = std::numeric_limits<double>::quiet_NaN())
+      : Refusal(Check::kCameraConsistent, message, measured, limit) {}
 };
 
 /// What a side measurement's warning is about. A kind biases the measure or only informs
@@ -126,6 +131,12 @@ struct SideMeasurement {
   SideProfile pixels;                  // the pixel measurement
   double height_m = 0.0;               // pile height H [m]
   double diameter_m = 0.0;             // base diameter D at the toe line [m]
+  // D's other definition, the flank lines' foot, and what a skirt (the reach beyond the foot)
+  // adds to D's uncertainty (sigma_diameter_m includes it: measure.cpp's settle_diameter says
+  // why); atan(2H/D) with the flank lines' foot.
+  double diameter_flank_m = 0.0;             // [m]
+  double sigma_diameter_definition_m = 0.0;  // [m]
+  double theta_flank_foot_deg = 0.0;         // [deg]
   double theta_deg = 0.0;              // atan(2H/D) [deg]
   double sigma_height_m = 0.0;         // uncertainty of H (pixels and scale) [m]
   double sigma_diameter_m = 0.0;       // uncertainty of D (pixels and scale) [m]
@@ -142,6 +153,9 @@ struct SideMeasurement {
   // it: pose_used).
   std::optional<PoseEstimate> pose;
   bool pose_used = false;  // measured through the estimated pose, not the declared camera
+  // The photo's own camera, when its pixels (`pixels`) were read in its level view
+  // (vision/level_view.hpp): a pitched, rolled or distorted camera. Unset: the photo's pixels.
+  std::optional<camera::Camera> photo_camera;
   ScaleSource scale_source = ScaleSource::kMmPerPx;
   double mm_per_px = 0.0;                        // scale at the pile axis [mm/px]
   double sigma_scale_rel = 0.0;                  // relative uncertainty of the scale [-]

@@ -44,6 +44,13 @@ nlohmann::json to_json(const SideMeasurement& m) {
       {"theta_deg", m.theta_deg},
       {"sigma_H_m", m.sigma_height_m},
       {"sigma_D_m", m.sigma_diameter_m},
+      {"D_definitions",
+       {{"D_m", "the silhouette's reach at the toe line (the toe band carried down the flank, "
+                "never beyond the outermost grain): the headline"},
+        {"D_flank_foot_m", m.diameter_flank_m},
+        {"theta_flank_foot_deg", m.theta_flank_foot_deg},
+        {"sigma_D_definition_m", m.sigma_diameter_definition_m},
+        {"rule", "half the difference of the two definitions joins sigma_D_m (vision/measure.hpp)"}}},
       {"sigma_theta_deg", m.sigma_theta_deg},
       {"flank_left_deg", m.flank_left_deg},
       {"flank_right_deg", m.flank_right_deg},
@@ -77,6 +84,9 @@ nlohmann::json to_json(const SideMeasurement& m) {
           {"residual_px", p.plate.residual_px},
           {"support_columns", p.plate.support},
           {"from", p.far_edge ? "toes on the plate's top face" : "plate edge"}}},
+        {"level_view", m.photo_camera ? "the photo re-projected onto a level camera at the same "
+                                        "centre (vision/level_view.hpp); pixels are in that view"
+                                      : "the photo itself"},
         {"crest",
          {{"width_px", m.crest.width_px},
           {"raw_width_px", m.crest.raw_width_px},

@@ -4,6 +4,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "vision/measure.hpp"
+
+#include "vision/level_view.hpp"
 #include "vision/text_detail.hpp"
 
 namespace reposetwin::vision {
@@ -53,7 +55,8 @@ cv::Point ip(const cv::Point2d& p) {
 }  // namespace
 
 cv::Mat draw_side_overlay(const cv::Mat& image, const SideMeasurement& m) {
-  cv::Mat img = to_bgr8(image);
+  // A photo read in its level view is drawn in that view, where its lines were found.
+  cv::Mat img = to_bgr8(m.photo_camera ? level_view(image, *m.photo_camera).image : image);
   const SideProfile& p = m.pixels;
   const int t = std::max(1, img.cols / 900);
   const int r = std::max(4, img.cols / 250);

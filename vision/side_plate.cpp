@@ -262,6 +262,133 @@ std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob
   return TopFace{*toe_line, pile};
 }
 
+cv::Mat pile_on_face(const cv::Mat& flat, const cv::Mat& above, const std::optional<PlateLine>& far,
+                     const PlateLine& toe, double axis_u, double depth_below, int morph_radius_px,
+                     const cv::Mat& valid) {
+  const int rows = flat.rows, cols = flat.cols;
+  auto is_valid = [&](int r, int c) { return valid.empty() || valid.at<uchar>(r, c) != 0; };
+  // The band: below the far edge's blurred rows (or from the top) to depth_below under the toe.
+  auto first_row = [&](int c) {
+    return far ? static_cast<int>(std::floor(far->v_at(c) - 0.5)) + 1 + kCleanGapPx : 0;
+  };
+  auto last_row = [&](int c) {
+    return std::min(rows - 1, static_cast<int>(std::floor(toe.v_at(c) + depth_below)));
+  };
+  // The plate's level per row at the band's outer columns (a tenth of its valid width, at least
+  // kSideColumns, each side): the pile stands in the middle, near the axis.
+  std::vector<double> left(rows, std::nan("")), right(rows, std::nan(""));
+  std::vector<double> spread;
+  int r_min = rows, r_max = -1;
+  for (int c = 0; c < cols; ++c) {
+    r_min = std::min(r_min, std::max(0, first_row(c)));
+    r_max = std::max(r_max, last_row(c));
+  }
+  for (int r = r_min; r <= r_max; ++r) {
+    int c0 = -1, c1 = -1;
+    for (int c = 0; c < cols; ++c)
+      if (is_valid(r, c) && r >= first_row(c) && r <= last_row(c)) {
+        if (c0 < 0) c0 = c;
+        c1 = c;
+      }
+    if (c0 < 0 || c1 - c0 < 4 * kSideColumns) continue;
+    const int n = std::max(kSideColumns, (c1 - c0 + 1) / 10);
+    std::vector<double> lv, rv;
+    for (int c = c0; c < c0 + n; ++c) lv.push_back(flat.at<float>(r, c));
+    for (int c = c1 - n + 1; c <= c1; ++c) rv.push_back(flat.at<float>(r, c));
+    left[r] = median(lv);
+    right[r] = median(rv);
+    for (double v : lv) spread.push_back(std::abs(v - left[r]));
+    for (double v : rv) spread.push_back(std::abs(v - right[r]));
+  }
+  if (spread.size() < 30) return cv::Mat();
+  const double tol = std::max(0.03, 4.0 * 1.4826 * median(spread));
+  cv::Mat fg = above.empty() ? cv::Mat(rows, cols, CV_8U, cv::Scalar(0)) : above.clone();
+  for (int c = 0; c < cols; ++c) {
+    const int r0 = std::max(0, first_row(c));
+    for (int r = r0; r <= last_row(c); ++r) {
+      if (!is_valid(r, c) || std::isnan(left[r])) continue;
+      const double lo = std::min(left[r], right[r]) - tol, hi = std::max(left[r], right[r]) + tol;
+      const float v = flat.at<float>(r, c);
+      if (v < lo || v > hi) fg.at<uchar>(r, c) = 255;
+    }
+    // The far edge's blurred rows join the pile where it is on both sides of them.
+    if (far) {
+      const int last_above = r0 - kCleanGapPx - 1;
+      if (last_above >= 0 && r0 < rows && fg.at<uchar>(last_above, c) && fg.at<uchar>(r0, c))
+        for (int r = last_above + 1; r < r0; ++r) fg.at<uchar>(r, c) = 255;
+    }
+  }
+  if (morph_radius_px > 0) {
+    const int k = 2 * morph_radius_px + 1;
+    const cv::Mat se = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k));
+    cv::morphologyEx(fg, fg, cv::MORPH_OPEN, se);
+    cv::morphologyEx(fg, fg, cv::MORPH_CLOSE, se);
+  }
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(fg, labels, stats, centroids, 8, CV_32S);
+  // Standing on the toe line: the component's lowest pixel reaches it (a component that ends
+  // higher hangs above the plate, as the funnel does).
+  std::vector<double> reach(n, -1e300);
+  for (int r = 0; r < rows; ++r) {
+    const int* l = labels.ptr<int>(r);
+    for (int c = 0; c < cols; ++c)
+      if (l[c] > 0) reach[l[c]] = std::max(reach[l[c]], r + 0.5 - toe.v_at(c));
+  }
+  const double min_area = std::max(50.0, 5e-4 * flat.total());
+  int best = -1, best_area = 0;
+  bool best_on_axis = false;
+  for (int i = 1; i < n; ++i) {
+    const int area = stats.at<int>(i, cv::CC_STAT_AREA);
+    if (area < min_area || reach[i] < -(morph_radius_px + 3.0)) continue;
+    const int x = stats.at<int>(i, cv::CC_STAT_LEFT), w = stats.at<int>(i, cv::CC_STAT_WIDTH);
+    const bool on_axis = axis_u >= x && axis_u <= x + w - 1;
+    if ((on_axis && !best_on_axis) || (on_axis == best_on_axis && area > best_area)) {
+      best = i;
+      best_area = area;
+      best_on_axis = on_axis;
+    }
+  }
+  if (best < 0) return cv::Mat();
+  cv::Mat pile = labels == best;
+  // Grains lying loose against the pile's foot: seen level they overlap the pile in the
+  // picture (all stand on one line), seen from above the plate opens between them vertically
+  // while their columns stay. So that both views read one extent, the components that stand in
+  // the pile's lowest fifth and whose columns overlap the pile's or lie within the closing's
+  // reach of them (what joins them in a level view) join it, and so on outwards. (Within 3% of
+  // the pile's width joined grains a level view leaves apart: +6 mm on a 75 mm pile.)
+  {
+    int x0 = stats.at<int>(best, cv::CC_STAT_LEFT);
+    int x1 = x0 + stats.at<int>(best, cv::CC_STAT_WIDTH) - 1;
+    const int top = stats.at<int>(best, cv::CC_STAT_TOP);
+    const double toe_v = toe.v_at(axis_u);
+    const double foot_top = toe_v - 0.2 * std::max(1.0, toe_v - top);
+    std::vector<bool> joined(n, false);
+    joined[best] = true;
+    for (bool grew = true; grew;) {
+      grew = false;
+      const double gap = 2.0 * morph_radius_px + 1.0;
+      for (int i = 1; i < n; ++i) {
+        if (joined[i] || stats.at<int>(i, cv::CC_STAT_AREA) < 20) continue;
+        const int x = stats.at<int>(i, cv::CC_STAT_LEFT), w = stats.at<int>(i, cv::CC_STAT_WIDTH);
+        const int y = stats.at<int>(i, cv::CC_STAT_TOP), h = stats.at<int>(i, cv::CC_STAT_HEIGHT);
+        if (y + h - 1 < foot_top || reach[i] < -(morph_radius_px + 3.0) - 0.2 * (toe_v - top))
+          continue;
+        if (x > x1 + gap || x + w - 1 < x0 - gap) continue;
+        joined[i] = true;
+        pile |= labels == i;
+        x0 = std::min(x0, x);
+        x1 = std::max(x1, x + w - 1);
+        grew = true;
+      }
+    }
+  }
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(pile, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+  pile.setTo(0);
+  cv::drawContours(pile, contours, -1, cv::Scalar(255), cv::FILLED);
+  return pile;
+}
+
 }  // namespace side_detail
 
 double PlateLine::height_above(const cv::Point2d& p) const {
@@ -344,15 +471,15 @@ struct CoarseLine {
 };
 
 CoarseLine coarse_plate_line(const EdgeStrips& st, int ncols, const SideSettings& s,
-                             const std::string& where) {
-  const int rows = st.rows;
+                             const std::string& where, int max_row) {
+  const int rows = std::min(st.rows, max_row + 3);
   const double tilt = std::tan(s.plate_max_tilt_deg / kRadToDeg);
   const int n_slopes = static_cast<int>(std::ceil(tilt * ncols * 0.5));
   double b = 0.0, best = -1.0;
   auto try_slope = [&](int j) {
     const double slope = n_slopes > 0 ? tilt * j / n_slopes : 0.0;
     const std::vector<double> prof = sheared_profile(st, slope);
-    for (int r = 1; r < rows - 1; ++r)
+    for (int r = 1; r < std::min(rows - 1, max_row + 1); ++r)
       if (prof[r] > best) {
         best = prof[r];
         b = slope;
@@ -372,9 +499,10 @@ CoarseLine coarse_plate_line(const EdgeStrips& st, int ncols, const SideSettings
   // Several long edges may qualify: the plate's, and the top edge of a layer of grains lying on
   // the plate (a sparse pile edge), which is longer than the plate's visible ends beside the
   // pile. The plate is the lowest of them (grains lie on the plate, not under it).
-  const std::vector<double> prof = sheared_profile(st, b);
+  std::vector<double> prof = sheared_profile(st, b);
+  prof.resize(rows, 0.0);
   int v0 = -1;
-  for (int r = rows - 3; r >= 2 && v0 < 0; --r) {
+  for (int r = std::min(rows - 3, max_row); r >= 2 && v0 < 0; --r) {
     const double p = prof[r];
     if (p >= kPlateCandidateFraction * best && p >= prof[r - 1] && p >= prof[r - 2] &&
         p >= prof[r + 1] && p >= prof[r + 2])
@@ -469,7 +597,10 @@ PlateLine refine_plate_line(const cv::Mat& gy, const std::vector<int>& cols, dou
 
 }  // namespace
 
-PlateLine find_plate_line(const cv::Mat& flat, const SideSettings& s, const std::string& where) {
+namespace {
+
+PlateLine find_plate_line_to(const cv::Mat& flat, const SideSettings& s, const std::string& where,
+                             int max_row) {
   CV_Assert(flat.type() == CV_32F);
   if (flat.rows < 8 || flat.cols < 8)
     throw std::invalid_argument(where + ": image region too small for a plate line (" +
@@ -477,9 +608,33 @@ PlateLine find_plate_line(const cv::Mat& flat, const SideSettings& s, const std:
   cv::Mat gy;
   cv::Sobel(flat, gy, CV_32F, 0, 1, 3, s.plate_darker_than_backdrop ? -0.125 : 0.125);
   const EdgeStrips strips = edge_strips(flat, gy);
-  const CoarseLine coarse = coarse_plate_line(strips, flat.cols, s, where);
+  const CoarseLine coarse = coarse_plate_line(strips, flat.cols, s, where, max_row);
   const std::vector<int> cols = clean_columns(flat, coarse, where);
   return refine_plate_line(gy, cols, coarse.a, coarse.b, strips.u_mid, where);
 }
+
+}  // namespace
+
+PlateLine find_plate_line(const cv::Mat& flat, const SideSettings& s, const std::string& where) {
+  return find_plate_line_to(flat, s, where, flat.rows);
+}
+
+namespace side_detail {
+
+std::optional<PlateLine> find_far_edge(const cv::Mat& flat, const SideSettings& s,
+                                       const PlateLine& toe_line, const std::string& where) {
+  const int max_row = static_cast<int>(std::floor(toe_line.v_at(0.5 * (flat.cols - 1)) + 4.0));
+  if (max_row < 8) return std::nullopt;
+  try {
+    PlateLine edge = find_plate_line_to(flat, s, where, std::min(max_row, flat.rows));
+    // A refined line may slide onto a lower edge nearby; above the toe line or not at all.
+    if (edge.v_at(0.5 * (flat.cols - 1)) > max_row + 2.0) return std::nullopt;
+    return edge;
+  } catch (const std::runtime_error&) {
+    return std::nullopt;  // no long edge with backdrop above it: the plate fills the view
+  }
+}
+
+}  // namespace side_detail
 
 }  // namespace reposetwin::vision

@@ -86,7 +86,7 @@ void refuse_scattered_grains(const cv::Mat& stats, int n_labels, int best, const
     if (i != best) ++similar;
   }
   if (similar < 2) return;
-  throw std::runtime_error(where + ": no heap: the largest dark blob on the plate (" +
+  throw Refusal(Check::kPilePresent, where + ": no heap: the largest dark blob on the plate (" +
                            str(best_area) + " px, " + str(stats.at<int>(best, cv::CC_STAT_HEIGHT)) +
                            " px tall, " + str(stats.at<int>(best, cv::CC_STAT_WIDTH)) +
                            " px wide) is one of " + str(similar + 1) +
@@ -98,6 +98,7 @@ void refuse_scattered_grains(const cv::Mat& stats, int n_labels, int best, const
 // holes filled. `threshold` is the flat-field level that split the classes.
 struct PileBlob {
   cv::Mat blob;          // CV_8U, the rows above the plate line only (rows_above x cols)
+  cv::Mat others;        // CV_8U, the other dark objects there (same size)
   int rows_above = 0;    // whole rows strictly above the plate line at either image end
   double threshold = 0;  // flat-field threshold used [-]
 };
@@ -131,9 +132,9 @@ PileBlob find_pile_blob(const cv::Mat& flat, const PlateLine& plate, const SideS
   const cv::Mat upper = flat.rowRange(0, rows_above);
   const cv::Mat above = above_plate(flat, plate, s, roi, rows_above);
   if (cv::countNonZero(above) < 64)
-    throw std::runtime_error(where + ": no pile found (the plate line at row " +
-                             str(plate.v_at(0.5 * flat.cols) + roi.y) +
-                             " leaves no image above it)");
+    throw Refusal(Check::kPilePresent, where + ": no pile found (the plate line at row " +
+                                           str(plate.v_at(0.5 * flat.cols) + roi.y) +
+                                           " leaves no image above it)");
   const double threshold = s.threshold > 0.0 ? s.threshold : otsu_threshold(upper, 0.0, 1.5, above);
   out.threshold = threshold;
   cv::Mat fg = (upper < threshold) & above;
@@ -147,24 +148,49 @@ PileBlob find_pile_blob(const cv::Mat& flat, const PlateLine& plate, const SideS
   cv::Mat labels, stats, centroids;
   const int n_labels = cv::connectedComponentsWithStats(fg, labels, stats, centroids, 8, CV_32S);
   const double min_area = std::max(50.0, s.min_area_fraction * flat.total());
-  int best = -1;
-  int best_area = 0;
-  for (int i = 1; i < n_labels; ++i) {
-    const int area = stats.at<int>(i, cv::CC_STAT_AREA);
-    if (area < min_area || area <= best_area) continue;
-    const int x = stats.at<int>(i, cv::CC_STAT_LEFT), w = stats.at<int>(i, cv::CC_STAT_WIDTH);
-    const int bottom = stats.at<int>(i, cv::CC_STAT_TOP) + stats.at<int>(i, cv::CC_STAT_HEIGHT) - 1;
-    const double line_v = std::min(plate.v_at(x), plate.v_at(x + w - 1));
-    if (bottom < std::floor(line_v - 0.5) - (s.morph_radius_px + 3)) continue;
-    best = i;
-    best_area = area;
+  // With a declared camera the pile stands on its axis: of the blobs resting on the plate line
+  // the largest that spans the axis column (a box or a tool at the side is not the pile).
+  const std::optional<double> axis_u =
+      s.axis_u_px ? std::optional<double>(*s.axis_u_px - roi.x) : std::nullopt;
+  // The largest resting on the plate, unless it is at the image's border and off the axis
+  // while something stands on the axis: then the largest of those.
+  auto pick = [&](bool on_axis_only) {
+    int found = -1, found_area = 0;
+    for (int i = 1; i < n_labels; ++i) {
+      const int area = stats.at<int>(i, cv::CC_STAT_AREA);
+      if (area < min_area || area <= found_area) continue;
+      const int x = stats.at<int>(i, cv::CC_STAT_LEFT), w = stats.at<int>(i, cv::CC_STAT_WIDTH);
+      const int bottom =
+          stats.at<int>(i, cv::CC_STAT_TOP) + stats.at<int>(i, cv::CC_STAT_HEIGHT) - 1;
+      const double line_v = std::min(plate.v_at(x), plate.v_at(x + w - 1));
+      if (bottom < std::floor(line_v - 0.5) - (s.morph_radius_px + 3)) continue;
+      if (on_axis_only && !(*axis_u >= x - 0.5 && *axis_u <= x + w - 0.5)) continue;
+      found = i;
+      found_area = area;
+    }
+    return found;
+  };
+  int best = pick(false);
+  if (axis_u && best >= 0) {
+    const int x = stats.at<int>(best, cv::CC_STAT_LEFT), w = stats.at<int>(best, cv::CC_STAT_WIDTH);
+    const bool at_border = x == 0 || x + w >= flat.cols || stats.at<int>(best, cv::CC_STAT_TOP) == 0;
+    if (at_border && !(*axis_u >= x - 0.5 && *axis_u <= x + w - 0.5)) {
+      const int on_axis = pick(true);
+      if (on_axis >= 0) best = on_axis;
+    }
   }
   if (best < 0)
-    throw std::runtime_error(where + ": no pile found (no dark blob of at least " +
-                             str(std::round(min_area)) + " px resting on the plate line at row " +
-                             str(std::round(plate.v_at(0.5 * flat.cols) + roi.y)) + ")");
+    throw Refusal(Check::kPilePresent,
+                  where + ": no pile found (no dark blob of at least " + str(std::round(min_area)) +
+                      " px resting on the plate line at row " +
+                      str(std::round(plate.v_at(0.5 * flat.cols) + roi.y)) +
+                      (axis_u ? " at the pile's axis, column " + str(std::round(*axis_u + roi.x))
+                              : std::string()) +
+                      ")",
+                  0.0, min_area);
   refuse_scattered_grains(stats, n_labels, best, plate, s.morph_radius_px, where);
   out.blob = labels == best;
+  out.others = (labels != best) & (labels > 0);
   std::vector<std::vector<cv::Point>> contours;
   cv::findContours(out.blob, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
   out.blob.setTo(0);
@@ -215,13 +241,27 @@ double pile_level_of(const cv::Mat& flat, const cv::Mat& blob, const cv::Rect& b
 }
 
 // The blob's box, refused when the image (or ROI) border cuts the pile.
-cv::Rect uncut_box(const cv::Mat& blob, const SideSettings& s, const std::string& where) {
+// With a level view (level_view.hpp) the photo's border runs through the image: a pile pixel
+// next to a pixel from outside the photo is cut by it just the same.
+cv::Rect uncut_box(const cv::Mat& blob, const cv::Mat& valid, const SideSettings& s,
+                   const std::string& where, bool refuse = true) {
   const cv::Rect box = cv::boundingRect(blob);
-  if (box.y == 0 || box.x == 0 || box.x + box.width >= blob.cols)
-    throw std::runtime_error(where + ": the pile is cut by the " +
-                             std::string(box.y == 0 ? "top" : "left or right") + " border of the " +
-                             (s.roi.empty() ? "image" : "region of interest") +
-                             "; H and D would be wrong");
+  std::string side;
+  if (box.y == 0) side = "top";
+  else if (box.x == 0 || box.x + box.width >= blob.cols) side = "left or right";
+  else if (!valid.empty()) {
+    cv::Mat outside;
+    cv::dilate(valid == 0, outside, cv::Mat(), cv::Point(-1, -1), 2);
+    cv::Mat cut = outside & blob;
+    if (cv::countNonZero(cut) > 0) {
+      const cv::Rect c = cv::boundingRect(cut);
+      side = c.y <= box.y + 1 ? "top" : "left or right";
+    }
+  }
+  if (!side.empty() && refuse)
+    throw Refusal(Check::kNotCut, where + ": the pile is cut by the " + side + " border of the " +
+                                      (s.roi.empty() ? "image" : "region of interest") +
+                                      "; H and D would be wrong");
   return box;
 }
 
@@ -296,7 +336,8 @@ void silhouette(const PileRegion& p, const std::optional<PlateLine>& far_edge,
 }
 
 // Apex: the top row's middle column and its neighbours, refined along the column.
-cv::Point2d find_apex(const PileRegion& p, const PlateLine& plate) {
+cv::Point2d find_apex(const PileRegion& p, const PlateLine& plate,
+                      const std::optional<PlateLine>& far_edge) {
   const cv::Mat& flat = p.flat;
   const cv::Rect& box = p.box;
   const int w = p.window;
@@ -311,7 +352,9 @@ cv::Point2d find_apex(const PileRegion& p, const PlateLine& plate) {
   for (int c = std::max(cmid - 1, 0); c <= std::min(cmid + 1, flat.cols - 1); ++c) {
     const int r0 = r - w, r1 = std::min(r + w, box.y + box.height - 1);
     double y = r - 0.5;
-    if (r0 >= 1) {
+    // Seen against the plate's top face the apex has no backdrop above it: its pixel edge.
+    const bool against_face = far_edge && r + 0.5 > far_edge->v_at(c);
+    if (r0 >= 1 && !against_face) {
       double back = col_mean(flat, c, r0 - 4, r0 - 1);
       if (!(back > p.level + 0.05)) back = 1.0;
       double sum = 0.0;
@@ -368,6 +411,17 @@ void set_geometry(SideProfile& out, const InterceptFit& tl, const InterceptFit& 
   out.diameter_px = std::hypot(out.toe_right.x - out.toe_left.x, out.toe_right.y - out.toe_left.y);
   if (!(out.diameter_px > 2.0))
     throw std::runtime_error(where + ": toe points coincide (D = " + str(out.diameter_px) + " px)");
+  // The flank lines' foot on the plate line: point + t direction with v = a + b u.
+  auto foot = [&](const FlankFit& f) {
+    const double den = f.direction.y - plate.b * f.direction.x;
+    if (std::abs(den) < 1e-9) return cv::Point2d(std::nan(""), std::nan(""));
+    const double t = (plate.a + plate.b * f.point.x - f.point.y) / den;
+    return f.point + t * f.direction;
+  };
+  out.foot_left = foot(out.left);
+  out.foot_right = foot(out.right);
+  out.diameter_flank_px =
+      std::hypot(out.foot_right.x - out.foot_left.x, out.foot_right.y - out.foot_left.y);
   out.sigma_height_px = std::hypot(0.5 / std::sqrt(3.0), plate.sigma_px);
   out.sigma_diameter_px = std::hypot(tl.sigma_alpha, tr.sigma_alpha);
   out.theta_deg = std::atan(2.0 * out.height_px / out.diameter_px) * kRadToDeg;
@@ -387,11 +441,357 @@ void to_full_image(SideProfile& out, const cv::Rect& roi) {
   out.apex += off;
   out.toe_left += off;
   out.toe_right += off;
+  out.foot_left += off;
+  out.foot_right += off;
   out.left.point += off;
   out.right.point += off;
   for (auto& p : out.left_edge) p += off;
   for (auto& p : out.right_edge) p += off;
   out.blob_box += roi.tl();
+}
+
+// The pile and what it stands on, found one of two ways (measure_side_pixels).
+struct PileOnPlate {
+  cv::Mat blob;                 // CV_8U, the pile, above the plate line
+  cv::Mat others;               // CV_8U, other dark objects (same size), for the foreign check
+  double threshold = 0.0;       // the dark class's threshold, where the pile was split by it
+  bool above_backdrop = false;  // the pile was segmented against the backdrop (by threshold)
+};
+
+// Without a camera: the plate line detected (step 2), the pile above it, grown into the plate's
+// top face when it continues below it.
+PileOnPlate pile_on_detected_plate(const SideImage& prepared, const SideSettings& s,
+                                   const std::string& where, SideProfile& out) {
+  const cv::Mat& flat = prepared.segment;
+  out.plate = find_plate_line(prepared.flat, s, where);
+  const PileBlob pile = find_pile_blob(flat, out.plate, s, prepared.roi, where);
+  PileOnPlate found;
+  found.blob = stand_on_top_face(flat, pile, s, out.plate, out.far_edge);
+  found.others = cv::Mat::zeros(found.blob.size(), CV_8U);
+  pile.others.rowRange(0, std::min(pile.others.rows, found.blob.rows))
+      .copyTo(found.others.rowRange(0, std::min(pile.others.rows, found.blob.rows)));
+  found.threshold = pile.threshold;
+  found.above_backdrop = true;
+  return found;
+}
+
+// Within this many pixels of the toe line the far edge is the plate line itself (a level
+// camera sees the plate edge-on) [px].
+constexpr double kFaceMinPx = 3.0;
+
+// The line v = a + b u of a full-image line in the region of interest's coordinates.
+PlateLine in_roi(PlateLine line, const cv::Rect& roi) {
+  line.a = line.a - roi.y + line.b * roi.x;
+  return line;
+}
+
+// With a declared camera: the toe line is where the camera puts the base circle's tangent
+// points. A level camera sees the plate edge-on there, and the detected plate line (within
+// kFaceMinPx of it) is the plate line; a camera above the plate sees its top face, and the pile
+// stands on the predicted toe line, seen against the backdrop above the far edge and against
+// the face below it (side_detail::pile_on_face).
+PileOnPlate pile_on_predicted_toe(const SideImage& prepared, const SideSettings& s,
+                                  const std::string& where, SideProfile& out) {
+  const cv::Mat& flat = prepared.segment;
+  const cv::Rect& roi = prepared.roi;
+  const PlateLine toe = in_roi(*s.toe_line, roi);
+  const double axis_u = s.axis_u_px ? *s.axis_u_px - roi.x : 0.5 * (flat.cols - 1);
+  // A camera declared level with the plate sees it edge-on on the toe line: the plate line is
+  // found in the photo as without a camera, and with it the toe line on the plate's top face of a
+  // camera standing a little higher than declared (the lab's 5-10 mm: side_view.hpp step 2),
+  // from which H is then read; measure.hpp allows that much. With no edge found (a pile as wide
+  // as the image hides it) the toe line is the plate line.
+  if (s.level_toe_line) {
+    try {
+      return pile_on_detected_plate(prepared, s, where, out);
+    } catch (const Refusal&) {
+      throw;
+    } catch (const std::runtime_error&) {
+      // No plate line in the photo (a pile as wide as the view hides it): the camera's.
+    }
+    out = SideProfile{};
+    out.plate = toe;
+    out.plate_from_camera = true;
+    const PileBlob pile = find_pile_blob(flat, out.plate, s, roi, where);
+    return {pile.blob, pile.others, pile.threshold, true};
+  }
+  const std::optional<PlateLine> far = find_far_edge(prepared.flat, s, toe, where);
+  if (far && toe.v_at(axis_u) - far->v_at(axis_u) <= kFaceMinPx) {
+    out.plate = *far;
+    const PileBlob pile = find_pile_blob(flat, out.plate, s, roi, where);
+    return {pile.blob, pile.others, pile.threshold, true};
+  }
+  // The base below the image's bottom: the pile is cut by it.
+  if (toe.v_at(axis_u) > flat.rows - 1.0)
+    throw Refusal(Check::kNotCut,
+                  where + ": the pile is cut by the bottom border of the " +
+                      (s.roi.empty() ? "image" : "region of interest") +
+                      ": the camera puts its base at row " +
+                      str(std::round(toe.v_at(axis_u) + roi.y)) + ", below it; H and D would be "
+                      "wrong",
+                  toe.v_at(axis_u) + roi.y, flat.rows - 1.0 + roi.y);
+  // The dark class above the far edge, when there is a far edge and something dark above it.
+  cv::Mat above(flat.size(), CV_8U, cv::Scalar(0));
+  double threshold = 0.0;
+  if (far) {
+    const int rows_above = std::clamp(
+        static_cast<int>(std::floor(std::max(far->v_at(0), far->v_at(flat.cols - 1)) - 0.5)) + 1,
+        1, flat.rows);
+    const cv::Mat region = above_plate(flat, *far, s, roi, rows_above);
+    if (cv::countNonZero(region) >= 64) {
+      const cv::Mat upper = flat.rowRange(0, rows_above);
+      threshold = s.threshold > 0.0 ? s.threshold : otsu_threshold(upper, 0.0, 1.5, region);
+      // Backdrop alone, or with a few light grains of the pile's top, splits at its own noise:
+      // then what lies below the backdrop's level by more than its noise allows is dark.
+      if (!(threshold < 0.9)) {
+        std::vector<double> v;
+        for (int r = 0; r < rows_above; r += 2)
+          for (int c = 0; c < flat.cols; c += 2)
+            if (region.at<uchar>(r, c)) v.push_back(flat.at<float>(r, c));
+        const double mid = median(v);
+        for (double& x : v) x = std::abs(x - mid);
+        threshold = mid - std::max(0.06, 6.0 * 1.4826 * median(v));
+      }
+      above.rowRange(0, rows_above) = (upper < threshold) & region;
+    }
+  }
+  const double gap = std::max(0.0, toe.v_at(axis_u) - (far ? far->v_at(axis_u) : 0.0));
+  cv::Mat grown = pile_on_face(flat, above, far, toe, axis_u, s.front_search_px,
+                               s.morph_radius_px, s.valid.empty() ? cv::Mat() : s.valid(roi));
+  if (grown.empty()) {
+    // Something dark stands at the axis but ends well above the toe line: the pile stands on a
+    // plate the camera puts elsewhere.
+    if (far) {
+      const int rows_above = std::clamp(static_cast<int>(std::floor(far->v_at(axis_u) + 0.5)) + 1,
+                                        1, flat.rows);
+      const int c = std::clamp(static_cast<int>(std::lround(axis_u)), 0, flat.cols - 1);
+      int lowest = -1;
+      for (int r = 0; r < rows_above; ++r)
+        if (above.at<uchar>(r, c)) lowest = r;
+      if (lowest >= 0 && toe.v_at(axis_u) - lowest > s.admission.camera_tolerance_px + kFaceMinPx)
+        throw Refusal(Check::kCameraConsistent,
+                      where + ": not measured through the declared camera: the pile at the axis "
+                              "(column " + str(std::round(axis_u + roi.x)) + ") stands on row " +
+                          str(lowest + roi.y) + ", " + str(std::round(toe.v_at(axis_u) - lowest)) +
+                          " px above the toe line where the declared camera puts its base (row " +
+                          str(std::round(toe.v_at(axis_u) + roi.y)) + ")",
+                      toe.v_at(axis_u) - lowest, s.admission.camera_tolerance_px + kFaceMinPx);
+    }
+    throw Refusal(Check::kPilePresent,
+                  where + ": no pile found standing on the toe line the camera predicts (row " +
+                      str(std::round(toe.v_at(axis_u) + roi.y)) + ", " + str(std::round(gap)) +
+                      " px below the plate's far edge) at the pile's axis (column " +
+                      str(std::round(axis_u + roi.x)) + ")",
+                  0.0);
+  }
+  // The base's front: the pile's lowest pixels over the middle tenth of its width.
+  {
+    const cv::Rect box = cv::boundingRect(grown);
+    const int half = std::max(2, box.width / 20);
+    std::vector<double> lows;
+    for (int c = std::max(box.x, static_cast<int>(axis_u) - half);
+         c <= std::min(box.x + box.width - 1, static_cast<int>(axis_u) + half); ++c)
+      for (int r = box.y + box.height - 1; r >= box.y; --r)
+        if (grown.at<uchar>(r, c)) {
+          lows.push_back(r + 0.5);
+          break;
+        }
+    if (!lows.empty()) out.front_v_px = median(lows) + roi.y;
+  }
+  for (int r = 0; r < grown.rows; ++r) {
+    uchar* m = grown.ptr<uchar>(r);
+    for (int c = 0; c < grown.cols; ++c)
+      if (r > std::floor(toe.v_at(c) - 0.5)) m[c] = 0;
+  }
+  out.plate = toe;
+  out.toe_line_predicted = true;
+  // No far edge in view: every row is seen against the plate's face.
+  out.far_edge = far ? *far : PlateLine{-1.5, 0.0, 0.0, 0.0, 0};
+  PileOnPlate found;
+  found.blob = grown;
+  cv::Mat others = above & ~grown;
+  found.others = others;
+  found.threshold = threshold;
+  found.above_backdrop = false;
+  return found;
+}
+
+// A pile narrows upwards; a box, a scale bar or a tool standing on the plate does not: its width
+// at 80% of its height is most of its width at 20%.
+constexpr double kTaperLimit = 0.85;
+
+// The silhouette's width in the row nearest `h` px above the plate line, or NaN.
+double width_at(const SideProfile& p, double h) {
+  auto x_at = [&](const std::vector<cv::Point2d>& edge) {
+    double best = 1e300, x = std::nan("");
+    for (const auto& q : edge) {
+      const double d = std::abs(p.plate.height_above(q) - h);
+      if (d < best) {
+        best = d;
+        x = q.x;
+      }
+    }
+    return best <= 1.5 ? x : std::nan("");
+  };
+  return x_at(p.right_edge) - x_at(p.left_edge);
+}
+
+// A camera looking down on a pile from well above sees no taper either: the pile's outline is
+// then its base, and the refusal says so (admission.hpp's kViewAngle).
+constexpr double kSteepCameraDeg = 12.0;
+
+void refuse_no_taper(const SideProfile& p, double camera_elevation_deg, const std::string& where) {
+  const double low = width_at(p, 0.2 * p.height_px), high = width_at(p, 0.8 * p.height_px);
+  if (!(low > 0.0 && high >= 0.0)) return;
+  if (high > kTaperLimit * low && camera_elevation_deg > kSteepCameraDeg)
+    throw Refusal(Check::kViewAngle,
+                  where + ": the camera looks down on the pile from " +
+                      str(camera_elevation_deg) + " deg above the plate and its outline does "
+                      "not narrow upwards (" + str(std::round(high)) + " px wide at 80% of its "
+                      "height, " + str(std::round(low)) + " px at 20%): the flanks face the "
+                      "camera and the apex is not on the silhouette; photograph it from lower",
+                  camera_elevation_deg, kSteepCameraDeg);
+  if (high > kTaperLimit * low)
+    throw Refusal(Check::kPilePresent,
+                  where + ": no pile found: the object standing on the plate does not narrow "
+                          "upwards (" + str(std::round(high)) + " px wide at 80% of its height, " +
+                      str(std::round(low)) + " px at 20%): a box, a bar or a tool, not a pile",
+                  high / low, kTaperLimit);
+}
+
+// A pile's silhouette narrows from the plate to its top. Something that hangs into it from
+// above (the funnel's outlet, a hand) widens it again above a neck; something hanging just above
+// it is a separate dark object near its top that does not stand on the plate.
+void refuse_foreign_objects(const SideProfile& p, const cv::Mat& blob, const cv::Mat& others,
+                            const SideSettings& s, const std::string& where) {
+  // The neck: rows from the plate up, the narrowest width so far, and a row much wider above it.
+  std::vector<std::pair<double, double>> rows;  // (height above the plate, width)
+  for (double h = 0.05 * p.height_px; h <= p.height_px; h += 1.0) {
+    const double w = width_at(p, h);
+    if (w >= 0.0) rows.emplace_back(h, w);
+  }
+  double narrowest = 1e300;
+  const double diameter = rows.empty() ? 0.0 : rows.front().second;
+  for (const auto& [h, w] : rows) {
+    // A neck is sought above 40% of the height: below it a base seen from above (an ellipse)
+    // and the loose grains at the foot make the width rise and fall by themselves.
+    if (h < 0.4 * p.height_px) continue;
+    narrowest = std::min(narrowest, w);
+    const double widening = w - narrowest;
+    if (widening > std::max(8.0, 0.2 * diameter))
+      throw Refusal(Check::kNoForeignObject,
+                    where + ": something rests on the pile from above: its silhouette narrows to " +
+                        str(std::round(narrowest)) + " px and widens again to " +
+                        str(std::round(w)) + " px at " + str(std::round(h)) +
+                        " px above the plate (the funnel, a hand or a tool in view)",
+                    widening, std::max(8.0, 0.2 * diameter));
+  }
+  if (others.empty() || cv::countNonZero(others) == 0) return;
+  // Other objects near the pile's silhouette that do not stand on the plate.
+  const int gap = std::max(3, static_cast<int>(std::lround(s.admission.foreign_gap_fraction *
+                                                           p.height_px)));
+  cv::Mat near;
+  cv::dilate(blob, near, cv::getStructuringElement(cv::MORPH_ELLIPSE,
+                                                    cv::Size(2 * gap + 1, 2 * gap + 1)));
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(others, labels, stats, centroids, 8, CV_32S);
+  const double min_area = std::max(20.0, 1e-4 * others.total());
+  // Inside the pile's outline (its convex hull) a dark patch is the pile's own grains set apart
+  // by lighter ones, not an object.
+  std::vector<cv::Point> pts;
+  cv::findNonZero(blob, pts);
+  std::vector<cv::Point> hull;
+  if (!pts.empty()) cv::convexHull(pts, hull);
+  cv::Mat inside(blob.size(), CV_8U, cv::Scalar(0));
+  if (hull.size() >= 3) cv::fillConvexPoly(inside, hull, cv::Scalar(255));
+  std::vector<int> near_top;
+  for (int i = 1; i < n; ++i) {
+    const int area = stats.at<int>(i, cv::CC_STAT_AREA);
+    if (area < min_area) continue;
+    const int x = stats.at<int>(i, cv::CC_STAT_LEFT), w = stats.at<int>(i, cv::CC_STAT_WIDTH);
+    const int bottom = stats.at<int>(i, cv::CC_STAT_TOP) + stats.at<int>(i, cv::CC_STAT_HEIGHT) - 1;
+    const double line_v = std::min(p.plate.v_at(x), p.plate.v_at(x + w - 1));
+    if (bottom >= std::floor(line_v - 0.5) - (s.morph_radius_px + 3)) continue;  // on the plate
+    // Only what hangs above the pile's lower half: grains bouncing at the foot are strays.
+    if (bottom > p.apex.y + 0.5 * p.height_px) continue;
+    // What hangs from above has its middle above the apex; a dark patch beside the flanks is
+    // the pile's own grains set apart by lighter ones.
+    if (centroids.at<double>(i, 1) > p.apex.y) continue;
+    const cv::Mat comp = labels == i;
+    if (cv::countNonZero(comp & near) == 0) continue;
+    if (2 * cv::countNonZero(comp & inside) > area) continue;
+    near_top.push_back(i);
+  }
+  // One object, or two (a funnel's two walls): a backdrop's texture makes many.
+  if (near_top.empty() || near_top.size() > 2) return;
+  {
+    const int i = near_top.front();
+    const int area = stats.at<int>(i, cv::CC_STAT_AREA);
+    const int bottom = stats.at<int>(i, cv::CC_STAT_TOP) + stats.at<int>(i, cv::CC_STAT_HEIGHT) - 1;
+    throw Refusal(Check::kNoForeignObject,
+                  where + ": an object hangs near the pile's top without standing on the plate (" +
+                      str(area) + " px, its lowest row " + str(bottom) + ", within " + str(gap) +
+                      " px of the silhouette): the funnel, a hand or a tool in view",
+                  static_cast<double>(area), min_area);
+  }
+}
+
+void refuse_flanks(const SideProfile& p, const AdmissionSettings& a, const std::string& where) {
+  for (const auto& [name, f] : {std::pair{"left", &p.left}, std::pair{"right", &p.right}})
+    if (!(f->angle_deg >= a.min_flank_deg && f->angle_deg <= a.max_flank_deg))
+      throw Refusal(Check::kFlankLimits,
+                    where + ": the " + name + " flank stands at " + str(f->angle_deg) +
+                        " deg, outside " + str(a.min_flank_deg) + "-" + str(a.max_flank_deg) +
+                        " deg: no granular pile stands so (an object's edge, or not a pile)",
+                    f->angle_deg, f->angle_deg > a.max_flank_deg ? a.max_flank_deg : a.min_flank_deg);
+}
+
+// The pile must stand out from the backdrop, and its top must not be lost to white.
+constexpr double kFadedTop = 0.2;
+
+void refuse_exposure(const SideImage& prepared, const PileRegion& region, const SideProfile& p,
+                     const AdmissionSettings& a, bool against_backdrop, const std::string& where) {
+  // Against the plate's top face the pile was told from the face's own level (pile_on_face).
+  const double contrast = std::abs(1.0 - region.level);
+  if (against_backdrop && contrast < a.min_contrast)
+    throw Refusal(Check::kExposure,
+                  where + ": the pile barely stands out from the backdrop (contrast " +
+                      str(contrast) + ", at least " + str(a.min_contrast) +
+                      " needed): expose for the pile, not the light",
+                  contrast, a.min_contrast);
+  if (prepared.clipped.empty()) return;
+  // A top washed out to white: the pile's top fifth reads more than kFadedTop of the way from
+  // the pile's level to the backdrop's (its grains fading into the light), and the band just
+  // above it is clipped at the sensor's brightest level, so where the apex ends cannot be told
+  // (a 60 mm cone under a gain rising to 2.6 over its top: read 35 mm tall, its top fifth 24% of
+  // the way, 62% of the band clipped). A white backdrop clipped around a well-exposed pile passes
+  // while its top reads as the rest of it.
+  const cv::Rect& box = region.box;
+  const int top_rows = std::max(2, static_cast<int>(0.2 * p.height_px));
+  std::vector<double> top_levels;
+  for (int r = box.y; r < std::min(box.y + top_rows, box.y + box.height); ++r) {
+    const uchar* m = region.blob.ptr<uchar>(r);
+    const float* f = region.flat.ptr<float>(r);
+    for (int c = box.x; c < box.x + box.width; ++c)
+      if (m[c]) top_levels.push_back(f[c]);
+  }
+  if (top_levels.size() < 8) return;
+  const double top_level = median(top_levels);
+  const double faded = (top_level - region.level) / std::max(1e-6, 1.0 - region.level);
+  const int band = std::max(3, static_cast<int>(0.1 * p.height_px));
+  const cv::Rect above_top = cv::Rect(box.x, box.y - band, box.width, band) &
+                             cv::Rect(0, 0, prepared.clipped.cols, prepared.clipped.rows);
+  if (above_top.empty()) return;
+  const double clipped =
+      static_cast<double>(cv::countNonZero(prepared.clipped(above_top))) / above_top.area();
+  if (faded > kFadedTop && clipped > a.max_clipped_fraction)
+    throw Refusal(Check::kExposure,
+                  where + ": the pile's top is washed out: its top fifth reads " +
+                      str(std::round(100.0 * faded)) + "% of the way from the pile's level to the "
+                      "backdrop's, and " + str(std::round(100.0 * clipped)) +
+                      "% of the band above it is at the sensor's brightest level: the apex cannot "
+                      "be told from the backdrop (expose for the pile)",
+                  faded, kFadedTop);
 }
 
 }  // namespace
@@ -415,6 +815,10 @@ SideImage prepare_side(const cv::Mat& image, const SideSettings& s, const std::s
   }
   SideImage out;
   out.roi = roi;
+  double max_level = 0.0;
+  cv::minMaxLoc(gray_full, nullptr, &max_level);
+  // Clipped: at the sensor's top level, in a photo that reaches it (255 of 8 bits, as scaled).
+  out.clipped = max_level >= 254.5 ? cv::Mat(gray_full(roi) >= 254.5) : cv::Mat();
   out.flat = flat_field(gray_full(roi), cv::Mat(), s.flat_field, where);
   if (s.smoothing_sigma_px > 0.0)
     cv::GaussianBlur(out.flat, out.flat, cv::Size(), s.smoothing_sigma_px, s.smoothing_sigma_px);
@@ -442,21 +846,32 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
   if (flat.empty() || flat.size() != prepared.flat.size())
     throw std::invalid_argument(where + ": prepared side image is incomplete");
   SideProfile out;
-  out.plate = find_plate_line(prepared.flat, s, where);
-  const PileBlob pile = find_pile_blob(flat, out.plate, s, prepared.roi, where);
-  const cv::Mat blob = stand_on_top_face(flat, pile, s, out.plate, out.far_edge);
+  const PileOnPlate pile = s.toe_line ? pile_on_predicted_toe(prepared, s, where, out)
+                                      : pile_on_detected_plate(prepared, s, where, out);
+  const cv::Mat& blob = pile.blob;
   const PlateLine& plate = out.plate;
-  PileRegion region{flat, blob, uncut_box(blob, s, where), 0.0, s.edge_window_px};
+  const cv::Mat valid =
+      s.valid.empty() ? cv::Mat() : s.valid(prepared.roi).rowRange(0, blob.rows);
+  // The border check waits for the silhouette: a pile that reaches the border through a
+  // foreign object hanging into it (the funnel from the top) is refused for the object.
+  PileRegion region{flat, blob, uncut_box(blob, valid, s, where, false), 0.0, s.edge_window_px};
   region.level = pile_level_of(flat, blob, region.box);
-  if (!(region.level < pile.threshold))
-    throw std::runtime_error(where + ": no pile found (blob level " + str(region.level) +
-                             " is not below the threshold " + str(pile.threshold) + ")");
+  if (pile.above_backdrop && !(region.level < pile.threshold))
+    throw Refusal(Check::kPilePresent, where + ": no pile found (blob level " + str(region.level) +
+                                           " is not below the threshold " + str(pile.threshold) +
+                                           ")");
   silhouette(region, out.far_edge, out.left_edge, out.right_edge);
-  out.apex = find_apex(region, plate);
+  out.apex = find_apex(region, plate, out.far_edge);
   out.height_px = plate.height_above(out.apex);
-  if (!(out.height_px > 4.0))
-    throw std::runtime_error(where + ": no pile found (blob only " + str(out.height_px) +
-                             " px above the plate line)");
+  if (!(out.height_px >= s.admission.min_height_px))
+    throw Refusal(Check::kPilePresent,
+                  where + ": no pile found (the object on the plate stands only " +
+                      str(out.height_px) + " px above the plate line, less than " +
+                      str(s.admission.min_height_px) + " px)",
+                  out.height_px, s.admission.min_height_px);
+  refuse_foreign_objects(out, blob, pile.others, s, where);
+  uncut_box(blob, valid, s, where);
+  refuse_no_taper(out, s.camera_elevation_deg, where);
   // Flank lines over the middle band of the height, then the toes below them.
   const double height = out.height_px;
   out.left = fit_flank(
@@ -465,6 +880,8 @@ SideProfile measure_side_pixels(const SideImage& prepared, const SideSettings& s
   out.right = fit_flank(
       in_band(out.right_edge, plate, s.flank_band_low * height, s.flank_band_high * height), plate,
       where + ": right flank");
+  refuse_flanks(out, s.admission, where);
+  refuse_exposure(prepared, region, out, s.admission, pile.above_backdrop, where);
   const double toe_lo = std::max(s.toe_band_low * height, s.toe_min_gap_px);
   const double toe_hi = std::max(s.toe_band_high * height, toe_lo + 3.0);
   const InterceptFit tl = toe_of(out.left_edge, out.left, plate, toe_lo, toe_hi, where + ": left");

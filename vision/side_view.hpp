@@ -35,6 +35,15 @@
 //     told from a level view's edge, and the far edge stays the plate line (a camera 5 mm up at
 //     12 pile radii over the lab's 0.5 m plate); a raised camera facing the plate's corner sees
 //     its far edges as a flat "^", not one line, and is not handled either.
+//     With a declared camera (measure.hpp reads the photo in its level view, level_view.hpp)
+//     the toe line is where the camera puts the base circle's tangent points (SideSettings::
+//     toe_line), not searched: the far edge is then the lowest long edge above it (the near edge
+//     and the front face below are never taken), within 3 px of it the plate is seen edge-on and
+//     is the plate line, and below it the pile stands on the plate's top face: segmented against
+//     the backdrop above the far edge and against the face's level below it, read row by row at
+//     the band's outer tenths (side_detail::pile_on_face), the component on the axis column
+//     standing on the toe line, with the loose grains at its foot. From high up the whole pile
+//     is seen against the face (from 10 deg above a 0.5 m plate at 12 pile radii).
 //  3. Pile: Otsu's dark class above the plate line, opened and closed, the largest component
 //     resting on the plate line (scale markers and dust are other components). Grains lying
 //     apart from it in the picture are strays and not part of it, as sim/pile_geometry.hpp
@@ -77,6 +86,7 @@
 #include <string>
 #include <vector>
 
+#include "vision/admission.hpp"
 #include "vision/image.hpp"
 
 namespace reposetwin::vision {
@@ -130,6 +140,18 @@ struct SideSettings {
   double toe_band_high = 0.12;    // toe band, upper end, fraction of H [-]
   double toe_min_gap_px = 3.0;    // rows this close to the plate line are never used [px]
   std::vector<cv::Rect> exclude;  // image regions ignored by the pile search (scale markers)
+  // Where a declared camera puts things (measure.hpp fills these from a level view): the toe
+  // line through the base circle's tangent points, the axis foot's column, and the pixels that
+  // come from inside the photo (CV_8U, image size; empty = all). With a toe line the plate line
+  // is not searched below it: the far edge is the lowest long edge above it, and the pile
+  // stands on the toe line (on the plate's visible top face when the far edge is above it).
+  std::optional<PlateLine> toe_line;  // [px], full-image coordinates
+  std::optional<double> axis_u_px;    // [px], full-image coordinates
+  double front_search_px = 0.0;       // how far below the toe line the base's front is sought [px]
+  double camera_elevation_deg = 0.0;  // the camera above the plate, seen from the axis foot [deg]
+  bool level_toe_line = false;        // the camera sees the plate edge-on (toe line = horizon)
+  cv::Mat valid;
+  AdmissionSettings admission;  // the pixel checks' limits (admission.hpp)
 };
 
 /// The silhouette measurement in pixels (full-image coordinates, even when an ROI was set).
@@ -140,6 +162,10 @@ struct SideProfile {
   cv::Point2d toe_right;           // right toe on the plate line [px]
   double height_px = 0.0;          // H: apex distance perpendicular to the plate line [px]
   double diameter_px = 0.0;        // D: distance between the toe points [px]
+  // The flank lines' foot: where the two fitted flank lines meet the plate line, and their
+  // distance, the other definition of D (measure.hpp's design note says which is reported).
+  cv::Point2d foot_left, foot_right;  // [px]
+  double diameter_flank_px = 0.0;     // [px]
   double sigma_height_px = 0.0;    // uncertainty of H (apex quantisation, plate line) [px]
   double sigma_diameter_px = 0.0;  // uncertainty of D (toe band scatter, flank slope) [px]
   double theta_deg = 0.0;          // atan(2H/D) [deg]
@@ -152,6 +178,15 @@ struct SideProfile {
   /// When the pile stands on the plate's visible top face (a camera above the plate): the
   /// plate's far edge against the backdrop, above the toe line that `plate` then is.
   std::optional<PlateLine> far_edge;
+  /// With a predicted toe line on the plate's top face: the row of the base's front point (the
+  /// pile's lowest pixels at the axis column), which the camera also predicts [px].
+  std::optional<double> front_v_px;
+  /// The plate line is the camera's toe line, no edge having been found there (a pile as wide as
+  /// the view hides it): the photo's own plate edge, wherever it is, is then checked instead.
+  bool plate_from_camera = false;
+  /// The toe line is where the camera put it (a camera above the plate, declared so); else it
+  /// was found in the photo, and H is read from it (measure.hpp).
+  bool toe_line_predicted = false;
 };
 
 /// Finds the plate line in a flat-fielded image (CV_32F, backdrop about 1). Throws
@@ -165,6 +200,7 @@ struct SideImage {
   cv::Mat segment;  // CV_32F, divided by the empty-scene image if one was given, else `flat`:
                     // pile segmentation and edges
   cv::Rect roi;     // where both sit in the full image [px]
+  cv::Mat clipped;  // CV_8U, 255 where the photo is at its brightest level (over-exposed)
 };
 
 /// Validates the settings and the image and computes its SideImage. Throws as

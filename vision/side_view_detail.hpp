@@ -45,4 +45,20 @@ struct TopFace {
 std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob,
                                         const PlateLine& edge, int morph_radius_px);
 
+/// The lowest long edge with backdrop above it and not below `toe_line` (+4 px): the plate's far
+/// edge as a camera above the plate sees it, or the plate line itself for a level camera.
+/// std::nullopt when the plate fills the view (no edge with backdrop above it).
+std::optional<PlateLine> find_far_edge(const cv::Mat& flat, const SideSettings& s,
+                                       const PlateLine& toe_line, const std::string& where);
+
+/// The pile standing on the plate's visible top face, its toe line given by the camera: the dark
+/// class above the far edge (`above`, CV_8U image size, may be all zero) joined with the pixels
+/// of the face band (below the far edge, or everything when there is none) unlike the plate's
+/// level in their row, read at the band's outer columns; the component standing on the toe line
+/// nearest the axis column, holes filled, down to `depth_below` px below the toe line. Empty when
+/// nothing stands there.
+cv::Mat pile_on_face(const cv::Mat& flat, const cv::Mat& above, const std::optional<PlateLine>& far,
+                     const PlateLine& toe, double axis_u, double depth_below, int morph_radius_px,
+                     const cv::Mat& valid);
+
 }  // namespace reposetwin::vision::side_detail

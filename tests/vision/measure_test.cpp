@@ -75,11 +75,17 @@ TEST(MeasureSide, PerspectiveCorrectionRecoversHandD) {
   // The convenience overload gives the same.
   EXPECT_DOUBLE_EQ(measure_side_camera(img, cam).theta_deg, m.theta_deg);
   EXPECT_TRUE(m.warnings.empty());
-  // A camera description that does not match the picture (here: 5 cm higher) is flagged.
+  // A camera description that does not match the picture (here: 5 cm higher) is refused as a
+  // camera mismatch: the pile stands 160 px above where that camera puts its base.
   ScaleSpec raised = spec;
   raised.camera->extrinsics.position.z() += 0.05;
   raised.camera->extrinsics.look_at.z() += 0.05;
-  EXPECT_FALSE(measure_side(img, raised).warnings.empty());
+  try {
+    (void)measure_side(img, raised);
+    ADD_FAILURE() << "measured through a camera 5 cm higher than the photo's";
+  } catch (const Refusal& r) {
+    EXPECT_EQ(r.check(), Check::kCameraConsistent) << r.what();
+  }
   // The same image read orthographically at the axis scale is visibly off: the correction matters.
   ScaleSpec ortho;
   ortho.mm_per_px = camera::mm_per_px_at(cam, Eigen::Vector3d::Zero());
@@ -119,12 +125,14 @@ TEST(MeasureSide, CameraAboveThePlateReadsHFromTheToeLine) {
   EXPECT_LT(m.height_m, h_read + low_px * mm_px);
   EXPECT_NEAR(m.diameter_m, 0.200, 2.0 * low_px * mm_px / std::tan(0.54));
   // Through the true camera the same image reads the plate line on the plate (the toes, nearer
-  // than the axis, map to z = -h R^2 / (L^2 - R^2) on the axis plane), H as above.
+  // than the axis, map to z = -h R^2 / (L^2 - R^2) on the axis plane).
   const SideMeasurement t = measure_side_camera(img, *s.camera, {}, "raised.png");
   const double z_true = -h * r * r / (l * l - r * r);
   EXPECT_LT(t.plate_line_z_m, z_true + 0.5 * mm_px);
   EXPECT_GT(t.plate_line_z_m, z_true - low_px * mm_px);
-  EXPECT_NEAR(t.height_m, m.height_m, 0.5 * mm_px);
+  // Through the true camera the toe line is where the camera puts it and H the apex's height
+  // above the plate: 60 mm, to a pixel.
+  EXPECT_NEAR(t.height_m, 0.060, 1.0 * mm_px);
 }
 
 TEST(MeasureSide, SidecarGivesCameraAndScale) {

@@ -156,7 +156,9 @@ TEST(VisionOnRenders, RaisedCameraReadsHFromTheToeLine) {
       const vision::SideMeasurement t = measure(p, p.truth, name + "_true_camera");
       EXPECT_NEAR(t.plate_line_z_m, 0.0, 0.3 * kA) << name;
       EXPECT_NEAR(t.height_m, kH0, 0.03 * kH0) << name;
-      EXPECT_NEAR(t.diameter_m, 2.0 * kR0, 0.03 * 2.0 * kR0) << name;
+      // Through the true camera the toe line is the camera's and the pile stands on the
+      // plate's face: its foot's grains read against the face to a pixel (3.5%).
+      EXPECT_NEAR(t.diameter_m, 2.0 * kR0, 0.035 * 2.0 * kR0) << name;
     }
   }
 }
