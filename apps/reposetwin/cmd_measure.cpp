@@ -2,6 +2,7 @@
 // images and an optional top image, printed as one line (the whole record as JSON with --json),
 // with an annotated overlay per image.
 // Thin: all measuring is vision/; this file only resolves files, scales and outputs.
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -39,6 +40,7 @@ struct MeasureOptions {
   std::vector<int> roi;
   std::vector<double> flank_band;
   bool json = false;
+  bool trust_photo_pose = false;
 };
 
 std::string sidecar_next_to(const std::string& image) {
@@ -130,10 +132,30 @@ void run_measure(const MeasureOptions& o) {
   std::vector<cv::Mat> overlays;
   for (size_t i = 0; i < sides.size(); ++i) {
     const cv::Mat img = vision::load_image(sides[i]);
-    const vision::ScaleSpec scale =
+    vision::ScaleSpec scale =
         resolve_scale(sides[i], o.mm_per_px, i < o.cameras.size() ? o.cameras[i] : "", o.marker,
                       camera::SidecarView::kSide);
-    views.push_back(vision::measure_side(img, scale, settings, sides[i]));
+    if (o.trust_photo_pose) scale.pose_policy = vision::PosePolicy::kEstimate;
+    try {
+      views.push_back(vision::measure_side(img, scale, settings, sides[i]));
+    } catch (const vision::Refusal& r) {
+      // A refused photo gives no number: the check, what it measured and its limit.
+      auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
+      if (o.json)
+        std::cout << nlohmann::json{{"tool", "reposetwin measure"},
+                                    {"image", sides[i]},
+                                    {"refused",
+                                     {{"check", vision::to_string(r.check())},
+                                      {"measured", number(r.measured())},
+                                      {"limit", number(r.limit())},
+                                      {"message", r.what()}}}}
+                         .dump(2)
+                  << "\n";
+      std::cerr << "reposetwin: refused by the " << vision::to_string(r.check())
+                << " check: " << r.what() << "\n";
+      set_exit_code(ExitCode::kRefused);
+      return;
+    }
     if (!o.no_overlay) overlays.push_back(vision::draw_side_overlay(img, views.back()));
   }
   std::optional<vision::TopMeasurement> top;
@@ -254,6 +276,10 @@ void add_measure_command(CLI::App& app) {
                   "Flank fit band as fractions of H (default 0.2,0.8)")
       ->delimiter(',')
       ->expected(2);
+  cmd->add_flag("--trust-photo-pose", opts->trust_photo_pose,
+                "Measure a photo whose lines contradict its declared camera through the pose the "
+                "photo implies (the declared camera re-pitched), saying so, where that pose is "
+                "determined; by default such a photo is refused as a camera mismatch");
   cmd->add_flag("--json", opts->json,
                 "Print the whole measurement as JSON on stdout instead of the one line");
   cmd->callback([opts]() { run_measure(*opts); });

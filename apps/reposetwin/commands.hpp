@@ -18,6 +18,7 @@ enum class ExitCode : int {
   kNoPile = 7,         // run, measure-particles: no settled pile to measure (time limit, not
                        // settled, jam, none)
   kNoPhotographs = 8,  // run: the photographs could not be written or measured
+  kRefused = 9,        // measure: a photo failed an admission check (vision/admission.hpp)
 };
 
 /// Exit code set by the subcommand that ran (0 = success).

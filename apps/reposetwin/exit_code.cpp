@@ -19,6 +19,9 @@ constexpr std::pair<ExitCode, const char*> kMeanings[] = {
     {ExitCode::kNoPile,
      "run: no angle: no settled pile to measure (time limit, not settled, jammed, no pile)"},
     {ExitCode::kNoPhotographs, "run: no angle: the photographs could not be written or measured"},
+    {ExitCode::kRefused,
+     "measure: a photo failed an admission check; the message (and --json's \"refused\") names "
+     "the check and the value it measured"},
 };
 }  // namespace
 

@@ -78,17 +78,21 @@ LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
     if (this_scale.camera) cameras.push_back(*this_scale.camera);
     try {
       views.push_back(vision::measure_side(image, this_scale, {}, p));
-      // A measure vision says may be biased is no measure: refused like a contradicted pose,
-      // with vision's numbers, before anything is simulated.
-      if (const auto w = vision::first_biasing_warning(views.back()))
+      // A measure vision says may be biased is no measure: refused like a contradicted pose.
+      if (const auto w = vision::first_biasing_warning(views.back())) {
+        views.pop_back();
         throw vision::PoseContradiction(p + ": not measured through the declared camera (" +
                                         vision::to_string(w->kind) + "): " + w->text);
+      }
       if (draw_overlays) overlays.push_back(vision::draw_side_overlay(image, views.back()));
-    } catch (const vision::PoseContradiction& e) {
-      // The declared camera is wrong for this photo: the test is refused, not measured on the
-      // other photos, which the same wrong declaration most likely describes too.
-      throw InputError(fields.photo + ": " + e.what() +
-                       " (declare the camera as it stood, or give a level photo)");
+    } catch (const vision::Refusal& e) {
+      // A photo that fails an admission check (vision/admission.hpp) gives no number; the test
+      // goes on with its other photos, and the record says which check refused which photo.
+      if (photos.size() == 1)
+        throw InputError(fields.photo + ": " + e.what() + " (refused by the " +
+                         vision::to_string(e.check()) + " check)");
+      unmeasured.push_back({{"photo", p}, {"check", vision::to_string(e.check())},
+                            {"error", e.what()}});
     } catch (const std::exception& e) {
       // A photo without any scale source is an error at once; with several photos of one test,
       // one that cannot be measured is recorded and the others still count.
@@ -98,13 +102,19 @@ LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
                          (no_scale ? " (give the photo's scale: a " + fields.camera_name +
                                          " sidecar JSON or " + fields.mm_per_px_name + ")"
                                    : std::string()));
-      unmeasured.push_back({{"photo", p}, {"error", e.what()}});
+      unmeasured.push_back({{"photo", p}, {"check", nullptr}, {"error", e.what()}});
     }
   }
-  if (views.empty())
+  if (views.empty()) {
+    std::string why;
+    for (const json& u : unmeasured)
+      why += (why.empty() ? "" : "; ") + u["photo"].get<std::string>() + ": " +
+             (u["check"].is_string() ? "refused by the " + u["check"].get<std::string>() + " check"
+                                     : u["error"].get<std::string>());
     throw InputError(fields.photo + ": none of the " + std::to_string(photos.size()) +
-                     " photos could be measured (" + unmeasured[0]["error"].get<std::string>() +
-                     ")");
+                     " photos could be measured (" + why + "; first: " +
+                     unmeasured[0]["error"].get<std::string>() + ")");
+  }
   LabPhotoMeasurement m;
   m.summary = vision::combine_sides(views);
   m.record = vision::to_json(m.summary);
