@@ -241,7 +241,7 @@ std::optional<Figure> draw(const ResidualPlot& p, const fs::path& dir) {
   }
   write_file_atomic(data.string(), d.str());
   const std::string script = plot_script(p, data, png);
-  if (!run_gnuplot(dir / ("residual_" + safe + ".gp"), script, png)) return std::nullopt;
+  run_gnuplot(dir / ("residual_" + safe + ".gp"), script, png);
   std::string caption = "Residual against " + p.condition;
   if (!p.categories.empty()) caption += " (a category each)";
   if (p.series.size() > 1)
