@@ -274,8 +274,9 @@ void OutputPlan::check() const {
     if (exists && !force_ && !made_by_us(o.path.string()))
       throw OutputRefused(OutputRefusal::kNotMade,
                           name +
-                              ": a file reposetwin did not make is already there; pass "
-                              "--force to replace it, or give another path");
+                              ": a file is already there that reposetwin did not write as a "
+                              "replaceable output (yours, or a run's result); pass --force to "
+                              "replace it, or give another path");
   }
 }
 

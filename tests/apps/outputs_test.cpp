@@ -58,7 +58,7 @@ TEST(Outputs, AUsersFileNamedLikeAnOverlayIsKeptWithoutForce) {
   write_text(d / "side.png", "x");
   write_text(d / "side.measured.png", "my own annotated photo");
   const CliResult r = run_cli_argv({"measure", "side.png", "--mm-per-px", "0.1"}, d);
-  expect_refused(r, {"side.measured.png", "did not make", "--force"});
+  expect_refused(r, {"side.measured.png", "already there", "--force"});
   EXPECT_EQ(read_text(d / "side.measured.png"), "my own annotated photo");
   fs::remove_all(d);
 }
@@ -98,7 +98,7 @@ TEST(Outputs, LoopIntoAUsersFolderKeepsTheirIndexHtml) {
   write_text(d / "index.html", "<p>my page</p>");
   write_text(d / "data.csv", "x");
   const CliResult r = run_cli_argv({"loop", "data.csv", "-o", "."}, d);
-  expect_refused(r, {"index.html", "did not make", "--force"});
+  expect_refused(r, {"index.html", "already there", "--force"});
   EXPECT_EQ(read_text(d / "index.html"), "<p>my page</p>");
   fs::remove_all(d);
 }
