@@ -103,6 +103,20 @@ TEST(Outputs, LoopIntoAUsersFolderKeepsTheirIndexHtml) {
   fs::remove_all(d);
 }
 
+TEST(Outputs, ExportIntoAUsersFolderKeepsTheirReadme) {
+  const fs::path d = fresh_dir("export_dot");
+  write_text(d / "README.md", "# my project");
+  const std::string scene = (kSource / "data" / "scenes" / "quick.toml").string();
+  const CliResult r = run_cli_argv({"export", scene, "--out", "."}, d);
+  expect_refused(r, {"README.md", "already there", "--force"});
+  EXPECT_EQ(read_text(d / "README.md"), "# my project");
+  EXPECT_FALSE(fs::exists(d / "in.pile"));
+  // Into a folder of its own, then again with --force: the deck replaces only its own files.
+  ASSERT_EQ(run_cli_argv({"export", scene, "--out", "deck"}, d).code, 0);
+  EXPECT_EQ(run_cli_argv({"export", scene, "--out", "deck", "--force"}, d).code, 0);
+  fs::remove_all(d);
+}
+
 TEST(Outputs, AFifoOrDevZeroAsADumpIsRefusedNotWaitedOn) {
   const fs::path d = fresh_dir("dump_fifo");
   ASSERT_EQ(::mkfifo((d / "dump").c_str(), 0600), 0);
