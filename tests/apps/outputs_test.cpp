@@ -128,6 +128,18 @@ TEST(Outputs, AFifoOrDevZeroAsADumpIsRefusedNotWaitedOn) {
   fs::remove_all(d);
 }
 
+TEST(Outputs, AFifoAsTheReportsLabPhotoIsRefusedNotWaitedOn) {
+  const fs::path d = fresh_dir("lab_photo_fifo");
+  const fs::path from = kSource / "results" / "table1_s1_calibration";
+  fs::create_directories(d / "cal");
+  for (const char* f : {"calibration.json", "predictions.json"})
+    fs::copy_file(from / f, d / "cal" / f);
+  ASSERT_EQ(::mkfifo((d / "lab.png").c_str(), 0600), 0);
+  const CliResult r = run_cli_argv({"report", "cal", "--lab-photo", "lab.png"}, d, 20);
+  expect_refused(r, {"--lab-photo lab.png", "not a regular file"});
+  fs::remove_all(d);
+}
+
 TEST(Outputs, AFifoAsTheSieveSheetIsRefusedNotWaitedOn) {
   const fs::path d = fresh_dir("psd_fifo");
   ASSERT_EQ(::mkfifo((d / "sieve.toml").c_str(), 0600), 0);
