@@ -131,7 +131,8 @@ void run_measure(const MeasureOptions& o) {
   const auto side_overlay = [&](std::size_t i) {
     return (i == 0 && !o.overlay.empty()) ? o.overlay : overlay_next_to(sides[i]);
   };
-  const std::string top_overlay_path = o.top_overlay.empty() ? overlay_next_to(o.top) : o.top_overlay;
+  const std::string top_overlay_path =
+      o.top_overlay.empty() ? overlay_next_to(o.top) : o.top_overlay;
   experiments::OutputPlan plan(o.force);
   for (const std::string& p : sides) plan.add_input(p);
   if (!o.top.empty()) plan.add_input(o.top);
@@ -145,9 +146,8 @@ void run_measure(const MeasureOptions& o) {
                                            ? "--overlay"
                                            : "the overlay of " + sides[i] + ":");
     if (!o.top.empty())
-      plan.add_output(top_overlay_path, o.top_overlay.empty()
-                                            ? "the overlay of " + o.top + ":"
-                                            : "--top-overlay");
+      plan.add_output(top_overlay_path,
+                      o.top_overlay.empty() ? "the overlay of " + o.top + ":" : "--top-overlay");
   }
   plan.check();
 
