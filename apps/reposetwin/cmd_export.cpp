@@ -4,6 +4,8 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -64,15 +66,26 @@ void add_export_command(CLI::App& app) {
     }
     const fs::path out(a->out);
     if (fs::exists(out / "in.pile") && !a->force)
-      throw experiments::InputError(a->out + ": holds a deck already (in.pile); --force replaces it");
+      throw experiments::InputError(a->out +
+                                    ": holds a deck already (in.pile); --force replaces it");
+    // --out may be a folder of the user's (`--out .` beside their own README.md): every file of
+    // the deck is checked against the inputs and the folder before one is written.
+    const std::vector<std::pair<std::string, const std::string*>> files = {
+        {"in.pile", &deck.input},
+        {"container.stl", &deck.funnel_stl},
+        {"README.md", &deck.notes},
+        {"initial.data", deck.initial_data.empty() ? nullptr : &deck.initial_data}};
+    experiments::OutputPlan plan(a->force);
+    plan.add_input(a->scene);
+    if (!a->initial.empty()) plan.add_input(a->initial);
+    for (const auto& [name, text] : files)
+      if (text) plan.add_output((out / name).string(), "--out");
+    plan.check();
     std::error_code ec;
     fs::create_directories(out, ec);
     if (ec) throw experiments::InputError(a->out + ": cannot create the folder: " + ec.message());
-    experiments::write_file_atomic((out / "in.pile").string(), deck.input);
-    experiments::write_file_atomic((out / "container.stl").string(), deck.funnel_stl);
-    experiments::write_file_atomic((out / "README.md").string(), deck.notes);
-    if (!deck.initial_data.empty())
-      experiments::write_file_atomic((out / "initial.data").string(), deck.initial_data);
+    for (const auto& [name, text] : files)
+      if (text) plan.write((out / name).string(), *text);
     std::cout << "LIGGGHTS deck of " << scene.name << " in " << a->out
               << ": run `liggghts -in in.pile` there (mpirun -np N for more cores)\n";
   });

@@ -193,6 +193,13 @@ void add_loop_command(CLI::App& app) {
     s.image.use_lab_cameras = !args->own_cameras;
     s.page = experiments::write_loop_html;
     experiments::check_output_folder(args->out);
+    // The page goes where the user pointed --out (`-o .` is a folder of theirs): a page there
+    // that reposetwin did not make stays unless --force.
+    experiments::OutputPlan plan(s.force);
+    plan.add_input(args->data);
+    plan.add_output((fs::path(args->out) / "index.html").string(), "--out");
+    plan.add_output((fs::path(args->out) / "loop.json").string(), "--out");
+    plan.check();
     const experiments::LabData data = experiments::read_lab_csv(args->data);
     const nlohmann::json loop = experiments::run_loop(data, args->out, s);
     std::cout << loop["summary"].dump(2) << "\n";
@@ -206,6 +213,7 @@ void add_loop_command(CLI::App& app) {
     std::string cache;
     std::string truth;
     int workers = 2;
+    bool force = false;
   };
   auto sargs = std::make_shared<SynthArgs>();
   auto* syn = app.add_subcommand(
@@ -221,7 +229,13 @@ void add_loop_command(CLI::App& app) {
   syn->add_option("--workers", sargs->workers, "Concurrent simulations")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
+  syn->add_flag("--force", sargs->force,
+                "Replace an existing --truth file that reposetwin did not make");
   syn->callback([sargs]() {
+    experiments::OutputPlan plan(sargs->force);
+    plan.add_input(sargs->design);
+    if (!sargs->truth.empty()) plan.add_output(sargs->truth, "--truth");
+    plan.check();
     const experiments::SynthDesign d = experiments::read_synth_design(sargs->design);
     // The loop reads the dataset's folder; the truth must not be where it could be read.
     if (!sargs->truth.empty()) {
@@ -239,7 +253,7 @@ void add_loop_command(CLI::App& app) {
     if (!sargs->truth.empty()) {
       nlohmann::json truth = experiments::synth_truth_json(d, sargs->design);
       truth["code_version"] = experiments::code_version();
-      experiments::write_json_atomic(sargs->truth, truth);
+      plan.write(sargs->truth, truth.dump(2) + "\n");
     }
     set_exit_code(ExitCode::kOk);
   });

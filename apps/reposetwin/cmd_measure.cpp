@@ -37,6 +37,7 @@ struct MeasureOptions {
   std::string overlay;
   std::string top_overlay;
   bool no_overlay = false;
+  bool force = false;
   std::vector<int> roi;
   std::vector<double> flank_band;
   bool json = false;
@@ -125,9 +126,34 @@ void run_measure(const MeasureOptions& o) {
     }
   }
 
-  // Measure everything first: nothing is printed or written unless every image succeeds.
   std::vector<std::string> sides{o.side};
   sides.insert(sides.end(), o.more_sides.begin(), o.more_sides.end());
+  // The overlays go beside the user's photos: checked against every input and each other before
+  // anything is measured (experiments/io/files.hpp).
+  const auto side_overlay = [&](std::size_t i) {
+    return (i == 0 && !o.overlay.empty()) ? o.overlay : overlay_next_to(sides[i]);
+  };
+  const std::string top_overlay_path =
+      o.top_overlay.empty() ? overlay_next_to(o.top) : o.top_overlay;
+  experiments::OutputPlan plan(o.force);
+  for (const std::string& p : sides) plan.add_input(p);
+  if (!o.top.empty()) plan.add_input(o.top);
+  for (const std::string& p : o.cameras) plan.add_input(p);
+  if (!o.top_camera.empty()) plan.add_input(o.top_camera);
+  for (const std::string& p : sides) plan.add_input(sidecar_next_to(p));
+  if (!o.top.empty()) plan.add_input(sidecar_next_to(o.top));
+  if (!o.no_overlay) {
+    for (std::size_t i = 0; i < sides.size(); ++i)
+      plan.add_output(side_overlay(i), i == 0 && !o.overlay.empty()
+                                           ? "--overlay"
+                                           : "the overlay of " + sides[i] + ":");
+    if (!o.top.empty())
+      plan.add_output(top_overlay_path,
+                      o.top_overlay.empty() ? "the overlay of " + o.top + ":" : "--top-overlay");
+  }
+  plan.check();
+
+  // Measure everything first: nothing is printed or written unless every image succeeds.
   std::vector<vision::SideMeasurement> views;
   std::vector<cv::Mat> overlays;
   for (size_t i = 0; i < sides.size(); ++i) {
@@ -173,15 +199,13 @@ void run_measure(const MeasureOptions& o) {
   std::vector<std::string> overlay_paths;
   if (!o.no_overlay) {
     for (size_t i = 0; i < sides.size(); ++i) {
-      const std::string path =
-          (i == 0 && !o.overlay.empty()) ? o.overlay : overlay_next_to(sides[i]);
-      experiments::write_image_atomic(path, overlays[i]);
+      const std::string path = side_overlay(i);
+      plan.write(path, experiments::encode_image(path, overlays[i]));
       overlay_paths.push_back(path);
     }
     if (top) {
-      const std::string path = o.top_overlay.empty() ? overlay_next_to(o.top) : o.top_overlay;
-      experiments::write_image_atomic(path, top_overlay);
-      overlay_paths.push_back(path);
+      plan.write(top_overlay_path, experiments::encode_image(top_overlay_path, top_overlay));
+      overlay_paths.push_back(top_overlay_path);
     }
   }
 
@@ -269,6 +293,9 @@ void add_measure_command(CLI::App& app) {
   cmd->add_option("--top-overlay", opts->top_overlay,
                   "Overlay PNG for the top image (default NAME.measured.png)");
   cmd->add_flag("--no-overlay", opts->no_overlay, "Do not write overlay images");
+  cmd->add_flag("--force", opts->force,
+                "Replace an existing file at an overlay's path that reposetwin did not make "
+                "(never an input image or sidecar)");
   cmd->add_option("--roi", opts->roi, "Region of interest in the side images: x,y,width,height")
       ->delimiter(',')
       ->expected(4);

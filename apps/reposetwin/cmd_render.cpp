@@ -8,6 +8,7 @@
 #include "apps/reposetwin/commands.hpp"
 #include "apps/reposetwin/validators.hpp"
 #include "camera/camera.hpp"
+#include "experiments/io/files.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/photos/pile_images.hpp"
 
@@ -51,6 +52,8 @@ void add_render_command(CLI::App& app) {
     // Photographs are results: an earlier set (run's own, or an earlier render) stays unless
     // asked, checked before anything is rendered.
     namespace fs = std::filesystem;
+    // images -> elsewhere would aim the photographs and --force at another folder.
+    experiments::refuse_escaping_links(args->run_dir);
     std::vector<fs::path> outputs = {fs::path(args->run_dir) / "images" / "measurement.json"};
     for (const std::string& f : args->frames)
       outputs.push_back(fs::path(args->run_dir) / "images" / fs::path(f).stem() /

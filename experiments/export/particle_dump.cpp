@@ -6,12 +6,21 @@
 #include <fstream>
 #include <sstream>
 
+#include "experiments/io/files.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/vtk_output.hpp"
 
 namespace reposetwin::experiments {
 
+namespace {
+// Dumps are streamed, not held: the bound is on time, a LIGGGHTS run of many snapshots of
+// millions of grains.
+constexpr std::uintmax_t kMaxDumpBytes = std::uintmax_t{64} << 30;
+}  // namespace
+
 ParticleDump read_particle_dump(const std::string& path) {
+  // A FIFO would block the open and /dev/zero never ends: refused, by name and reason, first.
+  check_input_file(path, kMaxDumpBytes);
   std::ifstream f(path);
   if (!f) throw InputError(path + ": cannot open the dump file");
   ParticleDump last;

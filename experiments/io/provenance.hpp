@@ -1,14 +1,15 @@
-// Provenance and safe result files.
+// Provenance and folder locks.
 //
 // Every result file says how it was made (scene, seed, time step, softened stiffness, code
-// version), and results are never lost: files are written to a temporary name in the same folder
-// and renamed into place, so a reader sees either the old file or the whole new one.
+// version). Results are read and written through the file layer (files.hpp, included here for
+// its callers): atomic writes, inputs that are regular files of a bounded size.
 #pragma once
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "experiments/io/files.hpp"
 #include "experiments/io/input_error.hpp"
 
 namespace reposetwin::experiments {
@@ -26,15 +27,6 @@ std::string imaging_version();
 
 /// UTC time now, ISO 8601 ("2026-11-22T01:02:03Z").
 std::string utc_now();
-
-/// Writes `text` to `path` atomically: a temporary file in the same folder, flushed to the disk
-/// (fsync) before the rename that publishes it, so a reader, or the machine after a crash, sees
-/// the old file or the whole new one. The temporary is removed on failure (a full disk). Throws
-/// std::runtime_error naming the path. Creates missing parent folders.
-void write_file_atomic(const std::string& path, const std::string& text);
-
-/// Writes JSON (indented) atomically.
-void write_json_atomic(const std::string& path, const nlohmann::json& j);
 
 /// Another process holds a folder's lock (a bad input for this one, which a caller that can
 /// wait for the other, such as a shared cache, catches by type).
@@ -57,12 +49,5 @@ class FolderLock {
  private:
   int fd_ = -1;
 };
-
-/// The largest file read_file() reads unless told otherwise [bytes].
-inline constexpr std::uintmax_t kMaxReadBytes = std::uintmax_t{1} << 30;
-
-/// Reads a whole regular file of at most `max_bytes`; throws std::runtime_error naming the path
-/// if it cannot, or if it is a directory, a pipe or a device, or larger.
-std::string read_file(const std::string& path, std::uintmax_t max_bytes = kMaxReadBytes);
 
 }  // namespace reposetwin::experiments

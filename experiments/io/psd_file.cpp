@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "experiments/io/csv.hpp"
+#include "experiments/io/files.hpp"
 #include "experiments/io/toml_tables.hpp"
 
 namespace reposetwin::experiments {
@@ -266,11 +267,16 @@ PsdFile parse_psd_table(const toml::table& t, const std::string& source, const s
   return f;
 }
 
+namespace {
+// A sieve sheet is a few dozen lines; a file far larger is not one.
+constexpr std::uintmax_t kMaxSieveSheetBytes = std::uintmax_t{16} << 20;
+}  // namespace
+
 toml::table psd_table_of_file(const std::string& path) {
   if (!is_csv_sheet(path)) {
     const PsdFile checked = read_psd_file(path);  // the same errors as the run's reader
     (void)checked;
-    return *toml::parse_file(path)["psd"].as_table();
+    return *toml::parse(read_file(path, kMaxSieveSheetBytes), path)["psd"].as_table();
   }
   const PsdFile f = read_psd_csv(path);
   toml::array sieve, passing;
@@ -285,8 +291,11 @@ toml::table psd_table_of_file(const std::string& path) {
 PsdFile read_psd_file(const std::string& path) {
   if (is_csv_sheet(path)) return read_psd_csv(path);
   toml::table root;
+  // Read through the file layer: a FIFO or a device named as a sieve sheet is refused before a
+  // byte is read, not waited on.
+  const std::string text = read_file(path, kMaxSieveSheetBytes);
   try {
-    root = toml::parse_file(path);
+    root = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
     const auto& at = e.source().begin;
     std::ostringstream m;

@@ -266,8 +266,15 @@ std::size_t write_contacts_vtp(const std::string& path, const sim::State& st) {
   return static_cast<std::size_t>(lines->GetNumberOfCells());
 }
 
+namespace {
+// A snapshot of 100 million grains is a few GB; a larger file is not one of ours.
+constexpr std::uintmax_t kMaxSnapshotBytes = std::uintmax_t{16} << 30;
+}  // namespace
+
 SnapshotParticles read_vtp(const std::string& path) {
   if (!std::filesystem::exists(path)) throw std::runtime_error(path + ": snapshot does not exist");
+  // VTK opens the file itself: a FIFO or a device is refused before it does.
+  check_input_file(path, kMaxSnapshotBytes);
   vtkNew<vtkXMLPolyDataReader> reader;
   reader->SetFileName(path.c_str());
   reader->Update();

@@ -32,7 +32,7 @@ json write(const LoopContext& ctx, const LoopRecord& rec) {
   const json loop = to_json(rec);
   fs::create_directories(ctx.out);
   const std::string path = (fs::path(ctx.out) / "loop.json").string();
-  write_json_atomic(path, loop);
+  write_made_file(path, loop.dump(2) + "\n");
   if (!ctx.s().html) return loop;
   try {
     ctx.s().page(loop, ctx.out);

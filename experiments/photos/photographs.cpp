@@ -292,7 +292,7 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& s,
   return photos;
 }
 
-void write_image_atomic(const std::string& path, const cv::Mat& image) {
+std::string encode_image(const std::string& path, const cv::Mat& image) {
   std::vector<unsigned char> bytes;
   bool ok = false;
   try {
@@ -302,7 +302,11 @@ void write_image_atomic(const std::string& path, const cv::Mat& image) {
     throw std::runtime_error(path + ": cannot encode the image (" + e.what() + ")");
   }
   if (!ok) throw std::runtime_error(path + ": cannot encode the image");
-  write_file_atomic(path, std::string(bytes.begin(), bytes.end()));
+  return std::string(bytes.begin(), bytes.end());
+}
+
+void write_image_atomic(const std::string& path, const cv::Mat& image) {
+  write_file_atomic(path, encode_image(path, image));
 }
 
 }  // namespace reposetwin::experiments

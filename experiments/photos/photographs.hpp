@@ -119,8 +119,12 @@ PilePhotos photograph_pile(const PileSpheres& pile, const PhotoSettings& setting
                            const std::string& out_dir, const nlohmann::json& provenance = nullptr,
                            std::optional<Eigen::Vector2d> centre = std::nullopt);
 
+/// The bytes of `image` encoded as the extension of `path` says (PNG when it has none). Throws
+/// std::runtime_error naming the path when OpenCV cannot encode it.
+std::string encode_image(const std::string& path, const cv::Mat& image);
+
 /// Writes an image (PNG, or the format of the path's extension) encoded in memory and published
-/// atomically (io/provenance.hpp): a full disk or an unwritable folder is an error naming the
+/// atomically (io/files.hpp): a full disk or an unwritable folder is an error naming the
 /// path, and never leaves half an image. Every image the experiments write goes through it.
 void write_image_atomic(const std::string& path, const cv::Mat& image);
 

@@ -99,6 +99,8 @@ namespace {
 json photograph_run(const PileRun& run, const PileSpheres& spheres, const std::string& run_dir,
                     const std::string& snapshot, const fs::path& out,
                     const ImageSettings& settings) {
+  // images -> elsewhere would aim the photographs (and --force's replacing) at another folder.
+  refuse_escaping_links(run_dir);
   json prov = to_json(run.provenance);
   prov["run_dir"] = run_dir;
   prov["snapshot"] = snapshot;

@@ -125,6 +125,9 @@ class PileRunner {
   // One process per run folder; a finished result is never overwritten without force.
   void prepare_folder() {
     lock_.emplace(out_.string(), ".run.lock", "another pile run");
+    // A link inside that leads outside would aim the run's writes and --force's removals at
+    // another folder.
+    refuse_escaping_links(out_.string());
     const fs::path result = path("result.json");
     if (fs::exists(result) && !opt_.force && !opt_.resume)
       throw InputError(result.string() +

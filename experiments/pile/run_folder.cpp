@@ -7,6 +7,7 @@
 #include <regex>
 #include <system_error>
 
+#include "experiments/io/files.hpp"
 #include "experiments/io/input_error.hpp"
 
 namespace reposetwin::experiments {
@@ -20,7 +21,8 @@ const std::regex kTemporary(R"((.+)\.tmp(\.[0-9]+)?)");
 // The run's own files, by folder. Photographs: side views at their azimuths (a second view at
 // one azimuth gets "_2"), the top view, each with its sidecar and its measured overlay.
 const std::regex kTopFile(R"(result\.json|final\.vtp|checkpoint\.bin|controller\.json|series\.pvd|)"
-                          R"(scene\.resolved\.toml|summary\.html|\.run\.lock)");
+                          R"(scene\.resolved\.toml|summary\.html|\.run\.lock|)"
+                          R"(\.reposetwin-made\.json)");
 // The files only a pile run makes: a folder with none of them is not a run's, even if it holds a
 // summary.html or an images/ folder of a person's own.
 const std::regex kRunMarker(
@@ -28,7 +30,8 @@ const std::regex kRunMarker(
 const std::regex kFrameFile(
     R"((frame|container|contacts)_[0-9]{5}\.vtp|plate\.vtp|filled\.vtp)");
 const std::regex kImageFile(
-    R"(measurement\.json|(side_az[0-9]{3}(_[0-9]+)?|top)(\.measured)?\.(png|json))");
+    R"(measurement\.json|\.reposetwin-made\.json|)"
+    R"((side_az[0-9]{3}(_[0-9]+)?|top)(\.measured)?\.(png|json))");
 // `reposetwin render --frame frames/frame_00004.vtp` photographs into images/frame_00004/.
 const std::regex kImageFolder(R"(frame_[0-9]{5})");
 
@@ -131,6 +134,7 @@ void check_output_folder(const std::string& out) {
 
 void check_run_folder(const std::string& out, bool resume, bool force) {
   check_output_folder(out);
+  refuse_escaping_links(out);
   const fs::path dir(out);
   std::vector<std::string> foreign;
   switch (run_folder_state(dir, &foreign)) {

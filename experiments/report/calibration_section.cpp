@@ -155,13 +155,14 @@ bool calibration_plot(const json& cal, const json& predictions, const fs::path& 
              fixed(cal["mu_r"].get<double>(), 3) + " (95% band)' at " + mu +
              ", graph 0.05 offset 0.5,0 tc rgb '#d62728'\n";
   }
-  return run_gnuplot(out / (stem + ".gp"),
-                     png_terminal(out / (stem + ".png"), 760, 560, false) +
-                         "set xlabel 'mu_r (rolling friction)'\nset ylabel 'angle of repose "
-                         "[deg]'\nset key below maxrows 3\nset grid\nset offsets graph 0.03, graph "
-                         "0.03, 1, 1\n" +
-                         marks + plot + "\n",
-                     out / (stem + ".png"));
+  run_gnuplot(out / (stem + ".gp"),
+              png_terminal(out / (stem + ".png"), 760, 560, false) +
+                  "set xlabel 'mu_r (rolling friction)'\nset ylabel 'angle of repose "
+                  "[deg]'\nset key below maxrows 3\nset grid\nset offsets graph 0.03, graph "
+                  "0.03, 1, 1\n" +
+                  marks + plot + "\n",
+              out / (stem + ".png"));
+  return true;
 }
 
 std::string calibration_section(const json& cal, const json& predictions, const fs::path& out,

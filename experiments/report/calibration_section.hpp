@@ -17,7 +17,8 @@ namespace reposetwin::experiments::report {
 
 /// The calibration plot of calibration.json `cal` (runs, the monotone fit, the target, the
 /// calibrated mu_r in its interval band, the check runs of `predictions` at it): writes
-/// out/STEM.png with its script STEM.gp and data STEM_*.dat. Returns whether gnuplot made it.
+/// out/STEM.png with its script STEM.gp and data STEM_*.dat. Returns false when there is
+/// nothing to plot; throws when gnuplot fails (gnuplot.hpp).
 bool calibration_plot(const nlohmann::json& cal, const nlohmann::json& predictions,
                       const std::filesystem::path& out, const std::string& stem);
 

@@ -202,13 +202,28 @@ std::string plot_script(const ResidualPlot& p, const fs::path& data, const fs::p
       script += (k ? ", " : "") + gnuplot_quoted(p.categories[k]) + " " + std::to_string(k);
     script += ")\nset offsets 0, 0, graph 0.05, graph 0.05\n";
   }
+  // Every point at one value of a numeric condition: gnuplot cannot autoscale an x range of
+  // zero width ("x range is invalid"), so the range is set around the value.
+  if (p.categories.empty()) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (const auto& series : p.points)
+      for (const ResidualPoint& q : series) lo = std::min(lo, q.x), hi = std::max(hi, q.x);
+    if (lo == hi) {
+      const double w = lo != 0.0 ? 0.1 * std::abs(lo) : 1.0;
+      std::ostringstream r;
+      r.precision(12);
+      r << "set xrange [" << lo - w << ":" << hi + w << "]\n";
+      script += r.str();
+    }
+  }
   // Before and after side by side on a category; one colour per series when there are several.
   const std::string shift = p.categories.empty() ? "" : "0.08";
   std::string plot;
+  int block = 0;  // the series' block in the data file: empty series have none (draw)
   for (std::size_t s = 0; s < p.series.size(); ++s) {
     if (p.points[s].empty()) continue;
     const std::string name = p.series[s].empty() ? "" : ", " + p.series[s];
-    const std::string index = " index " + std::to_string(s);
+    const std::string index = " index " + std::to_string(block++);
     const bool one = p.series.size() == 1;
     const std::string c_before = one ? "#c0392b" : kColours[s % 6];
     const std::string c_after = one ? "#2471a3" : kColours[s % 6];
@@ -222,8 +237,11 @@ std::string plot_script(const ResidualPlot& p, const fs::path& data, const fs::p
   return script + plot + "\n";
 }
 
-// The plot's data (one block per series) and gnuplot script; its figure when gnuplot drew it.
+// The plot's data (one block per series), gnuplot script and figure; none without a point.
 std::optional<Figure> draw(const ResidualPlot& p, const fs::path& dir) {
+  bool any = false;
+  for (const auto& series : p.points) any = any || !series.empty();
+  if (!any) return std::nullopt;  // nothing to draw: no figure, and no gnuplot run to fail
   std::string safe = p.condition;
   for (char& ch : safe)
     if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
@@ -232,8 +250,13 @@ std::optional<Figure> draw(const ResidualPlot& p, const fs::path& dir) {
   std::ostringstream d;
   d << "# " << p.condition << (p.categories.empty() ? "" : " (category index)")
     << " residual_before_deg residual_after_deg sigma_deg role(1=calibrate)\n";
+  // A block per series with points only: gnuplot does not count a block without data in its
+  // `index`, so an empty series would shift every later one (plot_script numbers the same way).
+  bool first = true;
   for (std::size_t s = 0; s < p.series.size(); ++s) {
-    if (s > 0) d << "\n\n";
+    if (p.points[s].empty()) continue;
+    if (!first) d << "\n\n";
+    first = false;
     d << "# series " << s << ": " << (p.series[s].empty() ? "all tests" : p.series[s]) << "\n";
     for (const ResidualPoint& q : p.points[s])
       d << q.x << " " << q.before << " " << q.after << " " << q.sigma << " "
@@ -241,7 +264,7 @@ std::optional<Figure> draw(const ResidualPlot& p, const fs::path& dir) {
   }
   write_file_atomic(data.string(), d.str());
   const std::string script = plot_script(p, data, png);
-  if (!run_gnuplot(dir / ("residual_" + safe + ".gp"), script, png)) return std::nullopt;
+  run_gnuplot(dir / ("residual_" + safe + ".gp"), script, png);
   std::string caption = "Residual against " + p.condition;
   if (!p.categories.empty()) caption += " (a category each)";
   if (p.series.size() > 1)

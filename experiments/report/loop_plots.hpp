@@ -23,8 +23,8 @@ namespace reposetwin::experiments::report {
 /// (numbers to three significant digits); the PSD's set: keys are left to the PSD's own plot.
 std::map<std::string, std::string> constant_conditions(const std::vector<LabTest>& tests);
 
-/// Writes the residual plots of `loop` into `dir` (each one's data, gnuplot script and, where
-/// gnuplot draws it, PNG), after removing the folder's earlier residual_* files; the figures
+/// Writes the residual plots of `loop` into `dir` (each one's data, gnuplot script and PNG; a
+/// failing gnuplot throws, gnuplot.hpp), after removing the folder's earlier residual_* files; the figures
 /// drawn, named relative to the page ("plots/residual_<condition>.png").
 std::vector<Figure> residual_figures(const LoopRecord& loop, const std::filesystem::path& dir);
 

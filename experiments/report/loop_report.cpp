@@ -408,7 +408,8 @@ void write_loop_page(const LoopRecord& loop, const std::string& out_dir) {
       "Closing the loop",
       {intro_section(loop), error_section(loop), effects_section(loop), iterations_section(loop),
        notes_section(loop), residuals_section(loop, plot_dir), loop_photos_section(loop, out_dir)}};
-  write_file_atomic((fs::path(out_dir) / "index.html").string(), render_page(page));
+  // Recorded as made by reposetwin (io/files.hpp): `loop -o .` then replaces only its own page.
+  write_made_file((fs::path(out_dir) / "index.html").string(), render_page(page));
 }
 
 void write_loop_html(const json& loop, const std::string& out_dir) {

@@ -482,14 +482,14 @@ std::string comparison_plot(const json& cmp, const fs::path& out) {
   plot += ", x with lines dt 2 lc rgb 'gray' title 'simulated = measured'\n";
   const std::string range = "[" + fixed(lo - 1.0, 1) + ":" + fixed(hi + 1.0, 1) + "]";
   const fs::path png = out / "comparison.png";
-  const bool ok = run_gnuplot(out / "comparison.gp",
-                              png_terminal(png, 650, 720) +
-                                  "set xlabel 'measured angle, Table 1 [deg]'\n"
-                                  "set ylabel 'simulated angle [deg]'\nset key outside below\n"
-                                  "set size square\nset xrange " + range + "\nset yrange " +
-                                  range + "\n" + plot,
-                              png);
-  return ok ? "comparison.png" : "";
+  run_gnuplot(out / "comparison.gp",
+              png_terminal(png, 650, 720) +
+                  "set xlabel 'measured angle, Table 1 [deg]'\n"
+                  "set ylabel 'simulated angle [deg]'\nset key outside below\n"
+                  "set size square\nset xrange " + range + "\nset yrange " + range + "\n" +
+                  plot,
+              png);
+  return "comparison.png";
 }
 
 }  // namespace

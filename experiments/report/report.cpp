@@ -28,6 +28,7 @@
 #include "experiments/report/loop_report.hpp"
 #include "experiments/report/paper_comparison.hpp"
 #include "experiments/report/templates.hpp"
+#include "vision/image.hpp"
 #include "vision/measure.hpp"
 
 namespace reposetwin::experiments {
@@ -38,7 +39,7 @@ using namespace report;
 namespace {
 
 // Angles per case: image and particle atan(2H/D) and the image flank angle, mean ± sd.
-bool angles_plot(const FolderResults& f, const fs::path& out) {
+void angles_plot(const FolderResults& f, const fs::path& out) {
   // index image_mean image_sd particle_mean particle_sd label flank sd; a case is labelled by
   // its inputs (mu_r 0.399), not by its folder name.
   std::vector<std::pair<std::string, json>> named;
@@ -54,16 +55,16 @@ bool angles_plot(const FolderResults& f, const fs::path& out) {
     ++k;
   }
   write_file_atomic((out / "angles.dat").string(), data.str());
-  return run_gnuplot(out / "angles.gp",
-                     png_terminal(out / "angles.png", 900, 520, false) +
-                         "set ylabel 'angle of repose [deg]'\nset xtics rotate by 30 right\n"
-                         "set key outside top center horizontal\nset grid ytics\n"
-                         "set offsets 0.5,0.5,2,2\nplot 'angles.dat'"
-                         " using 1:2:3:xtic(6) with yerrorbars pt 7 title 'image atan(2H/D) "
-                         "(vision on renders)', '' using ($1+0.1):4:5 with yerrorbars pt 5 "
-                         "title 'particles atan(2H/D)', '' using ($1+0.2):7:8 with yerrorbars "
-                         "pt 9 title 'image flank angle (vision on renders)'\n",
-                     out / "angles.png");
+  run_gnuplot(out / "angles.gp",
+              png_terminal(out / "angles.png", 900, 520, false) +
+                  "set ylabel 'angle of repose [deg]'\nset xtics rotate by 30 right\n"
+                  "set key outside top center horizontal\nset grid ytics\n"
+                  "set offsets 0.5,0.5,2,2\nplot 'angles.dat'"
+                  " using 1:2:3:xtic(6) with yerrorbars pt 7 title 'image atan(2H/D) "
+                  "(vision on renders)', '' using ($1+0.1):4:5 with yerrorbars pt 5 "
+                  "title 'particles atan(2H/D)', '' using ($1+0.2):7:8 with yerrorbars "
+                  "pt 9 title 'image flank angle (vision on renders)'\n",
+              out / "angles.png");
 }
 
 // A render shown beside the lab photo, with its caption; empty path when there is none.
@@ -156,8 +157,14 @@ struct LabView {
 // The photo given to `report --lab-photo`, measured here (its scale bar or --lab-mm-per-px).
 std::optional<LabView> given_lab_view(const ReportSettings& settings, json& summary) {
   if (settings.lab_photo.empty()) return std::nullopt;
-  const cv::Mat photo = cv::imread(settings.lab_photo, cv::IMREAD_COLOR);
-  if (photo.empty()) throw InputError(settings.lab_photo + ": not an image");
+  // vision's loader reads only a regular image file within its size limits (a FIFO named as the
+  // photo would block cv::imread).
+  cv::Mat photo;
+  try {
+    photo = vision::load_image(settings.lab_photo);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("--lab-photo ") + e.what());
+  }
   vision::ScaleSpec scale;
   if (settings.lab_mm_per_px > 0) scale.mm_per_px = settings.lab_mm_per_px;
   const vision::SideMeasurement m = vision::measure_side(photo, scale, {}, settings.lab_photo);
@@ -526,9 +533,8 @@ json build_report(const std::string& dir, const ReportSettings& settings) {
     summary["predictions"] = *f.predictions;
   }
   if (!f.cases.empty()) {
-    mustache::data plotted;
-    plotted.set("plotted", angles_plot(f, out));
-    sections.push_back(render(templates::kAngles, plotted));
+    angles_plot(f, out);
+    sections.push_back(templates::kAngles);
     sections.push_back(cases_section(f, out));
   } else if (is_calibration_dir(f.dir)) {
     sections.push_back(no_cases_section(f, out));

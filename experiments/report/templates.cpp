@@ -74,10 +74,9 @@ const char* const kComparisonCaption =
     R"(Predictions (shaded) run the other test at the calibrated mu_r; their mu_r interval )"
     R"(effect is the angle range at the interval's ends. Simulations count every run used.)";
 
-// plotted: whether angles.png was made.
-const char* const kAngles = R"({{#plotted}}<h2>Angles per case</h2><img src='angles.png'>
-{{/plotted}}{{^plotted}}<p>(gnuplot not available: no plot)</p>
-{{/plotted}})";
+// The angles plot (angles.png, made before the page: a failing gnuplot stops the report).
+const char* const kAngles = R"(<h2>Angles per case</h2><img src='angles.png'>
+)";
 
 // listed: {links: [{href, label}]} (the folder's own files that list its runs) or false;
 // kept: whether renders follow; renders: figures.

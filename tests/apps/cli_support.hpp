@@ -13,6 +13,9 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
+
+#include "experiments/io/process.hpp"
 
 namespace reposetwin::test_support {
 
@@ -39,6 +42,26 @@ inline CliResult run_cli(const std::string& args) {
   const int status = std::system(cmd.c_str());
   CliResult r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = read_text(log);
+  fs::remove(log);
+  return r;
+}
+
+// Runs reposetwin with `args` as its argument vector (no shell: a path may hold any character)
+// in the folder `cwd`, stdin from /dev/null, killed after `timeout_s` seconds (exit 124) so that
+// a read that hangs fails the test instead of stopping the suite.
+inline CliResult run_cli_argv(const std::vector<std::string>& args, const fs::path& cwd,
+                              int timeout_s = 60) {
+  const fs::path log = fs::temp_directory_path() /
+                       ("reposetwin_cli_argv_test." + std::to_string(getpid()) + ".log");
+  experiments::ProgramCall call;
+  call.argv = {"timeout", "-s", "KILL", std::to_string(timeout_s), REPOSETWIN_BIN};
+  call.argv.insert(call.argv.end(), args.begin(), args.end());
+  call.working_dir = cwd;
+  call.log = log;
+  const experiments::ProgramResult p = experiments::run_program(call);
+  CliResult r;
+  r.code = p.status == experiments::ProgramStatus::kExited ? p.code : -1;
   r.out = read_text(log);
   fs::remove(log);
   return r;

@@ -1,6 +1,7 @@
 // Tests of the sieve-table file reader: good files (ours and the shipped defaults) parse into the
 // values written in them; every kind of bad file gives an error naming the file, field and value.
 #include "experiments/io/psd_file.hpp"
+#include "experiments/io/input_error.hpp"
 #include "experiments/io/toml_tables.hpp"
 
 #include <gtest/gtest.h>
@@ -180,7 +181,7 @@ TEST(PsdFile, SyntaxErrorAndMissingFileNameTheFile) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(path + ":1:"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(read_psd_file("/nonexistent/psd.toml"), std::runtime_error);
+  EXPECT_THROW(read_psd_file("/nonexistent/psd.toml"), InputError);
 }
 
 }  // namespace
