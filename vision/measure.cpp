@@ -238,7 +238,7 @@ void refuse_steep_view(const SideMeasurement& m, const camera::Camera& level,
                       "base's far rim (row " + fixed(far->y(), 0) + "), so it is not the apex; "
                       "photograph it from lower down",
                   elevation, flank - kViewMarginDeg);
-  if (elevation > flank - kViewMarginDeg)
+  if (elevation > 0.0 && elevation > flank - kViewMarginDeg)
     throw Refusal(Check::kViewAngle,
                   where + ": the camera looks down on the pile from " + fixed(elevation, 1) +
                       " deg above its top, steeper than atan(2H/D) as read (" + fixed(flank, 1) +

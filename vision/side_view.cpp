@@ -152,8 +152,8 @@ PileBlob find_pile_blob(const cv::Mat& flat, const PlateLine& plate, const SideS
   // the largest that spans the axis column (a box or a tool at the side is not the pile).
   const std::optional<double> axis_u =
       s.axis_u_px ? std::optional<double>(*s.axis_u_px - roi.x) : std::nullopt;
-  // The largest resting on the plate, unless it is at the image's border and off the axis
-  // while something stands on the axis: then the largest of those.
+  // The largest resting on the plate; with a declared camera, the largest of those that span
+  // the pile's axis (a box or a bar beside the pile is not the pile).
   auto pick = [&](bool on_axis_only) {
     int found = -1, found_area = 0;
     for (int i = 1; i < n_labels; ++i) {
@@ -170,15 +170,7 @@ PileBlob find_pile_blob(const cv::Mat& flat, const PlateLine& plate, const SideS
     }
     return found;
   };
-  int best = pick(false);
-  if (axis_u && best >= 0) {
-    const int x = stats.at<int>(best, cv::CC_STAT_LEFT), w = stats.at<int>(best, cv::CC_STAT_WIDTH);
-    const bool at_border = x == 0 || x + w >= flat.cols || stats.at<int>(best, cv::CC_STAT_TOP) == 0;
-    if (at_border && !(*axis_u >= x - 0.5 && *axis_u <= x + w - 0.5)) {
-      const int on_axis = pick(true);
-      if (on_axis >= 0) best = on_axis;
-    }
-  }
+  const int best = pick(axis_u.has_value());
   if (best < 0)
     throw Refusal(Check::kPilePresent,
                   where + ": no pile found (no dark blob of at least " + str(std::round(min_area)) +
@@ -640,7 +632,15 @@ double width_at(const SideProfile& p, double h) {
 // then its base, and the refusal says so (admission.hpp's kViewAngle).
 constexpr double kSteepCameraDeg = 12.0;
 
+// Below this height a pile is a few grains tall and its outline is the grains' own: a heap two
+// grains high need not narrow between a fifth and four fifths of its height, and its "flanks"
+// are a grain's side (the twin's tiny test scene: 58 px wide at both, flanks 90 deg); neither
+// shape check applies. (With a camera, an object off the pile's axis is no pile whatever its
+// size: find_pile_blob.) [px]
+constexpr double kTaperMinHeightPx = 60.0;
+
 void refuse_no_taper(const SideProfile& p, double camera_elevation_deg, const std::string& where) {
+  if (p.height_px < kTaperMinHeightPx) return;
   const double low = width_at(p, 0.2 * p.height_px), high = width_at(p, 0.8 * p.height_px);
   if (!(low > 0.0 && high >= 0.0)) return;
   if (high > kTaperLimit * low && camera_elevation_deg > kSteepCameraDeg)
@@ -737,6 +737,7 @@ void refuse_foreign_objects(const SideProfile& p, const cv::Mat& blob, const cv:
 }
 
 void refuse_flanks(const SideProfile& p, const AdmissionSettings& a, const std::string& where) {
+  if (p.height_px < kTaperMinHeightPx) return;
   for (const auto& [name, f] : {std::pair{"left", &p.left}, std::pair{"right", &p.right}})
     if (!(f->angle_deg >= a.min_flank_deg && f->angle_deg <= a.max_flank_deg))
       throw Refusal(Check::kFlankLimits,
