@@ -422,40 +422,13 @@ struct PosedReading {
   SideMeasurement m;
   CameraCheck check;
   camera::Camera level_camera;  // the level view's camera the pixels were read through
+  bool edge_on_retry = false;   // refused for a top face that may be the plate's front face
 };
 
-PosedReading read_through(const cv::Mat& image, const camera::Camera& cam, const ScaleSpec& scale,
-                          const SideSettings& settings, const std::string& where) {
-  const LevelView view = level_view(image, cam, where);
-  SideSettings set = settings;
-  if (!view.identity) {
-    set.valid = view.valid;
-    if (!settings.roi.empty()) {  // the region of interest's corners seen level
-      std::vector<cv::Point2f> corners;
-      const cv::Rect& r = settings.roi;
-      const double lcx = camera::principal_u(view.camera), lcy = camera::principal_v(view.camera);
-      const Eigen::Matrix3d to_level = camera::rotation_world_to_camera(view.camera);
-      for (const cv::Point2d q : {cv::Point2d(r.x, r.y), cv::Point2d(r.x + r.width, r.y),
-                                  cv::Point2d(r.x, r.y + r.height),
-                                  cv::Point2d(r.x + r.width, r.y + r.height)}) {
-        const Eigen::Vector3d d = to_level * camera::unproject(cam, {q.x, q.y}).direction;
-        const double f = camera::focal_px(view.camera);
-        corners.emplace_back(static_cast<float>(lcx + f * d.x() / d.z()),
-                             static_cast<float>(lcy + f * d.y() / d.z()));
-      }
-      set.roi = cv::boundingRect(corners) & cv::Rect(0, 0, view.image.cols, view.image.rows);
-    }
-  }
-  const auto foot = camera::project(view.camera, scale.axis_foot);
-  if (!foot || foot->x() < 0.0 || foot->x() > view.image.cols - 1.0)
-    throw Refusal(Check::kCameraConsistent,
-                  where + ": the declared camera does not see the pile's axis foot; it cannot be "
-                          "the camera of this photo");
-  set.axis_u_px = foot->x();
-  set.camera_elevation_deg =
-      std::atan2(camera_height_m(view.camera, scale.axis_foot),
-                 camera_distance_m(view.camera, scale.axis_foot)) * kRadToDeg;
-  const SideImage prepared = prepare_side(view.image, set, where);
+// The reading of a prepared level view (read_through's loop and checks).
+PosedReading read_level_view(const LevelView& view, const camera::Camera& cam,
+                             const ScaleSpec& scale, SideSettings set, const SideImage& prepared,
+                             const std::string& where) {
   PosedReading out;
   double radius = 0.0;
   for (int pass = 0; pass < 4; ++pass) {
@@ -519,9 +492,83 @@ PosedReading read_through(const cv::Mat& image, const camera::Camera& cam, const
         c.dpitch_deg = dp;
         out.check = c;
         out.m.pose = *pose;
+        out.edge_on_retry = out.m.pixels.far_edge.has_value() && !pitch_contradicts(*pose) &&
+                            std::abs(de) <= std::max(kMaxElevationDeg,
+                                                     3.0 * pose->sigma_elevation_deg);
       }
     }
   }
+  return out;
+}
+
+PosedReading read_through(const cv::Mat& image, const camera::Camera& cam, const ScaleSpec& scale,
+                          const SideSettings& settings, const std::string& where) {
+  const LevelView view = level_view(image, cam, where);
+  SideSettings set = settings;
+  if (!view.identity) {
+    set.valid = view.valid;
+    if (!settings.roi.empty()) {  // the region of interest's corners seen level
+      std::vector<cv::Point2f> corners;
+      const cv::Rect& r = settings.roi;
+      const double lcx = camera::principal_u(view.camera), lcy = camera::principal_v(view.camera);
+      const Eigen::Matrix3d to_level = camera::rotation_world_to_camera(view.camera);
+      for (const cv::Point2d q : {cv::Point2d(r.x, r.y), cv::Point2d(r.x + r.width, r.y),
+                                  cv::Point2d(r.x, r.y + r.height),
+                                  cv::Point2d(r.x + r.width, r.y + r.height)}) {
+        const Eigen::Vector3d d = to_level * camera::unproject(cam, {q.x, q.y}).direction;
+        const double f = camera::focal_px(view.camera);
+        corners.emplace_back(static_cast<float>(lcx + f * d.x() / d.z()),
+                             static_cast<float>(lcy + f * d.y() / d.z()));
+      }
+      set.roi = cv::boundingRect(corners) & cv::Rect(0, 0, view.image.cols, view.image.rows);
+    }
+  }
+  const auto foot = camera::project(view.camera, scale.axis_foot);
+  if (!foot || foot->x() < 0.0 || foot->x() > view.image.cols - 1.0)
+    throw Refusal(Check::kCameraConsistent,
+                  where + ": the declared camera does not see the pile's axis foot; it cannot be "
+                          "the camera of this photo");
+  set.axis_u_px = foot->x();
+  set.camera_elevation_deg =
+      std::atan2(camera_height_m(view.camera, scale.axis_foot),
+                 camera_distance_m(view.camera, scale.axis_foot)) * kRadToDeg;
+  const SideImage prepared = prepare_side(view.image, set, where);
+  // A camera declared level whose reading found a top face the base ellipse refuses only for the
+  // toe line cutting through the base (the pitch and elevation agreeing), or through which the
+  // pile reached the image's sides: a thick plate's front face, seen from plate level, reads so.
+  // The plate is then read edge-on, and that reading stands when it agrees with the camera.
+  const bool declared_level =
+      toe_line_for(view.camera, scale.axis_foot, 0.0).v_at(*set.axis_u_px) -
+          camera::principal_v(view.camera) <= 1.0;
+  PosedReading out;
+  std::optional<Refusal> cut;
+  try {
+    out = read_level_view(view, cam, scale, set, prepared, where);
+  } catch (const Refusal& e) {
+    if (!(declared_level && e.check() == Check::kNotCut)) throw;
+    cut = e;
+    out.edge_on_retry = true;
+    out.check.consistent = false;
+  }
+  if (!out.check.consistent && out.edge_on_retry) {
+    set.plate_edge_on = true;
+    try {
+      PosedReading edge_on = read_level_view(view, cam, scale, set, prepared, where);
+      // Edge-on means on the camera's horizon, within the tolerance (not the 2.5 deg a camera
+      // declared level may be off by when a top face shows it).
+      const SideProfile& px = edge_on.m.pixels;
+      const double u = *set.axis_u_px;
+      const double off = px.plate.v_at(u) - camera::principal_v(view.camera);
+      const double tol = std::max(set.admission.camera_tolerance_px,
+                                  3.0 * std::hypot(px.plate.sigma_px, 0.5));
+      if (edge_on.check.consistent && !px.far_edge && std::abs(off) <= tol) {
+        out = std::move(edge_on);
+        cut.reset();
+      }
+    } catch (const Refusal&) {
+    }
+  }
+  if (cut) throw *cut;
   return out;
 }
 

@@ -458,7 +458,7 @@ PileOnPlate pile_on_detected_plate(const SideImage& prepared, const SideSettings
   out.plate = find_plate_line(prepared.flat, s, where);
   const PileBlob pile = find_pile_blob(flat, out.plate, s, prepared.roi, where);
   PileOnPlate found;
-  found.blob = stand_on_top_face(flat, pile, s, out.plate, out.far_edge);
+  found.blob = s.plate_edge_on ? pile.blob : stand_on_top_face(flat, pile, s, out.plate, out.far_edge);
   found.others = cv::Mat::zeros(found.blob.size(), CV_8U);
   pile.others.rowRange(0, std::min(pile.others.rows, found.blob.rows))
       .copyTo(found.others.rowRange(0, std::min(pile.others.rows, found.blob.rows)));
@@ -488,11 +488,19 @@ PileOnPlate pile_on_predicted_toe(const SideImage& prepared, const SideSettings&
   const cv::Rect& roi = prepared.roi;
   const PlateLine toe = in_roi(*s.toe_line, roi);
   const double axis_u = s.axis_u_px ? *s.axis_u_px - roi.x : 0.5 * (flat.cols - 1);
+  const std::optional<PlateLine> far = find_far_edge(prepared.flat, s, toe, where);
   // A camera declared level with the plate sees it edge-on on the toe line: the plate line is
   // found in the photo as without a camera, and with it the toe line on the plate's top face of a
   // camera standing a little higher than declared (the lab's 5-10 mm: side_view.hpp step 2),
   // from which H is then read; measure.hpp allows that much. With no edge found (a pile as wide
   // as the image hides it) the toe line is the plate line.
+  if (s.level_toe_line && s.plate_edge_on && far &&
+      std::abs(toe.v_at(axis_u) - far->v_at(axis_u)) <= kFaceMinPx) {
+    // Read edge-on (measure.cpp's retry): the long edge on the horizon is the plate line.
+    out.plate = *far;
+    const PileBlob pile = find_pile_blob(flat, out.plate, s, roi, where);
+    return {pile.blob, pile.others, pile.threshold, true};
+  }
   if (s.level_toe_line) {
     try {
       return pile_on_detected_plate(prepared, s, where, out);
@@ -507,7 +515,7 @@ PileOnPlate pile_on_predicted_toe(const SideImage& prepared, const SideSettings&
     const PileBlob pile = find_pile_blob(flat, out.plate, s, roi, where);
     return {pile.blob, pile.others, pile.threshold, true};
   }
-  const std::optional<PlateLine> far = find_far_edge(prepared.flat, s, toe, where);
+
   if (far && toe.v_at(axis_u) - far->v_at(axis_u) <= kFaceMinPx) {
     out.plate = *far;
     const PileBlob pile = find_pile_blob(flat, out.plate, s, roi, where);

@@ -150,6 +150,7 @@ struct SideSettings {
   double front_search_px = 0.0;       // how far below the toe line the base's front is sought [px]
   double camera_elevation_deg = 0.0;  // the camera above the plate, seen from the axis foot [deg]
   bool level_toe_line = false;        // the camera sees the plate edge-on (toe line = horizon)
+  bool plate_edge_on = false;         // no top face is sought below the plate line found
   cv::Mat valid;
   AdmissionSettings admission;  // the pixel checks' limits (admission.hpp)
 };
