@@ -11,7 +11,7 @@
 #include <optional>
 #include <string>
 
-#include "../../support/cone_pile.hpp"
+#include "../../support/cone_photo_scene.hpp"
 #include "experiments/photos/photographs.hpp"
 #include "render/renderer.hpp"
 #include "render/scene.hpp"
@@ -27,13 +27,7 @@ constexpr double kH0 = 14e-3;   // cone height [m]
 constexpr double kR0 = 24e-3;   // cone base radius [m]
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
-render::Scene cone_scene() {
-  const Spheres s = test_support::make_cone(kH0, kR0, 0.0, 0.0, kA, 11, 0.3);
-  std::vector<Eigen::Vector3d> x(s.x.begin(), s.x.end());
-  render::Scene scene = centred_pile_scene({x, s.r, std::vector<int>(s.r.size(), 0)});
-  scene.scale_reference.enabled = false;
-  return scene;
-}
+render::Scene cone_scene() { return test_support::cone_photo_scene(kH0, kR0, kA); }
 
 // The camera 12 pile radii away horizontally, `elevation_deg` above the plate as seen from the
 // axis foot, its optical axis through the pile's mid height (pitched down).

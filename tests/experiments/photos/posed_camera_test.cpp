@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "../../support/cone_pile.hpp"
+#include "../../support/cone_photo_scene.hpp"
 #include "experiments/photos/photographs.hpp"
 #include "render/renderer.hpp"
 #include "render/scene.hpp"
@@ -29,13 +29,7 @@ struct Cone {
   double h, r;  // apex height and base radius [m]
 };
 
-render::Scene cone_scene(const Cone& c) {
-  const Spheres s = test_support::make_cone(c.h, c.r, 0.0, 0.0, kA, 11, 0.3);
-  std::vector<Eigen::Vector3d> x(s.x.begin(), s.x.end());
-  render::Scene scene = centred_pile_scene({x, s.r, std::vector<int>(s.r.size(), 0)});
-  scene.scale_reference.enabled = false;
-  return scene;
-}
+render::Scene cone_scene(const Cone& c) { return test_support::cone_photo_scene(c.h, c.r, kA); }
 
 // The lab's level side camera at plate height, 12 pile radii away (the reference photo).
 camera::Camera level_camera(const render::Scene& scene) {

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "../../support/cone_pile.hpp"
+#include "../../support/cone_photo_scene.hpp"
 #include "experiments/photos/photographs.hpp"
 #include "render/renderer.hpp"
 #include "render/scene.hpp"
@@ -27,13 +27,7 @@ struct Cone {
   double h, r;  // apex height and base radius [m]
 };
 
-render::Scene cone_scene(const Cone& c) {
-  const Spheres s = test_support::make_cone(c.h, c.r, 0.0, 0.0, kA, 11, 0.3);
-  std::vector<Eigen::Vector3d> x(s.x.begin(), s.x.end());
-  render::Scene scene = centred_pile_scene({x, s.r, std::vector<int>(s.r.size(), 0)});
-  scene.scale_reference.enabled = false;
-  return scene;
-}
+render::Scene cone_scene(const Cone& c) { return test_support::cone_photo_scene(c.h, c.r, kA); }
 
 // The declared camera: level with the plate, 12 pile radii away, its lens centred on the
 // horizon (no shift), so a pitched camera keeps the pile in the frame.
