@@ -213,9 +213,7 @@ void settle_diameter(SideMeasurement& m) {
 constexpr double kViewMarginDeg = 10.0;
 
 void refuse_steep_view(const SideMeasurement& m, const camera::Camera& level,
-                       const Eigen::Vector3d& axis_foot, const AdmissionSettings& a,
-                       const std::string& where) {
-  (void)a;
+                       const Eigen::Vector3d& axis_foot, const std::string& where) {
   if (level.projection != camera::Projection::kPerspective) return;
   const double l = (level.extrinsics.position.head<2>() - axis_foot.head<2>()).norm();
   const double h = level.extrinsics.position.z() - axis_foot.z() - m.height_m;
@@ -353,13 +351,12 @@ CameraCheck check_camera(const SideProfile& p, const camera::Camera& level,
 // The declared camera turned about its own horizontal axis by `dpitch_deg` (down positive).
 camera::Camera repitched(const camera::Camera& cam, double dpitch_deg) {
   const Eigen::Matrix3d r = camera::rotation_world_to_camera(cam);
-  const Eigen::Vector3d right = r.row(0).transpose(), forward = r.row(2).transpose();
+  const Eigen::Vector3d forward = r.row(2).transpose();
   const Eigen::Vector3d down = r.row(1).transpose();
   const double a = dpitch_deg / kRadToDeg;
   camera::Camera out = cam;
   const Eigen::Vector3d f = std::cos(a) * forward + std::sin(a) * down;
   const Eigen::Vector3d up = -(std::cos(a) * down - std::sin(a) * forward);
-  (void)right;
   out.extrinsics.look_at = cam.extrinsics.position + f;
   out.extrinsics.up = up;
   return out;
@@ -631,7 +628,7 @@ SideMeasurement measure_side_posed(const cv::Mat& image, const ScaleSpec& scale,
   }
   SideMeasurement& m = r.m;
   refuse_small(m, settings.admission, where);
-  refuse_steep_view(m, r.level_camera, scale.axis_foot, settings.admission, where);
+  refuse_steep_view(m, r.level_camera, scale.axis_foot, where);
   settle_diameter(m);
   return m;
 }
