@@ -35,6 +35,15 @@ Crest measure_crest(const SideProfile& p, const CrestSettings& s, const std::str
   const double height = p.height_px;
   Crest c;
   c.depth_px = std::max(s.min_depth_px, s.depth_fraction * height);
+  // A top narrower than the edge window (one grain standing on it) has no silhouette rows of its
+  // own near the apex: the crest is read from the highest rows each side has.
+  auto highest = [&](const std::vector<cv::Point2d>& edge) {
+    double h = -std::numeric_limits<double>::infinity();
+    for (const cv::Point2d& q : edge) h = std::max(h, p.plate.height_above(q));
+    return h;
+  };
+  const double reach = height - std::min(highest(p.left_edge), highest(p.right_edge));
+  if (std::isfinite(reach) && reach > c.depth_px && reach < 0.5 * height) c.depth_px = reach;
   const cv::Point2d dir = p.plate.direction();
   const cv::Point2d up(dir.y, -dir.x);
   // The outermost silhouette point on each side within the depth of the apex height.

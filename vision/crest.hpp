@@ -39,8 +39,10 @@ struct CrestSettings {
   double min_depth_px = 3.0;     // but at least this deep [px]
 };
 
-/// The crest of a measured silhouette (SideProfile's edges, plate line, H and flank fits). Throws
-/// std::runtime_error naming `where` when no silhouette row lies within the depth of the apex.
+/// The crest of a measured silhouette (SideProfile's edges, plate line, H and flank fits). A top
+/// with no silhouette row of its own within the depth of the apex (one grain standing on it,
+/// narrower than the edge window) is read from the highest rows each side has, down to half of
+/// H. Throws std::runtime_error naming `where` when no silhouette row lies that high.
 Crest measure_crest(const SideProfile& profile, const CrestSettings& settings = {},
                     const std::string& where = "image");
 

@@ -43,6 +43,48 @@ TEST(Crest, SharpConeHasNone) {
   }
 }
 
+// A grain standing on the apex is narrower than the edge window, so the silhouette has no edge
+// row within the crest's depth (5% of H) of the apex: the crest is read from the highest rows
+// each side has, as for a top that deep. A 100 px tall cone of 45 deg flanks on a plate at row
+// 200, its edges from 30 px below the apex down: each end carried up its flank to the apex
+// height meets the axis, crest 0 within a pixel (it threw "no silhouette row" before: an exit 2
+// for a pile that was there; the LIGGGHTS pours seen from 5 deg above).
+TEST(Crest, AGrainOnTheApexReadsFromTheHighestRows) {
+  SideProfile p;
+  p.plate.a = 200.0;
+  p.height_px = 100.0;
+  p.apex = {500.0, 100.0};
+  const double s = std::sqrt(0.5);
+  p.left.direction = {s, -s};
+  p.left.angle_deg = 45.0;
+  p.right.direction = {-s, -s};
+  p.right.angle_deg = 45.0;
+  for (double v = 130.0; v <= 195.0; v += 1.0) {
+    const double half = v - 100.0;  // 45 deg flanks through the apex
+    p.left_edge.emplace_back(500.0 - half, v);
+    p.right_edge.emplace_back(500.0 + half, v);
+  }
+  p.left.point = p.left_edge.front();
+  p.right.point = p.right_edge.front();
+  Crest c;
+  ASSERT_NO_THROW(c = measure_crest(p, {}, "grain.png"));
+  EXPECT_NEAR(c.raw_width_px, 0.0, 1.0);
+  // Edges that stop below half of H: no crest is read, and the error names the photo.
+  SideProfile low = p;
+  low.left_edge.assign(p.left_edge.begin() + 30, p.left_edge.end());
+  low.right_edge.assign(p.right_edge.begin() + 30, p.right_edge.end());
+  EXPECT_THROW(
+      {
+        try {
+          measure_crest(low, {}, "grain.png");
+        } catch (const std::runtime_error& e) {
+          EXPECT_NE(std::string(e.what()).find("grain.png"), std::string::npos);
+          throw;
+        }
+      },
+      std::runtime_error);
+}
+
 // A truncated cone of top width w: its silhouette is w + d (cot + cot) wide at any depth d within
 // the straight flanks, so the crest is w. The edges are sub-pixel (coverage), the crest's two
 // ends each carried up the fitted flank over d (5% of H, 12-18 px here): within 2 px. Its H, D
