@@ -432,6 +432,10 @@ PosedReading read_level_view(const LevelView& view, const camera::Camera& cam,
     set.toe_line = toe_line_for(view.camera, scale.axis_foot, radius);
     const double toe_v = set.toe_line->v_at(*set.axis_u_px);
     set.level_toe_line = toe_v - camera::principal_v(view.camera) <= 1.0;
+    if (set.level_toe_line)
+      set.plate_line_lowest_v =
+          toe_v + camera::focal_px(view.camera) * std::tan(kMaxElevationDeg / kRadToDeg) +
+          set.admission.camera_tolerance_px;
     // The front is sought twice as deep as the camera puts it, and at least 20 px: a pile that
     // continues below that stands elsewhere than declared.
     const double front_v = front_row(view.camera, scale.axis_foot, std::max(radius, 1e-3));

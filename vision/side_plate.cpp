@@ -35,6 +35,7 @@ struct FaceBand {
 
   const cv::Mat& flat;
   const PlateLine& edge;
+  cv::Mat valid;                    // CV_8U, pixels from inside the photo (empty: all)
   int r_top = 0, r_bot = 0;         // rows searched [px]
   std::vector<double> left, right;  // the plate's level per row beside the pile (NaN: none)
   double tol = 0.0;                 // a pixel within tol of the levels' range is plate [-]
@@ -114,10 +115,13 @@ bool read_face_levels(FaceBand& f, const cv::Rect& box, double h_above) {
   std::vector<double> spread;
   for (int r = f.r_top; r <= f.r_bot; ++r) {
     std::vector<double> lv, rv;
+    // A level view's pixels from outside the photo (a rolled camera's corners) repeat its
+    // border, the bench below the plate among them: they are no level of the plate.
+    auto seen = [&](int c) { return f.valid.empty() || f.valid.at<uchar>(r, c); };
     for (int c : left_cols)
-      if (r >= f.first_row(c) + kCleanGapPx) lv.push_back(flat.at<float>(r, c));
+      if (r >= f.first_row(c) + kCleanGapPx && seen(c)) lv.push_back(flat.at<float>(r, c));
     for (int c : right_cols)
-      if (r >= f.first_row(c) + kCleanGapPx) rv.push_back(flat.at<float>(r, c));
+      if (r >= f.first_row(c) + kCleanGapPx && seen(c)) rv.push_back(flat.at<float>(r, c));
     if (lv.size() >= 3) f.left[r] = median(lv);
     if (rv.size() >= 3) f.right[r] = median(rv);
     if (r < f.r_top + 6) {
@@ -238,12 +242,14 @@ namespace side_detail {
 // base circle's tangent points. Returns std::nullopt when the pile ends at the edge (a level
 // camera: the edge is the plate line) or the band cannot be read.
 std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob,
-                                        const PlateLine& edge, int morph_radius_px) {
+                                        const PlateLine& edge, int morph_radius_px,
+                                        const cv::Mat& valid) {
   const cv::Rect box = cv::boundingRect(blob);
   if (box.empty()) return std::nullopt;
   const double h_above = edge.v_at(box.x + 0.5 * box.width) - box.y;
   if (!(h_above > 4.0)) return std::nullopt;
   FaceBand band(flat, edge);
+  band.valid = valid;
   if (!read_face_levels(band, box, h_above)) return std::nullopt;
   // A level camera's pile ends at the edge: nothing of it one "deep enough" row below the edge
   // (see the test on the deepest pixel below) ends the search early.
@@ -620,6 +626,11 @@ PlateLine find_plate_line(const cv::Mat& flat, const SideSettings& s, const std:
 }
 
 namespace side_detail {
+
+PlateLine find_plate_line_above(const cv::Mat& flat, const SideSettings& s, const std::string& where,
+                                int max_row) {
+  return find_plate_line_to(flat, s, where, std::clamp(max_row, 8, flat.rows));
+}
 
 std::optional<PlateLine> find_far_edge(const cv::Mat& flat, const SideSettings& s,
                                        const PlateLine& toe_line, const std::string& where) {

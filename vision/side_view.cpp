@@ -197,11 +197,19 @@ PileBlob find_pile_blob(const cv::Mat& flat, const PlateLine& plate, const SideS
 // as found, the rows above the plate line only (the pile level's erosion treats the rows beyond
 // a matrix's border as pile, so the two sizes are not the same measurement).
 cv::Mat stand_on_top_face(const cv::Mat& flat, const PileBlob& pile, const SideSettings& s,
-                          PlateLine& plate, std::optional<PlateLine>& far_edge) {
+                          const cv::Rect& roi, PlateLine& plate,
+                          std::optional<PlateLine>& far_edge) {
+  const double axis_u = s.axis_u_px ? *s.axis_u_px - roi.x : 0.5 * (flat.cols - 1);
   cv::Mat full(flat.size(), CV_8U, cv::Scalar(0));
   pile.blob.copyTo(full.rowRange(0, pile.rows_above));
-  const std::optional<TopFace> face = pile_on_top_face(flat, full, plate, s.morph_radius_px);
+  const std::optional<TopFace> face = pile_on_top_face(flat, full, plate, s.morph_radius_px,
+                                                            s.valid.empty() ? cv::Mat() : s.valid(roi));
   if (!face) return pile.blob;
+  // A camera declared level sees no top face deeper than its allowed elevation shows: a toe line
+  // below that is another edge (the plate's front face on a bench), and the plate line stands.
+  if (s.plate_line_lowest_v &&
+      face->toe_line.v_at(axis_u) > *s.plate_line_lowest_v - roi.y)
+    return pile.blob;
   far_edge = plate;
   plate = face->toe_line;
   std::vector<std::vector<cv::Point>> contours;
@@ -455,10 +463,14 @@ struct PileOnPlate {
 PileOnPlate pile_on_detected_plate(const SideImage& prepared, const SideSettings& s,
                                    const std::string& where, SideProfile& out) {
   const cv::Mat& flat = prepared.segment;
-  out.plate = find_plate_line(prepared.flat, s, where);
+  out.plate = s.plate_line_lowest_v
+                  ? find_plate_line_above(prepared.flat, s, where,
+                                          static_cast<int>(std::floor(*s.plate_line_lowest_v -
+                                                                      prepared.roi.y)))
+                  : find_plate_line(prepared.flat, s, where);
   const PileBlob pile = find_pile_blob(flat, out.plate, s, prepared.roi, where);
   PileOnPlate found;
-  found.blob = s.plate_edge_on ? pile.blob : stand_on_top_face(flat, pile, s, out.plate, out.far_edge);
+  found.blob = s.plate_edge_on ? pile.blob : stand_on_top_face(flat, pile, s, prepared.roi, out.plate, out.far_edge);
   found.others = cv::Mat::zeros(found.blob.size(), CV_8U);
   pile.others.rowRange(0, std::min(pile.others.rows, found.blob.rows))
       .copyTo(found.others.rowRange(0, std::min(pile.others.rows, found.blob.rows)));

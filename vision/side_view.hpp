@@ -151,6 +151,10 @@ struct SideSettings {
   double camera_elevation_deg = 0.0;  // the camera above the plate, seen from the axis foot [deg]
   bool level_toe_line = false;        // the camera sees the plate edge-on (toe line = horizon)
   bool plate_edge_on = false;         // no top face is sought below the plate line found
+  // A camera declared level: the lowest row its plate line can lie on (the toe line plus the
+  // elevation a level camera is allowed), so a lower long edge (the plate's front face on a
+  // bench, seen through a rolled camera) is never taken for it. [px], full-image coordinates
+  std::optional<double> plate_line_lowest_v;
   cv::Mat valid;
   AdmissionSettings admission;  // the pixel checks' limits (admission.hpp)
 };

@@ -43,13 +43,18 @@ struct TopFace {
 
 /// The pile on the plate's top face (side_plate.cpp says how), or std::nullopt.
 std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob,
-                                        const PlateLine& edge, int morph_radius_px);
+                                        const PlateLine& edge, int morph_radius_px,
+                                        const cv::Mat& valid = cv::Mat());
 
 /// The lowest long edge with backdrop above it and not below `toe_line` (+4 px): the plate's far
 /// edge as a camera above the plate sees it, or the plate line itself for a level camera.
 /// std::nullopt when the plate fills the view (no edge with backdrop above it).
 std::optional<PlateLine> find_far_edge(const cv::Mat& flat, const SideSettings& s,
                                        const PlateLine& toe_line, const std::string& where);
+
+/// The plate line (find_plate_line) no lower than row `max_row` of `flat`.
+PlateLine find_plate_line_above(const cv::Mat& flat, const SideSettings& s, const std::string& where,
+                                int max_row);
 
 /// The pile standing on the plate's visible top face, its toe line given by the camera: the dark
 /// class above the far edge (`above`, CV_8U image size, may be all zero) joined with the pixels
