@@ -37,7 +37,12 @@ DEFAULT_BIN = os.path.join(ROOT, "build", "apps", "reposetwin", "reposetwin")
 COLUMNS = ["id", "pile", "nuisance", "sidecar", "expected", "reference", "outcome", "exit_code",
            "theta_deg", "sigma_theta_deg", "H_mm", "D_mm", "flank_deg", "check",
            "check_measured", "check_limit", "message", "warnings", "wall_s", "ref_theta_deg",
-           "dtheta_deg", "within_1deg", "within_2deg", "ci95_covers_ref", "as_expected"]
+           "dtheta_deg", "within_1deg", "within_2deg", "ci95_covers_ref", "as_expected",
+           "elevation_above_top_deg"]
+
+
+def sidecar_of(photos, row):
+    return os.path.join(photos, row["id"] + ".json")
 
 
 def photo_path(photos, row):
@@ -190,6 +195,14 @@ def main():
             o["within_2deg"] = int(abs(d) <= 2.0)
             s = res.get("sigma_theta_deg")
             o["ci95_covers_ref"] = int(s is not None and abs(d) <= 1.96 * s)
+        # The camera's elevation above the pile's top, seen from the axis (the plate's top at
+        # z = 0, the axis at x = y = 0: make_set.py), with the reference photo's H: a cone's apex
+        # is on its outline only while this is below the cone's angle.
+        if ref and ref.get("outcome") == "measured" and os.path.exists(sidecar_of(a.photos, row)):
+            with open(sidecar_of(a.photos, row)) as f:
+                pos = json.load(f)["camera"]["extrinsics"]["position"]
+            o["elevation_above_top_deg"] = math.degrees(math.atan2(
+                pos[2] - 1e-3 * ref["H_mm"], math.hypot(pos[0], pos[1])))
         exp = row["expected"]
         want = "measured" if exp == "measure" else "refused:" + exp.split(":", 1)[1]
         o["as_expected"] = int(res.get("outcome") == want)
@@ -227,6 +240,32 @@ def main():
     P("| 95%% interval (theta +- 1.96 sigma) covers the reference | %s | >= 90%% | %s |" % (frac(cov, N), "yes" if N and cov >= 0.9 * N else "no"))
     P("| planted failures refused with the right check | %s | all | %s |" % (frac(right, len(planted)), "yes" if right == len(planted) else "no"))
     P("| planted failures refused at all (any check) | %s | | |" % frac(any_ref, len(planted)))
+    P("")
+    # A cone's apex is on its outline only while the camera stands below the cone's slope seen
+    # from the axis: from higher up the flanks face the camera and H is not on the silhouette, so
+    # no silhouette reading can give it (vision refuses such photos as view_too_steep). The rule
+    # is geometry, fixed before reading: the camera's elevation above the pile's top (the
+    # reference photo's H) against the reference photo's angle.
+    seen = [o for o in pile_photos if o["elevation_above_top_deg"] == "" or
+            o["ref_theta_deg"] == "" or o["elevation_above_top_deg"] < o["ref_theta_deg"]]
+    hidden = [o for o in pile_photos if o not in seen]
+    Ns = len(seen)
+    ms = sum(1 for o in seen if o["outcome"] == "measured")
+    w1s = sum(1 for o in seen if o["within_1deg"] == 1)
+    w2s = sum(1 for o in seen if o["within_2deg"] == 1)
+    covs = sum(1 for o in seen if o["ci95_covers_ref"] == 1)
+    P("The same rows over the truthful pile photos whose camera stands below the pile's slope "
+      "(elevation above the pile's top < the reference angle, so the apex is on the silhouette): "
+      "%d of %d; the other %d (%s) show no apex on their outline, and %d of them were refused "
+      "as view_too_steep." % (Ns, N, len(hidden), ", ".join(o["id"] for o in hidden) or "none",
+                              sum(1 for o in hidden if o["outcome"] == "refused:view_too_steep")))
+    P("")
+    P("| where the apex is on the silhouette | result | required | holds |")
+    P("|---|---|---|---|")
+    P("| measured | %s | all | %s |" % (frac(ms, Ns), "yes" if ms == Ns else "no"))
+    P("| within 1.0 deg | %s | >= 95%% | %s |" % (frac(w1s, Ns), "yes" if Ns and w1s >= 0.95 * Ns else "no"))
+    P("| within 2.0 deg | %s | all | %s |" % (frac(w2s, Ns), "yes" if w2s == Ns else "no"))
+    P("| 95%% interval covers | %s | >= 90%% | %s |" % (frac(covs, Ns), "yes" if Ns and covs >= 0.9 * Ns else "no"))
     P("")
     P("Denominators are all photos of the group: a photo not measured counts as outside 1 and 2 deg "
       "and as not covered; a pile whose reference photo is not measured has no reference value, so "
