@@ -378,28 +378,45 @@ std::optional<CameraCheck> plate_edge_check(const SideImage& prepared, const Sid
                                             const camera::Camera& level,
                                             const Eigen::Vector3d& axis_foot,
                                             const std::string& where) {
-  PlateLine edge;
-  try {
-    edge = find_plate_line(prepared.flat, set, where);
-  } catch (const std::runtime_error&) {
-    return std::nullopt;
-  }
   const double axis_u = *set.axis_u_px - prepared.roi.x;
-  const double v = edge.v_at(axis_u) + prepared.roi.y;
   const double horizon = camera::principal_v(level);
   const double lowest =
       toe_line_for(level, axis_foot, 0.3 * camera_distance_m(level, axis_foot)).v_at(*set.axis_u_px);
-  CameraCheck c;
-  c.what = "the plate's edge";
-  c.observed_v = v;
   const double raised = lowest - horizon <= 1.0
                             ? camera::focal_px(level) * std::tan(kMaxElevationDeg / kRadToDeg)
                             : 0.0;
-  c.predicted_v = std::clamp(v, std::min(horizon, lowest) - raised, lowest + raised);
-  c.tolerance = std::max(set.admission.camera_tolerance_px, 3.0 * std::hypot(edge.sigma_px, 0.5));
-  c.consistent = std::abs(c.observed_v - c.predicted_v) <= c.tolerance;
-  c.dpitch_deg = (row_angle(level, c.observed_v) - row_angle(level, c.predicted_v)) * kRadToDeg;
-  return c;
+  auto check_of = [&](const PlateLine& edge) {
+    CameraCheck c;
+    c.what = "the plate's edge";
+    c.observed_v = edge.v_at(axis_u) + prepared.roi.y;
+    c.predicted_v =
+        std::clamp(c.observed_v, std::min(horizon, lowest) - raised, lowest + raised);
+    c.tolerance =
+        std::max(set.admission.camera_tolerance_px, 3.0 * std::hypot(edge.sigma_px, 0.5));
+    c.consistent = std::abs(c.observed_v - c.predicted_v) <= c.tolerance;
+    c.dpitch_deg = (row_angle(level, c.observed_v) - row_angle(level, c.predicted_v)) * kRadToDeg;
+    return c;
+  };
+  // An edge where the camera can put the plate's is the plate's: a bench or table below the
+  // plate shows a lower long edge with a backdrop-like top above it (the LIGGGHTS pours' bench,
+  // 214 px below the plate's far edge from 100 mm above), and the lowest edge anywhere is then
+  // the bench's. Only where no edge lies where the camera allows is the photo's lowest edge
+  // the evidence against the camera.
+  try {
+    const int max_row = static_cast<int>(std::floor(
+        lowest + raised + set.admission.camera_tolerance_px - prepared.roi.y));
+    if (max_row >= 8) {
+      const CameraCheck c =
+          check_of(find_plate_line_above(prepared.flat, max_row, set, where));
+      if (c.consistent) return c;
+    }
+  } catch (const std::runtime_error&) {
+  }
+  try {
+    return check_of(find_plate_line(prepared.flat, set, where));
+  } catch (const std::runtime_error&) {
+    return std::nullopt;
+  }
 }
 
 void refuse_plate_off_camera(const SideImage& prepared, const SideSettings& set,

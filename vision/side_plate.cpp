@@ -307,15 +307,99 @@ cv::Mat pile_on_face(const cv::Mat& flat, const cv::Mat& above, const std::optio
     for (double v : rv) spread.push_back(std::abs(v - right[r]));
   }
   if (spread.size() < 30) return cv::Mat();
+  // And the plate's level per row on each side of the axis tracked up the band from its lowest
+  // rows: below the pile's front the band is plate alone, and each row higher takes the
+  // histogram peak of its valid band pixels on that side nearest the row below's level (refined
+  // by the median of the pixels near the peak). A pixel at either level is plate. The outer
+  // columns alone read a bench beside the plate's far corners where the plate is narrower than
+  // the view (the LIGGGHTS pours from 100 mm above: everything on the plate read as pile, the
+  // photo refused); the tracked level alone may start on the plate's front face where the band
+  // is thin (the same pours from 16 mm above: a 7 mm "pile" read at 27 deg). A row's most
+  // common level is no plate's either: an even-coloured pile covers most of the row (the twin's
+  // cone of spheres from 20 deg).
+  std::vector<double> track_left(rows, std::nan("")), track_right(rows, std::nan(""));
+  // The histogram is of log levels over the band's own range: the flat field is fitted to the
+  // backdrop above and may drift over the band by orders of magnitude (a narrow strip of
+  // backdrop above a camera looking down: levels 0.3-64 down the twin's 20 deg photo), so
+  // levels are compared as ratios.
+  auto log_of = [](double v) { return std::log(std::max(v, 1e-4)); };
+  double lo_v = std::numeric_limits<double>::infinity(), hi_v = -lo_v;
+  for (int r = r_min; r <= r_max; ++r)
+    for (int c = 0; c < cols; ++c)
+      if (is_valid(r, c) && r >= first_row(c) && r <= last_row(c)) {
+        lo_v = std::min(lo_v, log_of(flat.at<float>(r, c)));
+        hi_v = std::max(hi_v, log_of(flat.at<float>(r, c)));
+      }
+  if (!(hi_v >= lo_v)) return cv::Mat();
+  constexpr double kBin = 0.005;   // 0.5% of the level
+  constexpr double kNear = 0.05;   // a pixel within 5% of a peak belongs to it
+  constexpr double kJump = 0.1;    // the plate's level changes less than 10% from row to row
+  const int kBins = std::max(3, static_cast<int>(std::ceil((hi_v - lo_v) / kBin)) + 1);
+  const int axis_c = std::clamp(static_cast<int>(std::lround(axis_u)), 0, cols - 1);
+  std::vector<double> near;
+  for (const bool is_left : {true, false}) {
+    std::vector<double>& level = is_left ? track_left : track_right;
+    const int c_begin = is_left ? 0 : axis_c, c_end = is_left ? axis_c : cols;
+    double prev = std::nan("");
+    for (int r = r_max; r >= r_min; --r) {
+      std::vector<int> hist(kBins, 0);
+      std::vector<float> vals;
+      for (int c = c_begin; c < c_end; ++c)
+        if (is_valid(r, c) && r >= first_row(c) && r <= last_row(c)) {
+          const double v = log_of(flat.at<float>(r, c));
+          vals.push_back(static_cast<float>(v));
+          ++hist[std::clamp(static_cast<int>((v - lo_v) / kBin), 0, kBins - 1)];
+        }
+      if (static_cast<int>(vals.size()) < kSideColumns) continue;
+      // The peaks of the histogram smoothed over three bins that hold a fair share of the row.
+      const int min_count = std::max(kSideColumns / 2, static_cast<int>(0.03 * vals.size()));
+      std::vector<int> smooth(kBins, 0);
+      for (int k = 1; k + 1 < kBins; ++k) smooth[k] = hist[k - 1] + hist[k] + hist[k + 1];
+      double pick = std::nan("");
+      int pick_n = -1;
+      for (int k = 1; k + 1 < kBins; ++k) {
+        if (smooth[k] < min_count || smooth[k] < smooth[k - 1] || smooth[k] < smooth[k + 1])
+          continue;
+        const double peak = lo_v + (k + 0.5) * kBin;
+        // The first row read takes the highest peak; every other the one nearest the level
+        // below, if it lies within kJump of it.
+        const bool better = std::isnan(prev)
+                                ? smooth[k] > pick_n
+                                : std::abs(peak - prev) <= kJump &&
+                                      (std::isnan(pick) || std::abs(peak - prev) < std::abs(pick - prev));
+        if (better) {
+          pick = peak;
+          pick_n = smooth[k];
+        }
+      }
+      if (std::isnan(pick)) {
+        level[r] = std::isnan(prev) ? prev : std::exp(prev);  // the plate hidden: it continues
+        continue;
+      }
+      near.clear();
+      for (float v : vals)
+        if (std::abs(v - pick) <= kNear) near.push_back(std::exp(v));
+      level[r] = near.size() >= 3 ? median(near) : std::exp(pick);
+      for (double v : near) spread.push_back(std::abs(v - level[r]));
+      prev = pick;
+    }
+  }
+  for (int r = r_min; r <= r_max; ++r) {
+    if (std::isnan(track_left[r])) track_left[r] = track_right[r];
+    if (std::isnan(track_right[r])) track_right[r] = track_left[r];
+  }
   const double tol = std::max(0.03, 4.0 * 1.4826 * median(spread));
   cv::Mat fg = above.empty() ? cv::Mat(rows, cols, CV_8U, cv::Scalar(0)) : above.clone();
   for (int c = 0; c < cols; ++c) {
     const int r0 = std::max(0, first_row(c));
     for (int r = r0; r <= last_row(c); ++r) {
-      if (!is_valid(r, c) || std::isnan(left[r])) continue;
-      const double lo = std::min(left[r], right[r]) - tol, hi = std::max(left[r], right[r]) + tol;
+      if (!is_valid(r, c) || (std::isnan(left[r]) && std::isnan(track_left[r]))) continue;
       const float v = flat.at<float>(r, c);
-      if (v < lo || v > hi) fg.at<uchar>(r, c) = 255;
+      const bool outer = !std::isnan(left[r]) && v >= std::min(left[r], right[r]) - tol &&
+                         v <= std::max(left[r], right[r]) + tol;
+      const bool tracked = !std::isnan(track_left[r]) && (std::abs(v - track_left[r]) <= tol ||
+                                                          std::abs(v - track_right[r]) <= tol);
+      if (!outer && !tracked) fg.at<uchar>(r, c) = 255;
     }
     // The far edge's blurred rows join the pile where it is on both sides of them.
     if (far) {
@@ -625,12 +709,12 @@ PlateLine find_plate_line(const cv::Mat& flat, const SideSettings& s, const std:
   return find_plate_line_to(flat, s, where, flat.rows);
 }
 
-namespace side_detail {
-
-PlateLine find_plate_line_above(const cv::Mat& flat, const SideSettings& s, const std::string& where,
-                                int max_row) {
-  return find_plate_line_to(flat, s, where, std::clamp(max_row, 8, flat.rows));
+PlateLine find_plate_line_above(const cv::Mat& flat, int max_row, const SideSettings& s,
+                                const std::string& where) {
+  return find_plate_line_to(flat, s, where, std::max(8, std::min(max_row, flat.rows)));
 }
+
+namespace side_detail {
 
 std::optional<PlateLine> find_far_edge(const cv::Mat& flat, const SideSettings& s,
                                        const PlateLine& toe_line, const std::string& where) {

@@ -464,9 +464,10 @@ PileOnPlate pile_on_detected_plate(const SideImage& prepared, const SideSettings
                                    const std::string& where, SideProfile& out) {
   const cv::Mat& flat = prepared.segment;
   out.plate = s.plate_line_lowest_v
-                  ? find_plate_line_above(prepared.flat, s, where,
+                  ? find_plate_line_above(prepared.flat,
                                           static_cast<int>(std::floor(*s.plate_line_lowest_v -
-                                                                      prepared.roi.y)))
+                                                                      prepared.roi.y)),
+                                          s, where)
                   : find_plate_line(prepared.flat, s, where);
   const PileBlob pile = find_pile_blob(flat, out.plate, s, prepared.roi, where);
   PileOnPlate found;

@@ -199,6 +199,12 @@ struct SideProfile {
 PlateLine find_plate_line(const cv::Mat& flat, const SideSettings& settings = {},
                           const std::string& where = "image");
 
+/// find_plate_line over the rows above `max_row` only (where a declared camera can put the
+/// plate line): a lower long edge (a bench under the plate) is never taken for it.
+PlateLine find_plate_line_above(const cv::Mat& flat, int max_row,
+                                const SideSettings& settings = {},
+                                const std::string& where = "image");
+
 /// A side view after the common first step: its region of interest, flat-fielded and smoothed.
 struct SideImage {
   cv::Mat flat;     // CV_32F, divided by the fitted backdrop (about 1): plate line and markers

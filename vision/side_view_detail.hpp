@@ -52,10 +52,6 @@ std::optional<TopFace> pile_on_top_face(const cv::Mat& flat, const cv::Mat& blob
 std::optional<PlateLine> find_far_edge(const cv::Mat& flat, const SideSettings& s,
                                        const PlateLine& toe_line, const std::string& where);
 
-/// The plate line (find_plate_line) no lower than row `max_row` of `flat`.
-PlateLine find_plate_line_above(const cv::Mat& flat, const SideSettings& s, const std::string& where,
-                                int max_row);
-
 /// The pile standing on the plate's visible top face, its toe line given by the camera: the dark
 /// class above the far edge (`above`, CV_8U image size, may be all zero) joined with the pixels
 /// of the face band (below the far edge, or everything when there is none) unlike the plate's

@@ -94,6 +94,38 @@ TEST(MeasureSide, PerspectiveCorrectionRecoversHandD) {
   EXPECT_GT(std::abs(o.theta_deg - theta_of(60.0, 200.0)), 0.3);
 }
 
+// A tripod camera looking down 10 deg at a plate narrower than the view, standing on a wider
+// bench: below the plate's far edge the band shows the bench beside the plate's far corners,
+// and below the plate the bench's own front edge is the photo's lowest long edge with a light
+// top above it. Neither is the plate's: the plate edge is sought where the camera can put it,
+// and the plate's level is read where it continues from the band's foot. A cone of 31 deg
+// (H 60, D 200 mm) reads within 1 deg of atan(2H/D), as without the bench.
+TEST(MeasureSide, TripodCameraOverAPlateOnABenchReadsThePile) {
+  for (const double bench : {0.0, 0.6}) {
+    synthetic::SideScene s;
+    const double l = 0.6, aim = 0.03;
+    camera::Camera cam = camera::side_view(l, 0.7, aim + l * std::tan(10.0 * std::numbers::pi / 180.0),
+                                           0.0, 1280, 720);
+    cam.extrinsics.look_at = Eigen::Vector3d(0.0, 0.0, aim);
+    s.camera = cam;
+    s.scale_bar = false;
+    s.height_mm = 30.0;
+    s.diameter_mm = 120.0;
+    s.plate_half_size_m = 0.25;
+    s.bench_half_size_m = bench;
+    const cv::Mat img = synthetic::draw_side(s);
+    const std::string name = bench > 0.0 ? "bench.png" : "plate.png";
+    SideMeasurement m;
+    try {
+      m = measure_side_camera(img, cam, {}, name);
+    } catch (const std::exception& e) {
+      FAIL() << e.what();
+    }
+    EXPECT_NEAR(m.theta_deg, std::atan(2.0 * 30.0 / 120.0) * 180.0 / std::numbers::pi, 1.0)
+        << name;
+  }
+}
+
 TEST(MeasureSide, CameraAboveThePlateReadsHFromTheToeLine) {
   // The camera 10 mm above the plate, 0.6 m from a smooth 200 mm cone, measured as if level: the
   // plate's top face is a band from its far edge (23 px below the horizon) to its near edge

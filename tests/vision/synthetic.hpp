@@ -69,6 +69,9 @@ struct SideScene {
   double bar_width_mm = 20.0;            // bar width [mm]
   std::optional<camera::Camera> camera;  // when set: perspective scene in metres, plate a box
   double plate_half_size_m = 0.25;       // plate half size (camera scenes) [m]
+  // A bench the plate stands on (camera scenes): its top at the plate's underside, this half
+  // size, 0.2 m deep, coloured kBench; 0 = none [m].
+  double bench_half_size_m = 0.0;
   Degradation look;
 };
 
@@ -89,7 +92,7 @@ struct TopScene {
 
 // BGR colours of the shared convention.
 const cv::Scalar kBackdrop(220, 225, 225), kPlate(95, 80, 70), kPile(108, 115, 120),
-    kBlack(20, 20, 20), kWhite(245, 245, 245);
+    kBlack(20, 20, 20), kWhite(245, 245, 245), kBench(150, 165, 180);
 
 /// Area coverage (CV_32F, 0..1) of the union of polygons given in pixel coordinates (pixel
 /// centres at integers), by 4x4 supersampling.
@@ -212,7 +215,7 @@ inline cv::Mat draw_side(const SideScene& s) {
   const cv::Size size(s.width, s.height);
   cv::RNG rng(s.look.seed);
   cv::Mat img = backdrop(size, s.look, rng);
-  std::vector<std::vector<cv::Point2d>> plate, plate_right, pile, black, white;
+  std::vector<std::vector<cv::Point2d>> bench, plate, plate_right, pile, black, white;
   if (!s.camera) {
     const double au = s.axis_u < 0 ? 0.5 * (s.width - 1) : s.axis_u;
     const double k = 1.0 / s.mm_per_px;
@@ -293,6 +296,13 @@ inline cv::Mat draw_side(const SideScene& s) {
   } else {
     const camera::Camera& cam = *s.camera;
     const double L = s.plate_half_size_m, th = s.plate_thickness_mm / 1000.0;
+    if (s.bench_half_size_m > 0.0) {
+      std::vector<Eigen::Vector3d> b;
+      for (double x : {-s.bench_half_size_m, s.bench_half_size_m})
+        for (double y : {-s.bench_half_size_m, s.bench_half_size_m})
+          for (double z : {-th, -th - 0.2}) b.emplace_back(x, y, z);
+      bench.push_back(hull(project_all(cam, b)));
+    }
     std::vector<Eigen::Vector3d> box;
     for (double x : {-L, L})
       for (double y : {-L, L})
@@ -327,6 +337,7 @@ inline cv::Mat draw_side(const SideScene& s) {
       }
     }
   }
+  if (!bench.empty()) paint(img, coverage(size, bench), kBench);
   paint(img, coverage(size, plate), kPlate);
   if (!plate_right.empty()) paint(img, coverage(size, plate_right), kPlate * s.plate_right_shade);
   if (!black.empty()) paint(img, coverage(size, black), kBlack);
