@@ -451,7 +451,9 @@ int main(int argc, char** argv) {
   try {
     const Model model = make_model(o, 1.0);
     World world(model);
-    build_heap(world, o.particles, o.seed);
+    // A settled heap read from --heap replaces the constructed one: construct only otherwise.
+    const bool reuse = !o.heap_file.empty() && std::filesystem::exists(o.heap_file);
+    if (!reuse) build_heap(world, o.particles, o.seed);
     std::cout << "bench_sim: " << o.particles << " spheres, d " << kDiameterMin * 1e3 << "-"
               << kDiameterMax * 1e3 << " mm, E " << kSoftYoungs << " Pa (softened), rolling "
               << o.rolling << " mu_r " << kRollingFriction << " eta_r " << o.rolling_damping
@@ -479,7 +481,6 @@ int main(int argc, char** argv) {
         throw std::runtime_error(std::string("settle failed: ") + d.detail);
     };
     const int report_every = std::max(1, (o.settle + o.relax) / 8);
-    const bool reuse = !o.heap_file.empty() && std::filesystem::exists(o.heap_file);
     if (reuse) {
       reposetwin::sim::read_checkpoint(world, o.heap_file);
       std::cout << "read the settled heap from " << o.heap_file << " (no settle)\n";
