@@ -19,7 +19,9 @@
 //  - kExposure: the pile stands out from what is behind it (contrast at least min_contrast of the
 //    backdrop's level) and its top is not washed out (its top fifth reading more than a fifth of
 //    the way to the backdrop's level while more than max_clipped_fraction of the band above it is at the
-//    sensor's maximum).
+//    sensor's maximum). A photo in which no pile is found while more than
+//    max_clipped_photo_fraction of it is at the sensor's maximum is refused for its exposure,
+//    not as an empty plate: the pile may be lost in the white.
 //  - kCameraConsistent: the photo's lines fall where the declared camera puts them
 //    (measure.hpp): the plate line within max(3 px, 3 sigma) of the predicted row.
 //  - kViewAngle: the camera looks at the pile from below its flanks' slope (less 3 deg), so that
@@ -63,6 +65,7 @@ struct AdmissionSettings {
   double foreign_gap_fraction = 0.25;  // objects nearer the silhouette than this times H [-]
   double min_contrast = 0.12;          // |1 - pile level| against the backdrop, at least [-]
   double max_clipped_fraction = 0.5;   // of the band above a faded top clipped white, at most [-]
+  double max_clipped_photo_fraction = 0.25;  // of a photo with no pile found clipped white [-]
   double camera_tolerance_px = 3.0;    // lines off their predicted rows by more: a mismatch [px]
 };
 

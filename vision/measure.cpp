@@ -656,8 +656,50 @@ SideMeasurement measure_side_posed(const cv::Mat& image, const ScaleSpec& scale,
 
 }  // namespace
 
+namespace {
+
+// No pile found in a photo mostly at the sensor's brightest level is an exposure fault, not an
+// empty plate: the nuisance set's overexposed photos are 57-99% clipped and were refused as
+// "no pile", every other photo of the set under 0.002%.
+[[noreturn]] void refuse_no_pile_or_exposure(const Refusal& no_pile, const cv::Mat& image,
+                                             const SideSettings& settings,
+                                             const std::string& where) {
+  cv::Mat clipped;
+  try {
+    clipped = prepare_side(image, settings, where).clipped;
+  } catch (const std::exception&) {
+  }
+  const double fraction =
+      clipped.empty() ? 0.0 : static_cast<double>(cv::countNonZero(clipped)) / clipped.total();
+  const double limit = settings.admission.max_clipped_photo_fraction;
+  if (fraction > limit)
+    throw Refusal(Check::kExposure,
+                  where + ": no pile found, and " + fixed(100.0 * fraction, 0) +
+                      "% of the photo is at the sensor's brightest level (over-exposed): the "
+                      "pile may be lost in the white; expose for the pile",
+                  fraction, limit);
+  throw no_pile;
+}
+
+SideMeasurement measure_side_admitted(const cv::Mat& image, const ScaleSpec& scale,
+                                      const SideSettings& settings, const std::string& where);
+
+}  // namespace
+
 SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
                              const SideSettings& settings, const std::string& where) {
+  try {
+    return measure_side_admitted(image, scale, settings, where);
+  } catch (const Refusal& e) {
+    if (e.check() == Check::kPilePresent) refuse_no_pile_or_exposure(e, image, settings, where);
+    throw;
+  }
+}
+
+namespace {
+
+SideMeasurement measure_side_admitted(const cv::Mat& image, const ScaleSpec& scale,
+                                      const SideSettings& settings, const std::string& where) {
   check_input(image, scale, where);
   if (scale.camera) {
     check_camera_size(*scale.camera, image, where);
@@ -726,6 +768,7 @@ SideMeasurement measure_side(const cv::Mat& image, const ScaleSpec& scale,
   settle_diameter(m);
   return m;
 }
+}  // namespace
 
 namespace {
 

@@ -161,5 +161,22 @@ TEST(Admission, WashedOutTopIsAnExposureRefusal) {
   EXPECT_EQ(o.check, Check::kExposure) << o.why;
 }
 
+
+// A photo over-exposed as a whole (gain 3: the backdrop, the plate and most of the pile at the
+// sensor's brightest level) shows no pile to find; that is its exposure, not an empty plate. The
+// empty plate exposed well stays "no pile".
+TEST(Admission, NoPileInAnOverExposedPhotoIsAnExposureRefusal) {
+  synthetic::SideScene s = camera_scene();
+  cv::Mat bright;
+  synthetic::draw_side(s).convertTo(bright, CV_8UC3, 3.0);
+  const Outcome o = measure(bright, through(s));
+  EXPECT_FALSE(o.measured) << "H " << o.m.height_m;
+  EXPECT_EQ(o.check, Check::kExposure) << o.why;
+  s.pile = false;
+  const Outcome empty = measure(synthetic::draw_side(s), through(s));
+  EXPECT_FALSE(empty.measured);
+  EXPECT_EQ(empty.check, Check::kPilePresent) << empty.why;
+}
+
 }  // namespace
 }  // namespace reposetwin::vision
