@@ -553,8 +553,11 @@ PosedReading read_through(const cv::Mat& image, const camera::Camera& cam, const
   const SideImage prepared = prepare_side(view.image, set, where);
   // A camera declared level whose reading found a top face the base ellipse refuses only for the
   // toe line cutting through the base (the pitch and elevation agreeing), or through which the
-  // pile reached the image's sides: a thick plate's front face, seen from plate level, reads so.
-  // The plate is then read edge-on, and that reading stands when it agrees with the camera.
+  // pile reached the image's sides, or grew a "neck" into it: a thick plate's front face, seen
+  // from plate level, reads so (the twin's pile through a camera rolled 5 deg, or a light pile,
+  // grew into the face under it and was refused as a foreign object). The plate is then read
+  // edge-on, and that reading stands when it agrees with the camera; the edge-on reading runs
+  // every check again, so a funnel is refused by it as well.
   const bool declared_level =
       toe_line_for(view.camera, scale.axis_foot, 0.0).v_at(*set.axis_u_px) -
           camera::principal_v(view.camera) <= 1.0;
@@ -563,7 +566,8 @@ PosedReading read_through(const cv::Mat& image, const camera::Camera& cam, const
   try {
     out = read_level_view(view, cam, scale, set, prepared, where);
   } catch (const Refusal& e) {
-    if (!(declared_level && e.check() == Check::kNotCut)) throw;
+    if (!(declared_level && (e.check() == Check::kNotCut || e.check() == Check::kNoForeignObject)))
+      throw;
     cut = e;
     out.edge_on_retry = true;
     out.check.consistent = false;
