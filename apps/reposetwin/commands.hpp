@@ -19,6 +19,8 @@ enum class ExitCode : int {
                        // settled, jam, none)
   kNoPhotographs = 8,  // run: the photographs could not be written or measured
   kRefused = 9,        // measure: a photo failed an admission check (vision/admission.hpp)
+  kBusy = 10,          // run, render, report: another command holds the run folder's lock
+  kIncomplete = 11,    // report: a run folder stopped between stages (pile/run_state.hpp)
 };
 
 /// Exit code set by the subcommand that ran (0 = success).

@@ -22,6 +22,12 @@ constexpr std::pair<ExitCode, const char*> kMeanings[] = {
     {ExitCode::kRefused,
      "measure: a photo failed an admission check; the message (and --json's \"refused\") names "
      "the check and the value it measured"},
+    {ExitCode::kBusy,
+     "run, render, report: another reposetwin command is writing the run folder (its lock is "
+     "held); nothing was written: wait for it to end"},
+    {ExitCode::kIncomplete,
+     "report: a run folder stopped between its stages; no headline is shown, the message says "
+     "what is missing (run --resume finishes it)"},
 };
 }  // namespace
 
