@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
+#include "experiments/io/numbers.hpp"
 #include "apps/reposetwin/validators.hpp"
 #include "experiments/loop/loop.hpp"
 #include "experiments/loop/loop_synth.hpp"
@@ -29,14 +30,7 @@ std::vector<double> parse_list(const std::string& text, const std::string& optio
   std::stringstream ss(text);
   std::string item;
   while (std::getline(ss, item, ',')) {
-    try {
-      std::size_t used = 0;
-      out.push_back(std::stod(item, &used));
-      if (used != item.size() || !std::isfinite(out.back())) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
-      throw experiments::InputError(option + " " + text + ": \"" + item +
-                                    "\" is not a finite number");
-    }
+    out.push_back(experiments::plain_decimal(item, option + " " + text));
   }
   return out;
 }
@@ -157,12 +151,7 @@ void add_loop_command(CLI::App& app) {
                                         ": give at least two increasing values >= 0");
     }
     if (!args->seeds.empty()) {
-      s.seeds.clear();
-      for (double v : parse_list(args->seeds, "--seeds")) {
-        if (!(v >= 0.0) || v != static_cast<double>(static_cast<std::uint64_t>(v)))
-          throw experiments::InputError("--seeds: " + std::to_string(v) + " is not a seed");
-        s.seeds.push_back(static_cast<std::uint64_t>(v));
-      }
+      s.seeds = experiments::parse_seed_list(args->seeds, "--seeds");
     }
     if (!args->candidates.empty()) {
       std::stringstream ss(args->candidates);

@@ -67,6 +67,7 @@ void add_render_command(CLI::App& app) {
         throw experiments::InputError(p.string() +
                                       ": photographs are already there; pass --force to replace "
                                       "them");
+    experiments::refuse_repeated_contents(args->cameras, "render --camera");
     for (const std::string& path : args->cameras) {
       try {
         args->images.lab_cameras.push_back(camera::read_sidecar(path));

@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "apps/reposetwin/commands.hpp"
+#include "apps/reposetwin/validators.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/pile/run_state.hpp"
 #include "experiments/report/folder_results.hpp"
@@ -44,7 +45,8 @@ void add_report_command(CLI::App& app) {
                   "their common parent folder)");
   cmd->add_option("--lab-photo", a->settings.lab_photo, "A lab photo to measure and show");
   cmd->add_option("--lab-mm-per-px", a->settings.lab_mm_per_px,
-                  "The lab photo's scale [mm/px] (default: find the scale bar)");
+                  "The lab photo's scale [mm/px] (default: find the scale bar)")
+      ->check(positive_number());
   cmd->add_option("--title", a->settings.title, "Report title");
   cmd->add_option("--paper-data", a->settings.paper_dir,
                   "Folder of the paper's CSVs (default: data/paper found upwards from the "

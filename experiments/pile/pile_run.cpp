@@ -485,6 +485,7 @@ class PileRunner {
     FrameInfo info;
     info.time_s = st.time;
     info.phase = phase_name(ctl_.phase);
+    info.scene_fnv1a = ctl_.scene_hash;  // what a snapshot is of: another scene's is refused
     info.settled = final_state && (ctl_.stop.reason == StopReason::kSettled ||
                                    ctl_.stop.reason == StopReason::kSettleTimeLimit);
     if (st.walls[kContainerWall].enabled) {
