@@ -12,10 +12,11 @@ constexpr std::pair<ExitCode, const char*> kMeanings[] = {
     {ExitCode::kError, "bad input or another error; the message names the file, key and value"},
     {ExitCode::kPhysicsStop, "run: the engine stopped the run (NaN, overlap, escape)"},
     {ExitCode::kSomeFailed,
-     "campaign: some cases failed or gave no angle; paper: some items failed"},
+     "campaign, timestep: some cases failed or gave no angle; paper: some items failed"},
     {ExitCode::kUnreachable, "calibrate: the target angle cannot be reached in the mu_r range"},
     {ExitCode::kPlanRefused,
-     "run, calibrate: the plan is above the limits and was not confirmed (--yes)"},
+     "run, calibrate, campaign, timestep, loop, paper: the plan is above the limits and was "
+     "not confirmed (--yes)"},
     {ExitCode::kNoPile,
      "run: no angle: no settled pile to measure (time limit, not settled, jammed, no pile)"},
     {ExitCode::kNoPhotographs, "run: no angle: the photographs could not be written or measured"},

@@ -304,6 +304,14 @@ const std::vector<CommandCase> kCommandCases = {
      {"no angle", "formed no measurable pile"}, {"particle atan(2H/D)"}},
     {"B measure-particles inf in a dump", "measure-particles DUMPINF --scene SCENE", 2,
      {"\"inf\"", "not finite or not a plain decimal"}, {}},
+    // Every command that simulates prints its plan and refuses it above the limits without
+    // --yes (issue 52, part 5): the tiny scene's piles against a limit of one particle.
+    {"P5 campaign plan above the limit", "campaign CAMP --out DIR/pc --max-particles 1", 6,
+     {"runs of case a", "refused", "--yes"}, {}},
+    {"P5 timestep plan above the limit", "timestep SCENE --out DIR/pt --max-particles 1", 6,
+     {"runs of case dt_fraction", "refused", "--yes"}, {}},
+    {"P5 loop plan above the limit", "loop SHEET --out DIR/pl --max-particles 1", 6,
+     {"baseline piles of test", "refused", "--yes"}, {}},
 };
 
 TEST(BadInputTable, EveryCommandCaseIsRefusedNamingItsOption) {
@@ -338,6 +346,30 @@ TEST(BadInputTable, EveryCommandCaseIsRefusedNamingItsOption) {
     EXPECT_EQ(r.code, c.code) << r.out;
     expect_message(r, c.must, c.must_not);
   }
+  // The paper's whole index (about 15 CPU-hours) on two workers is above the hour a plan may
+  // take unconfirmed.
+  const CliResult paper =
+      run_cli("paper " +
+              quoted(fs::path(REPOSETWIN_SOURCE_DIR) / "experiments" / "paper" / "index.toml") +
+              " --out " + quoted(dir / "pp"));
+  EXPECT_EQ(paper.code, 6) << paper.out;
+  expect_message(paper, {"plan: ", "CPU-hours", "refused", "--max-hours", "--yes"}, {});
+  // A refused plan writes nothing.
+  for (const char* out : {"pc", "pt", "pl", "pp"}) EXPECT_FALSE(fs::exists(dir / out)) << out;
+}
+
+// A study whose run gives no angle did not get what it asked for: timestep exits 4, as a
+// campaign does (it exited 0 before). One tiny pile that cannot settle in 0.02 s.
+TEST(BadInputTable, ATimestepStudyWithAFailedRunExitsNonZero) {
+  const fs::path dir = fresh_dir("table_timestep_failed");
+  std::string scene = reposetwin::test_support::kTinyScene;
+  const std::string at = "settle_speed_m_s = 0.01\n";
+  scene.replace(scene.find(at), at.size(), at + "final_settle_max_s = 0.02\n");
+  write_text(dir / "scene.toml", scene);
+  const CliResult r = run_cli("timestep " + quoted(dir / "scene.toml") + " --out " +
+                              quoted(dir / "t") + " --fractions 0.3 --workers 1");
+  EXPECT_EQ(r.code, 4) << r.out;
+  expect_message(r, {"1 of 1 runs failed or gave no angle"}, {});
 }
 
 // 6, second pass (sidecar fuzz): a principal point off the image, and JSON errors in words.
