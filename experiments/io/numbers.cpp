@@ -55,8 +55,8 @@ std::vector<std::uint64_t> parse_seed_list(std::string_view text, const std::str
   std::size_t start = 0;
   while (true) {
     const std::size_t comma = text.find(',', start);
-    const std::string_view item =
-        text.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
+    const std::string_view item = text.substr(
+        start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
     const std::optional<std::uint64_t> seed = parse_seed(item);
     if (!seed)
       throw InputError(option + " " + std::string(text) + ": \"" + std::string(item) +

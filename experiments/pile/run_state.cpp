@@ -116,7 +116,8 @@ RunState run_state_from_text(const std::string& text, const std::string& path) {
     if (!kKeys.count(key)) throw bad("has an unknown field \"" + key + "\"");
   for (const std::string& key : kKeys)
     if (!j.contains(key)) throw bad("lacks the field \"" + key + "\"");
-  if (j["format"] != kFormat) throw bad("format is " + j["format"].dump() + ", not \"" + kFormat + "\"");
+  if (j["format"] != kFormat)
+    throw bad("format is " + j["format"].dump() + ", not \"" + kFormat + "\"");
   if (j["version"] != kVersion)
     throw bad("version is " + j["version"].dump() + "; this program reads version " +
               std::to_string(kVersion));

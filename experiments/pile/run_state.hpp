@@ -38,14 +38,7 @@
 namespace reposetwin::experiments {
 
 /// The stages of a run folder, in order.
-enum class RunStage {
-  kSimulated = 0,
-  kPhotographed,
-  kMeasured,
-  kSummarised,
-  kReported,
-  kCount
-};
+enum class RunStage { kSimulated = 0, kPhotographed, kMeasured, kSummarised, kReported, kCount };
 
 /// The stage's word in run_state.json and in messages, indexed by the enum.
 inline constexpr std::array<const char*, static_cast<std::size_t>(RunStage::kCount)>

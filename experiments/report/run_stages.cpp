@@ -63,9 +63,10 @@ RunStagesOutcome finish_run_stages(const PileRun& run, const SceneConfig& scene,
   if (out.state.photographs) {
     photographs_stages(run, req, out.state, in);
   } else {
-    in.images_note = !req.no_images_note.empty()    ? req.no_images_note
-                     : no_headline(run.stop, run.pile) ? "the run ended with no settled pile to photograph"
-                                                       : "--no-images";
+    in.images_note = !req.no_images_note.empty() ? req.no_images_note
+                     : no_headline(run.stop, run.pile)
+                         ? "the run ended with no settled pile to photograph"
+                         : "--no-images";
   }
   const auto wall = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - req.started).count();

@@ -25,9 +25,9 @@ namespace reposetwin::experiments {
 /// What the stages after the simulation are asked for.
 struct RunStagesRequest {
   std::string run_dir;
-  std::vector<std::string> overrides;  // the --set arguments, for the page
-  ImageSettings images;                // the photographs' settings
-  std::string no_images_note;          // why the run has no photographs ("--no-images")
+  std::vector<std::string> overrides;             // the --set arguments, for the page
+  ImageSettings images;                           // the photographs' settings
+  std::string no_images_note;                     // why the run has no photographs ("--no-images")
   std::chrono::steady_clock::time_point started;  // when the command began (the page's wall time)
 };
 

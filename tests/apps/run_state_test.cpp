@@ -25,8 +25,8 @@ struct Ended {
 };
 Ended run_with_env(const std::vector<std::string>& env, const std::vector<std::string>& args,
                    const fs::path& cwd) {
-  const fs::path log =
-      fs::temp_directory_path() / ("reposetwin_run_state_test." + std::to_string(getpid()) + ".log");
+  const fs::path log = fs::temp_directory_path() /
+                       ("reposetwin_run_state_test." + std::to_string(getpid()) + ".log");
   experiments::ProgramCall call;
   call.argv = {"env"};
   call.argv.insert(call.argv.end(), env.begin(), env.end());
@@ -60,9 +60,8 @@ TEST(RunKill, AKillAtEachStageLeavesAnIncompleteRunThatResumeFinishesToTheSameRe
   for (const char* stage : {"simulated", "photographed", "measured", "summarised", "reported"}) {
     SCOPED_TRACE(stage);
     const std::string out = std::string("killed_") + stage;
-    const Ended killed =
-        run_with_env({std::string("REPOSETWIN_TEST_KILL_AFTER_STAGE=") + stage},
-                     {"run", kTiny.string(), "--out", out, "--quiet"}, dir);
+    const Ended killed = run_with_env({std::string("REPOSETWIN_TEST_KILL_AFTER_STAGE=") + stage},
+                                      {"run", kTiny.string(), "--out", out, "--quiet"}, dir);
     ASSERT_EQ(killed.status, experiments::ProgramStatus::kSignaled) << killed.out;
     ASSERT_EQ(killed.code, SIGKILL);
     const bool complete = std::string(stage) == "reported";
@@ -76,8 +75,7 @@ TEST(RunKill, AKillAtEachStageLeavesAnIncompleteRunThatResumeFinishesToTheSameRe
       EXPECT_EQ(report.code, 11) << report.out;
       EXPECT_EQ(report.out.find("angle of repose"), std::string::npos) << report.out;
       EXPECT_NE(report.out.find("incomplete run, no headline"), std::string::npos) << report.out;
-      EXPECT_NE(report.out.find(std::string("stopped after the stage ") + stage),
-                std::string::npos)
+      EXPECT_NE(report.out.find(std::string("stopped after the stage ") + stage), std::string::npos)
           << report.out;
       EXPECT_NE(report.out.find("missing: "), std::string::npos) << report.out;
       // A plain run into it is refused: it is not finished, and not to be started over silently.

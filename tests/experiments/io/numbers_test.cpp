@@ -20,18 +20,20 @@ namespace {
 
 TEST(Numbers, APlainDecimalIsReadExactlyAndNothingElseIs) {
   const std::vector<std::pair<const char*, double>> good = {
-      {"0", 0.0},       {"12", 12.0},       {"-3.5", -3.5}, {"+2", 2.0},     {".5", 0.5},
-      {"5.", 5.0},      {"1e-3", 1e-3},     {"2.5E+2", 250.0}, {"0.1", 0.1},
-      {"1.7976931348623157e308", 1.7976931348623157e308}};
+      {"0", 0.0},     {"12", 12.0},
+      {"-3.5", -3.5}, {"+2", 2.0},
+      {".5", 0.5},    {"5.", 5.0},
+      {"1e-3", 1e-3}, {"2.5E+2", 250.0},
+      {"0.1", 0.1},   {"1.7976931348623157e308", 1.7976931348623157e308}};
   for (const auto& [text, value] : good) {
     const std::optional<double> v = parse_plain_decimal(text);
     ASSERT_TRUE(v) << text;
     EXPECT_EQ(*v, value) << text;
   }
   for (const char* bad :
-       {"", " ", "0x1A", "0X10", "0x1p3", "inf", "-inf", "Infinity", "nan", "NaN", "1e999",
-        "-1e999", "12abc", "1,5", " 1", "1 ", "1e", "e5", ".", "-", "+-1", "1..2", "1e5.5",
-        "١٢", "1_000", "--1", "0b101"})
+       {"",    " ",     "0x1A",   "0X10",  "0x1p3", "inf", "-inf",  "Infinity", "nan",
+        "NaN", "1e999", "-1e999", "12abc", "1,5",   " 1",  "1 ",    "1e",       "e5",
+        ".",   "-",     "+-1",    "1..2",  "1e5.5", "١٢",  "1_000", "--1",      "0b101"})
     EXPECT_FALSE(parse_plain_decimal(bad)) << "\"" << bad << "\"";
   try {
     plain_decimal("0x1A", "sheet.csv:3, column mass_g");
@@ -97,8 +99,7 @@ TEST(Numbers, RepeatedPhotosAreRefusedByContentUnderAnyName) {
   EXPECT_NO_THROW(refuse_repeated_contents({(d / "a.png").string(), (d / "b.png").string()}, "x"));
   try {
     refuse_repeated_contents(
-        {(d / "a.png").string(), (d / "b.png").string(), (d / "copy_of_a.png").string()},
-        "--side");
+        {(d / "a.png").string(), (d / "b.png").string(), (d / "copy_of_a.png").string()}, "--side");
     ADD_FAILURE();
   } catch (const InputError& e) {
     const std::string what = e.what();

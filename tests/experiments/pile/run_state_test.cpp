@@ -49,12 +49,12 @@ TEST(RunState, TransitionsGoOneStageOnOrSkipPhotographsOnlyWithoutThem) {
       {S::kPhotographed, S::kMeasured, true, true},
       {S::kMeasured, S::kSummarised, true, true},
       {S::kSummarised, S::kReported, true, true},
-      {S::kSimulated, S::kSummarised, false, true},   // --no-images, or no pile
-      {S::kSimulated, S::kSummarised, true, false},   // photographs skipped
-      {S::kSimulated, S::kMeasured, true, false},     // measured without photographs
+      {S::kSimulated, S::kSummarised, false, true},  // --no-images, or no pile
+      {S::kSimulated, S::kSummarised, true, false},  // photographs skipped
+      {S::kSimulated, S::kMeasured, true, false},    // measured without photographs
       {S::kSimulated, S::kPhotographed, false, false},
       {S::kPhotographed, S::kSummarised, true, false},
-      {S::kSummarised, S::kMeasured, true, false},    // backwards: only by rewinding
+      {S::kSummarised, S::kMeasured, true, false},  // backwards: only by rewinding
       {S::kReported, S::kReported, true, false},
       {S::kReported, S::kCount, true, false},
       {S::kMeasured, S::kMeasured, true, false},
@@ -156,14 +156,14 @@ TEST(RunState, DamagedEditedOrUnknownRecordsAreRefusedNamingTheFileAndWhy) {
 
 TEST(RunState, RewindLowersTheRecordFirstAndRemovesWhatTheStagesAboveMade) {
   const fs::path d = test_support::temp_dir("run_state_rewind");
-  for (const char* f : {"result.json", "final.vtp", "summary.html", "images/measurement.json",
-                        "images/side_az000.png", "images/side_az045_2.measured.png",
-                        "images/top.json", "images/frame_00004/side_az000.png",
-                        "images/holiday.jpg"})
+  for (const char* f :
+       {"result.json", "final.vtp", "summary.html", "images/measurement.json",
+        "images/side_az000.png", "images/side_az045_2.measured.png", "images/top.json",
+        "images/frame_00004/side_az000.png", "images/holiday.jpg"})
     put(d / f);
   record_simulated(d.string(), true);
-  for (RunStage s : {RunStage::kPhotographed, RunStage::kMeasured, RunStage::kSummarised,
-                     RunStage::kReported})
+  for (RunStage s :
+       {RunStage::kPhotographed, RunStage::kMeasured, RunStage::kSummarised, RunStage::kReported})
     record_stage(d.string(), s);
   rewind_run_state(d.string(), RunStage::kMeasured, true);
   EXPECT_EQ(read_run_state(d.string())->stage, RunStage::kMeasured);
