@@ -59,7 +59,7 @@ std::string incomplete_reason(const fs::path& dir) {
     const std::optional<RunState> s = read_run_state(dir.string());
     if (!s)
       return "no stage record (run_state.json): the run was stopped before its result was "
-             "recorded as simulated";
+             "recorded as simulated, or was made by a version that kept no stage record";
     if (s->complete()) return "";
     return "stopped after the stage " + std::string(run_stage_name(s->stage)) +
            "; missing: " + s->missing() + (s->note.empty() ? "" : " (" + s->note + ")");
