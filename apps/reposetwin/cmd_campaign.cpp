@@ -77,11 +77,20 @@ void add_campaign_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "campaign", "Run every case x seed of a campaign file (resumable; spreads over MPI ranks)");
   add_pool_options(cmd, *a, "Redo finished runs too");
-  cmd->callback([a]() {
+  auto plan = std::make_shared<PlanArgs>();
+  cmd->add_flag("--quiet,-q", a->quiet, "No plan lines");
+  add_plan_options(cmd, plan);
+  cmd->callback([a, plan]() {
     const experiments::Campaign c = experiments::load_campaign(a->file);
     experiments::check_pile_cases(c);
     const std::string out = a->out.empty() ? "runs/" + c.name : a->out;
     experiments::check_output_folder(out);
+    const experiments::BatchPlan bp = experiments::plan_campaign(c, a->workers);
+    if (!accept_plan(experiments::plan_text(bp, plan->limits),
+                     experiments::plan_refusal(bp, plan->limits), *plan, a->quiet)) {
+      set_exit_code(ExitCode::kPlanRefused);
+      return;
+    }
     const experiments::CampaignSummary s =
         experiments::run_campaign(c, out, case_fn(*a), runner(*a));
     std::cout << nlohmann::json{{"campaign", c.name},

@@ -10,6 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/reposetwin/commands.hpp"
+#include "experiments/io/hash.hpp"
+#include "experiments/pile/headline.hpp"
 #include "experiments/export/liggghts_deck.hpp"
 #include "experiments/export/particle_dump.hpp"
 #include "experiments/io/input_error.hpp"
@@ -55,6 +57,21 @@ void add_export_command(CLI::App& app) {
       } catch (const std::exception& e) {
         throw experiments::InputError(std::string("--initial-state: ") + e.what());
       }
+      // The filled sample of another scene (another PSD, container or material) would start
+      // this scene's pour from a state it cannot make: refused by the scene identity the
+      // snapshot records.
+      const std::string here = experiments::fnv1a_hex(scene.resolved_toml);
+      const std::string recorded = initial->info ? initial->info->scene_fnv1a : std::string();
+      if (recorded.empty())
+        throw experiments::InputError(
+            a->initial + ": --initial-state: the snapshot records no scene identity (not a "
+                         "twin's frames/filled.vtp, or made by an older version); run the scene "
+                         "again and give its frames/filled.vtp");
+      if (recorded != here)
+        throw experiments::InputError(
+            a->initial + ": --initial-state: the snapshot is of another scene (resolved scene "
+                         "hash " + recorded + ", " + a->scene + " with these --set is " + here +
+            "); give the filled.vtp of a run of this scene");
       s.initial_state = &*initial;
     }
     experiments::LiggghtsDeck deck;
@@ -110,6 +127,10 @@ void add_measure_particles_command(CLI::App& app) {
     const experiments::SceneConfig scene = experiments::load_scene(a->scene, a->sets);
     const experiments::ParticleDump d = experiments::read_particles(a->dump);
     const sim::PileGeometry g = sim::measure_pile(d.x, d.radius, scene.pile);
+    // The run's own rule (pile/headline.hpp): a pile too small or degenerate to fit a flank
+    // (one grain, a flat layer) has no angle, never a number from its bounding box.
+    const std::optional<experiments::NoHeadline> none =
+        experiments::no_headline(experiments::RunStop{}, experiments::pile_measure(g));
     const double deg = 180.0 / 3.14159265358979323846;
     if (a->json) {
       std::cout << nlohmann::json{{"dump", a->dump},
@@ -120,13 +141,16 @@ void add_measure_particles_command(CLI::App& app) {
                                   {"base_diameter_m", g.base_diameter},
                                   {"theta_hd_deg", g.theta_hd * deg},
                                   {"slice_angle_mean_deg", g.slice_angle_mean * deg},
-                                  {"pile_count", g.pile_count}}
+                                  {"pile_count", g.pile_count},
+                                  {"no_headline", none ? nlohmann::json(none->message)
+                                                       : nlohmann::json()}}
                        .dump(2)
                 << "\n";
+      if (none) set_exit_code(ExitCode::kNoPile);
       return;
     }
-    if (g.status == sim::PileStatus::kNoPile) {
-      std::cout << "no pile: no grain of " << a->dump << " touches the plate\n";
+    if (none) {
+      std::cout << "no angle: " << a->dump << " " << none->message << "\n";
       set_exit_code(ExitCode::kNoPile);
       return;
     }

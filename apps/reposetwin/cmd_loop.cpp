@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
+#include "apps/reposetwin/plan_gate.hpp"
+#include "experiments/io/numbers.hpp"
 #include "apps/reposetwin/validators.hpp"
 #include "experiments/loop/loop.hpp"
 #include "experiments/loop/loop_synth.hpp"
@@ -29,14 +31,7 @@ std::vector<double> parse_list(const std::string& text, const std::string& optio
   std::stringstream ss(text);
   std::string item;
   while (std::getline(ss, item, ',')) {
-    try {
-      std::size_t used = 0;
-      out.push_back(std::stod(item, &used));
-      if (used != item.size() || !std::isfinite(out.back())) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
-      throw experiments::InputError(option + " " + text + ": \"" + item +
-                                    "\" is not a finite number");
-    }
+    out.push_back(experiments::plain_decimal(item, option + " " + text));
   }
   return out;
 }
@@ -57,6 +52,7 @@ void add_loop_command(CLI::App& app) {
     experiments::LoopSettings settings;
     bool quiet = false;
     bool own_cameras = false;
+    std::shared_ptr<PlanArgs> plan = std::make_shared<PlanArgs>();
   };
   auto args = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
@@ -146,6 +142,7 @@ void add_loop_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--force", args->settings.force, "Recompute a finished loop.json (cache kept)");
   cmd->add_flag("--quiet,-q", args->quiet, "No progress lines");
+  add_plan_options(cmd, args->plan);
   cmd->callback([args]() {
     experiments::LoopSettings s = args->settings;
     if (!args->grid.empty()) {
@@ -157,12 +154,7 @@ void add_loop_command(CLI::App& app) {
                                         ": give at least two increasing values >= 0");
     }
     if (!args->seeds.empty()) {
-      s.seeds.clear();
-      for (double v : parse_list(args->seeds, "--seeds")) {
-        if (!(v >= 0.0) || v != static_cast<double>(static_cast<std::uint64_t>(v)))
-          throw experiments::InputError("--seeds: " + std::to_string(v) + " is not a seed");
-        s.seeds.push_back(static_cast<std::uint64_t>(v));
-      }
+      s.seeds = experiments::parse_seed_list(args->seeds, "--seeds");
     }
     if (!args->candidates.empty()) {
       std::stringstream ss(args->candidates);
@@ -201,6 +193,16 @@ void add_loop_command(CLI::App& app) {
     plan.add_output((fs::path(args->out) / "loop.json").string(), "--out");
     plan.check();
     const experiments::LabData data = experiments::read_lab_csv(args->data);
+    // The baseline's piles are known before anything runs; a grid of a thousand points is a
+    // week of piles, started only when confirmed.
+    const experiments::BatchPlan bp = experiments::plan_loop_baseline(data, s);
+    if (!accept_plan("The loop's baseline (fingerprints and refits come on top):\n" +
+                         experiments::plan_text(bp, args->plan->limits),
+                     experiments::plan_refusal(bp, args->plan->limits), *args->plan,
+                     args->quiet)) {
+      set_exit_code(ExitCode::kPlanRefused);
+      return;
+    }
     const nlohmann::json loop = experiments::run_loop(data, args->out, s);
     std::cout << loop["summary"].dump(2) << "\n";
     std::cout << "report: " << args->out << "/index.html, " << args->out << "/loop.json\n";

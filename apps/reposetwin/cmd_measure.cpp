@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
+#include "experiments/io/files.hpp"
 #include "experiments/photos/photographs.hpp"
 #include "apps/reposetwin/validators.hpp"
 #include "experiments/io/provenance.hpp"
@@ -128,6 +129,8 @@ void run_measure(const MeasureOptions& o) {
 
   std::vector<std::string> sides{o.side};
   sides.insert(sides.end(), o.more_sides.begin(), o.more_sides.end());
+  experiments::refuse_repeated_contents(sides, "measure (side and --side)");
+  if (!o.cameras.empty()) experiments::refuse_repeated_contents(o.cameras, "measure --camera");
   // The overlays go beside the user's photos: checked against every input and each other before
   // anything is measured (experiments/io/files.hpp).
   const auto side_overlay = [&](std::size_t i) {

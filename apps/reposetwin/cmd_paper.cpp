@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "apps/reposetwin/commands.hpp"
+#include "apps/reposetwin/plan_gate.hpp"
 #include "experiments/campaign/case_runner.hpp"
 #include "experiments/reproduce/paper_index.hpp"
 #include "experiments/reproduce/paper_page.hpp"
@@ -21,7 +22,33 @@ struct PaperArgs {
   int workers = 2;
   std::string mode = "processes";
   int views = 4;
+  std::shared_ptr<PlanArgs> plan = std::make_shared<PlanArgs>();
 };
+
+// The items a call runs (--only, or all) against the plan limits: their CPU-hours over the
+// workers as the wall time, and their largest pile. Empty when within them.
+std::string paper_refusal(const nlohmann::json& listing, const PaperArgs& a) {
+  double cpu_h = 0.0;
+  long long particles = 0;
+  for (const nlohmann::json& i : listing["items"]) {
+    const std::string name = i["name"].get<std::string>();
+    if (!a.only.empty() && std::find(a.only.begin(), a.only.end(), name) == a.only.end())
+      continue;
+    cpu_h += i["planned_cpu_hours"].get<double>();
+    for (const auto& g : i["groups"])
+      particles = std::max(particles, g["particles"].get<long long>());
+  }
+  const double wall_s = 3600.0 * cpu_h / std::max(1, a.workers);
+  const experiments::PlanSettings& lim = a.plan->limits;
+  if (particles > lim.max_particles)
+    return "a pile of " + std::to_string(particles) + " particles is above --max-particles " +
+           std::to_string(lim.max_particles) + "; pass --yes to run it anyway";
+  if (wall_s > lim.max_wall_s)
+    return "the items planned take about " + experiments::duration_text(wall_s) + " with " +
+           std::to_string(a.workers) + " workers, above --max-hours " +
+           experiments::duration_text(lim.max_wall_s) + "; pass --yes to run them anyway";
+  return "";
+}
 
 void print_listing(const nlohmann::json& l) {
   std::printf("%-22s %-26s %-11s %5s %8s %9s  %s\n", "item", "paper", "kind", "runs", "CPU-h",
@@ -76,6 +103,7 @@ void add_paper_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--views", a->views, "Side views per pile for the image angle")
       ->capture_default_str();
+  add_plan_options(cmd, a->plan);
   cmd->callback([a]() {
     const experiments::PaperIndex index = experiments::load_paper_index(a->index);
     if (a->list) {
@@ -85,6 +113,18 @@ void add_paper_command(CLI::App& app) {
     if (a->page) {
       const std::string page = experiments::build_paper_page(index, a->out, a->force);
       std::cout << "paper page " << page << "\n";
+      return;
+    }
+    // The listing is the plan: printed before anything runs, and above the limits only with
+    // --yes.
+    const nlohmann::json planned = experiments::paper_listing(index, a->out);
+    char line[160];
+    std::snprintf(line, sizeof line,
+                  "plan: %d runs of the index, %.2f CPU-hours (reposetwin paper --list shows "
+                  "each item)\n",
+                  planned["planned_runs"].get<int>(), planned["planned_cpu_hours"].get<double>());
+    if (!accept_plan(line, paper_refusal(planned, *a), *a->plan, false)) {
+      set_exit_code(ExitCode::kPlanRefused);
       return;
     }
     experiments::RunnerSettings rs;

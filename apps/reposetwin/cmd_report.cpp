@@ -4,7 +4,10 @@
 #include <memory>
 
 #include "apps/reposetwin/commands.hpp"
+#include "apps/reposetwin/validators.hpp"
 #include "experiments/io/input_error.hpp"
+#include "experiments/pile/run_state.hpp"
+#include "experiments/report/folder_results.hpp"
 #include "experiments/report/report.hpp"
 
 namespace reposetwin::cli {
@@ -42,7 +45,8 @@ void add_report_command(CLI::App& app) {
                   "their common parent folder)");
   cmd->add_option("--lab-photo", a->settings.lab_photo, "A lab photo to measure and show");
   cmd->add_option("--lab-mm-per-px", a->settings.lab_mm_per_px,
-                  "The lab photo's scale [mm/px] (default: find the scale bar)");
+                  "The lab photo's scale [mm/px] (default: find the scale bar)")
+      ->check(positive_number());
   cmd->add_option("--title", a->settings.title, "Report title");
   cmd->add_option("--paper-data", a->settings.paper_dir,
                   "Folder of the paper's CSVs (default: data/paper found upwards from the "
@@ -62,9 +66,16 @@ void add_report_command(CLI::App& app) {
       if (fs::exists(p) && !a->force)
         throw experiments::InputError(p.string() +
                                       ": a report is already there; pass --force to rebuild it");
+    // A report writes into each run folder it reads (RUN_DIR/report/): it holds the folder's
+    // lock for the whole command, so no run or render changes the stages under it.
+    std::vector<std::unique_ptr<experiments::RunFolderLock>> locks;
+    for (const auto& d : a->dirs)
+      if (experiments::report::is_run_dir(d))
+        locks.push_back(std::make_unique<experiments::RunFolderLock>(d));
     if (a->dirs.size() == 1 && out.empty()) {
       const nlohmann::json s = experiments::build_report(a->dirs[0], a->settings);
       print(s, experiments::report_page(a->dirs[0]), a->json);
+      if (s.contains("incomplete")) set_exit_code(ExitCode::kIncomplete);
       return;
     }
     if (out.empty()) {  // the folders' common parent

@@ -16,6 +16,8 @@
 #include "experiments/pile/pile_run.hpp"
 #include "experiments/pile/run_folder.hpp"
 #include "experiments/pile/run_plan.hpp"
+#include "experiments/pile/run_state.hpp"
+#include "experiments/report/run_stages.hpp"
 #include "experiments/report/run_summary.hpp"
 
 namespace reposetwin::cli {
@@ -45,32 +47,6 @@ bool accept_run_plan(const RunArgs& a, const experiments::SceneConfig& scene) {
       experiments::plan_run(scene, run_threads(a, scene), a.plan->limits);
   return accept_plan(experiments::plan_text(plan, a.plan->limits),
                      experiments::plan_refusal(plan, a.plan->limits), *a.plan, a.quiet);
-}
-
-// The run's photographs from its final state in memory, measured; nullopt when there are none:
-// `note` says why (--no-images, no pile), and `error` names the file and the reason when they
-// were asked for and could not be written or measured (then the run has no headline).
-std::optional<nlohmann::json> photographs(const RunArgs& a, const experiments::PileRun& run,
-                                          std::string& note, std::string& error) {
-  if (a.no_images) {
-    note = "--no-images";
-    return std::nullopt;
-  }
-  if (experiments::no_headline(run.stop, run.pile)) {
-    note = "the run ended with no settled pile to photograph";
-    return std::nullopt;
-  }
-  try {
-    nlohmann::json m =
-        experiments::render_and_measure_run(run, a.run.out_dir, experiments::ImageSettings{});
-    if (!m.contains("theta_deg") || !m["theta_deg"].is_number())
-      throw std::runtime_error(a.run.out_dir + "/images: vision measured no side view");
-    return m;
-  } catch (const std::exception& e) {
-    error = e.what();
-    note = "the photographs could not be taken: " + error;
-    return std::nullopt;
-  }
 }
 
 // The exit code of a finished run: 0 with a headline, else its reason's.
@@ -114,25 +90,52 @@ void add_run_command(CLI::App& app) {
   cmd->callback([args]() {
     const auto t0 = std::chrono::steady_clock::now();
     const experiments::SceneConfig scene = experiments::load_scene(args->scene, args->sets);
-    experiments::check_run_folder(args->run.out_dir, args->run.resume, args->run.force);
+    const std::string& out = args->run.out_dir;
+    // Classified before the lock (a folder that is not a run's gets no lock file), and again
+    // under it: another command may have changed it in between.
+    // A refused plan writes nothing, not even the lock file.
+    experiments::check_run_folder(out, args->run.resume, args->run.force);
     if (!accept_run_plan(*args, scene)) {
       set_exit_code(ExitCode::kPlanRefused);
       return;
     }
+    const experiments::RunFolderLock lock(out);
+    experiments::check_run_folder(out, args->run.resume, args->run.force);
     args->run.progress = !args->quiet;
-    const std::optional<experiments::PileRun> run = experiments::run_pile_test(scene, args->run);
-    if (!run) {  // a stop limit (none is set from the command line; kept for completeness)
-      std::cout << "stopped before the end; continue with --resume\n";
-      return;
+    args->run.lock_held = true;
+    // The stage record decides where a resumed run continues: a run recorded as simulated is
+    // not simulated again, only its missing stages are made.
+    const std::optional<experiments::RunState> recorded =
+        args->run.resume ? experiments::read_run_state(out) : std::nullopt;
+    std::optional<experiments::PileRun> run;
+    if (recorded) {
+      // The stages left are made for the scene the run was simulated from, never another.
+      if (experiments::read_file(out + "/scene.resolved.toml") != scene.resolved_toml)
+        throw experiments::InputError(
+            out + ": the run was simulated from another scene (its scene.resolved.toml differs "
+                  "from this one); resume it with the same scene and --set, or pass --force",
+            "--resume");
+      run = experiments::pile_run_from_json(
+          nlohmann::json::parse(experiments::read_file(out + "/result.json")));
+    } else {
+      run = experiments::run_pile_test(scene, args->run);
+      if (!run) {  // a stop limit (none is set from the command line; kept for completeness)
+        std::cout << "stopped before the end; continue with --resume\n";
+        return;
+      }
+      experiments::record_simulated(out, experiments::run_has_photographs(*run, args->no_images));
     }
-    experiments::RunSummaryInputs in;
-    in.run_dir = args->run.out_dir;
-    in.overrides = args->sets;
-    in.images = photographs(*args, *run, in.images_note, in.images_error);
-    in.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const experiments::RunSummary summary = experiments::finish_run(*run, scene, in);
-    if (args->json) std::cout << experiments::read_file(args->run.out_dir + "/result.json") << "\n";
-    std::cout << experiments::headline_line(*run, summary, in.wall_s) << std::endl;
+    experiments::RunStagesRequest req;
+    req.run_dir = out;
+    req.overrides = args->sets;
+    req.started = t0;
+    if (args->no_images) req.no_images_note = "--no-images";
+    const experiments::RunStagesOutcome done = experiments::finish_run_stages(*run, scene, req);
+    const experiments::RunSummary& summary = done.summary;
+    const double wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (args->json) std::cout << experiments::read_file(out + "/result.json") << "\n";
+    std::cout << experiments::headline_line(*run, summary, wall_s) << std::endl;
     if (summary.no_headline) {
       const experiments::NoHeadline& n = *summary.no_headline;
       std::cerr << "reposetwin: no angle of repose: " << n.message << "\n";
@@ -141,6 +144,9 @@ void add_run_command(CLI::App& app) {
       else
         std::cerr << "try: " << experiments::no_headline_advice(n.reason) << "\n";
     }
+    if (!done.state.complete())
+      std::cerr << "reposetwin: " << out << " is incomplete (missing: " << done.state.missing()
+                << "); continue it with --resume\n";
     set_exit_code(run_exit_code(summary));
   });
 }

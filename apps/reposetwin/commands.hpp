@@ -12,13 +12,15 @@ enum class ExitCode : int {
   kOk = 0,
   kError = 2,          // bad input or another error; nothing was run
   kPhysicsStop = 3,    // run: the engine stopped the run
-  kSomeFailed = 4,     // campaign: some cases failed or gave no angle; paper: some items
+  kSomeFailed = 4,     // campaign, timestep: some cases failed or gave no angle; paper: items
   kUnreachable = 5,    // calibrate: the target angle cannot be reached
-  kPlanRefused = 6,    // run, calibrate: the plan is above the limits and was not confirmed
+  kPlanRefused = 6,    // a command that simulates: the plan is above the limits, unconfirmed
   kNoPile = 7,         // run, measure-particles: no settled pile to measure (time limit, not
                        // settled, jam, none)
   kNoPhotographs = 8,  // run: the photographs could not be written or measured
   kRefused = 9,        // measure: a photo failed an admission check (vision/admission.hpp)
+  kBusy = 10,          // run, render, report: another command holds the run folder's lock
+  kIncomplete = 11,    // report: a run folder stopped between stages (pile/run_state.hpp)
 };
 
 /// Exit code set by the subcommand that ran (0 = success).

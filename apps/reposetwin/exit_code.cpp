@@ -12,16 +12,23 @@ constexpr std::pair<ExitCode, const char*> kMeanings[] = {
     {ExitCode::kError, "bad input or another error; the message names the file, key and value"},
     {ExitCode::kPhysicsStop, "run: the engine stopped the run (NaN, overlap, escape)"},
     {ExitCode::kSomeFailed,
-     "campaign: some cases failed or gave no angle; paper: some items failed"},
+     "campaign, timestep: some cases failed or gave no angle; paper: some items failed"},
     {ExitCode::kUnreachable, "calibrate: the target angle cannot be reached in the mu_r range"},
     {ExitCode::kPlanRefused,
-     "run, calibrate: the plan is above the limits and was not confirmed (--yes)"},
+     "run, calibrate, campaign, timestep, loop, paper: the plan is above the limits and was "
+     "not confirmed (--yes)"},
     {ExitCode::kNoPile,
      "run: no angle: no settled pile to measure (time limit, not settled, jammed, no pile)"},
     {ExitCode::kNoPhotographs, "run: no angle: the photographs could not be written or measured"},
     {ExitCode::kRefused,
      "measure: a photo failed an admission check; the message (and --json's \"refused\") names "
      "the check and the value it measured"},
+    {ExitCode::kBusy,
+     "run, render, report: another reposetwin command is writing the run folder (its lock is "
+     "held); nothing was written: wait for it to end"},
+    {ExitCode::kIncomplete,
+     "report: a run folder stopped between its stages; no headline is shown, the message says "
+     "what is missing (run --resume finishes it)"},
 };
 }  // namespace
 

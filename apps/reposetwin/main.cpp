@@ -65,6 +65,11 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const reposetwin::experiments::FolderBusy& e) {
+    // Refused, not waited for: a run holds its folder for hours, and a command that hangs
+    // without a word is worse than one that says who holds the folder.
+    std::cerr << "reposetwin: error: " << e.what() << "\n";
+    return static_cast<int>(reposetwin::cli::ExitCode::kBusy);
   } catch (const std::exception& e) {
     std::cerr << "reposetwin: error: " << e.what() << "\n";
     return static_cast<int>(reposetwin::cli::ExitCode::kError);

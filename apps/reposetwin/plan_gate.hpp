@@ -1,5 +1,6 @@
-// The plan gate of the commands that simulate (run, calibrate): the plan is printed before
-// anything runs, and a plan above the limits starts only when confirmed.
+// The plan gate of the commands that simulate (run, calibrate, campaign, timestep, loop, paper):
+// the plan is printed before anything runs, and a plan above the limits starts only when
+// confirmed.
 #pragma once
 
 #include <CLI/CLI.hpp>

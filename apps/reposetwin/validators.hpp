@@ -4,7 +4,10 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <optional>
 #include <string>
+
+#include "experiments/io/numbers.hpp"
 
 namespace reposetwin::cli {
 
@@ -12,9 +15,9 @@ namespace reposetwin::cli {
 inline CLI::Validator positive_number() {
   return CLI::Validator(
       [](std::string& s) -> std::string {
-        double v = 0.0;
-        if (!CLI::detail::lexical_cast(s, v)) return "'" + s + "' is not a number";
-        if (!(v > 0.0 && std::isfinite(v))) return "must be a positive number, got " + s;
+        const std::optional<double> v = experiments::parse_plain_decimal(s);
+        if (!v) return "'" + s + "' is not a number (a plain decimal is expected)";
+        if (!(*v > 0.0)) return "must be a positive number, got " + s;
         return "";
       },
       "POSITIVE");
@@ -24,8 +27,9 @@ inline CLI::Validator positive_number() {
 inline CLI::Validator number_in(double lo, double hi) {
   return CLI::Validator(
       [lo, hi](std::string& s) -> std::string {
-        double v = 0.0;
-        if (!CLI::detail::lexical_cast(s, v)) return "'" + s + "' is not a number";
+        const std::optional<double> parsed = experiments::parse_plain_decimal(s);
+        if (!parsed) return "'" + s + "' is not a number (a plain decimal is expected)";
+        const double v = *parsed;
         if (!(v >= lo && v <= hi))
           return "must lie in [" + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) +
                  "], got " + s;

@@ -29,13 +29,12 @@ double largest_stable_dt(const std::vector<std::pair<double, double>>& dt_angle,
   return stable;
 }
 
-json run_timestep_study(const std::string& scene_path, const std::string& out_dir,
-                        const TimestepStudySettings& s) {
+Campaign timestep_campaign(const std::string& scene_path, const std::string& out_dir,
+                           const TimestepStudySettings& s, std::string* text) {
   if (s.rayleigh_fractions.empty()) throw InputError("timestep: the list of fractions is empty");
   for (double f : s.rayleigh_fractions)
     if (!(f > 0)) throw InputError("timestep: fraction " + std::to_string(f) + " must be positive");
   if (!fs::exists(scene_path)) throw InputError(scene_path + ": scene file does not exist");
-  fs::create_directories(out_dir);
   // The study as a campaign file (kept in the folder, so the study is resumable and reportable).
   std::ostringstream c;
   c << "name = \"timestep_study\"\npaper = \"Fig. 5\"\nscene = \""
@@ -45,12 +44,22 @@ json run_timestep_study(const std::string& scene_path, const std::string& out_di
   for (std::size_t i = 0; i < s.rayleigh_fractions.size(); ++i)
     c << (i ? ", " : "") << s.rayleigh_fractions[i];
   c << "]\n";
+  if (text) *text = c.str();
+  return parse_campaign(c.str(), (fs::path(out_dir) / "timestep_campaign.toml").string());
+}
+
+json run_timestep_study(const std::string& scene_path, const std::string& out_dir,
+                        const TimestepStudySettings& s, CampaignSummary* summary) {
+  std::string text;
+  (void)timestep_campaign(scene_path, out_dir, s, &text);
+  fs::create_directories(out_dir);
   const std::string campaign_file = (fs::path(out_dir) / "timestep_campaign.toml").string();
-  write_file_atomic(campaign_file, c.str());
+  write_file_atomic(campaign_file, text);
   const Campaign campaign = load_campaign(campaign_file);
   CaseRunSettings cs;
   cs.images = s.images;
-  run_campaign(campaign, out_dir, pile_case_fn(cs), s.runner);
+  const CampaignSummary ran = run_campaign(campaign, out_dir, pile_case_fn(cs), s.runner);
+  if (summary) *summary = ran;
 
   // A run without a headline (not settled, jammed, ...) has no angle: it is counted by its
   // reason beside the point, never averaged in.

@@ -25,8 +25,17 @@ struct TimestepStudySettings {
 /// Runs the study of `scene_path` into `out_dir` and returns (and writes to
 /// out_dir/timestep_study.json) per dt: the step [s], the mean and spread of the angle, and the
 /// largest stable dt. Throws InputError for an empty or non-positive fraction list.
+/// The study as a campaign (one case per fraction, every seed), parsed from the text the study
+/// keeps in its folder (`text`, when given), so it can be planned before anything is written.
+/// Throws InputError for an empty or non-positive list of fractions or a missing scene.
+Campaign timestep_campaign(const std::string& scene_path, const std::string& out_dir,
+                           const TimestepStudySettings& settings, std::string* text = nullptr);
+
+/// Runs the study into `out_dir` and returns timestep_study.json; `summary`, when given,
+/// receives the campaign's counts (runs failed, runs without an angle by reason).
 nlohmann::json run_timestep_study(const std::string& scene_path, const std::string& out_dir,
-                                  const TimestepStudySettings& settings);
+                                  const TimestepStudySettings& settings,
+                                  CampaignSummary* summary = nullptr);
 
 /// The analysis alone: given (dt, mean angle) points, the largest dt whose angle is within
 /// `tolerance_deg` of the angle at the smallest dt, such that every smaller dt is within it too.

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -514,6 +515,19 @@ std::vector<nlohmann::json> run_batch(const Campaign& campaign, const std::vecto
   }
   if (!failures.empty()) throw std::runtime_error("run_batch: run(s) failed: " + failures);
   return results;
+}
+
+BatchPlan plan_campaign(const Campaign& campaign, int workers) {
+  std::vector<BatchPlan::Part> parts;
+  std::map<std::string, std::size_t> part_of;  // case name -> its part
+  for (const CaseSpec& run : campaign.runs) {
+    const auto [it, first] = part_of.emplace(run.case_name, parts.size());
+    if (first)
+      parts.push_back({"runs of case " + run.case_name,
+                       plan_run(build_case_scene(run).config(), 1), 0});
+    ++parts[it->second].runs;
+  }
+  return plan_batch(std::move(parts), workers);
 }
 
 }  // namespace reposetwin::experiments

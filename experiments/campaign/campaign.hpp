@@ -36,6 +36,7 @@
 
 #include "experiments/campaign/pool.hpp"
 #include "experiments/io/campaign_file.hpp"
+#include "experiments/pile/run_plan.hpp"
 #include "experiments/io/scene_overrides.hpp"
 
 namespace reposetwin::experiments {
@@ -119,5 +120,10 @@ std::optional<nlohmann::json> read_run_result(const std::string& out_dir, const 
 nlohmann::json campaign_manifest(
     const Campaign& campaign, const std::string& out_dir,
     const std::function<std::string(const nlohmann::json&)>& outcome_of = {});
+
+/// The plan of a campaign's runs (pile/run_plan.hpp): one part per case, planned from its first
+/// run's scene, with as many runs as the case has seeds; `workers` runs side by side. What every
+/// command that runs a campaign prints before it starts, and refuses above the limits.
+BatchPlan plan_campaign(const Campaign& campaign, int workers);
 
 }  // namespace reposetwin::experiments

@@ -1,5 +1,7 @@
 #include "experiments/export/particle_dump.hpp"
 
+#include "experiments/io/numbers.hpp"
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -68,17 +70,18 @@ ParticleDump read_particle_dump(const std::string& path) {
         ++n_line;
         if (!std::getline(f, line)) bad("the snapshot ends after " + std::to_string(i) + " of " +
                                         std::to_string(n) + " atoms");
-        // strtod, not >>: a "nan" or "inf" is read as what it is, then refused by name.
+        // The columns measured are read by the one strict number reader (io/numbers.hpp): a
+        // "nan", "inf", hex or out-of-range value is refused by name; the others are skipped.
         std::istringstream row(line);
         std::vector<double> v(static_cast<std::size_t>(columns));
         std::string token;
-        for (double& c : v) {
-          char* end = nullptr;
-          if (!(row >> token) || (c = std::strtod(token.c_str(), &end), *end != '\0'))
-            bad("a row with fewer than " + std::to_string(columns) + " numbers");
+        for (int k = 0; k < columns; ++k) {
+          if (!(row >> token)) bad("a row with fewer than " + std::to_string(columns) + " numbers");
+          if (k != ix && k != iy && k != iz && k != ir) continue;
+          const std::optional<double> c = parse_plain_decimal(token);
+          if (!c) bad("\"" + token + "\", a number that is not finite or not a plain decimal");
+          v[static_cast<std::size_t>(k)] = *c;
         }
-        for (int k : {ix, iy, iz, ir})
-          if (!std::isfinite(v[static_cast<std::size_t>(k)])) bad("a number that is not finite");
         if (!(v[static_cast<std::size_t>(ir)] > 0)) bad("a radius that is not positive");
         snap.x.emplace_back(v[static_cast<std::size_t>(ix)], v[static_cast<std::size_t>(iy)],
                             v[static_cast<std::size_t>(iz)]);

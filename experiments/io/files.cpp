@@ -1,5 +1,7 @@
 #include "experiments/io/files.hpp"
 
+#include "experiments/io/hash.hpp"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -140,6 +142,24 @@ std::string read_file(const std::string& path, std::uintmax_t max_bytes) {
   }
   text.resize(done);
   return text;
+}
+
+void refuse_repeated_contents(const std::vector<std::string>& paths, const std::string& option) {
+  std::vector<std::pair<std::string, std::string>> seen;  // content hash, path
+  for (const std::string& p : paths) {
+    std::string text;
+    try {
+      text = read_file(p);
+    } catch (const InputError& e) {  // a missing photo: named with the list it is in
+      throw InputError(option + ": " + e.what());
+    }
+    const std::string hash = fnv1a_hex(text) + ":" + std::to_string(text.size());
+    for (const auto& [h, first] : seen)
+      if (h == hash && read_file(first) == text)
+        throw InputError(option + ": " + p + " is the same image as " + first +
+                         " (identical bytes); each view must be its own photograph");
+    seen.emplace_back(hash, p);
+  }
 }
 
 void write_file_atomic(const std::string& path, const std::string& text) {

@@ -46,6 +46,12 @@ void check_input_file(const std::string& path, std::uintmax_t max_bytes = kMaxRe
 /// the descriptor it reads from; throws InputError naming the path and the reason.
 std::string read_file(const std::string& path, std::uintmax_t max_bytes = kMaxReadBytes);
 
+/// Throws InputError naming both paths when two of `paths` hold the same bytes (compared by
+/// content, so a copy under another name is caught too): one photo listed twice is one view,
+/// not two independent ones, and would shrink the spread it feeds by the square root of the
+/// repeats. `option` names the list in the message ("measure's side views").
+void refuse_repeated_contents(const std::vector<std::string>& paths, const std::string& option);
+
 /// Why an output is refused.
 enum class OutputRefusal {
   kIsInput,        // the same file as an input of the command

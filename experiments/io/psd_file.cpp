@@ -1,5 +1,7 @@
 #include "experiments/io/psd_file.hpp"
 
+#include "experiments/io/numbers.hpp"
+
 #include <array>
 #include <cctype>
 #include <cmath>
@@ -180,16 +182,12 @@ PsdFile read_psd_csv(const std::string& path) {
                     std::to_string(csv.header.size()));
     const auto number = [&](int column, const char* name) {
       const std::string text = trimmed(row.fields[static_cast<std::size_t>(column)]);
-      std::size_t used = 0;
-      double v = 0.0;
-      try {
-        v = std::stod(text, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (text.empty() || used != text.size() || !std::isfinite(v))
-        bad(line, std::string(name) + " = \"" + text + "\" is not a number");
-      return v;
+      const std::optional<double> v = parse_plain_decimal(text);
+      if (!v)
+        bad(line, std::string(name) + " = \"" + text +
+                      "\" is not a number (a plain decimal is expected: no hex, inf, nan or "
+                      "out-of-range value)");
+      return *v;
     };
     const double mm = number(sieve, "sieve_mm");
     if (!(mm >= kMinSieveMm && mm <= kMaxSieveMm))

@@ -91,6 +91,8 @@ void write_frame_info(vtkFieldData* fd, const FrameInfo& info) {
     add_field(fd, "container", {c.z_bottom_m, c.z_top_m, c.r_bottom_m, c.r_top_m});
   }
   add_field(fd, "material_names", info.material_names);
+  if (!info.scene_fnv1a.empty())
+    add_field(fd, "scene_fnv1a", std::vector<std::string>{info.scene_fnv1a});
 }
 
 std::optional<FrameInfo> read_frame_info(vtkFieldData* fd) {
@@ -113,6 +115,9 @@ std::optional<FrameInfo> read_frame_info(vtkFieldData* fd) {
   if (auto* names = vtkStringArray::SafeDownCast(fd->GetAbstractArray("material_names")))
     for (vtkIdType k = 0; k < names->GetNumberOfValues(); ++k)
       info.material_names.push_back(names->GetValue(k));
+  if (auto* scene = vtkStringArray::SafeDownCast(fd->GetAbstractArray("scene_fnv1a"));
+      scene && scene->GetNumberOfValues() == 1)
+    info.scene_fnv1a = scene->GetValue(0);
   return info;
 }
 

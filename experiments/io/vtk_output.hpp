@@ -54,6 +54,7 @@ struct FrameInfo {
   double plate_half_size_m = 0.0;          // half the square plate's side; 0 = no plate [m]
   double plate_thickness_m = 0.015;        // drawn thickness below z = 0 [m]
   std::vector<std::string> material_names;  // entry k names material k
+  std::string scene_fnv1a;  // FNV-1a of the resolved scene the run was made from; "" = unknown
 };
 
 /// Writes one snapshot of the particles, with `info` as field data; with `bodies` (the clumps

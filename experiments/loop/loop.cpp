@@ -160,4 +160,17 @@ json run_loop(const LabData& data, const std::string& out_dir, const LoopSetting
   return loop_detail::run_stages(compared, out_dir, settings);
 }
 
+BatchPlan plan_loop_baseline(const LabData& data, const LoopSettings& s) {
+  std::vector<BatchPlan::Part> parts;
+  const int runs = static_cast<int>(s.mu_grid.size() * s.seeds.size());
+  for (const LabTest& t : data.tests) {
+    std::vector<std::string> sets;
+    for (const auto& [key, value] : t.overrides) sets.push_back(key + "=" + value);
+    parts.push_back({"baseline piles of test " + t.id + " (" + std::to_string(s.mu_grid.size()) +
+                         " mu_r x " + std::to_string(s.seeds.size()) + " seeds)",
+                     plan_run(load_scene(t.scene_path, sets), 1), runs});
+  }
+  return plan_batch(std::move(parts), s.workers);
+}
+
 }  // namespace reposetwin::experiments

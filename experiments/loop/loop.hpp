@@ -157,4 +157,10 @@ double twin_angle(const SimOutcome& o, AngleMeasure measure);
 nlohmann::json run_loop(const LabData& data, const std::string& out_dir,
                         const LoopSettings& settings = {});
 
+/// The plan of the loop's baseline (pile/run_plan.hpp): every test's piles on the mu_r grid
+/// with every seed, planned from the test's scene, settings.workers side by side. The
+/// fingerprints, refits and extra pours of a jam come on top; the baseline is the part known
+/// before anything runs, and already most of the loop's cost on the shipped designs.
+BatchPlan plan_loop_baseline(const LabData& data, const LoopSettings& settings);
+
 }  // namespace reposetwin::experiments

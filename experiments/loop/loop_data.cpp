@@ -1,5 +1,7 @@
 #include "experiments/loop/loop_data.hpp"
 
+#include "experiments/io/numbers.hpp"
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -44,17 +46,7 @@ struct Where {
 };
 
 double parse_number(const std::string& text, const Where& w, const std::string& column) {
-  const std::string t = trim(text);
-  std::size_t used = 0;
-  double v = 0.0;
-  try {
-    v = std::stod(t, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (t.empty() || used != t.size() || !std::isfinite(v))
-    throw InputError(w.at(column) + ": \"" + text + "\" is not a number");
-  return v;
+  return plain_decimal(trim(text), w.at(column));
 }
 
 std::string toml_number(double v) { return toml_float(v, 17); }
@@ -253,14 +245,9 @@ void read_overrides(LabTest& test, const Row& row, const Where& w, const LabShee
     test.override_columns.push_back(h);
     // A number is plotted on an axis; anything else (a file name, a model keyword) as a
     // category.
-    std::size_t used = 0;
-    try {
-      test.conditions[h] = std::stod(v, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != v.size()) {
-      test.conditions.erase(h);
+    if (const std::optional<double> number = parse_plain_decimal(v)) {
+      test.conditions[h] = *number;
+    } else {
       test.text_conditions[h] =
           v.size() >= 2 && v.front() == '"' && v.back() == '"' ? v.substr(1, v.size() - 2) : v;
     }

@@ -1,5 +1,9 @@
 #include "experiments/photos/lab_photos.hpp"
 
+#include "experiments/io/numbers.hpp"
+
+#include "experiments/io/files.hpp"
+
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -27,14 +31,13 @@ class SingleOpenCvThread {
   int old_;
 };
 
-std::string number_text(double v) { return significant(v, 17); }
-
 }  // namespace
 
 LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
                                        const LabPhotoScale& scale, const LabPhotoFields& fields,
                                        bool draw_overlays) {
   if (photos.empty()) throw InputError(fields.photo + ": no photo given");
+  refuse_repeated_contents(photos, fields.photo);
   vision::ScaleSpec common;
   if (!scale.camera_json.empty()) {
     try {
@@ -44,10 +47,7 @@ LabPhotoMeasurement measure_lab_photos(const std::vector<std::string>& photos,
     }
     common.search_marker = false;
   } else if (scale.mm_per_px) {
-    if (!(*scale.mm_per_px > 0.0))
-      throw InputError(fields.mm_per_px + ": " + number_text(*scale.mm_per_px) +
-                       " must be positive");
-    common.mm_per_px = *scale.mm_per_px;
+    common.mm_per_px = positive_finite(*scale.mm_per_px, fields.mm_per_px);
     common.search_marker = false;
   }
   const bool declared_scale = !scale.camera_json.empty() || scale.mm_per_px.has_value();

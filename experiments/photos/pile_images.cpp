@@ -76,8 +76,10 @@ json measurement_json(const PilePhotos& photos, const ImageSettings& settings,
 
 json render_and_measure(const PileSpheres& pile, const std::string& out_dir,
                         const ImageSettings& settings, const json& provenance,
-                        std::optional<Eigen::Vector2d> centre) {
+                        std::optional<Eigen::Vector2d> centre,
+                        const std::function<void()>& after_photographs) {
   const PilePhotos photos = photograph_pile(pile, settings, out_dir, provenance, centre);
+  if (after_photographs) after_photographs();
   const json out = measurement_json(photos, settings, provenance);
   write_json_atomic((fs::path(out_dir) / "measurement.json").string(), out);
   return out;
@@ -98,7 +100,7 @@ namespace {
 // its own footprint is.
 json photograph_run(const PileRun& run, const PileSpheres& spheres, const std::string& run_dir,
                     const std::string& snapshot, const fs::path& out,
-                    const ImageSettings& settings) {
+                    const ImageSettings& settings, const std::function<void()>& after) {
   // images -> elsewhere would aim the photographs (and --force's replacing) at another folder.
   refuse_escaping_links(run_dir);
   json prov = to_json(run.provenance);
@@ -106,7 +108,7 @@ json photograph_run(const PileRun& run, const PileSpheres& spheres, const std::s
   prov["snapshot"] = snapshot;
   std::optional<Eigen::Vector2d> centre;
   if (snapshot == "final.vtp") centre = Eigen::Vector2d(run.pile.centre_x_m, run.pile.centre_y_m);
-  return render_and_measure(spheres, out.string(), settings, prov, centre);
+  return render_and_measure(spheres, out.string(), settings, prov, centre, after);
 }
 
 // A frame of the series is photographed as it was: the funnel where it stood, and, unless the
@@ -141,17 +143,20 @@ void frame_settings(const SnapshotParticles& p, const std::string& snapshot, Ima
 }  // namespace
 
 json render_and_measure_run(const PileRun& run, const std::string& run_dir,
-                            const ImageSettings& settings) {
-  if (run.final_spheres.x.empty()) return render_and_measure_run(run_dir, settings);
+                            const ImageSettings& settings,
+                            const std::function<void()>& after_photographs) {
+  if (run.final_spheres.x.empty())
+    return render_and_measure_run(run_dir, settings, "", after_photographs);
   if (run.pile.status == sim::PileStatus::kNoPile)
     throw InputError(run_dir + ": the run formed no pile (" + run.stop.detail +
                      "); nothing to photograph");
   return photograph_run(run, run.final_spheres, run_dir, "final.vtp", fs::path(run_dir) / "images",
-                        settings);
+                        settings, after_photographs);
 }
 
 json render_and_measure_run(const std::string& run_dir, const ImageSettings& settings,
-                            const std::string& frame) {
+                            const std::string& frame,
+                            const std::function<void()>& after_photographs) {
   const fs::path dir(run_dir);
   const fs::path result = dir / "result.json";
   const fs::path snapshot = dir / (frame.empty() ? "final.vtp" : frame);
@@ -167,7 +172,7 @@ json render_and_measure_run(const std::string& run_dir, const ImageSettings& set
   ImageSettings s = settings;
   if (!frame.empty()) frame_settings(p, snapshot.string(), s);
   return photograph_run(run, PileSpheres{p.x, p.radius, p.material, p.body}, run_dir,
-                        snapshot.filename().string(), out, s);
+                        snapshot.filename().string(), out, s, after_photographs);
 }
 
 }  // namespace reposetwin::experiments

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -27,10 +28,13 @@ using ImageSettings = PhotoSettings;
 /// measurement.json) and returns the measurement JSON: per-view results, the side summary
 /// (theta mean and spread), the top footprint, and the settings and provenance. `centre` is the
 /// pile's footprint centre when the caller has measured it (a run's PileMeasure).
+/// `after_photographs` is called once the images are written and before measurement.json is
+/// (a run folder records its stage there: pile/run_state.hpp).
 nlohmann::json render_and_measure(const PileSpheres& pile, const std::string& out_dir,
                                   const ImageSettings& settings,
                                   const nlohmann::json& provenance = nlohmann::json::object(),
-                                  std::optional<Eigen::Vector2d> centre = std::nullopt);
+                                  std::optional<Eigen::Vector2d> centre = std::nullopt,
+                                  const std::function<void()>& after_photographs = {});
 
 /// The same for spheres given as three arrays (centres [m], radii [m], material ids).
 nlohmann::json render_and_measure(const std::vector<Eigen::Vector3d>& positions,
@@ -43,13 +47,15 @@ nlohmann::json render_and_measure(const std::vector<Eigen::Vector3d>& positions,
 /// memory into RUN_DIR/images (a run read back from its files, which has none, from final.vtp).
 /// Throws InputError when the run formed no pile.
 nlohmann::json render_and_measure_run(const PileRun& run, const std::string& run_dir,
-                                      const ImageSettings& settings);
+                                      const ImageSettings& settings,
+                                      const std::function<void()>& after_photographs = {});
 
 /// The same for a finished run folder: reads RUN_DIR/final.vtp (or `frame`, a snapshot of the
 /// run's series such as "frames/frame_00012.vtp") and result.json (provenance), writes
 /// RUN_DIR/images/ (RUN_DIR/images/<frame name>/ for a frame). Throws InputError when the folder
 /// holds no finished run or the frame does not exist.
 nlohmann::json render_and_measure_run(const std::string& run_dir, const ImageSettings& settings,
-                                      const std::string& frame = "");
+                                      const std::string& frame = "",
+                                      const std::function<void()>& after_photographs = {});
 
 }  // namespace reposetwin::experiments

@@ -20,6 +20,7 @@
 #include "experiments/pile/pile_sample.hpp"
 #include "experiments/pile/run_controller.hpp"
 #include "experiments/pile/run_folder.hpp"
+#include "experiments/pile/run_state.hpp"
 #include "experiments/pile/stop_hint.hpp"
 #include "sim/checkpoint.hpp"
 #include "sim/psd.hpp"
@@ -123,8 +124,11 @@ class PileRunner {
   }
 
   // One process per run folder; a finished result is never overwritten without force.
+  // A resumed run whose result.json is there but whose stage record is not complete stopped
+  // between its result and its record (pile/run_state.hpp): it is finished again from its
+  // checkpoint.
   void prepare_folder() {
-    lock_.emplace(out_.string(), ".run.lock", "another pile run");
+    if (!opt_.lock_held) lock_.emplace(out_.string(), ".run.lock", "another pile run");
     // A link inside that leads outside would aim the run's writes and --force's removals at
     // another folder.
     refuse_escaping_links(out_.string());
@@ -132,7 +136,8 @@ class PileRunner {
     if (fs::exists(result) && !opt_.force && !opt_.resume)
       throw InputError(result.string() +
                        ": a finished result is already there; pass --force to overwrite it");
-    if (fs::exists(result) && opt_.resume && !opt_.force)
+    const std::optional<RunState> recorded = read_run_state(out_.string());
+    if (opt_.resume && !opt_.force && recorded && recorded->complete())
       throw InputError(result.string() + ": the run is already finished; nothing to resume");
   }
 
@@ -480,6 +485,7 @@ class PileRunner {
     FrameInfo info;
     info.time_s = st.time;
     info.phase = phase_name(ctl_.phase);
+    info.scene_fnv1a = ctl_.scene_hash;  // what a snapshot is of: another scene's is refused
     info.settled = final_state && (ctl_.stop.reason == StopReason::kSettled ||
                                    ctl_.stop.reason == StopReason::kSettleTimeLimit);
     if (st.walls[kContainerWall].enabled) {

@@ -38,6 +38,7 @@ struct RunOptions {
   std::int64_t stop_after_steps = 0;  // stop (with a checkpoint) after this many steps of this
                                       // session; 0 = never (deterministic, for tests)
   nlohmann::json extra_provenance = nlohmann::json::object();  // e.g. the campaign case
+  bool lock_held = false;  // the caller holds out_dir's RunFolderLock for its whole command
 };
 
 /// Thrown by run_pile_test with opt.resume when the folder's checkpoint or controller state cannot

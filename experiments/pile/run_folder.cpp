@@ -9,6 +9,7 @@
 
 #include "experiments/io/files.hpp"
 #include "experiments/io/input_error.hpp"
+#include "experiments/pile/run_state.hpp"
 
 namespace reposetwin::experiments {
 namespace fs = std::filesystem;
@@ -21,17 +22,20 @@ const std::regex kTemporary(R"((.+)\.tmp(\.[0-9]+)?)");
 // The run's own files, by folder. Photographs: side views at their azimuths (a second view at
 // one azimuth gets "_2"), the top view, each with its sidecar and its measured overlay.
 const std::regex kTopFile(R"(result\.json|final\.vtp|checkpoint\.bin|controller\.json|series\.pvd|)"
-                          R"(scene\.resolved\.toml|summary\.html|\.run\.lock|)"
+                          R"(scene\.resolved\.toml|summary\.html|\.run\.lock|run_state\.json|)"
                           R"(\.reposetwin-made\.json)");
 // The files only a pile run makes: a folder with none of them is not a run's, even if it holds a
 // summary.html or an images/ folder of a person's own.
 const std::regex kRunMarker(
-    R"(result\.json|final\.vtp|checkpoint\.bin|controller\.json|series\.pvd|scene\.resolved\.toml)");
+    R"(result\.json|final\.vtp|checkpoint\.bin|controller\.json|series\.pvd|scene\.resolved\.toml|)"
+    R"(run_state\.json)");
 const std::regex kFrameFile(
     R"((frame|container|contacts)_[0-9]{5}\.vtp|plate\.vtp|filled\.vtp)");
 const std::regex kImageFile(
     R"(measurement\.json|\.reposetwin-made\.json|)"
     R"((side_az[0-9]{3}(_[0-9]+)?|top)(\.measured)?\.(png|json))");
+// `reposetwin report RUN_DIR` writes its page, data, plots and copied renders into report/.
+const std::regex kReportFile(R"([A-Za-z0-9_.-]+\.(html|json|png|dat|gp))");
 // `reposetwin render --frame frames/frame_00004.vtp` photographs into images/frame_00004/.
 const std::regex kImageFolder(R"(frame_[0-9]{5})");
 
@@ -51,6 +55,21 @@ std::string list(const std::vector<std::string>& names) {
   return out;
 }
 
+// Where an interrupted run stopped, as its record says.
+std::string interrupted_at(const fs::path& dir) {
+  try {
+    if (const std::optional<RunState> s = read_run_state(dir.string()))
+      return "stage " + std::string(run_stage_name(s->stage)) + " recorded; missing: " +
+             s->missing() + (s->note.empty() ? "" : "; " + s->note);
+  } catch (const RunStateError& e) {
+    return e.what();
+  }
+  std::error_code ec;
+  if (fs::exists(dir / "result.json", ec))
+    return "result.json without a complete stage record (run_state.json)";
+  return "checkpoint.bin, no result.json";
+}
+
 }  // namespace
 
 bool is_run_file(const fs::path& relative) {
@@ -60,6 +79,7 @@ bool is_run_file(const fs::path& relative) {
   const std::string name = without_temporary(parts.back());
   if (parts.size() == 1) return std::regex_match(name, kTopFile);
   if (parts.size() == 2 && parts[0] == "frames") return std::regex_match(name, kFrameFile);
+  if (parts.size() == 2 && parts[0] == "report") return std::regex_match(name, kReportFile);
   if (parts[0] != "images") return false;
   if (parts.size() == 2) return std::regex_match(name, kImageFile);
   return parts.size() == 3 && std::regex_match(parts[1], kImageFolder) &&
@@ -96,8 +116,16 @@ RunFolderState run_folder_state(const fs::path& dir, std::vector<std::string>* f
     return RunFolderState::kForeign;
   }
   if (!any) return RunFolderState::kEmpty;
-  if (fs::exists(dir / "result.json", ec)) return RunFolderState::kFinished;
-  if (fs::exists(dir / "checkpoint.bin", ec) || fs::exists(dir / "controller.json", ec))
+  // The stage record decides (pile/run_state.hpp): a result.json without a complete record is
+  // a run stopped between stages, and so is a record that cannot be trusted.
+  try {
+    if (const std::optional<RunState> s = read_run_state(dir.string()); s && s->complete())
+      return RunFolderState::kFinished;
+  } catch (const RunStateError&) {
+    return RunFolderState::kInterrupted;
+  }
+  if (fs::exists(dir / "result.json", ec) || fs::exists(dir / kRunStateFile, ec) ||
+      fs::exists(dir / "checkpoint.bin", ec) || fs::exists(dir / "controller.json", ec))
     return RunFolderState::kInterrupted;
   return RunFolderState::kStarted;
 }
@@ -157,9 +185,8 @@ void check_run_folder(const std::string& out, bool resume, bool force) {
       return;
     case RunFolderState::kInterrupted:
       if (!resume && !force)
-        throw InputError(out +
-                             ": an interrupted run is there (checkpoint.bin, no result.json); "
-                             "continue it with --resume, or pass --force to start again",
+        throw InputError(out + ": an interrupted run is there (" + interrupted_at(dir) +
+                             "); continue it with --resume, or pass --force to start again",
                          "--resume");
       return;
     case RunFolderState::kForeign:
@@ -190,7 +217,8 @@ void remove_run_files(const fs::path& dir) {
   for (const fs::path& f : folders) {
     const fs::path rel = fs::relative(f, dir, ec);
     const std::string top = rel.begin()->string();
-    if ((top == "frames" || top == "images") && fs::is_empty(f, ec)) fs::remove(f, ec);
+    if ((top == "frames" || top == "images" || top == "report") && fs::is_empty(f, ec))
+      fs::remove(f, ec);
   }
 }
 

@@ -7,6 +7,7 @@
 #include "experiments/io/provenance.hpp"
 #include "experiments/pile/headline.hpp"
 #include "experiments/pile/pile_record.hpp"
+#include "experiments/pile/run_state.hpp"
 
 namespace reposetwin::experiments::report {
 namespace fs = std::filesystem;
@@ -52,8 +53,48 @@ void add_result(FolderResults& f, const std::string& case_name, const json& over
   }
 }
 
+// Why a single run folder is incomplete, from its stage record; "" when it is complete.
+std::string incomplete_reason(const fs::path& dir) {
+  try {
+    const std::optional<RunState> s = read_run_state(dir.string());
+    if (!s)
+      return "no stage record (run_state.json): the run was stopped before its result was "
+             "recorded as simulated, or was made by a version that kept no stage record";
+    if (s->complete()) return "";
+    return "stopped after the stage " + std::string(run_stage_name(s->stage)) +
+           "; missing: " + s->missing() + (s->note.empty() ? "" : " (" + s->note + ")");
+  } catch (const RunStateError& e) {
+    return e.what();
+  }
+}
+
 // A single run folder: result.json, with the image measurement beside it when there is one.
+// Only a complete stage record vouches for them: an incomplete run is listed by that reason,
+// with no angle, whatever its files hold.
 void read_single_run(FolderResults& f) {
+  f.incomplete = incomplete_reason(f.dir);
+  if (!f.incomplete.empty()) {
+    json prov = json::object();
+    std::string name = f.dir.filename().string();
+    if (fs::is_regular_file(f.dir / "result.json")) {
+      try {
+        prov = read_json(f.dir / "result.json").at("provenance");
+        name = prov.value("scene_name", name);
+      } catch (const std::exception&) {  // a result cut short: the folder is incomplete anyway
+      }
+    }
+    CaseRows c;
+    c.name = name;
+    c.stops = {"incomplete"};
+    c.run_dirs = {"."};
+    c.records = {"result.json"};
+    c.image_dirs = {"images"};
+    c.without_pile["incomplete"] = 1;
+    c.provenance = prov;
+    f.cases.push_back(std::move(c));
+    if (f.title.empty()) f.title = name;
+    return;
+  }
   const json r = read_json(f.dir / "result.json");
   if (!r.contains("pile")) throw InputError(f.dir.string() + "/result.json: not a run result");
   json rr = r;
@@ -98,8 +139,16 @@ void read_campaign_runs(FolderResults& f) {
 
 bool is_calibration_dir(const fs::path& d) { return fs::is_regular_file(d / "calibration.json"); }
 
+bool is_run_dir(const fs::path& d) {
+  std::error_code ec;
+  if (fs::exists(d / "campaign.json", ec)) return false;
+  for (const char* f : {"result.json", kRunStateFile, "checkpoint.bin", "controller.json"})
+    if (fs::exists(d / f, ec)) return true;
+  return false;
+}
+
 bool holds_results(const fs::path& d) {
-  return fs::is_regular_file(d / "result.json") || fs::is_directory(d / "cases") ||
+  return is_run_dir(d) || fs::is_directory(d / "cases") ||
          is_calibration_dir(d) || fs::is_regular_file(d / "campaign.json");
 }
 
@@ -115,8 +164,7 @@ FolderResults read_folder_results(const std::string& dir, const std::string& tit
   FolderResults f;
   f.dir = dir;
   f.title = title;
-  if (fs::exists(f.dir / "result.json") && !fs::exists(f.dir / "campaign.json"))
-    read_single_run(f);
+  if (is_run_dir(f.dir)) read_single_run(f);
   if (fs::exists(f.dir / "cases")) read_campaign_runs(f);
   if (fs::exists(f.dir / "calibration.json")) f.calibration = read_json(f.dir / "calibration.json");
   if (fs::is_regular_file(f.dir / "predictions.json"))

@@ -35,6 +35,10 @@ struct FolderResults {
   std::vector<CaseRows> cases;  // in the order first met
   nlohmann::json calibration;   // calibration.json, or null
   std::optional<nlohmann::json> predictions;
+  // A single run folder stopped between its stages (pile/run_state.hpp): what its record says
+  // and what is missing; "" for a complete run or another kind of folder. Such a run is listed
+  // without an angle, by the reason "incomplete".
+  std::string incomplete;
 };
 
 /// The statistics of a case's angles [deg].
@@ -44,6 +48,8 @@ struct CaseStats {
 
 /// A folder is a calibration folder when it holds calibration.json.
 bool is_calibration_dir(const std::filesystem::path& d);
+/// The folder is a single run's (its result, stage record or checkpoint, and no campaign).
+bool is_run_dir(const std::filesystem::path& d);
 /// The folder holds a run, a campaign or a calibration.
 bool holds_results(const std::filesystem::path& d);
 /// A JSON file, or an InputError naming it.

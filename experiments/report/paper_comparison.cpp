@@ -4,6 +4,8 @@
 // the paper by sample, sort, and caption with both mu_r conventions.
 #include "experiments/report/paper_comparison.hpp"
 
+#include "experiments/io/numbers.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -123,13 +125,7 @@ PaperTables read_paper_tables(const std::string& dir) {
 
 double csv_number(const json& row, const std::string& field, const std::string& file) {
   const std::string v = row.value(field, std::string());
-  try {
-    std::size_t used = 0;
-    const double d = std::stod(v, &used);
-    if (used == v.size()) return d;
-  } catch (const std::exception&) {
-  }
-  throw InputError(file + ": field '" + field + "' = \"" + v + "\" is not a number");
+  return plain_decimal(v, file + ": field '" + field + "'");
 }
 
 // Joins a row to the paper by its Table 1 sample number (the paper's d_max, mass, measured

@@ -486,7 +486,10 @@ std::string cases_line(const json& cases) {
 
 std::string report_line(const json& summary, const std::string& page) {
   std::string what;
-  if (summary.contains("calibration") && summary["calibration"].is_object())
+  if (summary.contains("incomplete"))
+    what = summary.value("title", std::string("run")) + ": incomplete run, no headline: " +
+           summary["incomplete"].get<std::string>() + "; finish it with run --resume";
+  else if (summary.contains("calibration") && summary["calibration"].is_object())
     what = calibration_line(summary["calibration"]);
   else if (summary.contains("cases") && !summary["cases"].empty())
     what = cases_line(summary["cases"]);
@@ -515,6 +518,12 @@ json build_report(const std::string& dir, const ReportSettings& settings) {
   fs::create_directories(out);
   json summary = case_summary(f);
   std::vector<std::string> sections = {built_section(folder_name(f.dir), 1)};
+  if (!f.incomplete.empty()) {
+    mustache::data d;
+    d.set("reason", f.incomplete);
+    sections.push_back(render(templates::kIncompleteRun, d));
+    summary["incomplete"] = f.incomplete;
+  }
   // A calibration's page leads with its answer: the calibrated value, its interval and curve,
   // then the lab's photo (the one given, else the calibration's own target photo) beside the
   // twin's at that value; the runs follow, and the paper's Table 3 comes last, on a paper

@@ -252,11 +252,17 @@ RunSummary run_headline(const PileRun& run, const RunSummaryInputs& in) {
   return s;
 }
 
-RunSummary finish_run(const PileRun& run, const SceneConfig& scene, const RunSummaryInputs& in) {
+RunSummary summarise_run(const PileRun& run, const SceneConfig& scene, const RunSummaryInputs& in) {
   RunSummary s = run_headline(run, in);
   const fs::path dir(in.run_dir);
   const fs::path result = dir / "result.json";
   json r = json::parse(read_file(result.string()));
+  // The fields a summary adds, all of them, so an earlier summary's (other views, a headline
+  // that is now none) cannot survive beside this one.
+  const json headline_fields = to_json(Headline{}), no_headline_fields = to_json(NoHeadline{});
+  for (const json* fields : {&headline_fields, &no_headline_fields})
+    for (const auto& [key, value] : fields->items()) r.erase(key);
+  for (const char* key : {"representativeness", "image"}) r.erase(key);
   r.update(s.headline ? to_json(*s.headline) : to_json(*s.no_headline));
   r["representativeness"] = to_json(run_representativeness(run, scene));
   if (in.images && s.headline)
@@ -268,7 +274,19 @@ RunSummary finish_run(const PileRun& run, const SceneConfig& scene, const RunSum
     r["image"]["crest_width_m"] = (*in.images)["crest_width_m"];
   write_json_atomic(result.string(), r);
   s.page = (dir / "summary.html").string();
+  return s;
+}
+
+std::string write_run_summary_page(const PileRun& run, const SceneConfig& scene,
+                                   const RunSummaryInputs& in, RunSummary& s) {
+  s.page = (fs::path(in.run_dir) / "summary.html").string();
   write_file_atomic(s.page, run_summary_html(run, scene, in, s));
+  return s.page;
+}
+
+RunSummary finish_run(const PileRun& run, const SceneConfig& scene, const RunSummaryInputs& in) {
+  RunSummary s = summarise_run(run, scene, in);
+  write_run_summary_page(run, scene, in, s);
   return s;
 }
 

@@ -43,8 +43,17 @@ struct RunSummary {
 /// why it has none (pile/headline.hpp).
 RunSummary run_headline(const PileRun& run, const RunSummaryInputs& in);
 
-/// Adds the headline (or headline_angle_deg = null and no_headline) to RUN_DIR/result.json and
-/// writes RUN_DIR/summary.html.
+/// Adds the headline (or headline_angle_deg = null and no_headline) to RUN_DIR/result.json,
+/// replacing every field an earlier summary added (so a summary without images leaves no
+/// earlier image fields behind): the run's `summarised` stage.
+RunSummary summarise_run(const PileRun& run, const SceneConfig& scene, const RunSummaryInputs& in);
+
+/// Writes RUN_DIR/summary.html for a summary summarise_run made: the `reported` stage. Returns
+/// the page's path.
+std::string write_run_summary_page(const PileRun& run, const SceneConfig& scene,
+                                   const RunSummaryInputs& in, RunSummary& s);
+
+/// summarise_run, then write_run_summary_page.
 RunSummary finish_run(const PileRun& run, const SceneConfig& scene, const RunSummaryInputs& in);
 
 /// The summary page's HTML (finish_run writes it).

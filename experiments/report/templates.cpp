@@ -42,6 +42,11 @@ const char* const kFigure =
 )";
 
 // built, version; dir (the folder's name: the report sits in its report/) or folders (how many).
+// reason: what the run's stage record says and what is missing.
+const char* const kIncompleteRun = R"(<h2>Incomplete run: no headline</h2>
+<p>This run folder stopped between its stages: {{reason}}. Its files are not shown as a result; <code>reposetwin run --resume</code> finishes it.</p>
+)";
+
 const char* const kBuilt =
     R"(<p>Built {{built}} by {{version}} from {{#dir}}the folder <code>{{dir}}</code> (the one above this report){{/dir}}{{^dir}}{{folders}} folder(s){{/dir}}.</p>
 )";

@@ -17,6 +17,7 @@ extern const char* const kFigure;
 
 // Sections of a run, campaign, calibration or comparison report.
 extern const char* const kBuilt;
+extern const char* const kIncompleteRun;
 extern const char* const kLabPhoto;
 extern const char* const kComparison;
 extern const char* const kComparisonCaption;

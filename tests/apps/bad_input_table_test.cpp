@@ -268,7 +268,7 @@ const std::vector<CommandCase> kCommandCases = {
      {"filesystem error"}},
     {"P2 loop sheet a FIFO", "loop FIFO --out DIR/l", 2, {"fifo.csv", "not a regular file"}, {}},
     {"P2 loop --mu-grid nan", "loop SHEET --out DIR/l --mu-grid 0.1,nan", 2,
-     {"--mu-grid", "nan", "not a finite number"}, {"grid_extensions"}},
+     {"--mu-grid", "nan", "is not a number"}, {"grid_extensions"}},
     {"P2 loop --mu-grid negative", "loop SHEET --out DIR/l --mu-grid -0.1,0.2", 2,
      {"--mu-grid -0.1,0.2", "increasing"}, {}},
     {"P2 loop --candidates unknown", "loop SHEET --out DIR/l --candidates warp_drive", 2,
@@ -278,6 +278,40 @@ const std::vector<CommandCase> kCommandCases = {
     {"P2 export --seed -1", "export SCENE --out DIR/e --seed -1", 105, {"--seed"}, {}},
     {"P2 a folder as the campaign", "campaign DIR --out DIR/c", 2,
      {"is a directory, not a file"}, {"not found"}},
+    // Inputs that would bias a result (issue 52, part 4): each class refused by its one check
+    // (io/numbers.hpp, io/files.hpp's refuse_repeated_contents, pile/headline.hpp's rule).
+    {"B loop --seeds repeated", "loop SHEET --out DIR/l --seeds 1,2,1", 2,
+     {"--seeds 1,2,1", "seed 1 is given twice"}, {}},
+    {"B loop --seeds not an integer", "loop SHEET --out DIR/l --seeds 1,2.0", 2,
+     {"--seeds 1,2.0", "\"2.0\" is not a seed"}, {}},
+    {"B loop --seeds out of range", "loop SHEET --out DIR/l --seeds 9223372036854775808", 2,
+     {"--seeds", "\"9223372036854775808\" is not a seed"}, {}},
+    {"B loop --mu-grid hex", "loop SHEET --out DIR/l --mu-grid 0.1,0x1", 2,
+     {"--mu-grid 0.1,0x1", "\"0x1\"", "a plain decimal is expected"}, {}},
+    {"B timestep --seeds repeated", "timestep SCENE --out DIR/t --seeds 3,3", 2,
+     {"--seeds 3,3", "seed 3 is given twice"}, {}},
+    {"B timestep --tolerance nan", "timestep SCENE --out DIR/t --tolerance nan", 105,
+     {"--tolerance", "nan"}, {}},
+    {"B timestep --fractions 0", "timestep SCENE --out DIR/t --fractions 0.1,0", 2,
+     {"--fractions = 0", "finite number > 0"}, {}},
+    {"B measure --mm-per-px hex", "measure AFILE --mm-per-px 0x10", 105,
+     {"--mm-per-px", "0x10", "a plain decimal is expected"}, {}},
+    {"B measure one photo twice", "measure AFILE --side COPY --mm-per-px 0.1", 2,
+     {"is the same image as", "copy_of_a_file"}, {}},
+    {"B report --lab-mm-per-px nan", "report DIR --lab-mm-per-px nan", 105,
+     {"--lab-mm-per-px", "nan"}, {}},
+    {"B measure-particles one grain", "measure-particles DUMP1 --scene SCENE", 7,
+     {"no angle", "formed no measurable pile"}, {"particle atan(2H/D)"}},
+    {"B measure-particles inf in a dump", "measure-particles DUMPINF --scene SCENE", 2,
+     {"\"inf\"", "not finite or not a plain decimal"}, {}},
+    // Every command that simulates prints its plan and refuses it above the limits without
+    // --yes (issue 52, part 5): the tiny scene's piles against a limit of one particle.
+    {"P5 campaign plan above the limit", "campaign CAMP --out DIR/pc --max-particles 1", 6,
+     {"runs of case a", "refused", "--yes"}, {}},
+    {"P5 timestep plan above the limit", "timestep SCENE --out DIR/pt --max-particles 1", 6,
+     {"runs of case dt_fraction", "refused", "--yes"}, {}},
+    {"P5 loop plan above the limit", "loop SHEET --out DIR/pl --max-particles 1", 6,
+     {"baseline piles of test", "refused", "--yes"}, {}},
 };
 
 TEST(BadInputTable, EveryCommandCaseIsRefusedNamingItsOption) {
@@ -288,10 +322,20 @@ TEST(BadInputTable, EveryCommandCaseIsRefusedNamingItsOption) {
              "overrides = { \"contacts.rock-rock.rolling_friction\" = 0.1 }\n");
   write_text(dir / "sheet.csv", kSheet);
   write_text(dir / "a_file", "x");
+  write_text(dir / "copy_of_a_file", "x");
+  const std::string dump_head =
+      "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n1\nITEM: BOX BOUNDS pp pp pp\n-1 1\n-1 1\n"
+      "0 1\nITEM: ATOMS x y z radius\n";
+  write_text(dir / "one_grain.dump", dump_head + "0 0 0.002 0.002\n");
+  write_text(dir / "inf.dump", dump_head + "0 inf 0.002 0.002\n");
   ASSERT_EQ(::mkfifo((dir / "fifo.csv").c_str(), 0644), 0);
+  // Longer names first: a name that is the start of another is replaced after it.
   const std::vector<std::pair<std::string, fs::path>> names = {
-      {"SCENE", dir / "scene.toml"}, {"CAMP", dir / "camp.toml"}, {"SHEET", dir / "sheet.csv"},
-      {"FIFO", dir / "fifo.csv"},    {"AFILE", dir / "a_file"},   {"DIR", dir}};
+      {"SCENE", dir / "scene.toml"},    {"CAMP", dir / "camp.toml"},
+      {"SHEET", dir / "sheet.csv"},     {"FIFO", dir / "fifo.csv"},
+      {"AFILE", dir / "a_file"},        {"COPY", dir / "copy_of_a_file"},
+      {"DUMPINF", dir / "inf.dump"},    {"DUMP1", dir / "one_grain.dump"},
+      {"DIR", dir}};
   for (const CommandCase& c : kCommandCases) {
     SCOPED_TRACE(c.item);
     std::string args = c.args;
@@ -302,6 +346,30 @@ TEST(BadInputTable, EveryCommandCaseIsRefusedNamingItsOption) {
     EXPECT_EQ(r.code, c.code) << r.out;
     expect_message(r, c.must, c.must_not);
   }
+  // The paper's whole index (about 15 CPU-hours) on two workers is above the hour a plan may
+  // take unconfirmed.
+  const CliResult paper =
+      run_cli("paper " +
+              quoted(fs::path(REPOSETWIN_SOURCE_DIR) / "experiments" / "paper" / "index.toml") +
+              " --out " + quoted(dir / "pp"));
+  EXPECT_EQ(paper.code, 6) << paper.out;
+  expect_message(paper, {"plan: ", "CPU-hours", "refused", "--max-hours", "--yes"}, {});
+  // A refused plan writes nothing.
+  for (const char* out : {"pc", "pt", "pl", "pp"}) EXPECT_FALSE(fs::exists(dir / out)) << out;
+}
+
+// A study whose run gives no angle did not get what it asked for: timestep exits 4, as a
+// campaign does (it exited 0 before). One tiny pile that cannot settle in 0.02 s.
+TEST(BadInputTable, ATimestepStudyWithAFailedRunExitsNonZero) {
+  const fs::path dir = fresh_dir("table_timestep_failed");
+  std::string scene = reposetwin::test_support::kTinyScene;
+  const std::string at = "settle_speed_m_s = 0.01\n";
+  scene.replace(scene.find(at), at.size(), at + "final_settle_max_s = 0.02\n");
+  write_text(dir / "scene.toml", scene);
+  const CliResult r = run_cli("timestep " + quoted(dir / "scene.toml") + " --out " +
+                              quoted(dir / "t") + " --fractions 0.3 --workers 1");
+  EXPECT_EQ(r.code, 4) << r.out;
+  expect_message(r, {"1 of 1 runs failed or gave no angle"}, {});
 }
 
 // 6, second pass (sidecar fuzz): a principal point off the image, and JSON errors in words.
@@ -385,6 +453,28 @@ TEST(BadInputTable, OutputFoldersAreCheckedBeforeTheRun) {
   EXPECT_EQ(r.code, 2) << r.out;
   expect_message(r, {"killed", "interrupted", "--resume", "--force"}, {});
   EXPECT_TRUE(fs::exists(killed / "checkpoint.bin"));
+}
+
+// A snapshot of another scene (issue 52, part 4): a twin's frames/filled.vtp records the scene
+// it is of, and `export --initial-state` refuses it for another; a tiny run makes one (a second).
+TEST(BadInputTable, AnotherScenesSnapshotIsRefusedAsTheInitialState) {
+  const fs::path dir = fresh_dir("table_snapshot");
+  write_text(dir / "scene.toml", reposetwin::test_support::kTinyScene);
+  const CliResult made = run_cli("run " + quoted(dir / "scene.toml") + " --out " +
+                                 quoted(dir / "run") +
+                                 " --no-images --quiet --set output.frame_interval_s=0.05");
+  ASSERT_EQ(made.code, 0) << made.out;
+  const fs::path filled = dir / "run" / "frames" / "filled.vtp";
+  ASSERT_TRUE(fs::exists(filled));
+  const std::string deck = "export " + quoted(dir / "scene.toml") + " --initial-state " +
+                           quoted(filled) + " --set output.frame_interval_s=0.05 --out ";
+  const CliResult same = run_cli(deck + quoted(dir / "same"));
+  EXPECT_EQ(same.code, 0) << same.out;
+  const CliResult other =
+      run_cli(deck + quoted(dir / "other") + " --set sample.mass_kg=0.008");
+  EXPECT_EQ(other.code, 2) << other.out;
+  expect_message(other, {"filled.vtp", "--initial-state", "another scene"}, {});
+  EXPECT_FALSE(fs::exists(dir / "other" / "in.pile"));
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // Run folders (pile/run_folder.hpp): what a folder holds decides whether a run may write there,
 // and --force removes a run's own files only. No simulation: the folders are made by hand.
 #include "experiments/pile/run_folder.hpp"
+#include "experiments/pile/run_state.hpp"
 
 #include <gtest/gtest.h>
 
@@ -41,11 +42,13 @@ TEST(RunFolder, TheRunsOwnFilesAreKnownByName) {
         "controller.json.tmp.4242", "series.pvd", "scene.resolved.toml", "summary.html",
         "frames/frame_00012.vtp", "frames/container_00000.vtp", "frames/plate.vtp",
         "images/measurement.json", "images/side_az045.png", "images/side_az045_2.measured.png",
-        "images/top.json", "images/frame_00004/side_az000.png"})
+        "images/top.json", "images/frame_00004/side_az000.png", "report/index.html",
+        "report/angles.gp", "run_state.json"})
     EXPECT_TRUE(is_run_file(f)) << f;
   for (const char* f :
        {"notes.txt", "frames/notes.txt", "images/holiday.jpg", "images/side_az45.png",
-        "images/mine/top.png", "data/result.json", "final.vtp.bak"})
+        "images/mine/top.png", "data/result.json", "final.vtp.bak", "report/notes.txt",
+        "report/sub/index.html"})
     EXPECT_FALSE(is_run_file(f)) << f;
 }
 
@@ -66,7 +69,17 @@ TEST(RunFolder, EachStateIsRefusedOrTakenAsItsFlagsSay) {
   EXPECT_EQ(refusal(killed, true, false), "");
   EXPECT_EQ(refusal(killed, false, true), "");
 
+  // A result.json alone is a run stopped between stages: the stage record decides.
   put(killed / "result.json");
+  EXPECT_EQ(run_folder_state(killed), RunFolderState::kInterrupted);
+  EXPECT_NE(refusal(killed, false, false).find("run_state.json"), std::string::npos);
+  record_simulated(killed.string(), false);
+  EXPECT_EQ(run_folder_state(killed), RunFolderState::kInterrupted);
+  EXPECT_NE(refusal(killed, false, false).find("missing: summarised, reported"),
+            std::string::npos)
+      << refusal(killed, false, false);
+  record_stage(killed.string(), RunStage::kSummarised);
+  record_stage(killed.string(), RunStage::kReported);
   EXPECT_EQ(run_folder_state(killed), RunFolderState::kFinished);
   EXPECT_NE(refusal(killed, false, false).find("--force"), std::string::npos);
   EXPECT_NE(refusal(killed, true, false).find("nothing to resume"), std::string::npos);
