@@ -224,7 +224,8 @@ void add_loop_command(CLI::App& app) {
   syn->add_option("design", sargs->design, "Design file (TOML, see experiments/loop/loop_synth.hpp)")
       ->required();
   syn->add_option("--out,-o", sargs->out, "Output folder")->capture_default_str();
-  syn->add_option("--cache", sargs->cache, "Simulation cache (default: a hidden folder)");
+  syn->add_option("--cache", sargs->cache,
+                  "Simulation cache, outside the dataset's folder (default: OUT.synth-cache)");
   syn->add_option("--truth", sargs->truth,
                   "Also write the hidden settings as JSON to this file, outside the dataset's "
                   "folder (for a validation to compare the loop's answer with)");
@@ -239,18 +240,10 @@ void add_loop_command(CLI::App& app) {
     if (!sargs->truth.empty()) plan.add_output(sargs->truth, "--truth");
     plan.check();
     const experiments::SynthDesign d = experiments::read_synth_design(sargs->design);
-    // The loop reads the dataset's folder; the truth must not be where it could be read.
-    if (!sargs->truth.empty()) {
-      const fs::path out = fs::weakly_canonical(sargs->out);
-      const fs::path truth = fs::weakly_canonical(sargs->truth);
-      const auto [o, t] = std::mismatch(out.begin(), out.end(), truth.begin(), truth.end());
-      if (o == out.end())
-        throw experiments::InputError("--truth " + sargs->truth + ": inside the dataset's folder " +
-                                      sargs->out + ", where the loop would read it; write it "
-                                      "elsewhere");
-    }
-    experiments::SimCache cache(sargs->cache.empty() ? sargs->out + "/.hidden_cache" : sargs->cache,
-                                {sargs->workers, true});
+    // The loop reads the dataset's folder; the truth and the cache must not be where it could.
+    experiments::SimCache cache(
+        experiments::synth_cache_dir(sargs->out, sargs->cache, sargs->truth),
+        {sargs->workers, true});
     std::cout << experiments::make_synthetic_dataset(d, sargs->out, cache) << "\n";
     if (!sargs->truth.empty()) {
       nlohmann::json truth = experiments::synth_truth_json(d, sargs->design);

@@ -234,4 +234,30 @@ std::string make_synthetic_dataset(const SynthDesign& d, const std::string& out_
   return path;
 }
 
+namespace {
+
+// `path` lies inside `folder` (both as they would resolve, existing or not).
+bool inside(const std::string& path, const std::string& folder) {
+  namespace fs = std::filesystem;
+  const fs::path f = fs::weakly_canonical(fs::absolute(folder));
+  const fs::path p = fs::weakly_canonical(fs::absolute(path));
+  const auto [a, b] = std::mismatch(f.begin(), f.end(), p.begin(), p.end());
+  return a == f.end();
+}
+
+}  // namespace
+
+std::string synth_cache_dir(const std::string& out_dir, const std::string& cache,
+                            const std::string& truth_file) {
+  for (const auto& [option, path] : {std::pair{"--truth", truth_file}, std::pair{"--cache", cache}})
+    if (!path.empty() && inside(path, out_dir))
+      throw InputError(std::string(option) + " " + path + ": inside the dataset's folder " +
+                       out_dir + ", where the loop would read the hidden settings; give a "
+                       "path outside it");
+  if (!cache.empty()) return cache;
+  std::filesystem::path out = std::filesystem::path(out_dir).lexically_normal();
+  if (!out.has_filename()) out = out.parent_path();  // "data/" -> "data"
+  return out.string() + ".synth-cache";
+}
+
 }  // namespace reposetwin::experiments

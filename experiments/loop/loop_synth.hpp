@@ -70,6 +70,13 @@ SynthDesign read_synth_design(const std::string& path);
 /// loop-synth --truth refuses a path there): the loop must not be able to read it.
 nlohmann::json synth_truth_json(const SynthDesign& design, const std::string& design_path);
 
+/// Where loop-synth keeps its simulation cache: `cache` as given, else the folder beside the
+/// dataset's, OUT.synth-cache. Never inside the dataset's folder, where the loop reads: the
+/// cache's records hold the hidden settings. Throws InputError naming the option for a given
+/// cache (or `truth_file`, when not empty) inside OUT.
+std::string synth_cache_dir(const std::string& out_dir, const std::string& cache,
+                            const std::string& truth_file = "");
+
 /// Runs the hidden twin through `cache` and writes OUT/measured.csv, OUT/scene.toml and
 /// OUT/photos/. Returns the path of the CSV. Throws InputError for unknown effect names or
 /// condition columns, std::runtime_error when a run fails or forms no pile.

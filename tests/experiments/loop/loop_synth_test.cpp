@@ -293,3 +293,29 @@ TEST(LoopSynth, NullDatasetNamesNothing) {
 
 }  // namespace
 }  // namespace reposetwin::experiments
+
+namespace reposetwin::experiments {
+namespace {
+
+// loop-synth's cache holds the hidden settings in its records, so it never lies inside the
+// dataset's folder (where the loop reads): by default it is the folder beside it, and a --cache
+// or --truth given inside it is refused naming the option (issue 52).
+TEST(SynthCacheDir, TheCacheLiesBesideTheDatasetNeverInsideIt) {
+  EXPECT_EQ(synth_cache_dir("runs/data", ""), "runs/data.synth-cache");
+  EXPECT_EQ(synth_cache_dir("runs/data/", ""), "runs/data.synth-cache");
+  EXPECT_EQ(synth_cache_dir("runs/data", "elsewhere/cache"), "elsewhere/cache");
+  for (const std::string inside : {"runs/data/cache", "runs/data/.hidden_cache", "runs/data",
+                                   "runs/./data/x/../cache"}) {
+    try {
+      synth_cache_dir("runs/data", inside);
+      ADD_FAILURE() << inside << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--cache " + inside), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(synth_cache_dir("runs/data", "", "runs/data/truth.json"), InputError);
+  EXPECT_EQ(synth_cache_dir("runs/data", "", "runs/truth.json"), "runs/data.synth-cache");
+}
+
+}  // namespace
+}  // namespace reposetwin::experiments
