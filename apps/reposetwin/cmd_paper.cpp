@@ -25,20 +25,32 @@ struct PaperArgs {
   std::shared_ptr<PlanArgs> plan = std::make_shared<PlanArgs>();
 };
 
-// The items a call runs (--only, or all) against the plan limits: their CPU-hours over the
-// workers as the wall time, and their largest pile. Empty when within them.
-std::string paper_refusal(const nlohmann::json& listing, const PaperArgs& a) {
-  double cpu_h = 0.0;
-  long long particles = 0;
-  for (const nlohmann::json& i : listing["items"]) {
-    const std::string name = i["name"].get<std::string>();
-    if (!a.only.empty() && std::find(a.only.begin(), a.only.end(), name) == a.only.end())
-      continue;
-    cpu_h += i["planned_cpu_hours"].get<double>();
-    for (const auto& g : i["groups"])
-      particles = std::max(particles, g["particles"].get<long long>());
+// What the items a call runs (those named in `only`, or all) cost by their plans.
+struct PaperCost {
+  int runs = 0;
+  double cpu_hours = 0.0;      // [CPU-h]
+  long long particles = 0;     // the largest pile's
+};
+
+PaperCost paper_cost(const experiments::PaperIndex& index, const std::vector<std::string>& only) {
+  PaperCost c;
+  for (const experiments::PaperItem& item : index.items) {
+    if (!only.empty() && std::find(only.begin(), only.end(), item.name) == only.end()) continue;
+    const experiments::ItemPlan plan = experiments::plan_item(item);
+    c.runs += plan.runs;
+    c.cpu_hours += plan.cpu_hours;
+    for (const experiments::PlanGroup& g : plan.groups)
+      c.particles = std::max<long long>(c.particles, g.plan.particles);
   }
-  const double wall_s = 3600.0 * cpu_h / std::max(1, a.workers);
+  return c;
+}
+
+// The items a call runs against the plan limits: their CPU-hours over the workers as the wall
+// time, and their largest pile. Empty when within them.
+std::string paper_refusal(const experiments::PaperIndex& index, const PaperArgs& a) {
+  const PaperCost cost = paper_cost(index, a.only);
+  const long long particles = cost.particles;
+  const double wall_s = 3600.0 * cost.cpu_hours / std::max(1, a.workers);
   const experiments::PlanSettings& lim = a.plan->limits;
   if (particles > lim.max_particles)
     return "a pile of " + std::to_string(particles) + " particles is above --max-particles " +
@@ -117,13 +129,13 @@ void add_paper_command(CLI::App& app) {
     }
     // The listing is the plan: printed before anything runs, and above the limits only with
     // --yes.
-    const nlohmann::json planned = experiments::paper_listing(index, a->out);
+    const PaperCost planned = paper_cost(index, {});
     char line[160];
     std::snprintf(line, sizeof line,
                   "plan: %d runs of the index, %.2f CPU-hours (reposetwin paper --list shows "
                   "each item)\n",
-                  planned["planned_runs"].get<int>(), planned["planned_cpu_hours"].get<double>());
-    if (!accept_plan(line, paper_refusal(planned, *a), *a->plan, false)) {
+                  planned.runs, planned.cpu_hours);
+    if (!accept_plan(line, paper_refusal(index, *a), *a->plan, false)) {
       set_exit_code(ExitCode::kPlanRefused);
       return;
     }
