@@ -22,4 +22,17 @@ inline render::Scene cone_photo_scene(double h, double r, double a) {
   return scene;
 }
 
+/// The lab's level side camera at plate height, 640 x 480, 12 pile radii away, margin 1.6: the
+/// camera-pose tests' reference. `shift_lens` false centres the lens on the horizon, so a camera
+/// pitched from it keeps the pile in the frame.
+inline camera::Camera cone_photo_camera(const render::Scene& scene, bool shift_lens = true) {
+  render::LabCameraSettings cams;
+  cams.width_px = 640;
+  cams.height_px = 480;
+  cams.distance_radii = 12.0;
+  cams.margin = 1.6;
+  cams.shift_lens = shift_lens;
+  return render::lab_side_camera(scene, cams);
+}
+
 }  // namespace reposetwin::test_support

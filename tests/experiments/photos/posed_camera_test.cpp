@@ -33,12 +33,7 @@ render::Scene cone_scene(const Cone& c) { return test_support::cone_photo_scene(
 
 // The lab's level side camera at plate height, 12 pile radii away (the reference photo).
 camera::Camera level_camera(const render::Scene& scene) {
-  render::LabCameraSettings cams;
-  cams.width_px = 640;
-  cams.height_px = 480;
-  cams.distance_radii = 12.0;
-  cams.margin = 1.6;
-  return render::lab_side_camera(scene, cams);
+  return test_support::cone_photo_camera(scene);
 }
 
 // A tripod camera at the level camera's horizontal place, `height` above the plate, aimed down

@@ -32,13 +32,7 @@ render::Scene cone_scene(const Cone& c) { return test_support::cone_photo_scene(
 // The declared camera: level with the plate, 12 pile radii away, its lens centred on the
 // horizon (no shift), so a pitched camera keeps the pile in the frame.
 camera::Camera declared_camera(const render::Scene& scene) {
-  render::LabCameraSettings cams;
-  cams.width_px = 640;
-  cams.height_px = 480;
-  cams.distance_radii = 12.0;
-  cams.shift_lens = false;
-  cams.margin = 1.6;
-  return render::lab_side_camera(scene, cams);
+  return test_support::cone_photo_camera(scene, false);
 }
 
 struct Pair {
