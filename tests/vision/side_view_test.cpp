@@ -38,6 +38,33 @@ TEST(SideView, CleanConeGivesThetaAndSize) {
   }
 }
 
+// A grain on the apex (a disk standing on it, its top at `top_mm`) in colour `bgr`.
+cv::Mat with_apex_grain(const SideScene& s, double radius_mm, double top_mm, cv::Scalar bgr) {
+  cv::Mat img = synthetic::draw_side(s);
+  const double au = s.axis_u < 0.0 ? 0.5 * (s.width - 1) : s.axis_u;
+  const cv::Point2d c(au, s.plate_v - (top_mm - radius_mm) / s.mm_per_px);
+  cv::circle(img, cv::Point(static_cast<int>(std::lround(c.x * 16)),
+                            static_cast<int>(std::lround(c.y * 16))),
+             static_cast<int>(std::lround(radius_mm / s.mm_per_px * 16)), bgr, cv::FILLED,
+             cv::LINE_AA, 4);
+  return img;
+}
+
+// A pale grain on the apex (a light rock against a light backdrop: darker than the backdrop by
+// 12%, lighter than Otsu's split between pile and backdrop) is the pile's top: H is its top, as
+// with a dark grain there. Both readings lay H at the grain's top within a pixel.
+TEST(SideView, APaleGrainOnTheApexIsThePilesTop) {
+  SideScene s;
+  s.height_mm = 60.0;
+  s.diameter_mm = 200.0;
+  const double top = 60.0 + 5.0;
+  const cv::Scalar pale = 0.88 * synthetic::kBackdrop;
+  for (const cv::Scalar& bgr : {pale, synthetic::kPile}) {
+    const SideProfile p = measure_side_pixels(with_apex_grain(s, 3.0, top, bgr));
+    EXPECT_NEAR(p.height_px * s.mm_per_px, top, 1.0 * s.mm_per_px) << bgr;
+  }
+}
+
 TEST(SideView, AnyScaleAndOffCentre) {
   SideScene s;
   s.mm_per_px = 0.6;  // a small pile in the image
