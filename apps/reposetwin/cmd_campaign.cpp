@@ -187,8 +187,14 @@ std::string calibration_line(const nlohmann::json& cal, const std::string& out) 
   else
     t = "no mu_r: the target " + num(target.value("angle_deg", nlohmann::json())) +
         " deg is out of reach (" + cal.value("status", std::string()) + ")";
+  // The line ends with what to run next, on the folder as typed (the user's shell stands where
+  // it was typed).
+  std::string next;
+  for (const auto& step :
+       experiments::calibration_next_steps(out, cal.contains("mu_r") && cal["mu_r"].is_number()))
+    next += (next.empty() ? "; next: `" : ", `") + step.command + "` (" + step.what + ")";
   return t + "; " + std::to_string(cal.value("simulations", 0)) + " pile runs; " + out +
-         "/calibration.json";
+         "/calibration.json" + next;
 }
 
 }  // namespace

@@ -591,6 +591,13 @@ std::string cannot_reach_advice(const Campaign& c, const nlohmann::json& cal,
   return t;
 }
 
+std::vector<NextStep> calibration_next_steps(const std::string& folder, bool reached) {
+  const std::string dir = shell_word(folder);
+  std::vector<NextStep> steps = {{"reposetwin report " + dir, "the page"}};
+  if (reached) steps.push_back({"reposetwin export " + dir, "the LIGGGHTS deck"});
+  return steps;
+}
+
 CalibrateOutcome calibrate_and_predict(const Campaign& c, const std::string& out,
                                        AngleMeasure measure, const CaseFn& fn,
                                        const RunnerSettings& rs, bool predict_only) {

@@ -18,6 +18,7 @@
 #include "experiments/export/liggghts_deck.hpp"
 #include "experiments/io/calibration_record.hpp"
 #include "experiments/io/files.hpp"
+#include "experiments/io/format.hpp"
 #include "experiments/io/hash.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/scene_overrides.hpp"
@@ -176,6 +177,19 @@ TEST(ExportFromCalibration, BadRecordsNameTheFileTheKeyAndTheValue) {
     const std::string what = refusal(d.path().string());
     EXPECT_EQ(what.substr(0, b.says.size()), b.says) << what;
   }
+}
+
+// After a calibration: its page, and the export of its material when it reached a mu_r, on the
+// folder's path quoted for a shell when it needs to be.
+TEST(ExportFromCalibration, NextStepsNameTheFolder) {
+  const auto reached = calibration_next_steps("runs/cal 1", true);
+  ASSERT_EQ(reached.size(), 2u);
+  EXPECT_EQ(reached[0].command, "reposetwin report 'runs/cal 1'");
+  EXPECT_EQ(reached[1].command, "reposetwin export 'runs/cal 1'");
+  const auto none = calibration_next_steps("runs/cal1", false);
+  ASSERT_EQ(none.size(), 1u);
+  EXPECT_EQ(none[0].command, "reposetwin report runs/cal1");
+  EXPECT_EQ(shell_word("it's"), "'it'\\''s'");
 }
 
 }  // namespace
