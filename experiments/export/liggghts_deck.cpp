@@ -328,8 +328,10 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
      << num(c.top_diameter) << " m, " << num(c.height) << " m high, " << num(c.gap)
      << " m above the plate) as `container.stl`, lifted at " << num(p.lift_speed) << " m/s.\n\n"
      << "## Not carried\n";
-  for (const auto& [names, p] : scene.contacts)
-    if (p.rolling_model == sim::RollingModel::kEpsd && p.rolling_damping > 0)
+  // One line a pair as the scene names it: the contacts map holds each pair in both orders.
+  for (const auto& names : scene.contact_pairs)
+    if (const sim::PairParams& p = scene.contacts.at(names);
+        p.rolling_model == sim::RollingModel::kEpsd && p.rolling_damping > 0)
       md << "- The rolling dashpot of contacts." << names.first << "-" << names.second
          << ": rolling_damping eta_r = " << num(p.rolling_damping)
          << " has no counterpart in epsd2; run the twin with `--set contacts." << names.first
