@@ -42,21 +42,8 @@ namespace {
 
 // Angles per case: image and particle atan(2H/D) and the image flank angle, mean ± sd.
 void angles_plot(const FolderResults& f, const fs::path& out) {
-  // index image_mean image_sd particle_mean particle_sd label flank sd; a case is labelled by
-  // its inputs (mu_r 0.399), not by its folder name.
-  std::vector<std::pair<std::string, json>> named;
-  for (const CaseRows& c : f.cases) named.emplace_back(c.name, c.overrides);
-  const std::vector<std::string> labels = case_labels(named);
-  std::ostringstream data;
-  int k = 0;
-  for (const CaseRows& c : f.cases) {
-    const CaseStats s = case_stats(c);
-    data << k << " " << s.image.mean << " " << s.image.sd << " " << s.particle.mean << " "
-         << s.particle.sd << " \"" << labels[k] << "\" "
-         << (s.flank.n ? s.flank.mean : NAN) << " " << (s.flank.n ? s.flank.sd : NAN) << "\n";
-    ++k;
-  }
-  write_file_atomic((out / "angles.dat").string(), data.str());
+  const std::string data = angles_plot_data(f);
+  write_file_atomic((out / "angles.dat").string(), data);
   run_gnuplot(out / "angles.gp",
               png_terminal(out / "angles.png", 900, 520, false) +
                   "set ylabel 'angle of repose [deg]'\nset xtics rotate by 30 right\n"
