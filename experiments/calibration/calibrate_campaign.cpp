@@ -296,6 +296,8 @@ Pour pour_of(const nlohmann::json& run, const AngleFn& angle_of) {
       p.outcome = PourOutcome::kPhysicsStop;
       break;
     case NoHeadlineReason::kTimeLimit:
+      p.outcome = PourOutcome::kTimeLimit;
+      break;
     case NoHeadlineReason::kNotSettled:
       p.outcome = PourOutcome::kNotSettled;
       break;
@@ -557,6 +559,25 @@ std::string cannot_reach_advice(const Campaign& c, const nlohmann::json& cal,
   } else {
     t = "cannot reach: no pour formed a pile to measure in " + std::to_string(runs) +
         " pile runs between mu_r " + lo + " and " + hi + " (" + cal.value("message", "") + ")\n";
+  }
+  // Without a pile, the advice is on the stop that took the pours: a time limit is cured by
+  // time, not by the grain shape.
+  std::map<NoHeadlineReason, int> stopped;
+  for (const auto& q : cal.value("jam_rate_per_mu_r", nlohmann::json::array())) {
+    stopped[NoHeadlineReason::kJammed] += q.value("jams", 0);
+    stopped[NoHeadlineReason::kTimeLimit] += q.value("time_limits", 0);
+    stopped[NoHeadlineReason::kNotSettled] += q.value("not_settled", 0);
+    stopped[NoHeadlineReason::kPhysicsStop] += q.value("physics_stops", 0);
+  }
+  if (!have_reach && (stopped[NoHeadlineReason::kTimeLimit] > 0 ||
+                      stopped[NoHeadlineReason::kNotSettled] > 0 ||
+                      stopped[NoHeadlineReason::kPhysicsStop] > 0)) {
+    t += "what to try:\n";
+    for (const auto& [reason, n] : stopped)
+      if (n > 0)
+        t += "  - " + std::string(no_headline_word(reason)) + " (" + std::to_string(n) +
+             " pour(s)): " + no_headline_advice(reason) + "\n";
+    return t;
   }
   t += "what to try:\n";
   if (high || !have_reach) {
