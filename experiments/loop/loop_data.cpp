@@ -264,7 +264,21 @@ void read_overrides(LabTest& test, const Row& row, const Where& w, const LabShee
     std::string culprit;
     try {
       (void)load_scene(test.scene_path, {sets.begin(), sets.begin() + own});
-    } catch (const std::exception&) {
+    } catch (const std::exception& common) {
+      // The command's own overrides (its sieve sheet) that break a scene that builds without
+      // them are named as the command gave them, never as the row's scene column.
+      bool base_builds = own > 0;
+      if (base_builds) {
+        try {
+          (void)load_scene(test.scene_path);
+        } catch (const std::exception&) {
+          base_builds = false;
+        }
+      }
+      if (base_builds)
+        throw InputError((form.common_origin.empty() ? std::string("the command line")
+                                                     : form.common_origin) +
+                         ": " + common.what());
       culprit = "scene";
     }
     for (std::size_t k = own + 1; k <= sets.size() && culprit.empty(); ++k) {

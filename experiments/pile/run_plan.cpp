@@ -73,6 +73,8 @@ RunPlan plan_run(const SceneConfig& scene, int threads, const PlanSettings& sett
   p.wall_s =
       static_cast<double>(p.steps) * static_cast<double>(p.particles) / p.particle_steps_per_s;
   p.representative = representativeness(scene);
+  p.psd_source = scene.psd.source;
+  p.psd_note = scene.psd.note;
   return p;
 }
 
@@ -89,6 +91,7 @@ std::string plan_text(const RunPlan& p, const PlanSettings& s) {
        printf_text("%.2g", s.particle_steps_per_s_per_thread) +
        " per thread, measured on whole pile " + "runs, x " + std::to_string(p.threads) +
        " thread(s))\n";
+  if (!p.psd_note.empty()) t += "plan: the sieve sheet " + p.psd_source + ": " + p.psd_note + "\n";
   return t + representativeness_text(p.representative);
 }
 

@@ -46,6 +46,8 @@ struct RunPlan {
   double particle_steps_per_s = 0.0;      // the rate assumed (per thread x threads) [1/s]
   double wall_s = 0.0;                    // estimated wall time [s]
   Representativeness representative;      // pile height, mass not simulated, outlet width
+  std::string psd_source, psd_note;       // the sieve table's file, and how it was read when
+                                          // not as written (io/psd_file.hpp), or empty
 };
 
 /// The plan of `scene` run with `threads` threads. Throws InputError as the scene's checks do.
