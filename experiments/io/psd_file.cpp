@@ -273,7 +273,8 @@ PsdFile parse_psd_table(const toml::table& t, const std::string& source, const s
       std::string allowed;
       for (std::string_view k : kKeys) allowed += (allowed.empty() ? "" : ", ") + std::string(k);
       bad(locate(source, where, std::string(key.str()), &node),
-          "unknown key (value " + show(node) + "); allowed keys: " + allowed);
+          "unknown key (value " + show(node) + ")" + did_you_mean(std::string(key.str()), kKeys) +
+              "; allowed keys: " + allowed);
     }
   }
 

@@ -1,5 +1,6 @@
 #include "experiments/loop/loop_data.hpp"
 
+#include "experiments/io/suggest.hpp"
 #include "experiments/io/numbers.hpp"
 
 #include <cmath>
@@ -155,8 +156,9 @@ Columns read_header(const CsvTable& csv, const std::string& file, const LabSheet
     const std::string h = trim(csv.header[i]);
     if (cols.has(h)) throw InputError(at + ": column " + h + " appears twice");
     if (!known.count(h) && h.rfind("set:", 0) != 0)
-      throw InputError(at + ": unknown column \"" + h +
-                       "\" (see docs/calibration.md or docs/loop.md; any scene key goes in a set:KEY column)");
+      throw InputError(at + ": unknown column \"" + h + "\"" + did_you_mean(h, known, "\"") +
+                       " (see docs/calibration.md or docs/loop.md; any scene key goes in a "
+                       "set:KEY column)");
     cols.header.push_back(h);
     cols.index[h] = static_cast<int>(i);
   }

@@ -83,5 +83,18 @@ TEST(ExportCli, ASceneFileWithSetStillExports) {
   EXPECT_TRUE(has(no_out.out, "--out is required")) << no_out.out;
 }
 
+// A misspelt option is named with the one meant, from the options that command takes.
+TEST(ExportCli, AMisspeltOptionGetsDidYouMean) {
+  const UniqueTempDir d("export_cli_option");
+  write_text(d.path() / "s.toml", kTinyScene);
+  const CliResult r = run_cli_argv(
+      {"export", "s.toml", "--out", "deck", "--sett", "contacts.rock-rock.rolling_friction=0.2"},
+      d.path());
+  EXPECT_NE(r.code, 0);
+  EXPECT_TRUE(has(r.out, "--sett: not an option of reposetwin export; did you mean '--set'?"))
+      << r.out;
+  EXPECT_FALSE(fs::exists(d.path() / "deck"));
+}
+
 }  // namespace
 }  // namespace reposetwin::test_support
