@@ -308,6 +308,11 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
      << "`liggghts -in in.pile` or `mpirun -np N liggghts -in in.pile`; it ends with "
      << "`final.dump`, which `reposetwin measure-particles final.dump --scene SCENE` measures "
         "with the twin's own pile measure (H, D, atan(2H/D)).\n\n"
+     << "Installing LIGGGHTS on the machine that builds the twin: `sudo apt-get install "
+        "--no-install-recommends liggghts`. With its recommended packages, Debian's liggghts "
+        "pulls in paraview and python3-paraview, which conflicts with python3-vtk9: apt then "
+        "removes python3-vtk9 and libvtk9-dev, and the twin no longer builds "
+        "(`apt-get -s install liggghts` shows it beforehand).\n\n"
      << calibration_notes(settings.calibration)
      << "## Carried as it is\n"
      << "- Hertz-Mindlin with history; E " << num(e_soft > 0 ? e_soft : t.material[0]->youngs_modulus)

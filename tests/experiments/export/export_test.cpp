@@ -55,6 +55,9 @@ TEST(LiggghtsDeck, CarriesTheSoftenedStiffnessTheLawAndTheProcedure) {
   stop << "variable ke_stop equal " << 0.5 * s.mass * v * v << "\n";
   EXPECT_TRUE(has(d.input, stop.str())) << d.input;
   EXPECT_TRUE(has(d.input, "if \"${ke_now} < ${ke_stop}\" then \"jump SELF fill_done\""));
+  // The notes warn of the install that breaks the twin's build, with the command that avoids it.
+  EXPECT_TRUE(has(d.notes, "`sudo apt-get install --no-install-recommends liggghts`")) << d.notes;
+  EXPECT_TRUE(has(d.notes, "removes python3-vtk9 and libvtk9-dev")) << d.notes;
   // The notes name every epsd contact whose dashpot epsd2 cannot carry.
   for (const auto& [a, b] : s.contact_pairs)
     if (s.contacts.at({a, b}).rolling_damping > 0)
