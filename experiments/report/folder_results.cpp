@@ -183,6 +183,24 @@ CaseStats case_stats(const CaseRows& c) {
           sample_stats(c.flank_deg)};
 }
 
+bool same_test_as_calibration(const FolderResults& f, const CaseRows& c) {
+  std::vector<std::string> keys;
+  if (f.calibration.is_object()) {
+    for (const json& k : f.calibration.value("keys", json::array()))
+      if (k.is_string()) keys.push_back(k.get<std::string>());
+    if (f.calibration.contains("key") && f.calibration["key"].is_string())
+      keys.push_back(f.calibration["key"].get<std::string>());
+  }
+  const auto conditions = [&keys](const json& overrides) {
+    json o = overrides.is_object() ? overrides : json::object();
+    for (const std::string& k : keys) o.erase(k);
+    return o;
+  };
+  for (const CaseRows& r : f.cases)
+    if (r.name.rfind("calib_", 0) == 0) return conditions(r.overrides) == conditions(c.overrides);
+  return true;
+}
+
 std::string angles_plot_data(const FolderResults& f) {
   std::vector<std::pair<std::string, json>> named;
   for (const CaseRows& c : f.cases) named.emplace_back(c.name, c.overrides);

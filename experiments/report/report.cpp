@@ -95,6 +95,8 @@ RenderBeside render_beside_lab(const FolderResults& f) {
     for (const CaseRows& c : f.cases) {
       if (!c.overrides.contains(key) || !c.overrides[key].is_number()) continue;
       if (!scene.empty() && !c.scene.empty() && c.scene != scene) continue;
+      // The lab photographed the calibration test: a render beside it is of that test.
+      if (!same_test_as_calibration(f, c)) continue;
       const fs::path p = overlay_of(f, c);
       if (p.empty()) continue;
       const double value = c.overrides[key].get<double>();

@@ -1,5 +1,7 @@
-// "Angles per case": a case whose runs gave no angle (a time limit, a jam) is shown as what it
-// is, in its label, and draws no point, never one at 0 deg.
+// What a page takes from a folder's cases (report/folder_results.hpp): in "Angles per case", a
+// case whose runs gave no angle (a time limit, a jam) is shown as what it is, in its label, and
+// draws no point, never one at 0 deg; the render set beside the lab photo is of the photographed
+// test.
 #include <gtest/gtest.h>
 
 #include <sstream>
@@ -44,6 +46,29 @@ TEST(AnglesPlot, RunsWithoutAnAngleAreNeverAZero) {
   EXPECT_EQ(particle, "nan") << lines[1];
   EXPECT_NE(lines[1].find("(no angle: 2 time_limit)\""), std::string::npos) << lines[1];
   EXPECT_EQ(lines[1].find(" 0 "), std::string::npos) << lines[1];
+}
+
+// The render set beside the lab photo is of the calibration's own test: a prediction of another
+// test (another mass) at the calibrated mu_r shares the scene and mu_r, not the test.
+TEST(LabPhotoPair, OnlyTheCalibrationTestsRunsStandBesideItsPhoto) {
+  const std::string key = "contacts.rock-rock.rolling_friction";
+  FolderResults f;
+  f.calibration = {{"key", key}, {"keys", {key}}, {"mu_r", 0.3}};
+  CaseRows calib, self, other;
+  calib.name = "calib_rolling_friction_0.3";
+  calib.overrides = {{key, 0.3}, {"sample.mass_kg", 0.008}};
+  self.name = "predict_t1_rolling_friction_0.3";
+  self.overrides = {{key, 0.3}, {"sample.mass_kg", 0.008}};
+  other.name = "predict_t2_rolling_friction_0.3";
+  other.overrides = {{key, 0.3}, {"sample.mass_kg", 0.011}};
+  f.cases = {calib, self, other};
+  EXPECT_TRUE(same_test_as_calibration(f, calib));
+  EXPECT_TRUE(same_test_as_calibration(f, self));
+  EXPECT_FALSE(same_test_as_calibration(f, other));
+  // Another mu_r of the same test is the same test.
+  CaseRows calib_low = calib;
+  calib_low.overrides[key] = 0.1;
+  EXPECT_TRUE(same_test_as_calibration(f, calib_low));
 }
 
 }  // namespace
