@@ -51,8 +51,10 @@ InputError record_error(const JsonFieldError& e, const std::string& file,
     value = doc.at(p).dump();
     if (value.size() > 80) value = value.substr(0, 80) + "...";
     // known_fields puts the value in its own words already.
-    if (e.problem().find("(value ") == std::string::npos) value = " = " + value;
-    else value.clear();
+    if (e.problem().find("(value ") == std::string::npos)
+      value = " = " + value;
+    else
+      value.clear();
   }
   return InputError(file + ": key " + dotted(e.pointer()) + value + ": " + e.problem());
 }
@@ -68,15 +70,16 @@ std::vector<Override> CalibratedMaterial::scene_overrides() const {
 nlohmann::json to_json(const CalibratedMaterial& m) {
   nlohmann::json ov = nlohmann::json::array();
   for (const Override& o : m.overrides) ov.push_back({{"key", o.key}, {"value", o.value}});
-  return {{"scene", m.scene},
-          {"scene_fnv1a", m.scene_fnv1a},
-          {"overrides", ov},
-          {"keys", m.keys},
-          {"mu_r", m.mu_r},
-          {"mu_r_interval", {m.mu_r_lo, m.mu_r_hi}},
-          {"target_deg", m.target_deg},
-          {"angle", m.angle},
-          {"sieve_sheet", m.sieve_sheet.empty() ? nlohmann::json() : nlohmann::json(m.sieve_sheet)}};
+  return {
+      {"scene", m.scene},
+      {"scene_fnv1a", m.scene_fnv1a},
+      {"overrides", ov},
+      {"keys", m.keys},
+      {"mu_r", m.mu_r},
+      {"mu_r_interval", {m.mu_r_lo, m.mu_r_hi}},
+      {"target_deg", m.target_deg},
+      {"angle", m.angle},
+      {"sieve_sheet", m.sieve_sheet.empty() ? nlohmann::json() : nlohmann::json(m.sieve_sheet)}};
 }
 
 CalibratedMaterial calibrated_material_from_json(const nlohmann::json& j, const std::string& file) {
@@ -119,8 +122,9 @@ CalibratedMaterial calibrated_material_from_json(const nlohmann::json& j, const 
 CalibratedMaterial read_calibrated_material(const std::string& folder) {
   std::error_code ec;
   if (!fs::is_directory(folder, ec))
-    throw InputError(folder + ": not a calibration folder (give the --out folder of "
-                              "`reposetwin calibrate`, or a scene file)");
+    throw InputError(folder +
+                     ": not a calibration folder (give the --out folder of "
+                     "`reposetwin calibrate`, or a scene file)");
   const std::string file = (fs::path(folder) / kCalibrationRecordFile).string();
   if (!fs::exists(file, ec))
     throw InputError(folder + ": holds no " + kCalibrationRecordFile +
@@ -132,8 +136,7 @@ CalibratedMaterial read_calibrated_material(const std::string& folder) {
     throw InputError(file + ": not JSON (" + e.what() + ")");
   }
   if (!j.is_object() || !j.contains(kRecordKey))
-    throw InputError(file + ": key " + kRecordKey +
-                     " is missing (the file is " +
+    throw InputError(file + ": key " + kRecordKey + " is missing (the file is " +
                      (j.dump().size() > 40 ? j.dump().substr(0, 40) + "..." : j.dump()) +
                      "): not a calibration record written by `reposetwin calibrate`, or one "
                      "written before calibrations recorded their material; calibrate again into "
@@ -144,7 +147,8 @@ CalibratedMaterial read_calibrated_material(const std::string& folder) {
     };
     throw InputError(file + ": status \"" + text("status") +
                      "\": this calibration reached no mu_r, so there is no calibrated material "
-                     "to take further (" + text("message") + ")");
+                     "to take further (" +
+                     text("message") + ")");
   }
   CalibratedMaterial m = calibrated_material_from_json(j.at(kRecordKey), file);
   std::string text;

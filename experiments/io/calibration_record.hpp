@@ -32,8 +32,8 @@ struct CalibratedMaterial {
   double mu_r = 0.0;                // the calibrated value [-]
   double mu_r_lo = 0.0;             // its 95% interval [-]
   double mu_r_hi = 0.0;
-  double target_deg = 0.0;          // the angle it was fitted to [deg]
-  std::string angle;                // the twin's measure matched to it ("image", ...)
+  double target_deg = 0.0;  // the angle it was fitted to [deg]
+  std::string angle;        // the twin's measure matched to it ("image", ...)
   std::string sieve_sheet;  // the file sample.psd_file names among the overrides; empty: the
                             // scene's own sieve table
   /// Every override a run of the calibrated material applies: the test's, then each key = mu_r.

@@ -35,8 +35,8 @@ TEST(ExportCli, FromACalibrationFolderNothingRetyped) {
       {"target_deg", 31.5},
       {"angle", "image"},
       {"sieve_sheet", (d.path() / "sieve.csv").string()}};
-  write_text(cal / "calibration.json", nlohmann::json{{"status", "calibrated"},
-                                                      {"material", material}}.dump(2));
+  write_text(cal / "calibration.json",
+             nlohmann::json{{"status", "calibrated"}, {"material", material}}.dump(2));
   const CliResult r = run_cli_argv({"export", cal.string()}, d.path());
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(has(r.out, "at the calibrated mu_r 0.297 (95% 0.258 to 0.339")) << r.out;
@@ -47,9 +47,9 @@ TEST(ExportCli, FromACalibrationFolderNothingRetyped) {
   EXPECT_TRUE(has(deck, "coefficientRollingFriction peratomtypepair 3 0.297")) << deck;
 
   // --set still applies on top, and the deck says its value is not the calibrated one.
-  const CliResult set = run_cli_argv(
-      {"export", cal.string(), "--out", "other", "--set", "contacts.rock-rock.rolling_friction=0.25"},
-      d.path());
+  const CliResult set = run_cli_argv({"export", cal.string(), "--out", "other", "--set",
+                                      "contacts.rock-rock.rolling_friction=0.25"},
+                                     d.path());
   ASSERT_EQ(set.code, 0) << set.out;
   EXPECT_TRUE(has(read_text(d.path() / "other" / "README.md"), "NOT the calibrated 0.297"));
 }

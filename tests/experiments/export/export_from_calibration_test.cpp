@@ -49,7 +49,8 @@ void write_inputs(const fs::path& dir) {
   write_file_atomic((dir / "campaign.toml").string(),
                     "name = \"cal\"\nscene = \"base.toml\"\nseeds = [1]\n"
                     "overrides = { \"sample.psd_file\" = \"sieve.csv\", \"sample.mass_kg\" = "
-                    "0.007 }\n[calibration]\nkey = \"" + std::string(kKey) +
+                    "0.007 }\n[calibration]\nkey = \"" +
+                        std::string(kKey) +
                         "\"\ntarget_deg = 35\ntarget_sd_deg = 0.3\nmu_r_range = [0.05, 0.6]\n"
                         "seeds_per_point = 2\ntolerance_deg = 0.3\nmax_simulations = 24\n"
                         "bootstrap_replicates = 200\n");
@@ -95,8 +96,7 @@ TEST(ExportFromCalibration, TheDeckCarriesWhatWasCalibratedNothingRetyped) {
 
   // The scene rebuilt from the record is the calibration test's at mu_r: its sieve sheet, its
   // mass, the calibrated key.
-  const SceneConfig scene =
-      SceneDoc(m.scene, m.scene_overrides(), "test").config();
+  const SceneConfig scene = SceneDoc(m.scene, m.scene_overrides(), "test").config();
   EXPECT_EQ(scene.psd.source, m.sieve_sheet);
   EXPECT_DOUBLE_EQ(scene.mass, 0.007);
   EXPECT_DOUBLE_EQ(scene.contacts.at({"rock", "rock"}).rolling_friction, m.mu_r);
@@ -139,8 +139,7 @@ TEST(ExportFromCalibration, BadRecordsNameTheFileTheKeyAndTheValue) {
             std::string::npos);
   EXPECT_NE(refusal(d.path().string()).find("holds no calibration.json"), std::string::npos);
   write_file_atomic(file, "{}");
-  EXPECT_NE(refusal(d.path().string()).find(file + ": key material is missing"),
-            std::string::npos)
+  EXPECT_NE(refusal(d.path().string()).find(file + ": key material is missing"), std::string::npos)
       << refusal(d.path().string());
   write_file_atomic(file, "{\"status\": \"cannot_reach_high\", \"material\": null}");
   EXPECT_NE(refusal(d.path().string()).find("status \"cannot_reach_high\""), std::string::npos);
@@ -169,7 +168,8 @@ TEST(ExportFromCalibration, BadRecordsNameTheFileTheKeyAndTheValue) {
   wrong["mu_r"] = "0.3";
   outside["mu_r_interval"] = {0.4, 0.5};
   for (const Bad& b :
-       {Bad{typo, file + ": key material.mu_rr: is not a known key (value 0.3); did you mean mu_r?"},
+       {Bad{typo,
+            file + ": key material.mu_rr: is not a known key (value 0.3); did you mean mu_r?"},
         Bad{missing, file + ": key material.keys: missing"},
         Bad{wrong, file + ": key material.mu_r = \"0.3\": is string, not a number"},
         Bad{outside, file + ": key material.mu_r_interval = [0.4,0.5]: must be two finite"}}) {

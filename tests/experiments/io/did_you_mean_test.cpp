@@ -61,13 +61,12 @@ TEST(DidYouMean, EveryStrictReaderNamesTheNearestKnownName) {
   EXPECT_NE(psd.find("did you mean passing_percent?"), std::string::npos) << psd;
   // A campaign file's key.
   file("base.toml", test_support::kTinyScene);
-  const std::string campaign = refusal([&] {
-    load_campaign(file("c.toml", "name = \"c\"\nscene = \"base.toml\"\nseedz = [1]\n"));
-  });
+  const std::string campaign = refusal(
+      [&] { load_campaign(file("c.toml", "name = \"c\"\nscene = \"base.toml\"\nseedz = [1]\n")); });
   EXPECT_NE(campaign.find("did you mean seeds?"), std::string::npos) << campaign;
   // A sieve sheet's column.
-  const std::string sieve = refusal(
-      [&] { read_psd_file(file("s.csv", "sieve_mm,pasing_percent\n1,0\n2,100\n")); });
+  const std::string sieve =
+      refusal([&] { read_psd_file(file("s.csv", "sieve_mm,pasing_percent\n1,0\n2,100\n")); });
   EXPECT_NE(sieve.find("did you mean \"passing_percent\"?"), std::string::npos) << sieve;
   // A test sheet's column.
   LabSheetForm form;
@@ -79,7 +78,8 @@ TEST(DidYouMean, EveryStrictReaderNamesTheNearestKnownName) {
   // A calibration record's key.
   fs::create_directories(d.path() / "cal");
   file("cal/calibration.json", R"({"material": {"scen": "x"}})");
-  const std::string record = refusal([&] { read_calibrated_material((d.path() / "cal").string()); });
+  const std::string record =
+      refusal([&] { read_calibrated_material((d.path() / "cal").string()); });
   EXPECT_NE(record.find("did you mean scene?"), std::string::npos) << record;
 }
 

@@ -2,13 +2,13 @@
 // case whose runs gave no angle (a time limit, a jam) is shown as what it is, in its label, and
 // draws no point, never one at 0 deg; the render set beside the lab photo is of the photographed
 // test.
+#include "experiments/report/folder_results.hpp"
+
 #include <gtest/gtest.h>
 
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include "experiments/report/folder_results.hpp"
 
 namespace reposetwin::experiments::report {
 namespace {
