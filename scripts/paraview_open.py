@@ -13,10 +13,19 @@
 # pvpython comes with Debian's python3-paraview, which conflicts with python3-vtk9: installing it
 # removes libvtk9-dev, which the twin builds against. Open runs on a machine (or container) other
 # than the one that builds the twin, or use the paraview GUI's Python shell.
+#
+# Without a screen: Debian's ParaView renders through X (it is built without an EGL or OSMesa
+# offscreen path), so a screenshot with no display crashes in the first render, with
+# --force-offscreen-rendering too. The script checks before it loads ParaView and refuses with
+# the one command that works, under a virtual X display:
+#   xvfb-run -a pvpython scripts/paraview_open.py RUN_DIR --screenshot PNG
+# A ParaView built to render offscreen (EGL or OSMesa) is told so by REPOSETWIN_PARAVIEW_OFFSCREEN=1.
 import os
+import shlex
+import shutil
 import sys
 
-from paraview import simple as pv
+pv = None  # paraview.simple, loaded once the run can be shown (load_paraview)
 
 
 def open_run(run_dir):
@@ -74,6 +83,34 @@ def has_array(source, name, cells=False):
                for i in range(arrays.GetNumberOfArrays()))
 
 
+def display_refusal(argv, env):
+    """Why a screenshot cannot be rendered in this environment, with the command that renders it;
+    None when it can (a display, or a ParaView declared able to render offscreen)."""
+    if env.get("DISPLAY") or env.get("WAYLAND_DISPLAY") or \
+            env.get("REPOSETWIN_PARAVIEW_OFFSCREEN") == "1":
+        return None
+    command = "xvfb-run -a pvpython scripts/paraview_open.py " + " ".join(
+        shlex.quote(a) for a in argv)
+    text = ("paraview_open: no display ($DISPLAY is not set), and Debian's ParaView renders "
+            "through X: a screenshot here would crash. Render it under a virtual display:\n  "
+            + command)
+    if not shutil.which("xvfb-run"):
+        text += "\n(xvfb-run is in Debian's xvfb: sudo apt-get install --no-install-recommends xvfb)"
+    return text
+
+
+def load_paraview():
+    global pv
+    try:
+        from paraview import simple
+    except ImportError:
+        sys.exit("paraview_open: ParaView's Python is not here: run the script with pvpython. On "
+                 "Debian pvpython is in python3-paraview, which conflicts with python3-vtk9 and "
+                 "removes libvtk9-dev (the twin's build): install it on another machine or "
+                 "container than the one that builds the twin")
+    pv = simple
+
+
 def main(argv):
     args = [a for a in argv if not a.startswith("--")]
     shot = None
@@ -86,6 +123,11 @@ def main(argv):
     run_dir = args[0] if args else os.environ.get("REPOSETWIN_RUN", "")
     if not run_dir:
         sys.exit("usage: pvpython scripts/paraview_open.py RUN_DIR [--screenshot PNG]")
+    if shot:
+        refusal = display_refusal(argv, os.environ)
+        if refusal:
+            sys.exit(refusal)
+    load_paraview()
     view, parts = open_run(run_dir)
     print(f"paraview_open: {run_dir}: {len(parts)} part(s) of the last frame shown")
     if shot:

@@ -87,7 +87,9 @@ void add_campaign_command(CLI::App& app) {
     experiments::check_output_folder(out);
     const experiments::BatchPlan bp = experiments::plan_campaign(c, a->workers);
     if (!accept_plan(experiments::plan_text(bp, plan->limits),
-                     experiments::plan_refusal(bp, plan->limits), *plan, a->quiet)) {
+                     experiments::plan_refusal(
+                         bp, {experiments::KeySource::Kind::kCampaignFile, c.file}, plan->limits),
+                     *plan, a->quiet)) {
       set_exit_code(ExitCode::kPlanRefused);
       return;
     }
@@ -187,8 +189,14 @@ std::string calibration_line(const nlohmann::json& cal, const std::string& out) 
   else
     t = "no mu_r: the target " + num(target.value("angle_deg", nlohmann::json())) +
         " deg is out of reach (" + cal.value("status", std::string()) + ")";
+  // The line ends with what to run next, on the folder as typed (the user's shell stands where
+  // it was typed).
+  std::string next;
+  for (const auto& step :
+       experiments::calibration_next_steps(out, cal.contains("mu_r") && cal["mu_r"].is_number()))
+    next += (next.empty() ? "; next: `" : ", `") + step.command + "` (" + step.what + ")";
   return t + "; " + std::to_string(cal.value("simulations", 0)) + " pile runs; " + out +
-         "/calibration.json";
+         "/calibration.json" + next;
 }
 
 }  // namespace
@@ -258,9 +266,15 @@ void add_calibrate_command(CLI::App& app) {
                                   experiments::angle_measure_name(measure) +
                                   "' is measured on the renders, so the runs need them");
     const experiments::BatchPlan bp = experiments::plan_calibration(c, a->workers);
+    // The plan's advice names what this call takes: the test sheet's columns, or the campaign
+    // file's overrides (calibrate takes no --set).
+    const experiments::KeySource keys_from =
+        sheets->given()
+            ? experiments::KeySource{experiments::KeySource::Kind::kTestSheet, sheets->tests}
+            : experiments::KeySource{experiments::KeySource::Kind::kCampaignFile, c.file};
     if (!accept_plan(experiments::calibration_order_text(c) +
                          experiments::plan_text(bp, plan->limits),
-                     experiments::plan_refusal(bp, plan->limits), *plan, a->quiet)) {
+                     experiments::plan_refusal(bp, keys_from, plan->limits), *plan, a->quiet)) {
       set_exit_code(ExitCode::kPlanRefused);
       return;
     }

@@ -10,6 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/reposetwin/commands.hpp"
+#include "experiments/io/calibration_record.hpp"
+#include "experiments/io/format.hpp"
 #include "experiments/io/hash.hpp"
 #include "experiments/pile/headline.hpp"
 #include "experiments/export/liggghts_deck.hpp"
@@ -31,10 +33,15 @@ void add_export_command(CLI::App& app) {
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
-      "export", "Write a scene (a calibrated material) as a LIGGGHTS 3.8 input deck: in.pile, "
-                "container.stl and README.md (what is carried, and mu_r in other conventions)");
-  cmd->add_option("scene", a->scene, "Scene file")->required();
-  cmd->add_option("--out,-o", a->out, "Folder for the deck")->required();
+      "export", "Write a calibration's material (its folder) or a scene as a LIGGGHTS 3.8 input "
+                "deck: in.pile, container.stl and README.md (the calibrated mu_r and its "
+                "interval, what is carried, and mu_r in other conventions)");
+  cmd->add_option("scene", a->scene,
+                  "A calibration's folder (the --out of `reposetwin calibrate`: its scene, "
+                  "sieve sheet and calibrated mu_r, nothing retyped), or a scene file")
+      ->required();
+  cmd->add_option("--out,-o", a->out,
+                  "Folder for the deck (default for a calibration folder: FOLDER/liggghts)");
   cmd->add_option("--set", a->sets, "Override a scene key: dotted.key=value (repeatable)");
   cmd->add_option("--seed", a->seed, "Seed of LIGGGHTS' random streams")
       ->check(CLI::NonNegativeNumber)  // checked as typed: -1 would wrap to 2^64 - 1
@@ -44,9 +51,39 @@ void add_export_command(CLI::App& app) {
                   "inserting one: the two engines then compare the pour from one state");
   cmd->add_flag("--force", a->force, "Replace a deck already in --out");
   cmd->callback([a]() {
-    const experiments::SceneConfig scene = experiments::load_scene(a->scene, a->sets);
+    std::error_code dir_ec;
+    const bool from_calibration = fs::is_directory(a->scene, dir_ec);
+    std::optional<experiments::CalibratedMaterial> material;
+    experiments::DeckCalibration calibration;
+    std::string out_folder = a->out;
+    std::vector<std::string> inputs = {a->scene};
+    experiments::SceneConfig scene;
+    if (from_calibration) {
+      material = experiments::read_calibrated_material(a->scene);
+      calibration.material = &*material;
+      calibration.file = (fs::path(a->scene) / experiments::kCalibrationRecordFile).string();
+      experiments::SceneDoc doc(material->scene, material->scene_overrides(),
+                                "the calibration " + calibration.file);
+      doc.apply_command_line(a->sets);
+      scene = doc.config_after_command_line();
+      for (const std::string& key : material->keys)
+        calibration.deck_values.emplace_back(key, doc.number(key).value_or(material->mu_r));
+      if (out_folder.empty()) out_folder = (fs::path(a->scene) / "liggghts").string();
+      inputs = {calibration.file, material->scene};
+      if (!material->sieve_sheet.empty()) inputs.push_back(material->sieve_sheet);
+    } else {
+      std::error_code ec;
+      if (!fs::exists(a->scene, ec))
+        throw experiments::InputError(a->scene + ": no such calibration folder or scene file");
+      if (out_folder.empty())
+        throw experiments::InputError("export " + a->scene +
+                                      ": --out is required with a scene file (the folder for "
+                                      "the deck)");
+      scene = experiments::load_scene(a->scene, a->sets);
+    }
     experiments::LiggghtsDeckSettings s;
     s.seed = a->seed;
+    if (from_calibration) s.calibration = &calibration;
     std::optional<experiments::SnapshotParticles> initial;
     if (!a->initial.empty()) {
       std::error_code ec;
@@ -81,9 +118,9 @@ void add_export_command(CLI::App& app) {
       if (a->initial.empty()) throw;
       throw experiments::InputError(a->initial + ": " + e.what());
     }
-    const fs::path out(a->out);
+    const fs::path out(out_folder);
     if (fs::exists(out / "in.pile") && !a->force)
-      throw experiments::InputError(a->out +
+      throw experiments::InputError(out_folder +
                                     ": holds a deck already (in.pile); --force replaces it");
     // --out may be a folder of the user's (`--out .` beside their own README.md): every file of
     // the deck is checked against the inputs and the folder before one is written.
@@ -93,17 +130,24 @@ void add_export_command(CLI::App& app) {
         {"README.md", &deck.notes},
         {"initial.data", deck.initial_data.empty() ? nullptr : &deck.initial_data}};
     experiments::OutputPlan plan(a->force);
-    plan.add_input(a->scene);
+    for (const std::string& in : inputs) plan.add_input(in);
     if (!a->initial.empty()) plan.add_input(a->initial);
     for (const auto& [name, text] : files)
       if (text) plan.add_output((out / name).string(), "--out");
     plan.check();
     std::error_code ec;
     fs::create_directories(out, ec);
-    if (ec) throw experiments::InputError(a->out + ": cannot create the folder: " + ec.message());
+    if (ec)
+      throw experiments::InputError(out_folder + ": cannot create the folder: " + ec.message());
     for (const auto& [name, text] : files)
       if (text) plan.write((out / name).string(), *text);
-    std::cout << "LIGGGHTS deck of " << scene.name << " in " << a->out
+    std::cout << "LIGGGHTS deck of " << scene.name;
+    if (material)
+      std::cout << " at the calibrated mu_r " << experiments::significant(material->mu_r, 3)
+                << " (95% " << experiments::significant(material->mu_r_lo, 3) << " to "
+                << experiments::significant(material->mu_r_hi, 3) << ", " << calibration.file
+                << ")";
+    std::cout << " in " << out_folder
               << ": run `liggghts -in in.pile` there (mpirun -np N for more cores)\n";
   });
 }

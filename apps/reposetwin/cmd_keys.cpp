@@ -27,8 +27,11 @@ void print_campaign_keys(bool markdown) {
               << experiments::test_sheet_markdown() << "\n### Sieve sheet\n\n"
               << "A CSV whose header is `" << experiments::kCsvHeader
               << "` (either order), one row a sieve: its opening [mm] and the cumulative "
-                 "percent passing by mass; `#` lines are notes. Or TOML with a `[psd]` table "
-                 "(`reposetwin keys`, sample.psd).\n\n### Paths\n\n"
+                 "percent passing by mass; or `sieve_mm,retained_percent` (the percent retained "
+                 "on each sieve) or `sieve_mm,cumulative_retained_percent`, converted to percent "
+                 "passing (the plan says so). Sieves finest first or coarsest first; `#` lines "
+                 "are notes. Or TOML with a `[psd]` table (`reposetwin keys`, sample.psd).\n\n"
+                 "### Paths\n\n"
               << experiments::kRelativePathRule << "\n";
     return;
   }

@@ -198,7 +198,9 @@ void add_loop_command(CLI::App& app) {
     const experiments::BatchPlan bp = experiments::plan_loop_baseline(data, s);
     if (!accept_plan("The loop's baseline (fingerprints and refits come on top):\n" +
                          experiments::plan_text(bp, args->plan->limits),
-                     experiments::plan_refusal(bp, args->plan->limits), *args->plan,
+                     experiments::plan_refusal(
+                         bp, {experiments::KeySource::Kind::kTestSheet, args->data},
+                         args->plan->limits), *args->plan,
                      args->quiet)) {
       set_exit_code(ExitCode::kPlanRefused);
       return;

@@ -46,7 +46,7 @@ bool accept_run_plan(const RunArgs& a, const experiments::SceneConfig& scene) {
   const experiments::RunPlan plan =
       experiments::plan_run(scene, run_threads(a, scene), a.plan->limits);
   return accept_plan(experiments::plan_text(plan, a.plan->limits),
-                     experiments::plan_refusal(plan, a.plan->limits), *a.plan, a.quiet);
+                     experiments::plan_refusal(plan, {}, a.plan->limits), *a.plan, a.quiet);
 }
 
 // The exit code of a finished run: 0 with a headline, else its reason's.

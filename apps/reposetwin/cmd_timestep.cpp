@@ -42,7 +42,9 @@ void add_timestep_command(CLI::App& app) {
     const experiments::BatchPlan plan = experiments::plan_campaign(
         experiments::timestep_campaign(a->scene, a->out, a->s), a->workers);
     if (!accept_plan(experiments::plan_text(plan, a->plan->limits),
-                     experiments::plan_refusal(plan, a->plan->limits), *a->plan, false)) {
+                     experiments::plan_refusal(
+                         plan, {experiments::KeySource::Kind::kSceneFile, a->scene},
+                         a->plan->limits), *a->plan, false)) {
       set_exit_code(ExitCode::kPlanRefused);
       return;
     }

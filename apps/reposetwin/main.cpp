@@ -17,18 +17,41 @@ namespace {
 // CLI11 (2.1) reads an unknown first word as a missing subcommand; a user who typed "runn"
 // wants to hear which command was meant. Returns the message, or "" when `word` is a command.
 std::string unknown_command(CLI::App& app, const std::string& word) {
-  std::string best, names;
-  std::size_t best_d = std::string::npos;
+  std::vector<std::string> names;
   for (const CLI::App* sub : app.get_subcommands({})) {
-    const std::string& name = sub->get_name();
-    if (name == word) return "";
-    names += (names.empty() ? "" : ", ") + name;
-    const std::size_t d = reposetwin::experiments::edit_distance(word, name);
-    if (d < best_d) best_d = d, best = name;
+    if (sub->get_name() == word) return "";
+    names.push_back(sub->get_name());
   }
-  std::string msg = "reposetwin: '" + word + "' is not a command";
-  if (best_d <= std::max<std::size_t>(2, word.size() / 3)) msg += "; did you mean '" + best + "'?";
-  return msg + "\ncommands: " + names + " (reposetwin --help)";
+  std::string list;
+  for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+  return "reposetwin: '" + word + "' is not a command" +
+         reposetwin::experiments::did_you_mean(word, names, "'") + "\ncommands: " + list +
+         " (reposetwin --help)";
+}
+
+// CLI11 names an option it does not know ("The following argument was not expected: --sett")
+// without the one meant. The subcommand being parsed is the last one the command line names;
+// every long option it and the top level take is a candidate.
+std::string unknown_options(CLI::App& app, const CLI::ExtrasError& e, int argc, char** argv) {
+  CLI::App* cmd = &app;
+  for (int i = 1; i < argc; ++i)
+    for (CLI::App* sub : cmd->get_subcommands({}))
+      if (sub->get_name() == argv[i]) cmd = sub;
+  std::vector<std::string> known;
+  for (const CLI::App* a : {cmd, static_cast<CLI::App*>(&app)})
+    for (const CLI::Option* o : a->get_options())
+      for (const std::string& name : o->get_lnames()) known.push_back("--" + name);
+  std::string msg = e.what();
+  for (int i = 1; i < argc; ++i) {
+    std::string word = argv[i];
+    word = word.substr(0, word.find('='));
+    if (word.rfind("--", 0) != 0 || msg.find(word) == std::string::npos) continue;
+    if (std::find(known.begin(), known.end(), word) != known.end()) continue;
+    const std::string where = "reposetwin" + (cmd == &app ? std::string() : " " + cmd->get_name());
+    msg += "\n" + word + ": not an option of " + where +
+           reposetwin::experiments::did_you_mean(word, known, "'") + " (" + where + " --help)";
+  }
+  return msg;
 }
 
 }  // namespace
@@ -63,6 +86,9 @@ int main(int argc, char** argv) {
   }
   try {
     app.parse(argc, argv);
+  } catch (const CLI::ExtrasError& e) {
+    std::cerr << unknown_options(app, e, argc, argv) << "\n";
+    return e.get_exit_code();
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const reposetwin::experiments::FolderBusy& e) {

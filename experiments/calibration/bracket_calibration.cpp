@@ -58,6 +58,7 @@ std::vector<PourPoint> points_of(const std::vector<Pour>& pours) {
     if (p.outcome == PourOutcome::kPile) ++q.piles;
     if (p.outcome == PourOutcome::kJam) ++q.jams;
     if (p.outcome == PourOutcome::kPhysicsStop) ++q.physics_stops;
+    if (p.outcome == PourOutcome::kTimeLimit) ++q.time_limits;
     if (p.outcome == PourOutcome::kNotSettled) ++q.unsettled;
   }
   std::vector<PourPoint> out;
@@ -243,10 +244,40 @@ std::optional<double> step_out(const MonotoneFit& fit, const Target& target,
   return next;
 }
 
-// The next point while nothing usable exists yet (every pour so far jammed): halfway down.
+// The pours without a pile, by their real stop ("2 jammed, 2 stopped by the time limit
+// procedure.max_time_s"), for a message.
+std::string stops_text(const std::vector<PourPoint>& points) {
+  int jams = 0, limits = 0, unsettled = 0, stops = 0;
+  for (const PourPoint& q : points) {
+    jams += q.jams;
+    limits += q.time_limits;
+    unsettled += q.unsettled;
+    stops += q.physics_stops;
+  }
+  std::string t;
+  const auto add = [&t](int n, const std::string& what) {
+    if (n > 0) t += (t.empty() ? "" : ", ") + std::to_string(n) + " " + what;
+  };
+  add(jams, "jammed");
+  add(limits, "stopped by the time limit procedure.max_time_s");
+  add(unsettled, "still moving at procedure.final_settle_max_s");
+  add(stops, "stopped by the engine");
+  return t;
+}
+
+// The next point while nothing usable exists yet: halfway down when every pour so far jammed
+// (a lower mu_r flows); none when another stop took them (a time limit, the engine), which a
+// lower mu_r does not cure, and the message names that stop.
 std::optional<double> step_below_jams(const std::vector<PourPoint>& points,
                                       const BracketSettings& s, std::string& why) {
   const double lowest = points.front().mu_r;
+  bool only_jams = true;
+  for (const PourPoint& q : points)
+    only_jams = only_jams && q.time_limits + q.unsettled + q.physics_stops == 0;
+  if (!only_jams) {
+    why = "no pour formed a pile, and not all for jams, which a lower mu_r would cure";
+    return std::nullopt;
+  }
   if (lowest - s.mu_r_lo < s.mu_r_tolerance) {
     why = "every pour jammed, down to mu_r " + significant(lowest);
     return std::nullopt;
@@ -266,17 +297,11 @@ void finish(BracketCalibration& c, const Target& target, const BracketSettings& 
   c.result.status = status;
   if (!c.result.mu_r) c.result.message.clear();  // the note says why there is no mu_r
   c.result.simulations = static_cast<int>(c.pours.size());
-  int jams = 0, stops = 0, unsettled = 0;
-  for (const PourPoint& q : c.points) {
-    jams += q.jams;
-    stops += q.physics_stops;
-    unsettled += q.unsettled;
-  }
   std::string m = c.result.message.empty() ? std::string() : c.result.message + "; ";
   m += note.empty() ? std::string() : note + "; ";
-  m += std::to_string(c.pours.size()) + " pile runs (" + std::to_string(jams) + " jammed, " +
-       (unsettled > 0 ? std::to_string(unsettled) + " not settled, " : std::string()) +
-       std::to_string(stops) + " stopped by the engine)";
+  const std::string stops = stops_text(c.points);
+  m += std::to_string(c.pours.size()) + " pile runs (" +
+       (stops.empty() ? std::string("each formed a pile") : stops) + ")";
   if (c.bracketed)
     m += "; mu_r uncertainty " + significant(c.mu_r_uncertainty) + " (seed spread " +
          significant(c.mu_r_seed_se) + ", interpolation " + significant(c.mu_r_interpolation) +
@@ -294,6 +319,8 @@ std::string to_string(PourOutcome outcome) {
       return "jam";
     case PourOutcome::kPhysicsStop:
       return "physics_stop";
+    case PourOutcome::kTimeLimit:
+      return "time_limit";
     case PourOutcome::kNotSettled:
       return "not_settled";
   }
@@ -380,6 +407,7 @@ nlohmann::json to_json(const BracketCalibration& c, const BracketSettings& s) {
                       {"piles", q.piles},
                       {"jams", q.jams},
                       {"physics_stops", q.physics_stops},
+                      {"time_limits", q.time_limits},
                       {"not_settled", q.unsettled},
                       {"jam_rate", q.jam_rate()},
                       {"in_fit", q.piles > 0 && q.jam_rate() <= s.max_jam_rate}});

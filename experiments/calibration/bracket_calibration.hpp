@@ -56,10 +56,12 @@ enum class PourOutcome {
   kPile,         // a pile formed: angle_deg is its angle
   kJam,          // the outlet arched or the particles lodged: no pile, no angle
   kPhysicsStop,  // the engine stopped the run (overlap, NaN, escape): no angle
-  kNotSettled,   // a time limit stopped the run before its pile settled: no angle
+  kTimeLimit,    // procedure.max_time_s stopped the run before its pile settled: no angle
+  kNotSettled,   // the last settling reached its own time limit still moving: no angle
 };
 
-/// The outcome as a word for files ("pile", "jam", "physics_stop", "not_settled").
+/// The outcome as a word for files ("pile", "jam", "physics_stop", "time_limit",
+/// "not_settled").
 std::string to_string(PourOutcome outcome);
 
 /// One pour: where it ran and what it gave.
@@ -78,7 +80,8 @@ struct PourPoint {
   int piles = 0;          // runs that formed a pile
   int jams = 0;           // runs that jammed (no pile)
   int physics_stops = 0;  // runs the engine stopped
-  int unsettled = 0;      // runs a time limit stopped before the pile settled
+  int time_limits = 0;    // runs procedure.max_time_s stopped before the pile settled
+  int unsettled = 0;      // runs whose last settling ended still moving
   double jam_rate() const { return pours > 0 ? static_cast<double>(jams) / pours : 0.0; }
 };
 

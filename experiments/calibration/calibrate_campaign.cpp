@@ -12,6 +12,7 @@
 #include "experiments/calibration/bracket_calibration.hpp"
 #include "experiments/calibration/calibration.hpp"
 #include "experiments/campaign/case_runner.hpp"
+#include "experiments/io/calibration_record.hpp"
 #include "experiments/io/format.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/pile/headline.hpp"
@@ -295,6 +296,8 @@ Pour pour_of(const nlohmann::json& run, const AngleFn& angle_of) {
       p.outcome = PourOutcome::kPhysicsStop;
       break;
     case NoHeadlineReason::kTimeLimit:
+      p.outcome = PourOutcome::kTimeLimit;
+      break;
     case NoHeadlineReason::kNotSettled:
       p.outcome = PourOutcome::kNotSettled;
       break;
@@ -319,6 +322,32 @@ nlohmann::json bracket_calibration_json(const Campaign& c, const std::string& ou
     return out;
   };
   return to_json(calibrate_bracket(pour, cc.target, cc.bracket), cc.bracket);
+}
+
+// The calibrated material (io/calibration_record.hpp) of a calibration that reached mu_r: the
+// calibration test as its runs were built (calibration_run), its keys apart, so a later command
+// rebuilds the same scene at mu_r.
+CalibratedMaterial calibrated_material(const Campaign& c, const nlohmann::json& cal,
+                                       const std::string& angle) {
+  const CampaignCalibration& cc = calibration_of(c);
+  const CaseSpec run = calibration_run(c, cal.at("mu_r").get<double>(), cc.settings.first_seed);
+  CalibratedMaterial m;
+  m.scene = run.scene_path;
+  m.scene_fnv1a = run.scene_hash;
+  m.keys = keys_of(cc);
+  for (const Override& o : run.overrides) {
+    if (o.key == cc.key || std::find(m.keys.begin(), m.keys.end(), o.key) != m.keys.end())
+      continue;
+    m.overrides.push_back(o);
+    if (o.key == "sample.psd_file")
+      m.sieve_sheet = overrides_to_json({o}).at(o.key).get<std::string>();
+  }
+  m.mu_r = cal.at("mu_r").get<double>();
+  m.mu_r_lo = cal.at("mu_r_interval").at(0).get<double>();
+  m.mu_r_hi = cal.at("mu_r_interval").at(1).get<double>();
+  m.target_deg = cc.target.angle_deg;
+  m.angle = angle;
+  return m;
 }
 
 }  // namespace
@@ -370,6 +399,12 @@ nlohmann::json run_calibration(const Campaign& c, const std::string& out_dir, co
   j["rolling_model"] = rolling_model_of(c);
   j["angle_method"] = options.angle_method;
   if (!cc.target_photos.is_null()) j["target_photos"] = cc.target_photos;
+  const std::string angle = options.extra.is_object() && options.extra.contains("angle")
+                                ? options.extra["angle"].get<std::string>()
+                                : angle_measure_name(cc.angle);
+  j["material"] = j.contains("mu_r") && j["mu_r"].is_number()
+                      ? to_json(calibrated_material(c, j, angle))
+                      : nlohmann::json();
   j["created_utc"] = utc_now();
   fs::create_directories(fs::path(out_dir));
   write_result(j, out_dir, kCalibrationFile, runner, options);
@@ -525,6 +560,25 @@ std::string cannot_reach_advice(const Campaign& c, const nlohmann::json& cal,
     t = "cannot reach: no pour formed a pile to measure in " + std::to_string(runs) +
         " pile runs between mu_r " + lo + " and " + hi + " (" + cal.value("message", "") + ")\n";
   }
+  // Without a pile, the advice is on the stop that took the pours: a time limit is cured by
+  // time, not by the grain shape.
+  std::map<NoHeadlineReason, int> stopped;
+  for (const auto& q : cal.value("jam_rate_per_mu_r", nlohmann::json::array())) {
+    stopped[NoHeadlineReason::kJammed] += q.value("jams", 0);
+    stopped[NoHeadlineReason::kTimeLimit] += q.value("time_limits", 0);
+    stopped[NoHeadlineReason::kNotSettled] += q.value("not_settled", 0);
+    stopped[NoHeadlineReason::kPhysicsStop] += q.value("physics_stops", 0);
+  }
+  if (!have_reach && (stopped[NoHeadlineReason::kTimeLimit] > 0 ||
+                      stopped[NoHeadlineReason::kNotSettled] > 0 ||
+                      stopped[NoHeadlineReason::kPhysicsStop] > 0)) {
+    t += "what to try:\n";
+    for (const auto& [reason, n] : stopped)
+      if (n > 0)
+        t += "  - " + std::string(no_headline_word(reason)) + " (" + std::to_string(n) +
+             " pour(s)): " + no_headline_advice(reason) + "\n";
+    return t;
+  }
   t += "what to try:\n";
   if (high || !have_reach) {
     t += "  - the grain shape: spheres roll where angular rock locks; blocky grains build steeper "
@@ -556,6 +610,13 @@ std::string cannot_reach_advice(const Campaign& c, const nlohmann::json& cal,
          "twin's 'image' measure; a protractor angle is steeper (--angle image_flank)\n";
   }
   return t;
+}
+
+std::vector<NextStep> calibration_next_steps(const std::string& folder, bool reached) {
+  const std::string dir = shell_word(folder);
+  std::vector<NextStep> steps = {{"reposetwin report " + dir, "the page"}};
+  if (reached) steps.push_back({"reposetwin export " + dir, "the LIGGGHTS deck"});
+  return steps;
 }
 
 CalibrateOutcome calibrate_and_predict(const Campaign& c, const std::string& out,

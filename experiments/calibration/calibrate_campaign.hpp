@@ -90,6 +90,17 @@ std::string calibration_order_text(const Campaign& campaign);
 std::string cannot_reach_advice(const Campaign& campaign, const nlohmann::json& calibration,
                                 AngleMeasure measure);
 
+/// A command to run after a calibration, and what it makes.
+struct NextStep {
+  std::string command;  // a shell command a person can paste, the folder quoted as needed
+  std::string what;     // "the page", "the LIGGGHTS deck"
+};
+
+/// What to run after the calibration in `folder` (its path as it should appear in the
+/// commands): its report, and, when it reached a mu_r, the export of its material. The
+/// calibrate command's last line and the calibration's page both say these.
+std::vector<NextStep> calibration_next_steps(const std::string& folder, bool reached);
+
 /// What calibrate_and_predict() wrote.
 struct CalibrateOutcome {
   nlohmann::json calibration;                // calibration.json's content

@@ -128,6 +128,34 @@ std::string initial_data(const SceneConfig& scene, const SnapshotParticles& s, c
   return os.str();
 }
 
+// The README's section on the calibration the deck carries: the value, its interval, what it was
+// fitted to, and the value each calibrated key has in this deck.
+std::string calibration_notes(const DeckCalibration* cal) {
+  if (!cal) return "";
+  const CalibratedMaterial& m = *cal->material;
+  std::ostringstream md;
+  md << "## The calibration it carries\n"
+     << "- mu_r = " << num(m.mu_r) << ", 95% interval " << num(m.mu_r_lo) << " to "
+     << num(m.mu_r_hi) << ", calibrated by `reposetwin calibrate` (`" << cal->file
+     << "`) to the target angle " << num(m.target_deg) << " deg (the twin's '" << m.angle
+     << "' measure).\n"
+     << "- The scene: `" << m.scene << "` with the calibration test's " << m.overrides.size()
+     << " override(s)"
+     << (m.sieve_sheet.empty() ? std::string(", and its own sieve table")
+                               : ", the sieve sheet `" + m.sieve_sheet + "` among them")
+     << ".\n";
+  for (const auto& [key, value] : cal->deck_values)
+    md << "- " << key << " = " << num(value) << " in this deck"
+       << (value == m.mu_r ? std::string(" (the calibrated value)")
+                           : " (set by --set: NOT the calibrated " + num(m.mu_r) + ")")
+       << ".\n";
+  md << "- The interval's ends are the calibration's uncertainty: a field result that matters "
+        "is run at both, each calibrated key set to "
+     << num(m.mu_r_lo) << " and to " << num(m.mu_r_hi)
+     << " (`reposetwin export FOLDER --set KEY=VALUE`).\n\n";
+  return md.str();
+}
+
 }  // namespace
 
 RollingConventions rolling_conventions(double mu_r) { return {mu_r, mu_r, mu_r, 0.5 * mu_r}; }
@@ -172,8 +200,12 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
 
   std::ostringstream in;
   in << "# LIGGGHTS 3.8 input written by `reposetwin export` from " << scene.file << "\n"
-     << "# (scene " << scene.name << "); README.md beside it says what is carried and what not.\n"
-     << "# Run: liggghts -in in.pile, or mpirun -np N liggghts -in in.pile\n"
+     << "# (scene " << scene.name << "); README.md beside it says what is carried and what not.\n";
+  if (const DeckCalibration* cal = settings.calibration)
+    in << "# calibrated: mu_r " << num(cal->material->mu_r) << " (95% "
+       << num(cal->material->mu_r_lo) << " to " << num(cal->material->mu_r_hi) << ") from "
+       << cal->file << "\n";
+  in << "# Run: liggghts -in in.pile, or mpirun -np N liggghts -in in.pile\n"
      << "atom_style granular\natom_modify map array\nboundary f f f\nnewton off\n"
      << "communicate single vel yes\nunits si\nprocessors * * 1\n"
      << "region domain block " << num(-half) << " " << num(half) << " " << num(-half) << " "
@@ -276,6 +308,12 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
      << "`liggghts -in in.pile` or `mpirun -np N liggghts -in in.pile`; it ends with "
      << "`final.dump`, which `reposetwin measure-particles final.dump --scene SCENE` measures "
         "with the twin's own pile measure (H, D, atan(2H/D)).\n\n"
+     << "Installing LIGGGHTS on the machine that builds the twin: `sudo apt-get install "
+        "--no-install-recommends liggghts`. With its recommended packages, Debian's liggghts "
+        "pulls in paraview and python3-paraview, which conflicts with python3-vtk9: apt then "
+        "removes python3-vtk9 and libvtk9-dev, and the twin no longer builds "
+        "(`apt-get -s install liggghts` shows it beforehand).\n\n"
+     << calibration_notes(settings.calibration)
      << "## Carried as it is\n"
      << "- Hertz-Mindlin with history; E " << num(e_soft > 0 ? e_soft : t.material[0]->youngs_modulus)
      << " Pa" << (e_soft > 0 ? " (the scene's softened E, for every material, as the twin)" : "")
@@ -295,8 +333,10 @@ LiggghtsDeck liggghts_deck(const SceneConfig& scene, const LiggghtsDeckSettings&
      << num(c.top_diameter) << " m, " << num(c.height) << " m high, " << num(c.gap)
      << " m above the plate) as `container.stl`, lifted at " << num(p.lift_speed) << " m/s.\n\n"
      << "## Not carried\n";
-  for (const auto& [names, p] : scene.contacts)
-    if (p.rolling_model == sim::RollingModel::kEpsd && p.rolling_damping > 0)
+  // One line a pair as the scene names it: the contacts map holds each pair in both orders.
+  for (const auto& names : scene.contact_pairs)
+    if (const sim::PairParams& p = scene.contacts.at(names);
+        p.rolling_model == sim::RollingModel::kEpsd && p.rolling_damping > 0)
       md << "- The rolling dashpot of contacts." << names.first << "-" << names.second
          << ": rolling_damping eta_r = " << num(p.rolling_damping)
          << " has no counterpart in epsd2; run the twin with `--set contacts." << names.first

@@ -35,7 +35,10 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "experiments/io/calibration_record.hpp"
 #include "experiments/io/scene.hpp"
 #include "experiments/io/vtk_output.hpp"
 
@@ -50,6 +53,15 @@ struct LiggghtsDeck {
                              // inserts and fills itself
 };
 
+/// The calibration a deck carries, for its notes and its header: the record, the file it was
+/// read from, and each calibrated key's value in the exported scene (the calibrated mu_r unless
+/// a --set changed it).
+struct DeckCalibration {
+  const CalibratedMaterial* material = nullptr;
+  std::string file;                                       // its calibration.json
+  std::vector<std::pair<std::string, double>> deck_values;  // key -> value in the deck [-]
+};
+
 /// Settings of the deck that the scene does not hold.
 struct LiggghtsDeckSettings {
   std::uint64_t seed = 1;           // LIGGGHTS' random seeds derive from it (primes > 10000)
@@ -59,6 +71,9 @@ struct LiggghtsDeckSettings {
   // starts at the lift, so the two engines compare the pour from one state. Null: the deck
   // inserts at random and lets the sample fall and settle.
   const SnapshotParticles* initial_state = nullptr;
+  // The calibration the scene was rebuilt from (`export CAL_FOLDER`): the deck states the
+  // calibrated value and its interval. Null: a scene file exported as it is.
+  const DeckCalibration* calibration = nullptr;
 };
 
 /// Writes the deck of a scene. Throws InputError naming the scene file and the key for what

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cstdio>
 #include <string>
+#include <string_view>
 
 namespace reposetwin::experiments {
 
@@ -37,6 +38,20 @@ inline std::string toml_float(double v, int digits = 17) {
   std::string t = significant(v, digits);
   if (t.find_first_of(".eEn") == std::string::npos) t += ".0";
   return t;
+}
+
+/// `word` as one word of a POSIX shell command a person can paste: as it is when it holds only
+/// letters, digits and _ . / - + = : , @ % (a plain path), else in single quotes (a ' inside as
+/// '\'').
+inline std::string shell_word(const std::string& word) {
+  bool plain = !word.empty();
+  for (char c : word)
+    plain = plain && ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                      std::string_view("_./-+=:,@%").find(c) != std::string_view::npos);
+  if (plain) return word;
+  std::string q = "'";
+  for (char c : word) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
 }
 
 }  // namespace reposetwin::experiments

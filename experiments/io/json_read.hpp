@@ -8,6 +8,7 @@
 // the document. The top-level reader of a file catches the error once and names the file.
 #pragma once
 
+#include <initializer_list>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -16,6 +17,8 @@
 #include <type_traits>
 #include <utility>
 #include <vector>
+
+#include "experiments/io/suggest.hpp"
 
 namespace reposetwin::experiments {
 
@@ -70,6 +73,28 @@ auto at_token(const nlohmann::json& v, const std::string& token, F&& read) -> de
 }
 
 }  // namespace json_read_detail
+
+/// Refuses a key of the object `j` that is not one of `known`: JsonFieldError at /key saying so,
+/// with its value, the nearest known key (suggest.hpp) and the known keys. A strict record's
+/// from_json calls it first, so a misspelt key is named rather than reported missing.
+inline void known_fields(const nlohmann::json& j, std::initializer_list<const char*> known) {
+  if (!j.is_object())
+    throw JsonFieldError("", std::string("is ") + j.type_name() + ", not an object");
+  for (const auto& [key, value] : j.items()) {
+    bool ok = false;
+    std::string list;
+    for (const char* k : known) {
+      ok = ok || key == k;
+      list += (list.empty() ? "" : ", ") + std::string(k);
+    }
+    if (ok) continue;
+    std::string shown = value.dump();
+    if (shown.size() > 80) shown = shown.substr(0, 80) + "...";
+    throw JsonFieldError("/" + JsonFieldError::escaped(key),
+                         "is not a known key (value " + shown + ")" + did_you_mean(key, known) +
+                             "; known keys: " + list);
+  }
+}
 
 /// j[key] as a T; JsonFieldError at /key when it is missing or not a T.
 template <class T>

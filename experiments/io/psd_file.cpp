@@ -2,6 +2,7 @@
 
 #include "experiments/io/numbers.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cctype>
 #include <cmath>
@@ -13,6 +14,8 @@
 
 #include "experiments/io/csv.hpp"
 #include "experiments/io/files.hpp"
+#include "experiments/io/format.hpp"
+#include "experiments/io/suggest.hpp"
 #include "experiments/io/toml_tables.hpp"
 
 namespace reposetwin::experiments {
@@ -148,6 +151,50 @@ std::string trimmed(const std::string& s) {
   return s.substr(first, s.find_last_not_of(" \t") - first + 1);
 }
 
+// A table listed coarsest first, read finest first: sizes strictly decreasing are reversed with
+// their values. Returns whether it did.
+bool finest_first(sim::SieveTable& t) {
+  if (t.size.size() < 2) return false;
+  for (std::size_t i = 1; i < t.size.size(); ++i)
+    if (!(t.size[i] < t.size[i - 1])) return false;
+  std::reverse(t.size.begin(), t.size.end());
+  std::reverse(t.passing.begin(), t.passing.end());
+  return true;
+}
+
+void add_note(PsdFile& f, const std::string& note) {
+  f.note += (f.note.empty() ? "" : "; ") + note;
+}
+
+// The value columns a CSV sieve sheet may give beside sieve_mm.
+enum class SheetValues { kPassing, kRetained, kCumulativeRetained };
+constexpr std::array<std::string_view, 4> kCsvColumns = {
+    "sieve_mm", "passing_percent", "retained_percent", "cumulative_retained_percent"};
+
+// Percent retained (on each sieve, or cumulative) as cumulative percent passing, on a table
+// already finest first. Passing at a sieve is 100 minus what it and the coarser sieves retain.
+void to_passing(PsdFile& f, SheetValues kind, const std::string& path) {
+  std::vector<double>& v = f.spec.table.passing;
+  if (kind == SheetValues::kCumulativeRetained) {
+    for (double& x : v) x = 100.0 - x;
+    add_note(f, "cumulative percent retained converted to percent passing (100 - retained)");
+    return;
+  }
+  double above = 0.0;
+  for (std::size_t i = v.size(); i-- > 0;) {
+    if (!(v[i] >= 0.0)) bad(path, "retained_percent = " + shortest_text(v[i]) + " is negative");
+    above += v[i];
+    v[i] = 100.0 - above;
+  }
+  if (above > 100.0 + 0.5)
+    bad(path, "retained_percent sums to " + shortest_text(above) +
+                  " % over the sieves, above 100 %: not percent retained on each sieve (a "
+                  "cumulative column is cumulative_retained_percent)");
+  add_note(f, "percent retained on each sieve converted to cumulative percent passing (passing "
+              "at a sieve = 100 - what it and the coarser sieves retain; " +
+              shortest_text(100.0 - above) + " % passes the finest sieve)");
+}
+
 // A sieve sheet as CSV (psd_file.hpp's second form): the header names the two columns, each
 // row one sieve.
 PsdFile read_psd_csv(const std::string& path) {
@@ -156,14 +203,27 @@ PsdFile read_psd_csv(const std::string& path) {
   if (csv.header.empty())
     bad(path, "is empty; a sieve sheet's header is " + std::string(kCsvHeader));
   int sieve = -1, passing = -1;
+  SheetValues kind = SheetValues::kPassing;
+  std::string value_name = "passing_percent";
   for (std::size_t i = 0; i < csv.header.size(); ++i) {
     const std::string name = trimmed(csv.header[i]);
-    int* column = name == "sieve_mm" ? &sieve : name == "passing_percent" ? &passing : nullptr;
+    int* column = name == "sieve_mm" ? &sieve : nullptr;
+    for (std::size_t k = 1; k < kCsvColumns.size(); ++k)
+      if (name == kCsvColumns[k]) {
+        if (passing >= 0)
+          bad(at, "columns \"" + value_name + "\" and \"" + name +
+                      "\" both give the sieves' values; keep one");
+        column = &passing;
+        kind = static_cast<SheetValues>(k - 1);
+        value_name = name;
+      }
     if (column == nullptr)
       bad(at, "column " + std::to_string(i + 1) + " \"" + name +
-                  "\" is not a sieve-sheet column; the header must be " + kCsvHeader +
-                  " (sieve opening in mm, cumulative percent passing by mass)");
-    if (*column >= 0) bad(at, "column \"" + name + "\" is named twice");
+                  "\" is not a sieve-sheet column" + did_you_mean(name, kCsvColumns, "\"") +
+                  "; the header must be " + kCsvHeader +
+                  " (sieve opening in mm, cumulative percent passing by mass), or sieve_mm with "
+                  "retained_percent or cumulative_retained_percent");
+    if (*column >= 0 && column == &sieve) bad(at, "column \"" + name + "\" is named twice");
     *column = static_cast<int>(i);
   }
   if (sieve < 0 || passing < 0)
@@ -193,10 +253,12 @@ PsdFile read_psd_csv(const std::string& path) {
     if (!(mm >= kMinSieveMm && mm <= kMaxSieveMm))
       bad(line, "sieve_mm " + sieve_range_text(mm));
     f.spec.table.size.push_back(1e-3 * mm);
-    f.spec.table.passing.push_back(number(passing, "passing_percent"));
+    f.spec.table.passing.push_back(number(passing, value_name.c_str()));
   }
   if (csv.rows.empty()) bad(path, "has a header and no sieves");
-  check_psd(f, path + ": columns sieve_mm / passing_percent",
+  if (finest_first(f.spec.table)) add_note(f, "listed coarsest first; read finest first");
+  if (kind != SheetValues::kPassing) to_passing(f, kind, path);
+  check_psd(f, path + ": columns sieve_mm / " + value_name,
             path + ": the sheet's sizes against the scene's sample.d_min_mm / d_max_mm");
   return f;
 }
@@ -211,7 +273,8 @@ PsdFile parse_psd_table(const toml::table& t, const std::string& source, const s
       std::string allowed;
       for (std::string_view k : kKeys) allowed += (allowed.empty() ? "" : ", ") + std::string(k);
       bad(locate(source, where, std::string(key.str()), &node),
-          "unknown key (value " + show(node) + "); allowed keys: " + allowed);
+          "unknown key (value " + show(node) + ")" + did_you_mean(std::string(key.str()), kKeys) +
+              "; allowed keys: " + allowed);
     }
   }
 
@@ -229,6 +292,8 @@ PsdFile parse_psd_table(const toml::table& t, const std::string& source, const s
   const std::vector<double> passing = read_numbers(t, "passing_percent", source, where);
   for (double d : sieve_mm) f.spec.table.size.push_back(d * 1e-3);
   f.spec.table.passing = passing;
+  if (f.spec.table.size.size() == passing.size() && finest_first(f.spec.table))
+    add_note(f, "listed coarsest first; read finest first");
 
   double value = 0.0;
   if (read_number(t, "d_max_mm", source, where, value)) {
@@ -281,7 +346,8 @@ toml::table psd_table_of_file(const std::string& path) {
   for (double d : f.spec.table.size) sieve.push_back(1e3 * d);
   for (double p : f.spec.table.passing) passing.push_back(p);
   return toml::table{{"name", f.name},
-                     {"provenance", f.provenance},
+                     {"provenance", f.note.empty() ? f.provenance
+                                                   : f.provenance + "; read: " + f.note},
                      {"sieve_mm", std::move(sieve)},
                      {"passing_percent", std::move(passing)}};
 }

@@ -21,12 +21,18 @@
 //
 // A file whose name ends in .csv is a sieve sheet as a spreadsheet exports it, read by the same
 // reader into the same spec and checked by the same rules: lines starting with '#' are notes
-// (kept as the table's provenance), the header is exactly the two columns
-//   sieve_mm,passing_percent
-// (in either order; any other column is refused, naming it), and each row is one sieve: its
-// opening [mm] and the cumulative percent passing by mass. The cuts (d_min, d_max) and the fines
-// policy of a CSV sheet are the scene's (sample.d_min_mm, sample.d_max_mm); its name is the
-// file's stem.
+// (kept as the table's provenance), the header is two columns (in either order; any other column
+// is refused, naming it and the nearest known one)
+//   sieve_mm,passing_percent              the cumulative percent passing by mass, or
+//   sieve_mm,retained_percent             the percent of the mass retained on each sieve, or
+//   sieve_mm,cumulative_retained_percent  the cumulative percent retained,
+// and each row is one sieve: its opening [mm] and its value. Percent retained is converted to
+// percent passing (passing at a sieve = 100 - what it and the sieves above it retain), and the
+// PsdFile's note says so. The cuts (d_min, d_max) and the fines policy of a CSV sheet are the
+// scene's (sample.d_min_mm, sample.d_max_mm); its name is the file's stem.
+//
+// Either form may list its sieves finest first or coarsest first (a lab sheet often starts at
+// the top sieve): sizes strictly decreasing are read in reverse, and the note says so.
 #pragma once
 
 #include <string>
@@ -41,6 +47,8 @@ struct PsdFile {
   std::string name;        // [psd].name, or empty
   std::string provenance;  // [psd].provenance, or empty
   std::string assumption;  // [psd].assumption, or empty
+  std::string note;        // how the file was read when not as written (its order, percent
+                           // retained converted), or empty; runs print it with their plan
   sim::PsdSpec spec;       // sizes in metres
 };
 

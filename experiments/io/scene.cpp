@@ -278,6 +278,7 @@ void read_contacts(TableReader t, SceneConfig& s) {
     const sim::PairParams p = read_contact(*t.table(key));
     s.contacts[{a, b}] = p;
     s.contacts[{b, a}] = p;
+    s.contact_pairs.emplace_back(a, b);
   }
   t.finish();
 }

@@ -63,7 +63,9 @@ struct SceneConfig {
   PsdFile psd;
   std::vector<GrainShape> shapes;    // grain shapes (io/grain_shape.hpp); empty: spheres
   std::vector<sim::Material> materials;                 // in file order
-  std::map<std::pair<std::string, std::string>, sim::PairParams> contacts;
+  std::map<std::pair<std::string, std::string>, sim::PairParams> contacts;  // both orders
+  std::vector<std::pair<std::string, std::string>> contact_pairs;  // each [contacts] table once,
+                                                                   // as written ("rock-plate")
   ContainerConfig container;
   std::string plate_material = "plate";
   ProcedureConfig procedure;

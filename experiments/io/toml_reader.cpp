@@ -138,9 +138,11 @@ std::vector<std::string> TableReader::keys() const {
 }
 
 void TableReader::finish() const {
+  // The keys this table's reader asked for are the ones it knows: a misspelling is near one.
   for (const auto& [key, node] : *table_) {
-    if (!used_.count(std::string(key.str())))
-      fail(std::string(key.str()), "is not a known key (value " + show_node(node) + ")");
+    const std::string k(key.str());
+    if (!used_.count(k))
+      fail(k, "is not a known key (value " + show_node(node) + ")" + did_you_mean(k, used_));
   }
 }
 
@@ -148,16 +150,10 @@ void TableReader::known_keys(const std::set<std::string>& allowed) const {
   for (const auto& [key, node] : *table_) {
     const std::string k(key.str());
     if (allowed.count(k)) continue;
-    std::string list, best;
-    std::size_t best_d = std::string::npos;
-    for (const auto& a : allowed) {
-      list += (list.empty() ? "" : ", ") + a;
-      if (const std::size_t d = edit_distance(k, a); d < best_d) best_d = d, best = a;
-    }
-    // A misspelling is a letter or two away; a name farther off is something else.
-    const bool close = best_d <= std::max<std::size_t>(2, k.size() / 3);
-    fail(k, "is an unknown key (value " + show_node(node) + ")" +
-                (close ? "; did you mean " + best + "?" : "") + " allowed: " + list);
+    std::string list;
+    for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+    fail(k, "is an unknown key (value " + show_node(node) + ")" + did_you_mean(k, allowed) +
+                " allowed: " + list);
   }
 }
 

@@ -1,5 +1,6 @@
 #include "experiments/loop/loop_data.hpp"
 
+#include "experiments/io/suggest.hpp"
 #include "experiments/io/numbers.hpp"
 
 #include <cmath>
@@ -155,8 +156,9 @@ Columns read_header(const CsvTable& csv, const std::string& file, const LabSheet
     const std::string h = trim(csv.header[i]);
     if (cols.has(h)) throw InputError(at + ": column " + h + " appears twice");
     if (!known.count(h) && h.rfind("set:", 0) != 0)
-      throw InputError(at + ": unknown column \"" + h +
-                       "\" (see docs/calibration.md or docs/loop.md; any scene key goes in a set:KEY column)");
+      throw InputError(at + ": unknown column \"" + h + "\"" + did_you_mean(h, known, "\"") +
+                       " (see docs/calibration.md or docs/loop.md; any scene key goes in a "
+                       "set:KEY column)");
     cols.header.push_back(h);
     cols.index[h] = static_cast<int>(i);
   }
@@ -264,7 +266,21 @@ void read_overrides(LabTest& test, const Row& row, const Where& w, const LabShee
     std::string culprit;
     try {
       (void)load_scene(test.scene_path, {sets.begin(), sets.begin() + own});
-    } catch (const std::exception&) {
+    } catch (const std::exception& common) {
+      // The command's own overrides (its sieve sheet) that break a scene that builds without
+      // them are named as the command gave them, never as the row's scene column.
+      bool base_builds = own > 0;
+      if (base_builds) {
+        try {
+          (void)load_scene(test.scene_path);
+        } catch (const std::exception&) {
+          base_builds = false;
+        }
+      }
+      if (base_builds)
+        throw InputError((form.common_origin.empty() ? std::string("the command line")
+                                                     : form.common_origin) +
+                         ": " + common.what());
       culprit = "scene";
     }
     for (std::size_t k = own + 1; k <= sets.size() && culprit.empty(); ++k) {

@@ -84,6 +84,7 @@ struct LabSheetForm {
                                // the others are predicted (validate)
   std::vector<std::pair<std::string, std::string>> common;  // overrides of every row's scene
                                                            // before its own (the sieve sheet)
+  std::string common_origin;  // where `common` came from, for errors ("--sieve FILE")
 };
 
 /// Reads a loop CSV (see docs/loop.md): checks every column, builds every test's scene (with

@@ -127,8 +127,10 @@ SheetCampaign sheet_campaign(const SheetCalibrationRequest& r) {
   LabSheetForm form;
   form.base_scene = absolute(r.scene);
   form.role_required = false;
-  if (!r.sieve_sheet.empty())
+  if (!r.sieve_sheet.empty()) {
     form.common.emplace_back("sample.psd_file", quote(absolute(r.sieve_sheet)));
+    form.common_origin = "--sieve " + r.sieve_sheet;
+  }
   SheetCampaign out;
   out.tests = read_lab_csv(r.tests_csv, form);
   const LabTest& cal = calibration_row(out.tests);

@@ -73,6 +73,8 @@ RunPlan plan_run(const SceneConfig& scene, int threads, const PlanSettings& sett
   p.wall_s =
       static_cast<double>(p.steps) * static_cast<double>(p.particles) / p.particle_steps_per_s;
   p.representative = representativeness(scene);
+  p.psd_source = scene.psd.source;
+  p.psd_note = scene.psd.note;
   return p;
 }
 
@@ -89,6 +91,7 @@ std::string plan_text(const RunPlan& p, const PlanSettings& s) {
        printf_text("%.2g", s.particle_steps_per_s_per_thread) +
        " per thread, measured on whole pile " + "runs, x " + std::to_string(p.threads) +
        " thread(s))\n";
+  if (!p.psd_note.empty()) t += "plan: the sieve sheet " + p.psd_source + ": " + p.psd_note + "\n";
   return t + representativeness_text(p.representative);
 }
 
@@ -96,7 +99,8 @@ namespace {
 
 // Why `subject` is above the limits (empty when it is not), and what shrinks it.
 std::string refusal(const std::string& subject, std::int64_t particles, double wall_s,
-                    double d_min_mm, double d_max_mm, const PlanSettings& s) {
+                    double d_min_mm, double d_max_mm, const KeySource& source,
+                    const PlanSettings& s) {
   std::string why;
   if (particles > s.max_particles)
     why = std::to_string(particles) + " particles is above the limit of " +
@@ -107,7 +111,9 @@ std::string refusal(const std::string& subject, std::int64_t particles, double w
   if (why.empty()) return "";
   const double bigger = 2.0 * d_min_mm;
   const std::string example =
-      bigger < 0.9 * d_max_mm ? ", e.g. --set sample.d_min_mm=" + printf_text("%.3g", bigger) : "";
+      bigger < 0.9 * d_max_mm
+          ? ", e.g. " + how_to_set(source, "sample.d_min_mm", printf_text("%.3g", bigger))
+          : "";
   return subject + " is too large to start unasked: " + why +
          ". Raise the cut-off sample.d_min_mm (now " + printf_text("%.3g", d_min_mm) +
          " mm; the count grows about as d_min^-3)" + example +
@@ -116,8 +122,28 @@ std::string refusal(const std::string& subject, std::int64_t particles, double w
 
 }  // namespace
 
-std::string plan_refusal(const RunPlan& p, const PlanSettings& s) {
-  return refusal("this run", p.particles, p.wall_s, p.d_min_mm, p.d_max_mm, s);
+std::string how_to_set(const KeySource& source, const std::string& key, const std::string& value) {
+  switch (source.kind) {
+    case KeySource::Kind::kSetOption:
+      return "--set " + key + "=" + value;
+    case KeySource::Kind::kSceneFile: {
+      const auto dot = key.rfind('.');
+      return dot == std::string::npos
+                 ? key + " = " + value + " in " + source.file
+                 : key.substr(dot + 1) + " = " + value + " in [" + key.substr(0, dot) + "] of " +
+                       source.file;
+    }
+    case KeySource::Kind::kCampaignFile:
+      return "overrides = { \"" + key + "\" = " + value + " } in " + source.file;
+    case KeySource::Kind::kTestSheet:
+      return "a column set:" + key + " of " + value + " on every row of " + source.file +
+             ", or " + key + " in the base scene";
+  }
+  return key + " = " + value;
+}
+
+std::string plan_refusal(const RunPlan& p, const KeySource& source, const PlanSettings& s) {
+  return refusal("this run", p.particles, p.wall_s, p.d_min_mm, p.d_max_mm, source, s);
 }
 
 BatchPlan plan_batch(std::vector<BatchPlan::Part> parts, int workers) {
@@ -151,13 +177,13 @@ std::string plan_text(const BatchPlan& b, const PlanSettings& s) {
   return t;
 }
 
-std::string plan_refusal(const BatchPlan& b, const PlanSettings& s) {
+std::string plan_refusal(const BatchPlan& b, const KeySource& source, const PlanSettings& s) {
   const RunPlan* largest = nullptr;
   for (const BatchPlan::Part& part : b.parts)
     if (!largest || part.plan.particles > largest->particles) largest = &part.plan;
   if (!largest) return "";
   return refusal("this batch of " + std::to_string(b.runs) + " runs", largest->particles,
-                 b.wall_s, largest->d_min_mm, largest->d_max_mm, s);
+                 b.wall_s, largest->d_min_mm, largest->d_max_mm, source, s);
 }
 
 }  // namespace reposetwin::experiments

@@ -46,6 +46,8 @@ struct RunPlan {
   double particle_steps_per_s = 0.0;      // the rate assumed (per thread x threads) [1/s]
   double wall_s = 0.0;                    // estimated wall time [s]
   Representativeness representative;      // pile height, mass not simulated, outlet width
+  std::string psd_source, psd_note;       // the sieve table's file, and how it was read when
+                                          // not as written (io/psd_file.hpp), or empty
 };
 
 /// The plan of `scene` run with `threads` threads. Throws InputError as the scene's checks do.
@@ -55,9 +57,24 @@ RunPlan plan_run(const SceneConfig& scene, int threads, const PlanSettings& sett
 /// representativeness rule the scene breaks (pile/representativeness.hpp).
 std::string plan_text(const RunPlan& plan, const PlanSettings& settings = {});
 
+/// Where the command that plans a run takes its scene keys from, so a refusal's advice names
+/// only what a user can type to that command: `run --set`, a scene file's key (timestep), a
+/// campaign file's overrides (campaign, calibrate FILE) or a test sheet's column (calibrate
+/// --tests, loop).
+struct KeySource {
+  enum class Kind { kSetOption, kSceneFile, kCampaignFile, kTestSheet };
+  Kind kind = Kind::kSetOption;
+  std::string file;  // the scene, campaign file or test sheet the key is set in
+};
+
+/// How to set scene key `key` to the TOML value `value` through `source`, as words to type.
+std::string how_to_set(const KeySource& source, const std::string& key, const std::string& value);
+
 /// Empty when the plan is within the settings' limits; otherwise why not, naming the limit, the
-/// key that shrinks the run (sample.d_min_mm, sample.mass_kg) and how to go ahead anyway.
-std::string plan_refusal(const RunPlan& plan, const PlanSettings& settings = {});
+/// key that shrinks the run (sample.d_min_mm, sample.mass_kg), how to set it through `source`
+/// and how to go ahead anyway.
+std::string plan_refusal(const RunPlan& plan, const KeySource& source,
+                         const PlanSettings& settings = {});
 
 /// The plan of many pile runs (a calibration and its predictions): every kind of run with its
 /// own plan and count, and the wall time with `workers` runs side by side. The runs of a batch
@@ -82,7 +99,8 @@ std::string plan_text(const BatchPlan& plan, const PlanSettings& settings = {});
 
 /// As plan_refusal of one run: the largest run's particles and the batch's wall time against
 /// the limits; empty when within them.
-std::string plan_refusal(const BatchPlan& plan, const PlanSettings& settings = {});
+std::string plan_refusal(const BatchPlan& plan, const KeySource& source,
+                         const PlanSettings& settings = {});
 
 /// "45s", "12m5s", "3h20m", "4d6h": a duration for a person.
 std::string duration_text(double seconds);

@@ -1,9 +1,12 @@
 #include "experiments/report/folder_results.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <sstream>
 #include <utility>
 
 #include "experiments/io/input_error.hpp"
+#include "experiments/report/format.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/pile/headline.hpp"
 #include "experiments/pile/pile_record.hpp"
@@ -178,6 +181,50 @@ FolderResults read_folder_results(const std::string& dir, const std::string& tit
 CaseStats case_stats(const CaseRows& c) {
   return {sample_stats(c.image_deg), sample_stats(c.particle_deg), sample_stats(c.slice_deg),
           sample_stats(c.flank_deg)};
+}
+
+bool same_test_as_calibration(const FolderResults& f, const CaseRows& c) {
+  std::vector<std::string> keys;
+  if (f.calibration.is_object()) {
+    for (const json& k : f.calibration.value("keys", json::array()))
+      if (k.is_string()) keys.push_back(k.get<std::string>());
+    if (f.calibration.contains("key") && f.calibration["key"].is_string())
+      keys.push_back(f.calibration["key"].get<std::string>());
+  }
+  const auto conditions = [&keys](const json& overrides) {
+    json o = overrides.is_object() ? overrides : json::object();
+    for (const std::string& k : keys) o.erase(k);
+    return o;
+  };
+  for (const CaseRows& r : f.cases)
+    if (r.name.rfind("calib_", 0) == 0) return conditions(r.overrides) == conditions(c.overrides);
+  return true;
+}
+
+std::string angles_plot_data(const FolderResults& f) {
+  std::vector<std::pair<std::string, json>> named;
+  for (const CaseRows& c : f.cases) named.emplace_back(c.name, c.overrides);
+  const std::vector<std::string> labels = case_labels(named);
+  const auto mean = [](const SampleStats& s) { return s.n ? s.mean : NAN; };
+  const auto sd = [](const SampleStats& s) { return s.n ? s.sd : NAN; };
+  std::ostringstream data;
+  for (std::size_t k = 0; k < f.cases.size(); ++k) {
+    const CaseRows& c = f.cases[k];
+    const CaseStats s = case_stats(c);
+    std::string label = labels[k];
+    if (s.image.n + s.particle.n + s.flank.n == 0) {
+      std::string why;
+      for (const auto& [reason, n] : c.without_pile)
+        why += (why.empty() ? "" : ", ") + std::to_string(n) + " " + reason;
+      label += " (no angle" + (why.empty() ? std::string() : ": " + why) + ")";
+    }
+    // A label is one quoted gnuplot string.
+    std::erase(label, '"');
+    data << k << " " << mean(s.image) << " " << sd(s.image) << " " << mean(s.particle) << " "
+         << sd(s.particle) << " \"" << label << "\" " << mean(s.flank) << " " << sd(s.flank)
+         << "\n";
+  }
+  return data.str();
 }
 
 json case_summary(const FolderResults& f) {

@@ -58,6 +58,19 @@ nlohmann::json read_json(const std::filesystem::path& p);
 /// it holds none. `title` empty: the campaign's name or the folder's.
 FolderResults read_folder_results(const std::string& dir, const std::string& title);
 CaseStats case_stats(const CaseRows& c);
+/// Whether case `c` ran the calibration's own test: its overrides, but the calibrated keys (the
+/// calibration's "keys", or its "key"), are a calibration run's ("calib_*"). A prediction of
+/// another test at the calibrated mu_r shares the scene but not its conditions (another mass,
+/// another funnel), so a render of it is no picture of the test the lab photographed. True when
+/// the folder holds no calibration run to compare with.
+bool same_test_as_calibration(const FolderResults& f, const CaseRows& c);
+
+/// The data of the "Angles per case" plot, a line a case: index, image mean and sd, particle
+/// mean and sd, the label (the case's inputs), flank mean and sd. A measure no run of the case
+/// gave is NaN (gnuplot draws no point), never 0; a case none of whose runs gave an angle says
+/// so in its label, with its runs' reasons ("no angle: 2 time_limit").
+std::string angles_plot_data(const FolderResults& f);
+
 /// The cases as summary.json lists them.
 nlohmann::json case_summary(const FolderResults& f);
 

@@ -12,7 +12,9 @@
 #include <optional>
 #include <sstream>
 
+#include "experiments/calibration/calibrate_campaign.hpp"
 #include "experiments/calibration/calibration.hpp"
+#include "experiments/io/format.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/loop/loop.hpp"
@@ -40,21 +42,8 @@ namespace {
 
 // Angles per case: image and particle atan(2H/D) and the image flank angle, mean ± sd.
 void angles_plot(const FolderResults& f, const fs::path& out) {
-  // index image_mean image_sd particle_mean particle_sd label flank sd; a case is labelled by
-  // its inputs (mu_r 0.399), not by its folder name.
-  std::vector<std::pair<std::string, json>> named;
-  for (const CaseRows& c : f.cases) named.emplace_back(c.name, c.overrides);
-  const std::vector<std::string> labels = case_labels(named);
-  std::ostringstream data;
-  int k = 0;
-  for (const CaseRows& c : f.cases) {
-    const CaseStats s = case_stats(c);
-    data << k << " " << s.image.mean << " " << s.image.sd << " " << s.particle.mean << " "
-         << s.particle.sd << " \"" << labels[k] << "\" "
-         << (s.flank.n ? s.flank.mean : NAN) << " " << (s.flank.n ? s.flank.sd : NAN) << "\n";
-    ++k;
-  }
-  write_file_atomic((out / "angles.dat").string(), data.str());
+  const std::string data = angles_plot_data(f);
+  write_file_atomic((out / "angles.dat").string(), data);
   run_gnuplot(out / "angles.gp",
               png_terminal(out / "angles.png", 900, 520, false) +
                   "set ylabel 'angle of repose [deg]'\nset xtics rotate by 30 right\n"
@@ -106,6 +95,8 @@ RenderBeside render_beside_lab(const FolderResults& f) {
     for (const CaseRows& c : f.cases) {
       if (!c.overrides.contains(key) || !c.overrides[key].is_number()) continue;
       if (!scene.empty() && !c.scene.empty() && c.scene != scene) continue;
+      // The lab photographed the calibration test: a render beside it is of that test.
+      if (!same_test_as_calibration(f, c)) continue;
       const fs::path p = overlay_of(f, c);
       if (p.empty()) continue;
       const double value = c.overrides[key].get<double>();
@@ -402,6 +393,29 @@ std::string built_section(const std::string& dir, std::size_t folders) {
   return render(templates::kBuilt, d);
 }
 
+// What to run after a calibration: export its material (or, without a mu_r, calibrate again as
+// its advice says), and rebuild this page. A page is read in a copied folder too, so it names no
+// absolute path: the folder as the report was given it when that is relative (a command run
+// where the report was built), else its name (run from the folder that holds it), and the page
+// says which.
+std::string next_steps_section(const FolderResults& f) {
+  const bool reached = f.calibration.contains("mu_r") && f.calibration["mu_r"].is_number();
+  const fs::path given = f.dir.lexically_normal();
+  const bool relative = given.is_relative() && !given.empty();
+  fs::path whole = fs::absolute(f.dir).lexically_normal();
+  if (whole.filename().empty()) whole = whole.parent_path();  // "/runs/cal1/"
+  const std::string folder = relative ? given.string() : whole.filename().string();
+  const std::vector<NextStep> steps = calibration_next_steps(folder, reached);
+  mustache::data d;
+  d.set("where", relative ? "where this report was built" : "in the folder that holds " + folder);
+  d.set("export", reached ? mustache::data(steps.back().command) : mustache::data(false));
+  d.set("again", "the calibrate command printed why and what to try (a wider mu_r range, the "
+                 "grain shape, the plate friction); its runs are reused when it is run again into "
+                 "the same folder");
+  d.set("report", steps.front().command + " --force");
+  return render(templates::kNextSteps, d);
+}
+
 void write_page(const fs::path& out, const std::string& title, std::vector<std::string> sections,
                 const json& summary) {
   std::erase(sections, std::string());
@@ -535,6 +549,7 @@ json build_report(const std::string& dir, const ReportSettings& settings) {
     sections.push_back(calibration_section(f.calibration, f.predictions ? *f.predictions : json(),
                                            out, "../calibration.json"));
     summary["calibration"] = f.calibration;
+    sections.push_back(next_steps_section(f));
   }
   sections.push_back(lab_photo_section(lab, out, render_beside_lab(f), summary, photo_note));
   if (f.predictions) {

@@ -102,6 +102,17 @@ const char* const kCalibration = R"(<h2>Calibration</h2>
 {{> table}}{{/fit}}<p>Every field: <a href='{{link}}'>calibration.json</a>.</p>
 )";
 
+// export: the export command, or false (no calibrated mu_r); again: the calibrate command's
+// advice when there is none; report: the report command that rebuilds this page; where: the
+// folder the commands are run in.
+const char* const kNextSteps = R"(<h2>What next</h2>
+<p>Each command is run {{where}}.</p>
+<ul>{{#export}}<li>The calibrated material as a LIGGGHTS 3.8 deck (the scene, the sieve sheet and mu_r with its interval, nothing retyped): <code>{{export}}</code>; its README says what is carried and what is not.</li>
+<li>The field: a field-scale deck (a stope, a dump) is not built yet; the exported deck is the lab's pile test, whose container and insertion you replace by your geometry, keeping the material lines.</li>
+{{/export}}{{^export}}<li>This calibration reached no mu_r, so there is nothing to export: {{again}}</li>
+{{/export}}<li>This page again, after more runs: <code>{{report}}</code>.</li></ul>
+)";
+
 // predictions: table; link: predictions.json.
 const char* const kPredictions = R"(<h2>Predictions at the calibrated mu_r</h2>
 {{#predictions}}{{> table}}{{/predictions}}<p>Every field: <a href='{{link}}'>predictions.json</a>.</p>

@@ -22,6 +22,7 @@ extern const char* const kLabPhoto;
 extern const char* const kComparison;
 extern const char* const kComparisonCaption;
 extern const char* const kAngles;
+extern const char* const kNextSteps;
 extern const char* const kCases;
 extern const char* const kNoCases;
 extern const char* const kCalibration;

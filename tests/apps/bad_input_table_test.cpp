@@ -94,8 +94,10 @@ const std::vector<Case> kRunCases = {
     {"8 flank band values", "", "", "--set measure.flank_low=0.9 --set measure.flank_high=0.1", 2,
      {"measure.flank_low", "0.9", "flank_high", "0.1"}, {}},
     // Second pass (scene fuzz, hostile pass 2026-12-06): the key as the user writes it.
-    {"P2 sieve table out of order", "", "", "--set sample.psd.sieve_mm=[4.0,3.0,2.0]", 2,
-     {"sample.psd.sieve_mm", "--set sample.psd.sieve_mm=[4.0,3.0,2.0]", "not larger"},
+    // A table listed coarsest first is read in reverse (psd_file.hpp); one in neither order is
+    // refused.
+    {"P2 sieve table out of order", "", "", "--set sample.psd.sieve_mm=[2.0,4.0,3.0]", 2,
+     {"sample.psd.sieve_mm", "--set sample.psd.sieve_mm=[2.0,4.0,3.0]", "not larger"},
      {"[sample.psd]."}},
     {"P2 passing above 100", "", "", "--set sample.psd.passing_percent=[0.0,150.0,100.0]", 2,
      {"sample.psd.passing_percent", "150"}, {"[sample.psd]."}},

@@ -3,8 +3,11 @@
 // scene's relative paths and messages name a real file, as a user's would).
 #pragma once
 
+#include <stdlib.h>
+
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 #include <string>
 
 #include "experiments/io/scene.hpp"
@@ -19,6 +22,28 @@ inline std::filesystem::path temp_dir(const std::string& name) {
   std::filesystem::create_directories(p);
   return p;
 }
+
+/// A new empty folder `<tmp>/reposetwin_<name>.XXXXXX` made by mkdtemp: its own, whatever else
+/// runs at the same time; removed when the object goes.
+class UniqueTempDir {
+ public:
+  explicit UniqueTempDir(const std::string& name) {
+    std::string t =
+        (std::filesystem::temp_directory_path() / ("reposetwin_" + name + ".XXXXXX")).string();
+    if (!::mkdtemp(t.data())) throw std::runtime_error("mkdtemp " + t + " failed");
+    path_ = t;
+  }
+  ~UniqueTempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  UniqueTempDir(const UniqueTempDir&) = delete;
+  UniqueTempDir& operator=(const UniqueTempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
 
 /// `text` written to `dir`/scene.toml and read by the strict scene parser.
 inline experiments::SceneConfig scene_from(const std::string& text,

@@ -185,6 +185,41 @@ TEST(BracketCalibration, JamsBelowTheTargetMakeItUnreachable) {
   for (const Observation& o : c.result.observations) EXPECT_LE(o.mu_r, 0.3);
 }
 
+// Pours that a time limit stopped are not jams: the calibration stops at once (a lower mu_r does
+// not cure a time limit), and its message names the real stop, never "every pour jammed".
+TEST(BracketCalibration, ATimeLimitIsNamedNotTakenForAJam) {
+  BracketSettings s = sample1_settings();
+  s.mu_r_start.reset();
+  s.ends_first = true;
+  s.max_runs = 12;
+  int calls = 0;
+  const auto timed_out = [&calls](const std::vector<std::pair<double, std::uint64_t>>& batch) {
+    std::vector<Pour> out;
+    for (const auto& [mu, seed] : batch) {
+      ++calls;
+      Pour p;
+      p.mu_r = mu;
+      p.seed = seed;
+      p.outcome = PourOutcome::kTimeLimit;
+      p.detail = "stopped at procedure.max_time_s";
+      out.push_back(p);
+    }
+    return out;
+  };
+  const BracketCalibration c = calibrate_bracket(timed_out, {33.47, 0.0}, s);
+  EXPECT_FALSE(c.result.mu_r.has_value());
+  EXPECT_EQ(calls, 4);  // the two ends, then stopped
+  EXPECT_EQ(c.result.message.find("jammed"), std::string::npos) << c.result.message;
+  EXPECT_NE(c.result.message.find("4 stopped by the time limit procedure.max_time_s"),
+            std::string::npos)
+      << c.result.message;
+  const nlohmann::json j = to_json(c, s);
+  int limits = 0;
+  for (const auto& q : j["jam_rate_per_mu_r"]) limits += q["time_limits"].get<int>();
+  EXPECT_EQ(limits, 4);
+  EXPECT_EQ(j["pours"][0]["outcome"], "time_limit");
+}
+
 // A lab's calibration from its sheets runs the two range ends first: a target above what the
 // range reaches is known after those two points (4 pours with 2 seeds), and the reachable
 // interval is the curve's values at the ends.

@@ -170,5 +170,29 @@ TEST(BracketCampaign, CalibratesThroughThePoolAndCountsJams) {
   EXPECT_EQ(again["mu_r"], cal["mu_r"]);
 }
 
+// Every pour stopped by procedure.max_time_s: the calibration names the time limit and advises
+// on it, not on the grain shape or jams.
+TEST(BracketCampaign, AdviceIsOnTheRealStop) {
+  const Scratch d("time_limit");
+  write_file_atomic((d.path / "c.toml").string(),
+                    campaign("ends_first = true\nmax_simulations = 8\n"));
+  const Campaign c = load_campaign((d.path / "c.toml").string());
+  const CaseFn timed_out = [](const CaseSpec&, const std::string&) {
+    return json{{"stop", {{"reason", "time limit"}, {"detail", "t = 4 s"}}},
+                {"pile", {{"status", "ok"}, {"theta_hd_deg", 30.0}, {"slice_angle_mean_deg", 30.0}}},
+                {"provenance", {{"time_step_s", 1e-6}, {"code_version", "test"}}},
+                {"run_dir", "run"}};
+  };
+  const json cal = run_calibration(c, (d.path / "out").string(), timed_out,
+                                   calibration_angle(AngleMeasure::kParticles), quiet());
+  ASSERT_FALSE(cal["mu_r"].is_number()) << cal.dump(2);
+  EXPECT_TRUE(cal["material"].is_null());
+  const std::string advice = cannot_reach_advice(c, cal, AngleMeasure::kParticles);
+  EXPECT_NE(advice.find("time_limit (4 pour(s)): raise procedure.max_time_s"), std::string::npos)
+      << advice;
+  EXPECT_EQ(advice.find("jammed"), std::string::npos) << advice;
+  EXPECT_EQ(advice.find("grain shape"), std::string::npos) << advice;
+}
+
 }  // namespace
 }  // namespace reposetwin::experiments

@@ -55,10 +55,36 @@ TEST(LiggghtsDeck, CarriesTheSoftenedStiffnessTheLawAndTheProcedure) {
   stop << "variable ke_stop equal " << 0.5 * s.mass * v * v << "\n";
   EXPECT_TRUE(has(d.input, stop.str())) << d.input;
   EXPECT_TRUE(has(d.input, "if \"${ke_now} < ${ke_stop}\" then \"jump SELF fill_done\""));
+  // The notes warn of the install that breaks the twin's build, with the command that avoids it.
+  EXPECT_TRUE(has(d.notes, "`sudo apt-get install --no-install-recommends liggghts`")) << d.notes;
+  EXPECT_TRUE(has(d.notes, "removes python3-vtk9 and libvtk9-dev")) << d.notes;
   // The notes name every epsd contact whose dashpot epsd2 cannot carry.
-  for (const auto& [names, p] : s.contacts)
-    if (p.rolling_damping > 0)
-      EXPECT_TRUE(has(d.notes, "contacts." + names.first + "-" + names.second)) << d.notes;
+  for (const auto& [a, b] : s.contact_pairs)
+    if (s.contacts.at({a, b}).rolling_damping > 0)
+      EXPECT_TRUE(has(d.notes, "contacts." + a + "-" + b)) << d.notes;
+}
+
+// A pair is one [contacts] table: the notes name it once, as the scene writes it, though the
+// scene's contact map holds it in both orders.
+TEST(LiggghtsDeck, NotCarriedNamesEachPairOnceAsWritten) {
+  const SceneConfig s = tiny(R"(
+[materials.plate]
+density_kg_m3 = 7800.0
+youngs_modulus_pa = 200e9
+poisson_ratio = 0.3
+[contacts.rock-plate]
+restitution = 0.4
+friction = 0.6
+rolling_friction = 0.2
+rolling_damping = 0.3
+)");
+  ASSERT_EQ(s.contacts.count({"plate", "rock"}), 1u);
+  const LiggghtsDeck d = liggghts_deck(s);
+  EXPECT_FALSE(has(d.notes, "contacts.plate-rock")) << d.notes;
+  const std::string line = "- The rolling dashpot of contacts.rock-plate:";
+  const auto first = d.notes.find(line);
+  ASSERT_NE(first, std::string::npos) << d.notes;
+  EXPECT_EQ(d.notes.find(line, first + 1), std::string::npos) << d.notes;
 }
 
 // Started from the twin's filled sample, the deck reads it instead of inserting one: the data

@@ -14,6 +14,7 @@
 #include "experiments/io/psd_file.hpp"
 #include "experiments/io/scene.hpp"
 #include "experiments/io/scene_overrides.hpp"
+#include "experiments/pile/run_plan.hpp"
 
 namespace reposetwin::experiments {
 namespace {
@@ -86,6 +87,59 @@ TEST(PsdSheet, OtherHeadersAreRefusedNamingTheColumn) {
     ASSERT_FALSE(what.empty()) << c.text;
     for (const std::string& s : c.says) EXPECT_NE(what.find(s), std::string::npos) << what;
   }
+}
+
+// A sheet listed coarsest first (as a lab sheet often starts at the top sieve), or in percent
+// retained on each sieve or cumulative, reads as the same table, and its note says how it was read.
+TEST(PsdSheet, EitherOrderAndPercentRetainedReadAsTheSameTable) {
+  const fs::path d = dir_of("forms");
+  const PsdFile passing = read_psd_file(
+      write(d / "passing.csv", "sieve_mm,passing_percent\n0.5,10\n1,30\n2,60\n4,100\n"));
+  EXPECT_TRUE(passing.note.empty()) << passing.note;
+  const PsdFile coarse_first = read_psd_file(
+      write(d / "coarse.csv", "sieve_mm,passing_percent\n4,100\n2,60\n1,30\n0.5,10\n"));
+  EXPECT_EQ(coarse_first.spec.table.size, passing.spec.table.size);
+  EXPECT_EQ(coarse_first.spec.table.passing, passing.spec.table.passing);
+  EXPECT_NE(coarse_first.note.find("listed coarsest first"), std::string::npos);
+  // Retained on each sieve, top sieve first: 0 on 4 mm, 40 on 2, 30 on 1, 20 on 0.5, 10 in the pan.
+  const PsdFile retained = read_psd_file(
+      write(d / "retained.csv", "sieve_mm,retained_percent\n4,0\n2,40\n1,30\n0.5,20\n"));
+  EXPECT_EQ(retained.spec.table.size, passing.spec.table.size);
+  ASSERT_EQ(retained.spec.table.passing.size(), 4u);
+  for (std::size_t i = 0; i < 4; ++i)
+    EXPECT_NEAR(retained.spec.table.passing[i], passing.spec.table.passing[i], 1e-12) << i;
+  EXPECT_NE(retained.note.find("percent retained on each sieve converted"), std::string::npos)
+      << retained.note;
+  const PsdFile cumulative = read_psd_file(write(
+      d / "cumulative.csv", "cumulative_retained_percent,sieve_mm\n90,0.5\n70,1\n40,2\n0,4\n"));
+  EXPECT_EQ(cumulative.spec.table.passing, passing.spec.table.passing);
+  EXPECT_NE(cumulative.note.find("cumulative percent retained"), std::string::npos);
+  // The TOML form may be listed coarsest first too.
+  const PsdFile toml = read_psd_file(write(d / "coarse.toml",
+                                           "[psd]\nsieve_mm = [4, 2, 1, 0.5]\n"
+                                           "passing_percent = [100, 60, 30, 10]\n"));
+  EXPECT_EQ(toml.spec.table.passing, passing.spec.table.passing);
+  // Percent retained that is not (it sums above 100), and a misspelt column, are refused.
+  EXPECT_NE(refusal("sieve_mm,retained_percent\n4,0\n2,70\n1,50\n").find("sums to 120"),
+            std::string::npos);
+  EXPECT_NE(refusal("sieve_mm,retained_percnt\n4,0\n2,70\n")
+                .find("did you mean \"retained_percent\"?"),
+            std::string::npos)
+      << refusal("sieve_mm,retained_percnt\n4,0\n2,70\n");
+}
+
+// A run's plan says how its sieve sheet was read when not as written.
+TEST(PsdSheet, ThePlanSaysASheetWasConverted) {
+  const fs::path d = dir_of("plan");
+  const std::string scene = write(d / "tiny.toml", test_support::kTinyScene);
+  const std::string sheet =
+      write(d / "retained.csv", "sieve_mm,retained_percent\n4.0,0\n3.5,50\n3.0,50\n");
+  const RunPlan plan = plan_run(load_scene(scene, {"sample.psd_file=" + sheet}), 1);
+  const std::string text = plan_text(plan);
+  EXPECT_NE(text.find("plan: the sieve sheet " + sheet + ": listed coarsest first"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("percent retained on each sieve converted"), std::string::npos) << text;
 }
 
 // A scene names its sheet relative to its own folder; the run folder's resolved scene carries the

@@ -145,6 +145,22 @@ TEST(SheetCampaign, ABadSieveSheetIsNamed) {
   }
 }
 
+// A sieve sheet the scene cannot take (its sieves do not reach 100 % passing) is named as the
+// command's --sieve with the sheet's own file, not blamed on the test sheet's scene column.
+TEST(SheetCampaign, ASieveSheetsErrorNamesTheSieveSheetNotTheSceneColumn) {
+  const std::string sieve = write("short.csv", "sieve_mm,passing_percent\n4.0,90\n3.0,0\n");
+  const std::string tests = write("forshort.csv", "id,angle_deg\nt1,30\n");
+  try {
+    (void)sheet_campaign(request(tests, sieve));
+    FAIL() << "a sieve sheet short of 100 % was accepted";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("--sieve " + sieve + ": ", 0), 0u) << what;
+    EXPECT_NE(what.find("short.csv"), std::string::npos) << what;
+    EXPECT_EQ(what.find("column scene"), std::string::npos) << what;
+  }
+}
+
 // Every key the campaign readers allow is in the reference, and the reference is what
 // docs/calibration.md shows.
 TEST(CampaignKeys, TheReferenceIsTheReadersListAndTheDocsPage) {

@@ -56,18 +56,46 @@ TEST(RunPlan, SmallerCutOffMeansMoreParticlesAndASmallerStep) {
 
 TEST(RunPlan, AboveTheLimitsItIsRefusedNamingTheCutOffKey) {
   const RunPlan p = plan_run(load_scene(""), 1);
-  EXPECT_EQ(plan_refusal(p), "");
+  EXPECT_EQ(plan_refusal(p, {}), "");
   PlanSettings few;
   few.max_particles = 100;
-  const std::string why = plan_refusal(p, few);
+  const std::string why = plan_refusal(p, {}, few);
   EXPECT_NE(why.find("above the limit of 100"), std::string::npos) << why;
   EXPECT_NE(why.find("sample.d_min_mm"), std::string::npos) << why;
   EXPECT_NE(why.find("--yes"), std::string::npos) << why;
   PlanSettings slow;
   slow.particle_steps_per_s_per_thread = 10.0;  // days
-  const std::string late = plan_refusal(plan_run(load_scene(""), 1, slow), slow);
+  const std::string late = plan_refusal(plan_run(load_scene(""), 1, slow), {}, slow);
   EXPECT_NE(late.find("above the limit of 1h0m"), std::string::npos) << late;
   EXPECT_NE(plan_text(p).find("particle-steps/s"), std::string::npos);
+}
+
+// The advice names only what the command that plans takes: --set for run, a scene file's key
+// for timestep, a campaign file's overrides for campaign and calibrate FILE (which take no
+// --set), a test sheet's column for calibrate --tests and loop.
+TEST(RunPlan, TheAdviceNamesWhatTheCommandTakes) {
+  const RunPlan p =
+      plan_run(load_scene(kSource + "/data/scenes/paper/table1_s1_dmax2p0_200g.toml",
+                          {"sample.d_min_mm=0.5"}),
+               1);
+  ASSERT_LT(2.0 * p.d_min_mm, 0.9 * p.d_max_mm);  // the example is given
+  PlanSettings few;
+  few.max_particles = 100;
+  using K = KeySource::Kind;
+  struct Row {
+    KeySource source;
+    std::string says, never;
+  };
+  for (const Row& r :
+       {Row{{K::kSetOption, ""}, "e.g. --set sample.d_min_mm=", ""},
+        Row{{K::kSceneFile, "s.toml"}, "e.g. d_min_mm = ", "--set"},
+        Row{{K::kCampaignFile, "c.toml"}, "e.g. overrides = { \"sample.d_min_mm\" = ", "--set"},
+        Row{{K::kTestSheet, "tests.csv"}, "e.g. a column set:sample.d_min_mm of ", "--set"}}) {
+    const std::string why = plan_refusal(p, r.source, few);
+    EXPECT_NE(why.find(r.says), std::string::npos) << why;
+    if (!r.never.empty()) EXPECT_EQ(why.find(r.never), std::string::npos) << why;
+    if (!r.source.file.empty()) EXPECT_NE(why.find(r.source.file), std::string::npos) << why;
+  }
 }
 
 TEST(RunPlan, DurationsReadAsAPersonWritesThem) {

@@ -86,6 +86,14 @@ TEST(ReportPages, CalibrationReportReadsAsTablesWithReadableAxesAndOneScale) {
   EXPECT_NE(html.find("calibrated mu_r [95% interval]"), std::string::npos);
   EXPECT_NE(html.find("0.377 [0.351, 0.410]"), std::string::npos);
   EXPECT_NE(html.find("sample1_check"), std::string::npos);  // the predictions table
+  // What next: the export of this folder's material. The page names no absolute path (it is
+  // read in a copied folder too): given an absolute folder, the command names the folder and is
+  // run in the one that holds it.
+  EXPECT_NE(html.find("<h2>What next</h2>"), std::string::npos);
+  EXPECT_NE(html.find("<code>reposetwin export table1_s1_calibration</code>"), std::string::npos)
+      << html;
+  EXPECT_NE(html.find("in the folder that holds table1_s1_calibration"), std::string::npos);
+  EXPECT_NE(html.find("field-scale deck (a stope, a dump) is not built yet"), std::string::npos);
 
   // Axis labels by inputs: the plot's data names no case folder.
   const std::string angles = read_file((out / "angles.dat").string());

@@ -1,0 +1,100 @@
+// `reposetwin export` as a user types it: a calibration's folder (nothing retyped), or a scene
+// file with --set as before; a folder that holds no calibration record is refused before
+// anything is written, naming the file and the key.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli_support.hpp"
+#include "experiments/io/hash.hpp"
+#include "tests/support/scratch.hpp"
+#include "tests/support/tiny_scene.hpp"
+
+namespace reposetwin::test_support {
+namespace {
+
+bool has(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+TEST(ExportCli, FromACalibrationFolderNothingRetyped) {
+  const UniqueTempDir d("export_cli");
+  const fs::path cal = d.path() / "cal1";
+  write_text(d.path() / "base.toml", kTinyScene);
+  write_text(d.path() / "sieve.csv", "sieve_mm,passing_percent\n3.0,0\n3.6,50\n4.0,100\n");
+  const nlohmann::json material = {
+      {"scene", (d.path() / "base.toml").string()},
+      {"scene_fnv1a", experiments::fnv1a_hex(kTinyScene)},
+      {"overrides",
+       {{{"key", "sample.psd_file"}, {"value", "\"" + (d.path() / "sieve.csv").string() + "\""}}}},
+      {"keys", {"contacts.rock-rock.rolling_friction"}},
+      {"mu_r", 0.297},
+      {"mu_r_interval", {0.258, 0.339}},
+      {"target_deg", 31.5},
+      {"angle", "image"},
+      {"sieve_sheet", (d.path() / "sieve.csv").string()}};
+  write_text(cal / "calibration.json",
+             nlohmann::json{{"status", "calibrated"}, {"material", material}}.dump(2));
+  const CliResult r = run_cli_argv({"export", cal.string()}, d.path());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(has(r.out, "at the calibrated mu_r 0.297 (95% 0.258 to 0.339")) << r.out;
+  const std::string notes = read_text(cal / "liggghts" / "README.md");
+  EXPECT_TRUE(has(notes, "mu_r = 0.297, 95% interval 0.258 to 0.339")) << notes;
+  EXPECT_TRUE(has(notes, "sieve.csv")) << notes;
+  const std::string deck = read_text(cal / "liggghts" / "in.pile");
+  EXPECT_TRUE(has(deck, "coefficientRollingFriction peratomtypepair 3 0.297")) << deck;
+
+  // --set still applies on top, and the deck says its value is not the calibrated one.
+  const CliResult set = run_cli_argv({"export", cal.string(), "--out", "other", "--set",
+                                      "contacts.rock-rock.rolling_friction=0.25"},
+                                     d.path());
+  ASSERT_EQ(set.code, 0) << set.out;
+  EXPECT_TRUE(has(read_text(d.path() / "other" / "README.md"), "NOT the calibrated 0.297"));
+}
+
+TEST(ExportCli, AFolderWithoutARecordIsRefusedNamingFileAndKey) {
+  const UniqueTempDir d("export_cli_bad");
+  const fs::path cal = d.path() / "cal1";
+  fs::create_directories(cal);
+  const CliResult none = run_cli_argv({"export", cal.string()}, d.path());
+  EXPECT_NE(none.code, 0);
+  EXPECT_TRUE(has(none.out, "holds no calibration.json")) << none.out;
+  write_text(cal / "calibration.json", "{}");
+  const CliResult empty = run_cli_argv({"export", cal.string()}, d.path());
+  EXPECT_NE(empty.code, 0);
+  EXPECT_TRUE(has(empty.out, (cal / "calibration.json").string() + ": key material is missing"))
+      << empty.out;
+  EXPECT_FALSE(fs::exists(cal / "liggghts"));
+}
+
+TEST(ExportCli, ASceneFileWithSetStillExports) {
+  const UniqueTempDir d("export_cli_scene");
+  write_text(d.path() / "s.toml", kTinyScene);
+  const CliResult r = run_cli_argv(
+      {"export", "s.toml", "--out", "deck", "--set", "contacts.rock-rock.rolling_friction=0.2"},
+      d.path());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(has(read_text(d.path() / "deck" / "in.pile"),
+                  "coefficientRollingFriction peratomtypepair 3 0.2"));
+  const CliResult no_out = run_cli_argv({"export", "s.toml"}, d.path());
+  EXPECT_NE(no_out.code, 0);
+  EXPECT_TRUE(has(no_out.out, "--out is required")) << no_out.out;
+}
+
+// A misspelt option is named with the one meant, from the options that command takes.
+TEST(ExportCli, AMisspeltOptionGetsDidYouMean) {
+  const UniqueTempDir d("export_cli_option");
+  write_text(d.path() / "s.toml", kTinyScene);
+  const CliResult r = run_cli_argv(
+      {"export", "s.toml", "--out", "deck", "--sett", "contacts.rock-rock.rolling_friction=0.2"},
+      d.path());
+  EXPECT_NE(r.code, 0);
+  EXPECT_TRUE(has(r.out, "--sett: not an option of reposetwin export; did you mean '--set'?"))
+      << r.out;
+  EXPECT_FALSE(fs::exists(d.path() / "deck"));
+}
+
+}  // namespace
+}  // namespace reposetwin::test_support
