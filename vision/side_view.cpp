@@ -119,27 +119,24 @@ cv::Mat above_plate(const cv::Mat& flat, const PlateLine& plate, const SideSetti
   return above;
 }
 
-// The pile with its pale grains (hysteresis, as Canny's edges): Otsu splits the levels between
-// the pile's mean and the backdrop's, and a pale grain at the pile's top (a light rock, or a
-// grain lit from above) can lie on the backdrop's side of the split although it differs from
-// the backdrop far beyond its noise. Its pixels joined the backdrop and H read low: 2.5 mm on a
-// 31 mm pile of mixed pale grains rendered by POV-Ray (0.94 against a backdrop of 1.00 +- 0.01,
-// the split at 0.81), 1.0 mm on a 15 mm one. So the pixels darker than the backdrop by more than
-// max(0.06, 6 robust sigmas) (the rule pile_on_predicted_toe uses for a backdrop without a dark
-// class) join the pile where they touch it, with the dark patches they reach (a grain cut off
-// from the pile by pale ones), never another object standing on the plate or hanging into the
-// picture. Returns the pile's pixels (CV_8U).
-cv::Mat light_grains_of(const cv::Mat& upper, const cv::Mat& above, const cv::Mat& labels,
-                        const cv::Mat& stats, int best, double threshold, const PlateLine& plate,
-                        int rest_px) {
-  cv::Mat grown = labels == best;
-  // The backdrop as a quadratic surface in the picture (a flat field leaves a few percent of
-  // gradient across it, more than the backdrop's own noise: 0.91-1.06 on a render), fitted to
-  // the pixels at least kClearPx from the dark class, then again without those beyond 3 robust
-  // sigmas of the first fit (pale grains read as backdrop).
+// Pale pixels (hysteresis, as Canny's edges): Otsu splits the levels between the pile's mean and
+// the backdrop's, and a pale grain at the pile's top (a light rock, a grain lit from above) can
+// lie on the backdrop's side of the split although it differs from the backdrop far beyond its
+// noise. Its pixels joined the backdrop and H read low: 2.5 mm on a 31 mm pile of mixed pale
+// grains rendered by POV-Ray (0.94 against a backdrop of 1.00 +- 0.01, the split at 0.81), 1.0 mm
+// on a 15 mm one. The pixels of `region` at or above `threshold` but darker than the backdrop by
+// more than max(0.06, 6 robust sigmas) (the rule pile_on_predicted_toe uses for a backdrop
+// without a dark class) are pale. The backdrop is a quadratic surface in the picture (a flat
+// field leaves a few percent of gradient across it, more than the backdrop's own noise:
+// 0.91-1.06 on a render), fitted to the pixels at least kClearPx from `dark`, then again without
+// those beyond 3 robust sigmas of the first fit (pale grains read as backdrop). A pixel-wide
+// fringe (the outline's own blur, which the sub-pixel edge reads) is opened away.
+cv::Mat pale_pixels(const cv::Mat& upper, const cv::Mat& region, const cv::Mat& dark,
+                    double threshold) {
   constexpr double kClearPx = 8.0;
+  cv::Mat weak = cv::Mat::zeros(upper.size(), CV_8U);
   cv::Mat dist;
-  cv::distanceTransform(labels == 0, dist, cv::DIST_L2, 3);
+  cv::distanceTransform(dark == 0, dist, cv::DIST_L2, 3);
   const double su = 2.0 / std::max(1, upper.cols - 1), sv = 2.0 / std::max(1, upper.rows - 1);
   auto basis = [&](int r, int c, double* b) {
     const double u = c * su - 1.0, v = r * sv - 1.0;
@@ -152,9 +149,9 @@ cv::Mat light_grains_of(const cv::Mat& upper, const cv::Mat& above, const cv::Ma
   std::vector<Sample> samples;
   for (int r = 0; r < upper.rows; r += 3)
     for (int c = 0; c < upper.cols; c += 3)
-      if (above.at<uchar>(r, c) && dist.at<float>(r, c) > kClearPx)
+      if (region.at<uchar>(r, c) && dist.at<float>(r, c) > kClearPx)
         samples.push_back({r, c, upper.at<float>(r, c)});
-  if (samples.size() < 64) return grown;
+  if (samples.size() < 64) return weak;
   cv::Mat coef;
   double sigma = 0.0;
   std::vector<char> use(samples.size(), 1);
@@ -167,7 +164,7 @@ cv::Mat light_grains_of(const cv::Mat& upper, const cv::Mat& above, const cv::Ma
       a.push_back(cv::Mat(1, 6, CV_64F, b));
       y.push_back(static_cast<double>(samples[i].f));
     }
-    if (a.rows < 64 || !cv::solve(a, y, coef, cv::DECOMP_SVD)) return grown;
+    if (a.rows < 64 || !cv::solve(a, y, coef, cv::DECOMP_SVD)) return weak;
     std::vector<double> res(samples.size());
     std::vector<double> dev;
     for (size_t i = 0; i < samples.size(); ++i) {
@@ -180,10 +177,9 @@ cv::Mat light_grains_of(const cv::Mat& upper, const cv::Mat& above, const cv::Ma
     for (size_t i = 0; i < samples.size(); ++i) use[i] = std::abs(res[i]) <= 3.0 * sigma;
   }
   const double margin = std::max(0.06, 6.0 * sigma);
-  cv::Mat weak = cv::Mat::zeros(upper.size(), CV_8U);
   for (int r = 0; r < upper.rows; ++r) {
     const float* f = upper.ptr<float>(r);
-    const uchar* a = above.ptr<uchar>(r);
+    const uchar* a = region.ptr<uchar>(r);
     uchar* w = weak.ptr<uchar>(r);
     for (int c = 0; c < upper.cols; ++c) {
       double b[6];
@@ -193,12 +189,39 @@ cv::Mat light_grains_of(const cv::Mat& upper, const cv::Mat& above, const cv::Ma
       if (a[c] && f[c] >= threshold && f[c] < back - margin) w[c] = 255;
     }
   }
-  // A pixel-wide fringe is the outline's own blur (the sub-pixel edge reads it), not a grain.
   const cv::Mat se = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
   cv::morphologyEx(weak, weak, cv::MORPH_OPEN, se);
-  // Grown from the pile through the weak pixels that touch it; the dark patches it meets
-  // (grains cut off by pale ones) join whole, other objects standing on the plate or hanging
-  // into the picture never (refuse_foreign_objects judges those).
+  return weak;
+}
+
+// `seed` with the pale pixels that touch it, through one another (CV_8U).
+cv::Mat grown_through(const cv::Mat& seed, const cv::Mat& pale) {
+  cv::Mat labels;
+  const int n = cv::connectedComponents(seed | pale, labels, 8, CV_32S);
+  std::vector<char> keep(n, 0);
+  for (int r = 0; r < seed.rows; ++r) {
+    const int* l = labels.ptr<int>(r);
+    const uchar* g = seed.ptr<uchar>(r);
+    for (int c = 0; c < seed.cols; ++c)
+      if (g[c]) keep[l[c]] = 1;
+  }
+  cv::Mat out = seed.clone();
+  for (int r = 0; r < seed.rows; ++r) {
+    const int* l = labels.ptr<int>(r);
+    uchar* o = out.ptr<uchar>(r);
+    for (int c = 0; c < seed.cols; ++c)
+      if (l[c] > 0 && keep[l[c]]) o[c] = 255;
+  }
+  return out;
+}
+
+// The pile (component `best` of `labels`) with its pale grains (pale_pixels) and the dark
+// patches they reach (a grain cut off from the pile by pale ones), never another object standing
+// on the plate or hanging into the picture (refuse_foreign_objects judges those).
+cv::Mat light_grains_of(const cv::Mat& upper, const cv::Mat& above, const cv::Mat& labels,
+                        const cv::Mat& stats, int best, double threshold, const PlateLine& plate,
+                        int rest_px) {
+  cv::Mat grown = grown_through(labels == best, pale_pixels(upper, above, labels > 0, threshold));
   auto is_object = [&](int i) {
     const int x = stats.at<int>(i, cv::CC_STAT_LEFT), w = stats.at<int>(i, cv::CC_STAT_WIDTH);
     const int top = stats.at<int>(i, cv::CC_STAT_TOP);
@@ -206,25 +229,8 @@ cv::Mat light_grains_of(const cv::Mat& upper, const cv::Mat& above, const cv::Ma
     const double line_v = std::min(plate.v_at(x), plate.v_at(x + w - 1));
     return top == 0 || bottom >= std::floor(line_v - 0.5) - rest_px;
   };
-  {
-    cv::Mat weak_labels;
-    const int n = cv::connectedComponents(weak | grown, weak_labels, 8, CV_32S);
-    std::vector<char> keep(n, 0);
-    for (int r = 0; r < upper.rows; ++r) {
-      const int* w = weak_labels.ptr<int>(r);
-      const uchar* g = grown.ptr<uchar>(r);
-      for (int c = 0; c < upper.cols; ++c)
-        if (g[c]) keep[w[c]] = 1;
-    }
-    for (int r = 0; r < upper.rows; ++r) {
-      const int* w = weak_labels.ptr<int>(r);
-      uchar* g = grown.ptr<uchar>(r);
-      for (int c = 0; c < upper.cols; ++c)
-        if (w[c] > 0 && keep[w[c]]) g[c] = 255;
-    }
-  }
   cv::Mat near;
-  cv::dilate(grown, near, se);
+  cv::dilate(grown, near, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)));
   std::vector<char> join(stats.rows, 0);
   for (int r = 0; r < upper.rows; ++r) {
     const int* l = labels.ptr<int>(r);
