@@ -194,6 +194,16 @@ cv::Mat pale_pixels(const cv::Mat& upper, const cv::Mat& region, const cv::Mat& 
   return weak;
 }
 
+// Sets the pixels of `mask` whose label in `labels` is marked in `keep`.
+void add_labels(cv::Mat& mask, const cv::Mat& labels, const std::vector<char>& keep) {
+  for (int r = 0; r < mask.rows; ++r) {
+    const int* l = labels.ptr<int>(r);
+    uchar* m = mask.ptr<uchar>(r);
+    for (int c = 0; c < mask.cols; ++c)
+      if (l[c] > 0 && keep[l[c]]) m[c] = 255;
+  }
+}
+
 // `seed` with the pale pixels that touch it, through one another (CV_8U).
 cv::Mat grown_through(const cv::Mat& seed, const cv::Mat& pale) {
   cv::Mat labels;
@@ -206,12 +216,7 @@ cv::Mat grown_through(const cv::Mat& seed, const cv::Mat& pale) {
       if (g[c]) keep[l[c]] = 1;
   }
   cv::Mat out = seed.clone();
-  for (int r = 0; r < seed.rows; ++r) {
-    const int* l = labels.ptr<int>(r);
-    uchar* o = out.ptr<uchar>(r);
-    for (int c = 0; c < seed.cols; ++c)
-      if (l[c] > 0 && keep[l[c]]) o[c] = 255;
-  }
+  add_labels(out, labels, keep);
   return out;
 }
 
@@ -238,12 +243,7 @@ cv::Mat light_grains_of(const cv::Mat& upper, const cv::Mat& above, const cv::Ma
     for (int c = 0; c < upper.cols; ++c)
       if (m[c] && l[c] > 0 && l[c] != best && !join[l[c]] && !is_object(l[c])) join[l[c]] = 1;
   }
-  for (int r = 0; r < upper.rows; ++r) {
-    const int* l = labels.ptr<int>(r);
-    uchar* g = grown.ptr<uchar>(r);
-    for (int c = 0; c < upper.cols; ++c)
-      if (l[c] > 0 && join[l[c]]) g[c] = 255;
-  }
+  add_labels(grown, labels, join);
   return grown;
 }
 

@@ -9,6 +9,7 @@
 #include <map>
 #include <sstream>
 
+#include "../../support/quiet_runner.hpp"
 #include "experiments/calibration/calibrate_campaign.hpp"
 #include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/case_runner.hpp"
@@ -123,13 +124,7 @@ CaseFn jamming_case(const fs::path& log) {
   };
 }
 
-RunnerSettings quiet() {
-  RunnerSettings r;
-  r.mode = WorkerMode::kThreads;
-  r.progress = false;
-  r.rank.reset();
-  return r;
-}
+RunnerSettings quiet() { return test_support::quiet_runner(); }
 
 TEST(BracketCampaign, CalibratesThroughThePoolAndCountsJams) {
   const Scratch d("run");

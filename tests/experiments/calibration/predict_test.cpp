@@ -18,6 +18,7 @@
 #include <sstream>
 #include <thread>
 
+#include "../../support/quiet_runner.hpp"
 #include "../../vision/synthetic.hpp"
 #include "experiments/calibration/calibrate_campaign.hpp"
 #include "experiments/calibration/campaign_target.hpp"
@@ -106,13 +107,7 @@ std::map<std::string, int> read_log(const fs::path& log) {
   return n;
 }
 
-RunnerSettings quiet() {
-  RunnerSettings r;
-  r.mode = WorkerMode::kThreads;
-  r.progress = false;
-  r.rank.reset();
-  return r;
-}
+RunnerSettings quiet() { return test_support::quiet_runner(); }
 
 const AngleFn kAngle = [](const json& r) { return case_angle_deg(r, AngleMeasure::kImage); };
 

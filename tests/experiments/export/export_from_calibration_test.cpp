@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "../../support/quiet_runner.hpp"
 #include "../../support/scratch.hpp"
 #include "../../support/tiny_scene.hpp"
 #include "experiments/calibration/calibrate_campaign.hpp"
@@ -56,13 +57,7 @@ void write_inputs(const fs::path& dir) {
                         "bootstrap_replicates = 200\n");
 }
 
-RunnerSettings quiet() {
-  RunnerSettings r;
-  r.mode = WorkerMode::kThreads;
-  r.progress = false;
-  r.rank.reset();
-  return r;
-}
+RunnerSettings quiet() { return test_support::quiet_runner(); }
 
 std::string refusal(const std::string& folder) {
   try {
