@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "numeric/median.hpp"
 #include "vision/image.hpp"
 #include "vision/text_detail.hpp"
 
@@ -75,9 +76,7 @@ SeedLevels seed_levels(const cv::Mat& gray, const cv::Point2d& seed, const TopSe
                                 2 * half + 1, 2 * half + 1) &
                        cv::Rect(0, 0, roi.width, roi.height);
   const cv::Mat patch = gray(win).clone();
-  std::vector<float> vals(patch.begin<float>(), patch.end<float>());
-  std::nth_element(vals.begin(), vals.begin() + static_cast<long>(vals.size() / 2), vals.end());
-  const double p = vals[vals.size() / 2];
+  const double p = numeric::median(std::vector<double>(patch.begin<float>(), patch.end<float>()));
   const cv::Mat hist = histogram256(gray);
   const double total = static_cast<double>(gray.total());
   auto dominant = [&](int lo, int hi) {
@@ -167,9 +166,7 @@ double outside_level(const cv::Mat& gray, const cv::Mat& blob, const cv::Rect& b
     for (int c = 0; c < ring.cols; ++c)
       if (ring.at<uchar>(r, c)) outside.push_back(gray.at<float>(r + padded.y, c + padded.x));
   if (outside.empty()) throw std::runtime_error(where + ": no footprint surroundings found");
-  std::nth_element(outside.begin(), outside.begin() + static_cast<long>(outside.size() / 2),
-                   outside.end());
-  return outside[outside.size() / 2];
+  return numeric::median(outside);
 }
 
 // Sub-pixel outline along rays from the blob centroid c0, between the pile level p and the
@@ -341,9 +338,8 @@ TopProfile measure_top_pixels(const cv::Mat& image, const TopSettings& s,
                                     static_cast<int>(seed.y) - half, 2 * half + 1, 2 * half + 1) &
                            cv::Rect(0, 0, roi.width, roi.height);
       const cv::Mat patch = cues.front().second(win).clone();
-      std::vector<float> vals(patch.begin<float>(), patch.end<float>());
-      std::nth_element(vals.begin(), vals.begin() + static_cast<long>(vals.size() / 2), vals.end());
-      out.pile_level = vals[vals.size() / 2];
+      out.pile_level =
+          numeric::median(std::vector<double>(patch.begin<float>(), patch.end<float>()));
       out.cue = name;
       const cv::Point2d off(roi.x, roi.y);
       out.center += off;
