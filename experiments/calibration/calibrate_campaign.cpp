@@ -130,6 +130,7 @@ struct CalibratedMu {
   double mu = 0.0, lo = 0.0, hi = 0.0;
 };
 CalibratedMu calibrated_mu_of(const nlohmann::json& cal, const std::string& cal_file) {
+  check_calibration_record(cal, cal_file);
   if (!cal.contains("mu_r") || !cal["mu_r"].is_number())
     throw std::runtime_error(cal_file + ": status '" + cal.value("status", std::string("?")) +
                              "': no calibrated mu_r to predict with (" +

@@ -5,6 +5,7 @@
 #include <sstream>
 #include <utility>
 
+#include "experiments/calibration/calibration.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/report/format.hpp"
 #include "experiments/io/provenance.hpp"
@@ -169,7 +170,10 @@ FolderResults read_folder_results(const std::string& dir, const std::string& tit
   f.title = title;
   if (is_run_dir(f.dir)) read_single_run(f);
   if (fs::exists(f.dir / "cases")) read_campaign_runs(f);
-  if (fs::exists(f.dir / "calibration.json")) f.calibration = read_json(f.dir / "calibration.json");
+  if (fs::exists(f.dir / "calibration.json")) {
+    f.calibration = read_json(f.dir / "calibration.json");
+    check_calibration_record(f.calibration, (f.dir / "calibration.json").string());
+  }
   if (fs::is_regular_file(f.dir / "predictions.json"))
     f.predictions = read_json(f.dir / "predictions.json");
   if (f.cases.empty() && f.calibration.is_null())

@@ -70,5 +70,17 @@ TEST(HostileFixes, HexInASetOptionIsRefusedAndAPlainDecimalIsNot) {
   fs::remove_all(d);
 }
 
+TEST(HostileFixes, AnEmptyCalibrationRecordIsAnErrorNamingTheFileAndTheKey) {
+  const fs::path d = own_dir();
+  write_text(d / "cal" / "calibration.json", "{}");
+  const CliResult r = run_cli_argv({"report", "cal"}, d);
+  expect_words(r, 2, {"cal/calibration.json", "\"status\"", "missing"});
+  EXPECT_FALSE(fs::exists(d / "cal" / "report"));
+  write_text(d / "cal" / "calibration.json",
+             R"({"status": "calibrated", "target": {"angle_deg": 30}, "mu_r": 0.1})");
+  expect_words(run_cli_argv({"report", "cal"}, d), 2, {"calibration.json", "\"mu_r_interval\""});
+  fs::remove_all(d);
+}
+
 }  // namespace
 }  // namespace reposetwin::test_support
