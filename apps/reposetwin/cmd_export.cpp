@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/reposetwin/commands.hpp"
+#include "apps/reposetwin/validators.hpp"
 #include "experiments/io/calibration_record.hpp"
 #include "experiments/io/format.hpp"
 #include "experiments/io/hash.hpp"
@@ -44,7 +45,7 @@ void add_export_command(CLI::App& app) {
                   "Folder for the deck (default for a calibration folder: FOLDER/liggghts)");
   cmd->add_option("--set", a->sets, "Override a scene key: dotted.key=value (repeatable)");
   cmd->add_option("--seed", a->seed, "Seed of LIGGGHTS' random streams")
-      ->check(CLI::NonNegativeNumber)  // checked as typed: -1 would wrap to 2^64 - 1
+      ->check(seed_number())  // checked as typed: -1 would wrap to 2^64 - 1
       ->capture_default_str();
   cmd->add_option("--initial-state", a->initial,
                   "Start from the twin's filled sample (a run's frames/filled.vtp) instead of "

@@ -75,17 +75,17 @@ void add_loop_command(CLI::App& app) {
                   "you bring; reported as declared, with the trace's own verdict)");
   cmd->add_option("--max-effects", args->settings.max_effects,
                   "Stop after this many effects (0: trace and rank only, no refit)")
-      ->check(CLI::Range(0, 10))
+      ->check(whole_number_in(0, 10))
       ->capture_default_str();
   cmd->add_option("--refit-follow-ups", args->settings.refit_follow_ups,
                   "Trials a refit adds where its fit lands, until it lands on a simulated value "
                   "(0: the effect's value may be read off a chord beyond the trials)")
-      ->check(CLI::Range(0, 10))
+      ->check(whole_number_in(0, 10))
       ->capture_default_str();
   cmd->add_option("--max-pours", args->settings.max_pours,
                   "Pours per pile: a pour that forms no pile (the funnel jammed) is repeated with "
                   "a new seed, as a lab repeats it, up to this many pours in all")
-      ->check(CLI::Range(1, 100))
+      ->check(whole_number_in(1, 100))
       ->capture_default_str();
   cmd->add_option("--min-t", args->settings.rule.min_t, "Significance threshold |c|/se")
       ->check(positive_number())
@@ -94,7 +94,7 @@ void add_loop_command(CLI::App& app) {
                   "A candidate is named only when its joint chi^2 (angle, H, D) beats every "
                   "other accepted candidate's by more than this; else they are reported as "
                   "indistinguishable")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   cmd->add_option("--at-bound", args->at_bound,
                   "When the calibrated mu_r sits on an end of the grid: extend (add grid points "
@@ -103,7 +103,7 @@ void add_loop_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--grid-extensions", args->settings.grid_extensions,
                   "Grid points the loop may add beyond a bound mu_r lands on")
-      ->check(CLI::Range(0, 10))
+      ->check(whole_number_in(0, 10))
       ->capture_default_str();
   cmd->add_option("--mu-range", args->mu_range,
                   "mu_r's plausible range LO,HI (a prior, e.g. 0.02,0.4 for rock in our "
@@ -117,19 +117,17 @@ void add_loop_command(CLI::App& app) {
   cmd->add_option("--probe-scalings", args->settings.probe_scalings,
                   "Doublings of a candidate's probe while its fingerprint does not stand out "
                   "of the seed noise")
-      ->check(CLI::Range(0, 10))
+      ->check(whole_number_in(0, 10))
       ->capture_default_str();
-  cmd->add_option("--workers", args->settings.workers, "Concurrent simulations")
-      ->check(CLI::Range(1, 1024))
-      ->capture_default_str();
+  add_workers_option(cmd, args->settings.workers, "Concurrent simulations");
   cmd->add_option("--width", args->settings.image.width_px, "Render width [px]")
-      ->check(CLI::Range(64, 16384))
+      ->check(whole_number_in(64, 16384))
       ->capture_default_str();
   cmd->add_option("--height", args->settings.image.height_px, "Render height [px]")
-      ->check(CLI::Range(64, 16384))
+      ->check(whole_number_in(64, 16384))
       ->capture_default_str();
   cmd->add_option("--views", args->settings.image.side_views, "Side views per pile")
-      ->check(CLI::Range(1, 64))
+      ->check(whole_number_in(1, 64))
       ->capture_default_str();
   cmd->add_flag("--own-cameras", args->own_cameras,
                 "Photograph the twin's piles with its own framing (--width, --height, --views) "
@@ -231,12 +229,12 @@ void add_loop_command(CLI::App& app) {
   syn->add_option("--truth", sargs->truth,
                   "Also write the hidden settings as JSON to this file, outside the dataset's "
                   "folder (for a validation to compare the loop's answer with)");
-  syn->add_option("--workers", sargs->workers, "Concurrent simulations")
-      ->check(CLI::Range(1, 1024))
-      ->capture_default_str();
+  add_workers_option(syn, sargs->workers, "Concurrent simulations");
   syn->add_flag("--force", sargs->force,
                 "Replace an existing --truth file that reposetwin did not make");
-  syn->callback([sargs]() {
+  auto synth_plan = std::make_shared<PlanArgs>();
+  add_plan_options(syn, synth_plan);
+  syn->callback([sargs, synth_plan]() {
     experiments::OutputPlan plan(sargs->force);
     plan.add_input(sargs->design);
     if (!sargs->truth.empty()) plan.add_output(sargs->truth, "--truth");

@@ -14,7 +14,7 @@ void add_plan_options(CLI::App* cmd, const std::shared_ptr<PlanArgs>& args) {
   cmd->add_option("--max-particles", args->limits.max_particles,
                   "Plan limit: more particles in a run need --yes")
       ->capture_default_str()
-      ->check(positive_number());
+      ->check(whole_number_in(1, 1'000'000'000'000));
   auto* hours = cmd->add_option_function<double>(
       "--max-hours", [args](double h) { args->limits.max_wall_s = 3600.0 * h; },
       "Plan limit: a longer estimated wall time needs --yes [h] (default 1)");

@@ -82,5 +82,34 @@ TEST(HostileFixes, AnEmptyCalibrationRecordIsAnErrorNamingTheFileAndTheKey) {
   fs::remove_all(d);
 }
 
+TEST(HostileFixes, WorkersIsCheckedAlikeOnEveryCommand) {
+  const fs::path d = own_dir();
+  const std::vector<std::vector<std::string>> commands = {
+      {"campaign", "c.toml"}, {"calibrate", "c.toml"}, {"timestep", "s.toml"},
+      {"loop", "d.csv"},      {"loop-synth", "d.toml"}, {"paper", "i.toml"}};
+  for (const auto& base : commands)
+    for (const std::string v : {"0", "0x2", "-1", "1025", "2.0"}) {
+      std::vector<std::string> args = base;
+      args.insert(args.end(), {"--workers", v});
+      expect_words(run_cli_argv(args, d), 105, {"--workers", v, "whole number from 1 to 1024"});
+    }
+  fs::remove_all(d);
+}
+
+TEST(HostileFixes, NumbersInListOptionsArePlainDecimals) {
+  const fs::path d = own_dir();
+  write_text(d / "tiny.toml", kTinyScene);
+  write_text(d / "s.png", "x");  // the positional is checked for existence first
+  expect_words(run_cli_argv({"timestep", "tiny.toml", "--fractions", "0x1p-2"}, d), 105,
+               {"--fractions", "0x1p-2"});
+  expect_words(run_cli_argv({"measure", "s.png", "--flank-band", "0x1p-3,0.8"}, d), 105,
+               {"--flank-band", "0x1p-3"});
+  expect_words(run_cli_argv({"measure", "s.png", "--roi", "0x10,0,30,30"}, d), 105,
+               {"--roi", "0x10"});
+  expect_words(run_cli_argv({"calibrate", "--mu-r-range", "0.1", "inf"}, d), 105,
+               {"--mu-r-range", "inf"});
+  fs::remove_all(d);
+}
+
 }  // namespace
 }  // namespace reposetwin::test_support
