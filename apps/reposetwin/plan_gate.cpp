@@ -3,8 +3,10 @@
 #include <unistd.h>
 
 #include <iostream>
+#include <optional>
 
 #include "apps/reposetwin/validators.hpp"
+#include "experiments/campaign/pool.hpp"
 
 namespace reposetwin::cli {
 
@@ -23,16 +25,21 @@ void add_plan_options(CLI::App* cmd, const std::shared_ptr<PlanArgs>& args) {
 
 bool accept_plan(const std::string& plan, const std::string& refusal, const PlanArgs& args,
                  bool quiet) {
-  if (!quiet) std::cerr << plan;
+  // Under mpirun every rank plans the same piles and decides alike, but only rank 0 speaks: N
+  // copies of one plan bury the progress lines. No rank asks at the terminal, since one rank's
+  // answer would not reach the others; --yes is the only way past a refusal there.
+  const std::optional<experiments::RankInfo> rank = experiments::detect_mpi_rank();
+  const bool speaks = !rank || rank->rank == 0;
+  if (!quiet && speaks) std::cerr << plan;
   if (refusal.empty() || args.yes) return true;
-  if (isatty(STDIN_FILENO) && isatty(STDERR_FILENO)) {
+  if (!rank && isatty(STDIN_FILENO) && isatty(STDERR_FILENO)) {
     if (quiet) std::cerr << plan;
     std::cerr << refusal << "\nRun it anyway? [y/N] ";
     std::string answer;
     std::getline(std::cin, answer);
     if (answer == "y" || answer == "Y" || answer == "yes") return true;
   }
-  std::cerr << "reposetwin: refused: " << refusal << "\n";
+  if (speaks) std::cerr << "reposetwin: refused: " << refusal << "\n";
   return false;
 }
 

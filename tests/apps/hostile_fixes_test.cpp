@@ -96,6 +96,31 @@ TEST(HostileFixes, WorkersIsCheckedAlikeOnEveryCommand) {
   fs::remove_all(d);
 }
 
+TEST(HostileFixes, OnlyRankZeroPrintsThePlanUnderMpirun) {
+  const fs::path d = own_dir();
+  write_text(d / "tiny.toml", kTinyScene);
+  write_text(d / "camp.toml", "name = \"h\"\nscene = \"tiny.toml\"\nseeds = [1]\n[[case]]\n"
+                              "name = \"a\"\n");
+  const auto as_rank = [&](int rank) {
+    experiments::ProgramCall call;
+    call.argv = {"env", "OMPI_COMM_WORLD_RANK=" + std::to_string(rank), "OMPI_COMM_WORLD_SIZE=2",
+                 REPOSETWIN_BIN, "campaign", "camp.toml", "-o", "out", "--max-particles", "1"};
+    call.working_dir = d;
+    call.log = d / ("rank" + std::to_string(rank) + ".log");
+    const experiments::ProgramResult p = experiments::run_program(call);
+    return CliResult{p.status == experiments::ProgramStatus::kExited ? p.code : -1,
+                     read_text(call.log)};
+  };
+  const CliResult r0 = as_rank(0), r1 = as_rank(1);
+  EXPECT_EQ(r0.code, 6) << r0.out;
+  EXPECT_EQ(r1.code, 6) << r1.out;  // every rank decides alike
+  EXPECT_NE(r0.out.find("plan:"), std::string::npos) << r0.out;
+  EXPECT_NE(r0.out.find("refused"), std::string::npos) << r0.out;
+  EXPECT_EQ(r1.out.find("plan:"), std::string::npos) << r1.out;
+  EXPECT_EQ(r1.out.find("refused"), std::string::npos) << r1.out;
+  fs::remove_all(d);
+}
+
 TEST(HostileFixes, NumbersInListOptionsArePlainDecimals) {
   const fs::path d = own_dir();
   write_text(d / "tiny.toml", kTinyScene);
