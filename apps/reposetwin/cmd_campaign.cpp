@@ -84,6 +84,7 @@ void add_campaign_command(CLI::App& app) {
     experiments::check_pile_cases(c);
     const std::string out = a->out.empty() ? "runs/" + c.name : a->out;
     experiments::check_output_folder(out);
+    if (!a->cache.empty()) experiments::check_output_folder(a->cache, "--cache");
     const experiments::BatchPlan bp = experiments::plan_campaign(c, a->workers);
     if (!accept_plan(experiments::plan_text(bp, plan->limits),
                      experiments::plan_refusal(
@@ -250,6 +251,7 @@ void add_calibrate_command(CLI::App& app) {
     std::string out, sheet_text;
     experiments::Campaign c = calibrate_campaign(*a, *sheets, *angle, out, sheet_text);
     experiments::check_output_folder(out);
+    if (!a->cache.empty()) experiments::check_output_folder(a->cache, "--cache");
     if (!only->empty()) experiments::keep_only_predictions(c, *only);
     if (!c.calibration)
       throw std::invalid_argument(c.file + ": [calibration] is missing (target_deg, mu_r_range)");

@@ -20,6 +20,7 @@
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/scene_overrides.hpp"
+#include "experiments/pile/run_folder.hpp"
 #include "sim/pile_geometry.hpp"
 
 namespace reposetwin::cli {
@@ -82,6 +83,7 @@ void add_export_command(CLI::App& app) {
                                       "the deck)");
       scene = experiments::load_scene(a->scene, a->sets);
     }
+    experiments::check_output_folder(out_folder);
     experiments::LiggghtsDeckSettings s;
     s.seed = a->seed;
     if (from_calibration) s.calibration = &calibration;

@@ -183,6 +183,7 @@ void add_loop_command(CLI::App& app) {
     s.image.use_lab_cameras = !args->own_cameras;
     s.page = experiments::write_loop_html;
     experiments::check_output_folder(args->out);
+    if (!s.cache_dir.empty()) experiments::check_output_folder(s.cache_dir, "--cache");
     // The page goes where the user pointed --out (`-o .` is a folder of theirs): a page there
     // that reposetwin did not make stays unless --force.
     experiments::OutputPlan plan(s.force);

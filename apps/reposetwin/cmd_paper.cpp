@@ -129,6 +129,7 @@ void add_paper_command(CLI::App& app) {
       std::cout << "paper page " << page << "\n";
       return;
     }
+    experiments::check_output_folder(a->out);
     // The listing is the plan: printed before anything runs, and above the limits only with
     // --yes.
     const PaperCost planned = paper_cost(index, {});

@@ -5,7 +5,9 @@
 
 #include "apps/reposetwin/commands.hpp"
 #include "apps/reposetwin/validators.hpp"
+#include "experiments/io/files.hpp"
 #include "experiments/io/input_error.hpp"
+#include "experiments/pile/run_folder.hpp"
 #include "experiments/pile/run_state.hpp"
 #include "experiments/report/folder_results.hpp"
 #include "experiments/report/report.hpp"
@@ -57,6 +59,7 @@ void add_report_command(CLI::App& app) {
   cmd->callback([a]() {
     namespace fs = std::filesystem;
     std::string out = a->out;
+    if (!out.empty()) experiments::check_output_folder(out);
     // A report is a result: an earlier one stays unless asked (checked before anything is read).
     // Over several folders, each folder's own report is rebuilt too.
     std::vector<fs::path> pages;

@@ -6,6 +6,7 @@
 #include "apps/reposetwin/validators.hpp"
 #include "experiments/calibration/timestep_study.hpp"
 #include "experiments/io/numbers.hpp"
+#include "experiments/pile/run_folder.hpp"
 
 namespace reposetwin::cli {
 
@@ -37,6 +38,7 @@ void add_timestep_command(CLI::App& app) {
     if (!a->seeds.empty()) a->s.seeds = experiments::parse_seed_list(a->seeds, "--seeds");
     for (double f : a->s.rayleigh_fractions) experiments::positive_finite(f, "--fractions");
     a->s.runner.workers = a->workers;
+    experiments::check_output_folder(a->out);
     // The plan of every run (the finest dt costs the most), before anything is written.
     const experiments::BatchPlan plan = experiments::plan_campaign(
         experiments::timestep_campaign(a->scene, a->out, a->s), a->workers);
