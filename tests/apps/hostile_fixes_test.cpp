@@ -121,6 +121,19 @@ TEST(HostileFixes, OnlyRankZeroPrintsThePlanUnderMpirun) {
   fs::remove_all(d);
 }
 
+TEST(HostileFixes, LoopSynthPrintsItsPlanAndRefusesAboveTheLimits) {
+  const fs::path d = own_dir();
+  write_text(d / "tiny.toml", kTinyScene);
+  write_text(d / "design.toml", "scene = \"tiny.toml\"\nmu_r = 0.2\nseeds = [7001, 7002]\n"
+                                "[[test]]\nid = \"t1\"\nmass_kg = 0.006\n");
+  const CliResult r =
+      run_cli_argv({"loop-synth", "design.toml", "-o", "data", "--max-particles", "10"}, d);
+  expect_words(r, 6, {"plan:", "2 x hidden piles of test t1", "above the limit", "--yes"});
+  EXPECT_FALSE(fs::exists(d / "data" / "measured.csv"));
+  EXPECT_FALSE(fs::exists(d / "data.synth-cache" / "piles"));
+  fs::remove_all(d);
+}
+
 TEST(HostileFixes, NumbersInListOptionsArePlainDecimals) {
   const fs::path d = own_dir();
   write_text(d / "tiny.toml", kTinyScene);
