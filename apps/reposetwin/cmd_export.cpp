@@ -89,9 +89,6 @@ void add_export_command(CLI::App& app) {
     if (from_calibration) s.calibration = &calibration;
     std::optional<experiments::SnapshotParticles> initial;
     if (!a->initial.empty()) {
-      std::error_code ec;
-      if (!fs::is_regular_file(a->initial, ec))
-        throw experiments::InputError(a->initial + ": --initial-state: no such file");
       try {
         initial = experiments::read_vtp(a->initial);
       } catch (const std::exception& e) {

@@ -134,6 +134,45 @@ TEST(HostileFixes, LoopSynthPrintsItsPlanAndRefusesAboveTheLimits) {
   fs::remove_all(d);
 }
 
+TEST(HostileFixes, AnEmptyArgumentIsRefusedNamingItsOption) {
+  const fs::path d = own_dir();
+  write_text(d / "tiny.toml", kTinyScene);
+  expect_words(run_cli_argv({"export", "tiny.toml", "-o", ""}, d), 2, {"--out", "empty"});
+  expect_words(run_cli_argv({"campaign", "c.toml", "--cache="}, d), 2, {"--cache", "empty"});
+  expect_words(run_cli_argv({"measure", ""}, d), 2, {"argument 2", "empty"});
+  EXPECT_TRUE(fs::is_empty(d / "tiny.toml") == false);
+  fs::remove_all(d);
+}
+
+TEST(HostileFixes, AnOutputUnderAFileIsRefusedBeforeAnyOutputIsWritten) {
+  const fs::path d = own_dir();
+  write_text(d / "side.png", "x");
+  write_text(d / "top.png", "x");
+  write_text(d / "notes.txt", "mine");
+  const CliResult r = run_cli_argv({"measure", "side.png", "--top", "top.png", "--top-overlay",
+                                    "notes.txt/top.png", "--mm-per-px", "0.1"},
+                                   d);
+  expect_words(r, 2, {"--top-overlay notes.txt/top.png", "is not a folder"});
+  EXPECT_FALSE(fs::exists(d / "side.measured.png"));
+  EXPECT_FALSE(fs::exists(d / ".reposetwin-made.json"));
+  EXPECT_EQ(read_text(d / "notes.txt"), "mine");
+  fs::remove_all(d);
+}
+
+TEST(HostileFixes, ADumpOfOneHugeLineOrAHexCountIsRefusedAtOnce) {
+  const fs::path d = own_dir();
+  write_text(d / "tiny.toml", kTinyScene);
+  write_text(d / "huge.dump", "ITEM: TIMESTEP\n");
+  fs::resize_file(d / "huge.dump", std::uintmax_t{2} << 30);  // sparse: no disk used
+  expect_words(run_cli_argv({"measure-particles", "huge.dump", "--scene", "tiny.toml"}, d, 20), 2,
+               {"huge.dump:2", "a line longer than"});
+  write_text(d / "hex.dump", "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n0x10\n"
+                             "ITEM: ATOMS id x y z radius\n");
+  expect_words(run_cli_argv({"measure-particles", "hex.dump", "--scene", "tiny.toml"}, d), 2,
+               {"hex.dump:4", "NUMBER OF ATOMS", "0x10", "not a whole number"});
+  fs::remove_all(d);
+}
+
 TEST(HostileFixes, NumbersInListOptionsArePlainDecimals) {
   const fs::path d = own_dir();
   write_text(d / "tiny.toml", kTinyScene);
