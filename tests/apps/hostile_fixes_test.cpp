@@ -82,6 +82,8 @@ TEST(HostileFixes, AnEmptyCalibrationRecordIsAnErrorNamingTheFileAndTheKey) {
   fs::remove_all(d);
 }
 
+// --workers: one option with one check on every command that takes it; hex is refused and
+// "010" is ten, as typed, where CLI11 alone reads octal eight.
 TEST(HostileFixes, WorkersIsCheckedAlikeOnEveryCommand) {
   const fs::path d = own_dir();
   const std::vector<std::vector<std::string>> commands = {
@@ -134,6 +136,32 @@ TEST(HostileFixes, LoopSynthPrintsItsPlanAndRefusesAboveTheLimits) {
   fs::remove_all(d);
 }
 
+// A campaign's folders that are not run folders of their own: report says what they are and
+// which folder to report, rather than calling them incomplete runs.
+TEST(HostileFixes, ReportNamesAPileOfTheStoreAndACaseRecordForWhatTheyAre) {
+  const fs::path d = own_dir();
+  write_text(d / "tiny.toml", kTinyScene);
+  write_text(d / "camp.toml", "name = \"h\"\nscene = \"tiny.toml\"\nseeds = [1]\n[[case]]\n"
+                              "name = \"a\"\n");
+  const CliResult c = run_cli_argv({"campaign", "camp.toml", "-o", "c", "--no-images", "-q"}, d);
+  ASSERT_EQ(c.code, 0) << c.out;
+  fs::path pile_run;
+  for (const auto& e : fs::recursive_directory_iterator(d / "c" / "cache"))
+    if (e.path().filename() == "run" && fs::exists(e.path().parent_path() / "request.json"))
+      pile_run = e.path();
+  ASSERT_FALSE(pile_run.empty());
+  expect_words(run_cli_argv({"report", pile_run.string()}, d), 2,
+               {pile_run.string(), "a pile of a pile store", "report that folder instead"});
+  expect_words(run_cli_argv({"report", pile_run.parent_path().string()}, d), 2,
+               {"a pile of a pile store"});
+  expect_words(run_cli_argv({"report", "c/cases/a/seed_1"}, d), 2,
+               {"c/cases/a/seed_1", "case 'a'", "reposetwin report", "/c"});
+  EXPECT_FALSE(fs::exists(pile_run / "report"));
+  // The campaign itself is reported.
+  EXPECT_EQ(run_cli_argv({"report", "c"}, d).code, 0);
+  fs::remove_all(d);
+}
+
 TEST(HostileFixes, AnEmptyArgumentIsRefusedNamingItsOption) {
   const fs::path d = own_dir();
   write_text(d / "tiny.toml", kTinyScene);
@@ -144,6 +172,7 @@ TEST(HostileFixes, AnEmptyArgumentIsRefusedNamingItsOption) {
   fs::remove_all(d);
 }
 
+// An output under a regular file is refused with the others, before the first is written.
 TEST(HostileFixes, AnOutputUnderAFileIsRefusedBeforeAnyOutputIsWritten) {
   const fs::path d = own_dir();
   write_text(d / "side.png", "x");
@@ -170,6 +199,19 @@ TEST(HostileFixes, ADumpOfOneHugeLineOrAHexCountIsRefusedAtOnce) {
                              "ITEM: ATOMS id x y z radius\n");
   expect_words(run_cli_argv({"measure-particles", "hex.dump", "--scene", "tiny.toml"}, d), 2,
                {"hex.dump:4", "NUMBER OF ATOMS", "0x10", "not a whole number"});
+  fs::remove_all(d);
+}
+
+TEST(HostileFixes, ReportRefusesALinkOutOfTheRunFolder) {
+  const fs::path d = own_dir();
+  write_text(d / "tiny.toml", kTinyScene);
+  ASSERT_EQ(run_cli_argv({"run", "tiny.toml", "-o", "run", "--no-images", "-q"}, d).code, 0);
+  fs::create_directories(d / "elsewhere");
+  fs::remove_all(d / "run" / "report");
+  fs::create_directory_symlink(d / "elsewhere", d / "run" / "report");
+  const CliResult r = run_cli_argv({"report", "run", "--force"}, d);
+  expect_words(r, 2, {"run/report", "symbolic link leading outside"});
+  EXPECT_TRUE(fs::is_empty(d / "elsewhere"));
   fs::remove_all(d);
 }
 
