@@ -246,15 +246,14 @@ void add_loop_command(CLI::App& app) {
         experiments::synth_cache_dir(sargs->out, sargs->cache, sargs->truth);
     experiments::check_output_folder(cache_dir, "--cache");
     const experiments::BatchPlan bp = experiments::plan_synth_dataset(d, sargs->workers);
-    if (!accept_plan("The synthetic lab's piles:\n" + experiments::plan_text(bp, synth_plan->limits),
-                     experiments::plan_refusal(bp, synth_plan->limits), *synth_plan, false)) {
+    if (!accept_plan(
+            "The synthetic lab's piles:\n" + experiments::plan_text(bp, synth_plan->limits),
+            experiments::plan_refusal(bp, synth_plan->limits), *synth_plan, false)) {
       set_exit_code(ExitCode::kPlanRefused);
       return;
     }
     // The loop reads the dataset's folder; the truth and the cache must not be where it could.
-    experiments::SimCache cache(
-        cache_dir,
-        {sargs->workers, true});
+    experiments::SimCache cache(cache_dir, {sargs->workers, true});
     std::cout << experiments::make_synthetic_dataset(d, sargs->out, cache) << "\n";
     if (!sargs->truth.empty()) {
       nlohmann::json truth = experiments::synth_truth_json(d, sargs->design);

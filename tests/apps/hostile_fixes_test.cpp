@@ -46,10 +46,9 @@ TEST(HostileFixes, HexAndSeparatorsInASheetSetColumnAreRefusedByName) {
     std::string sheet = kSheet;
     sheet.replace(sheet.find("SET"), 3, v);
     write_text(d / "sheet.csv", sheet);
-    const CliResult r =
-        run_cli_argv({"loop", "sheet.csv", "-o", "out", "--max-particles", "1"}, d);
-    expect_words(r, 2, {"sheet.csv line 2", "set:contacts.rock-rock.friction", v,
-                        "not a plain decimal"});
+    const CliResult r = run_cli_argv({"loop", "sheet.csv", "-o", "out", "--max-particles", "1"}, d);
+    expect_words(r, 2,
+                 {"sheet.csv line 2", "set:contacts.rock-rock.friction", v, "not a plain decimal"});
     EXPECT_FALSE(fs::exists(d / "out" / "loop.json"));
   }
   fs::remove_all(d);
@@ -58,11 +57,12 @@ TEST(HostileFixes, HexAndSeparatorsInASheetSetColumnAreRefusedByName) {
 TEST(HostileFixes, HexInASetOptionIsRefusedAndAPlainDecimalIsNot) {
   const fs::path d = own_dir();
   write_text(d / "tiny.toml", kTinyScene);
-  const CliResult hex = run_cli_argv(
-      {"export", "tiny.toml", "-o", "deck", "--set", "sample.mass_kg=0x10"}, d);
+  const CliResult hex =
+      run_cli_argv({"export", "tiny.toml", "-o", "deck", "--set", "sample.mass_kg=0x10"}, d);
   expect_words(hex, 2, {"--set", "sample.mass_kg", "0x10", "not a plain decimal"});
   EXPECT_FALSE(fs::exists(d / "deck"));
-  const CliResult seed = run_cli_argv({"export", "tiny.toml", "-o", "deck", "--set", "scene.seed=1_0"}, d);
+  const CliResult seed =
+      run_cli_argv({"export", "tiny.toml", "-o", "deck", "--set", "scene.seed=1_0"}, d);
   expect_words(seed, 2, {"scene.seed", "1_0"});
   const CliResult plain =
       run_cli_argv({"export", "tiny.toml", "-o", "deck", "--set", "sample.mass_kg=6e-3"}, d);
@@ -87,7 +87,7 @@ TEST(HostileFixes, AnEmptyCalibrationRecordIsAnErrorNamingTheFileAndTheKey) {
 TEST(HostileFixes, WorkersIsCheckedAlikeOnEveryCommand) {
   const fs::path d = own_dir();
   const std::vector<std::vector<std::string>> commands = {
-      {"campaign", "c.toml"}, {"calibrate", "c.toml"}, {"timestep", "s.toml"},
+      {"campaign", "c.toml"}, {"calibrate", "c.toml"},  {"timestep", "s.toml"},
       {"loop", "d.csv"},      {"loop-synth", "d.toml"}, {"paper", "i.toml"}};
   for (const auto& base : commands)
     for (const std::string v : {"0", "0x2", "-1", "1025", "2.0"}) {
@@ -101,12 +101,21 @@ TEST(HostileFixes, WorkersIsCheckedAlikeOnEveryCommand) {
 TEST(HostileFixes, OnlyRankZeroPrintsThePlanUnderMpirun) {
   const fs::path d = own_dir();
   write_text(d / "tiny.toml", kTinyScene);
-  write_text(d / "camp.toml", "name = \"h\"\nscene = \"tiny.toml\"\nseeds = [1]\n[[case]]\n"
-                              "name = \"a\"\n");
+  write_text(d / "camp.toml",
+             "name = \"h\"\nscene = \"tiny.toml\"\nseeds = [1]\n[[case]]\n"
+             "name = \"a\"\n");
   const auto as_rank = [&](int rank) {
     experiments::ProgramCall call;
-    call.argv = {"env", "OMPI_COMM_WORLD_RANK=" + std::to_string(rank), "OMPI_COMM_WORLD_SIZE=2",
-                 REPOSETWIN_BIN, "campaign", "camp.toml", "-o", "out", "--max-particles", "1"};
+    call.argv = {"env",
+                 "OMPI_COMM_WORLD_RANK=" + std::to_string(rank),
+                 "OMPI_COMM_WORLD_SIZE=2",
+                 REPOSETWIN_BIN,
+                 "campaign",
+                 "camp.toml",
+                 "-o",
+                 "out",
+                 "--max-particles",
+                 "1"};
     call.working_dir = d;
     call.log = d / ("rank" + std::to_string(rank) + ".log");
     const experiments::ProgramResult p = experiments::run_program(call);
@@ -126,8 +135,9 @@ TEST(HostileFixes, OnlyRankZeroPrintsThePlanUnderMpirun) {
 TEST(HostileFixes, LoopSynthPrintsItsPlanAndRefusesAboveTheLimits) {
   const fs::path d = own_dir();
   write_text(d / "tiny.toml", kTinyScene);
-  write_text(d / "design.toml", "scene = \"tiny.toml\"\nmu_r = 0.2\nseeds = [7001, 7002]\n"
-                                "[[test]]\nid = \"t1\"\nmass_kg = 0.006\n");
+  write_text(d / "design.toml",
+             "scene = \"tiny.toml\"\nmu_r = 0.2\nseeds = [7001, 7002]\n"
+             "[[test]]\nid = \"t1\"\nmass_kg = 0.006\n");
   const CliResult r =
       run_cli_argv({"loop-synth", "design.toml", "-o", "data", "--max-particles", "10"}, d);
   expect_words(r, 6, {"plan:", "2 x hidden piles of test t1", "above the limit", "--yes"});
@@ -141,8 +151,9 @@ TEST(HostileFixes, LoopSynthPrintsItsPlanAndRefusesAboveTheLimits) {
 TEST(HostileFixes, ReportNamesAPileOfTheStoreAndACaseRecordForWhatTheyAre) {
   const fs::path d = own_dir();
   write_text(d / "tiny.toml", kTinyScene);
-  write_text(d / "camp.toml", "name = \"h\"\nscene = \"tiny.toml\"\nseeds = [1]\n[[case]]\n"
-                              "name = \"a\"\n");
+  write_text(d / "camp.toml",
+             "name = \"h\"\nscene = \"tiny.toml\"\nseeds = [1]\n[[case]]\n"
+             "name = \"a\"\n");
   const CliResult c = run_cli_argv({"campaign", "camp.toml", "-o", "c", "--no-images", "-q"}, d);
   ASSERT_EQ(c.code, 0) << c.out;
   fs::path pile_run;
@@ -195,8 +206,9 @@ TEST(HostileFixes, ADumpOfOneHugeLineOrAHexCountIsRefusedAtOnce) {
   fs::resize_file(d / "huge.dump", std::uintmax_t{2} << 30);  // sparse: no disk used
   expect_words(run_cli_argv({"measure-particles", "huge.dump", "--scene", "tiny.toml"}, d, 20), 2,
                {"huge.dump:2", "a line longer than"});
-  write_text(d / "hex.dump", "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n0x10\n"
-                             "ITEM: ATOMS id x y z radius\n");
+  write_text(d / "hex.dump",
+             "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n0x10\n"
+             "ITEM: ATOMS id x y z radius\n");
   expect_words(run_cli_argv({"measure-particles", "hex.dump", "--scene", "tiny.toml"}, d), 2,
                {"hex.dump:4", "NUMBER OF ATOMS", "0x10", "not a whole number"});
   fs::remove_all(d);

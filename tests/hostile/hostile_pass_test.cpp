@@ -145,7 +145,8 @@ void walk(const fs::path& root, const std::function<void(const fs::path&)>& f,
 // Every path below `root` with its state, `skip` and its contents left out.
 std::map<std::string, std::string> snapshot(const fs::path& root, const fs::path& skip = {}) {
   std::map<std::string, std::string> m;
-  walk(root, [&](const fs::path& p) { m[p.lexically_relative(root).string()] = state_of(p); }, skip);
+  walk(
+      root, [&](const fs::path& p) { m[p.lexically_relative(root).string()] = state_of(p); }, skip);
   return m;
 }
 
@@ -159,7 +160,7 @@ bool has_marker(const fs::path& root) {
 // Running one case: posix_spawn, no shell, its own process group, a time limit.
 
 struct Spawned {
-  int code = -1;    // exit status, or -signal
+  int code = -1;  // exit status, or -signal
   bool timed_out = false;
   double seconds = 0.0;
 };
@@ -193,8 +194,7 @@ Spawned spawn(const std::vector<std::string>& argv, const fs::path& cwd, const f
   while (true) {
     const pid_t r = waitpid(pid, &status, WNOHANG);
     if (r == pid) break;
-    const double t =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (t > kTimeoutS && !s.timed_out) {
       s.timed_out = true;
       kill(-pid, SIGKILL);
@@ -220,17 +220,17 @@ bool contains(const std::string& text, const std::string& word) {
 
 // A library's own text where a message for a person was due.
 const char* raw_library_text(const std::string& text) {
-  for (const char* raw : {"std::", "basic_string", "filesystem error", "[json.exception",
-                          "what()", "stoi", "stod", "bad_alloc", "vector::", "map::at",
-                          "unordered_map", "Assertion", "terminate called", "cv::Exception",
-                          "OpenCV(", "vtkXML", "ERROR: In "})
+  for (const char* raw :
+       {"std::", "basic_string", "filesystem error", "[json.exception", "what()", "stoi", "stod",
+        "bad_alloc", "vector::", "map::at", "unordered_map", "Assertion", "terminate called",
+        "cv::Exception", "OpenCV(", "vtkXML", "ERROR: In "})
     if (text.find(raw) != std::string::npos) return raw;
   return nullptr;
 }
 
 struct Pass {
-  fs::path root;     // every case's folder lies in it, beside home/, tmp/ and outside/
-  fs::path logs;     // outside root: the command's output
+  fs::path root;  // every case's folder lies in it, beside home/, tmp/ and outside/
+  fs::path logs;  // outside root: the command's output
   std::string bin;
   std::vector<std::string> env;
 };
@@ -403,7 +403,8 @@ void base_inputs(const fs::path& d) {
   write(d / "tests.csv", kTests);
   write(d / "sieve.csv", kSieve);
   for (const char* f : {"side_az000.png", "side_az000.json", "top.png", "top.json"}) {
-    const std::string name = std::string(f).rfind("side", 0) == 0 ? "side" + std::string(f).substr(10) : f;
+    const std::string name =
+        std::string(f).rfind("side", 0) == 0 ? "side" + std::string(f).substr(10) : f;
     fs::copy_file(g_base_run / "images" / f, d / name);
   }
   fs::copy_file(g_base_run / "final.vtp", d / "grains.vtp");
@@ -431,24 +432,29 @@ struct InputKind {
 
 std::vector<InputKind> input_kinds() {
   return {
-      {"symlink_to_fifo", [](const fs::path& d, const fs::path& p) {
+      {"symlink_to_fifo",
+       [](const fs::path& d, const fs::path& p) {
          fifo(d / "the_fifo");
          link_to(p, d / "the_fifo");
-       }, false, ""},
-      {"dangling_symlink", [](const fs::path& d, const fs::path& p) {
-         link_to(p, d / "gone" / "nothing");
-       }, false, ""},
-      {"symlink_loop", [](const fs::path& d, const fs::path& p) {
+       },
+       false, ""},
+      {"dangling_symlink",
+       [](const fs::path& d, const fs::path& p) { link_to(p, d / "gone" / "nothing"); }, false, ""},
+      {"symlink_loop",
+       [](const fs::path& d, const fs::path& p) {
          link_to(p, p.string() + ".b");
          link_to(p.string() + ".b", p);
          (void)d;
-       }, false, ""},
+       },
+       false, ""},
       {"dev_full", [](const fs::path&, const fs::path&) {}, true, "/dev/full"},
       {"dev_urandom", [](const fs::path&, const fs::path&) {}, true, "/dev/urandom"},
-      {"symlink_to_dir", [](const fs::path& d, const fs::path& p) {
+      {"symlink_to_dir",
+       [](const fs::path& d, const fs::path& p) {
          fs::create_directories(d / "a_dir");
          link_to(p, d / "a_dir");
-       }, false, ""},
+       },
+       false, ""},
       {"sparse_2GB", [](const fs::path&, const fs::path& p) { sparse(p, std::uintmax_t{2} << 30); },
        false, ""},
       {"empty", [](const fs::path&, const fs::path& p) { write(p, ""); }, false, ""},
@@ -469,7 +475,9 @@ std::vector<InputSlot> input_slots() {
   };
   return {
       {"run", "scene", "in.toml", {"run", "@", "-o", "out", "--no-images", "-q"}},
-      {"run", "psd_file", "in.csv",
+      {"run",
+       "psd_file",
+       "in.csv",
        {"run", "tiny.toml", "-o", "out", "--no-images", "-q", "--set", "sample.psd_file=@"}},
       {"campaign", "file", "in.toml", plus({"campaign", "@", "-o", "out"}, lim)},
       {"calibrate", "file", "in.toml", plus({"calibrate", "@", "-o", "out"}, lim)},
@@ -483,15 +491,22 @@ std::vector<InputSlot> input_slots() {
        plus({"calibrate", "--tests", "tests.csv", "--scene", "@", "-o", "out"}, lim)},
       {"timestep", "scene", "in.toml", plus({"timestep", "@", "-o", "out"}, lim)},
       {"export", "scene", "in.toml", {"export", "@", "-o", "out"}},
-      {"export", "initial_state", "in.vtp", {"export", "tiny.toml", "-o", "out", "--initial-state", "@"}},
+      {"export",
+       "initial_state",
+       "in.vtp",
+       {"export", "tiny.toml", "-o", "out", "--initial-state", "@"}},
       {"measure", "side", "in.png", {"measure", "@", "--mm-per-px", "0.5"}},
       {"measure", "second_side", "in.png", {"measure", "side.png", "--side", "@"}},
       {"measure", "top", "in.png", {"measure", "side.png", "--top", "@"}},
       {"measure", "camera", "in.json", {"measure", "side.png", "--camera", "@"}},
-      {"measure", "top_camera", "in.json",
+      {"measure",
+       "top_camera",
+       "in.json",
        {"measure", "side.png", "--top", "top.png", "--top-camera", "@"}},
       {"measure-particles", "dump", "in.dump", {"measure-particles", "@", "--scene", "tiny.toml"}},
-      {"measure-particles", "scene", "in.toml",
+      {"measure-particles",
+       "scene",
+       "in.toml",
        {"measure-particles", "grains.vtp", "--scene", "@"}},
       {"loop", "data", "in.csv", plus({"loop", "@", "-o", "out"}, lim)},
       {"loop-synth", "design", "in.toml", plus({"loop-synth", "@", "-o", "out"}, lim)},
@@ -500,7 +515,6 @@ std::vector<InputSlot> input_slots() {
       {"render", "camera", "in.json", {"render", "run", "--camera", "@", "--force"}},
   };
 }
-
 
 void with_run(const fs::path& d, const std::string& name = "run") {
   copy_tree(g_base_run, d / name);
@@ -512,15 +526,18 @@ std::vector<Case> build_cases() {
 
   // --- F1. run --set: numbers TOML reads but a person would not write, and near-numbers.
   {
-    const std::vector<std::string> keys = {"sample.mass_kg", "numerics.time_step_s",
-                                           "contacts.rock-rock.friction", "container.height_m",
-                                           "procedure.lift_speed_m_s", "scene.seed",
-                                           "numerics.threads"};
-    const std::vector<std::string> values = {"0x10", "0o7",  "0b1",  "1_0",
+    const std::vector<std::string> keys = {
+        "sample.mass_kg",     "numerics.time_step_s",     "contacts.rock-rock.friction",
+        "container.height_m", "procedure.lift_speed_m_s", "scene.seed",
+        "numerics.threads"};
+    const std::vector<std::string> values = {"0x10",  "0o7",   "0b1",  "1_0",
                                              "1e999", "0x1p3", "1..2", "1e"};
     for (const std::string& k : keys)
       for (const std::string& v : values)
-        add({"run", "set " + k + "=" + v, Expect::kRefuse, with(nullptr),
+        add({"run",
+             "set " + k + "=" + v,
+             Expect::kRefuse,
+             with(nullptr),
              {"run", "tiny.toml", "-o", "out", "--no-images", "-q", "--set", k + "=" + v},
              words({k, v})});
   }
@@ -528,22 +545,35 @@ std::vector<Case> build_cases() {
   // --- F2. loop sheet cells: every kind of number column with spellings no sheet should hold.
   {
     const std::vector<std::pair<std::string, std::string>> cols = {
-        {"mass_kg", "0.006"}, {"W_mm", "20"}, {"set:contacts.rock-rock.friction", "0.5"},
+        {"mass_kg", "0.006"},
+        {"W_mm", "20"},
+        {"set:contacts.rock-rock.friction", "0.5"},
         {"angle_deg", "30"}};
-    const std::vector<std::string> values = {"0x10", "1_0", "0b1", "inf", "nan", "1e999",
-                                             "\"1,5\"", "0.5x", "$(touch INJECTED)",
-                                             "0.5;touch INJECTED", "-0.5", "\xef\xbc\x91"};
+    const std::vector<std::string> values = {"0x10",
+                                             "1_0",
+                                             "0b1",
+                                             "inf",
+                                             "nan",
+                                             "1e999",
+                                             "\"1,5\"",
+                                             "0.5x",
+                                             "$(touch INJECTED)",
+                                             "0.5;touch INJECTED",
+                                             "-0.5",
+                                             "\xef\xbc\x91"};
     for (std::size_t c = 0; c < cols.size(); ++c)
       for (const std::string& v : values) {
         const std::string row_from = "t1,calibrate,tiny.toml,0.006,20,0.5,30";
-        std::vector<std::string> cells = {"t1", "calibrate", "tiny.toml", "0.006", "20", "0.5",
-                                          "30"};
+        std::vector<std::string> cells = {"t1", "calibrate", "tiny.toml", "0.006",
+                                          "20", "0.5",       "30"};
         cells[3 + c] = v;
         std::string row;
         for (const std::string& x : cells) row += (row.empty() ? "" : ",") + x;
         const std::string shown = v.front() == '"' ? v.substr(1, v.size() - 2) : v;
         const std::string col = cols[c].first;
-        add({"loop", "sheet " + col + "=" + v, Expect::kRefuse,
+        add({"loop",
+             "sheet " + col + "=" + v,
+             Expect::kRefuse,
              with([row_from, row](const fs::path& d) {
                write(d / "bad.csv", replaced(kSheet, row_from, row));
              }),
@@ -554,37 +584,45 @@ std::vector<Case> build_cases() {
 
   // --- F3. calibrate's test sheet and sieve sheet cells.
   {
-    const std::vector<std::string> values = {"0x10", "1_0", "inf", "nan", "1e999", "-1", "7,5",
-                                             " 1x"};
+    const std::vector<std::string> values = {"0x10",  "1_0", "inf", "nan",
+                                             "1e999", "-1",  "7,5", " 1x"};
     for (const std::string& v : values) {
       const std::string cell = v == "7,5" ? "\"7,5\"" : v;
-      add({"calibrate", "tests mass_kg=" + v, Expect::kRefuse,
+      add({"calibrate",
+           "tests mass_kg=" + v,
+           Expect::kRefuse,
            with([cell](const fs::path& d) {
              write(d / "bad.csv", "id,mass_kg,angle_deg\nt1," + cell + ",31\nt2,0.006,32\n");
            }),
            {"calibrate", "--tests", "bad.csv", "--scene", "tiny.toml", "-o", "out",
             "--max-particles", "1"},
            words({"bad.csv", "mass_kg"})});
-      add({"calibrate", "tests angle_deg=" + v, Expect::kRefuse,
+      add({"calibrate",
+           "tests angle_deg=" + v,
+           Expect::kRefuse,
            with([cell](const fs::path& d) {
              write(d / "bad.csv", "id,mass_kg,angle_deg\nt1,0.006," + cell + "\nt2,0.006,32\n");
            }),
            {"calibrate", "--tests", "bad.csv", "--scene", "tiny.toml", "-o", "out",
             "--max-particles", "1"},
            words({"bad.csv", "angle_deg"})});
-      add({"calibrate", "sieve passing=" + v, Expect::kRefuse,
+      add({"calibrate",
+           "sieve passing=" + v,
+           Expect::kRefuse,
            with([cell](const fs::path& d) {
              write(d / "bad.csv", "sieve_mm,passing_percent\n3.0,0\n3.5," + cell + "\n4.0,100\n");
            }),
-           {"calibrate", "--tests", "tests.csv", "--scene", "tiny.toml", "--sieve", "bad.csv",
-            "-o", "out", "--max-particles", "1"},
+           {"calibrate", "--tests", "tests.csv", "--scene", "tiny.toml", "--sieve", "bad.csv", "-o",
+            "out", "--max-particles", "1"},
            words({"bad.csv", "passing"})});
-      add({"calibrate", "sieve mm=" + v, Expect::kRefuse,
+      add({"calibrate",
+           "sieve mm=" + v,
+           Expect::kRefuse,
            with([cell](const fs::path& d) {
              write(d / "bad.csv", "sieve_mm,passing_percent\n3.0,0\n" + cell + ",50\n4.0,100\n");
            }),
-           {"calibrate", "--tests", "tests.csv", "--scene", "tiny.toml", "--sieve", "bad.csv",
-            "-o", "out", "--max-particles", "1"},
+           {"calibrate", "--tests", "tests.csv", "--scene", "tiny.toml", "--sieve", "bad.csv", "-o",
+            "out", "--max-particles", "1"},
            words({"bad.csv", "sieve"})});
     }
   }
@@ -621,9 +659,11 @@ std::vector<Case> build_cases() {
                for (int i = 0; i < 5000; ++i) s += "{a=";
                return s + "1" + std::string(5000, '}') + "\n";
              }},
-            {"key_1MB", [](const std::string& b) { return b + "\n" + std::string(1 << 20, 'k') + " = 1\n"; }},
+            {"key_1MB",
+             [](const std::string& b) { return b + "\n" + std::string(1 << 20, 'k') + " = 1\n"; }},
             {"table_then_array", [](const std::string& b) { return b + "\n[zz]\n[[zz]]\n"; }},
-            {"date_value", [](const std::string& b) { return b + "\nzz = 1979-05-27T07:32:00Z\n"; }},
+            {"date_value",
+             [](const std::string& b) { return b + "\nzz = 1979-05-27T07:32:00Z\n"; }},
         };
     for (const Kind& k : kinds)
       for (const auto& [bname, make] : breaks) {
@@ -655,34 +695,53 @@ std::vector<Case> build_cases() {
     };
     for (const auto& [name, text] : bad_json) {
       const std::string t = text;
-      add({"measure", "camera json " + name, Expect::kRefuse,
+      add({"measure",
+           "camera json " + name,
+           Expect::kRefuse,
            with([t](const fs::path& d) { write(d / "cam.json", t); }),
-           {"measure", "side.png", "--camera", "cam.json"}, words({"cam.json"})});
-      add({"measure", "top camera json " + name, Expect::kRefuse,
+           {"measure", "side.png", "--camera", "cam.json"},
+           words({"cam.json"})});
+      add({"measure",
+           "top camera json " + name,
+           Expect::kRefuse,
            with([t](const fs::path& d) { write(d / "cam.json", t); }),
            {"measure", "side.png", "--top", "top.png", "--top-camera", "cam.json"},
            words({"cam.json"})});
-      add({"render", "camera json " + name, Expect::kRefuse,
+      add({"render",
+           "camera json " + name,
+           Expect::kRefuse,
            with([t](const fs::path& d) {
              with_run(d);
              write(d / "cam.json", t);
            }),
-           {"render", "run", "--camera", "cam.json", "--force"}, words({"cam.json"})});
-      add({"report", "calibration.json " + name, Expect::kRefuse,
+           {"render", "run", "--camera", "cam.json", "--force"},
+           words({"cam.json"})});
+      add({"report",
+           "calibration.json " + name,
+           Expect::kRefuse,
            with([t](const fs::path& d) { write(d / "cal" / "calibration.json", t); }),
-           {"report", "cal"}, words({"calibration.json"})});
-      add({"report", "run_state.json " + name, Expect::kRefuse,
+           {"report", "cal"},
+           words({"calibration.json"})});
+      add({"report",
+           "run_state.json " + name,
+           Expect::kRefuse,
            with([t](const fs::path& d) {
              with_run(d);
              write(d / "run" / "run_state.json", t);
            }),
-           {"report", "run"}, words({"run_state.json"}), true});
-      add({"report", "result.json " + name, Expect::kRefuse,
+           {"report", "run"},
+           words({"run_state.json"}),
+           true});
+      add({"report",
+           "result.json " + name,
+           Expect::kRefuse,
            with([t](const fs::path& d) {
              with_run(d);
              write(d / "run" / "result.json", t);
            }),
-           {"report", "run"}, words({"result.json"}), true});
+           {"report", "run"},
+           words({"result.json"}),
+           true});
     }
     // Calibration records with the right syntax and the wrong shape.
     const std::vector<std::pair<std::string, std::string>> cal = {
@@ -694,9 +753,12 @@ std::vector<Case> build_cases() {
     };
     for (const auto& [name, text] : cal) {
       const std::string t = text;
-      add({"report", "calibration.json " + name, Expect::kRefuse,
+      add({"report",
+           "calibration.json " + name,
+           Expect::kRefuse,
            with([t](const fs::path& d) { write(d / "cal" / "calibration.json", t); }),
-           {"report", "cal"}, words({"calibration.json"})});
+           {"report", "cal"},
+           words({"calibration.json"})});
     }
   }
 
@@ -730,34 +792,63 @@ std::vector<Case> build_cases() {
     };
     const std::vector<OutSlot> outs = {
         {"run", "--out", {"run", "tiny.toml", "-o", "@", "--no-images", "-q"}, true, "tiny.toml"},
-        {"campaign", "--out", {"campaign", "camp.toml", "-o", "@", "--max-particles", "1"}, true,
+        {"campaign",
+         "--out",
+         {"campaign", "camp.toml", "-o", "@", "--max-particles", "1"},
+         true,
          "camp.toml"},
-        {"campaign", "--cache",
-         {"campaign", "camp.toml", "-o", "out", "--cache", "@", "--max-particles", "1"}, true,
+        {"campaign",
+         "--cache",
+         {"campaign", "camp.toml", "-o", "out", "--cache", "@", "--max-particles", "1"},
+         true,
          "camp.toml"},
-        {"calibrate", "--out", {"calibrate", "cal.toml", "-o", "@", "--max-particles", "1"}, true,
+        {"calibrate",
+         "--out",
+         {"calibrate", "cal.toml", "-o", "@", "--max-particles", "1"},
+         true,
          "cal.toml"},
-        {"timestep", "--out", {"timestep", "tiny.toml", "-o", "@", "--max-particles", "1"}, true,
+        {"timestep",
+         "--out",
+         {"timestep", "tiny.toml", "-o", "@", "--max-particles", "1"},
+         true,
          "tiny.toml"},
         {"export", "--out", {"export", "tiny.toml", "-o", "@"}, true, "tiny.toml"},
-        {"loop", "--out", {"loop", "sheet.csv", "-o", "@", "--max-particles", "1"}, true,
+        {"loop",
+         "--out",
+         {"loop", "sheet.csv", "-o", "@", "--max-particles", "1"},
+         true,
          "sheet.csv"},
-        {"loop", "--cache",
-         {"loop", "sheet.csv", "-o", "out", "--cache", "@", "--max-particles", "1"}, true,
+        {"loop",
+         "--cache",
+         {"loop", "sheet.csv", "-o", "out", "--cache", "@", "--max-particles", "1"},
+         true,
          "sheet.csv"},
-        {"loop-synth", "--out", {"loop-synth", "design.toml", "-o", "@", "--max-particles", "1"},
-         true, "design.toml"},
-        {"loop-synth", "--cache",
-         {"loop-synth", "design.toml", "-o", "out", "--cache", "@", "--max-particles", "1"}, true,
+        {"loop-synth",
+         "--out",
+         {"loop-synth", "design.toml", "-o", "@", "--max-particles", "1"},
+         true,
          "design.toml"},
-        {"paper", "--out", {"paper", "index.toml", "-o", "@", "--max-particles", "1"}, true,
+        {"loop-synth",
+         "--cache",
+         {"loop-synth", "design.toml", "-o", "out", "--cache", "@", "--max-particles", "1"},
+         true,
+         "design.toml"},
+        {"paper",
+         "--out",
+         {"paper", "index.toml", "-o", "@", "--max-particles", "1"},
+         true,
          "index.toml"},
         {"report", "--out", {"report", "run", "-o", "@"}, true, "run/result.json"},
         {"measure", "--overlay", {"measure", "side.png", "--overlay", "@"}, false, "side.png"},
-        {"measure", "--top-overlay",
-         {"measure", "side.png", "--top", "top.png", "--top-overlay", "@"}, false, "top.png"},
-        {"loop-synth", "--truth",
-         {"loop-synth", "design.toml", "-o", "out", "--truth", "@", "--max-particles", "1"}, false,
+        {"measure",
+         "--top-overlay",
+         {"measure", "side.png", "--top", "top.png", "--top-overlay", "@"},
+         false,
+         "top.png"},
+        {"loop-synth",
+         "--truth",
+         {"loop-synth", "design.toml", "-o", "out", "--truth", "@", "--max-particles", "1"},
+         false,
          "design.toml"},
     };
     struct OutKind {
@@ -780,8 +871,7 @@ std::vector<Case> build_cases() {
            link_to(d / "o_link", d.parent_path() / "outside" / "target.png");
          },
          true},
-        {"a_folder", "o_dir", [](const fs::path& d) { fs::create_directories(d / "o_dir"); },
-         true},
+        {"a_folder", "o_dir", [](const fs::path& d) { fs::create_directories(d / "o_dir"); }, true},
     };
     for (const OutSlot& o : outs)
       for (const OutKind& k : kinds) {
@@ -810,14 +900,29 @@ std::vector<Case> build_cases() {
       fs::remove_all(d / "run" / s);
       link_to(d / "run" / s, d.parent_path() / "outside" / ("dir_" + s));
     });
-    add({"run", "--force over " + s + " link", Expect::kRefuse, setup,
-         {"run", "tiny.toml", "-o", "run", "--force", "--no-images", "-q"}, words({s})});
-    add({"run", "--resume over " + s + " link", Expect::kRefuse, setup,
-         {"run", "tiny.toml", "-o", "run", "--resume", "--no-images", "-q"}, words({s})});
-    add({"render", "render over " + s + " link", Expect::kRefuse, setup,
+    add({"run",
+         "--force over " + s + " link",
+         Expect::kRefuse,
+         setup,
+         {"run", "tiny.toml", "-o", "run", "--force", "--no-images", "-q"},
+         words({s})});
+    add({"run",
+         "--resume over " + s + " link",
+         Expect::kRefuse,
+         setup,
+         {"run", "tiny.toml", "-o", "run", "--resume", "--no-images", "-q"},
+         words({s})});
+    add({"render",
+         "render over " + s + " link",
+         Expect::kRefuse,
+         setup,
          {"render", "run", "--force", "--views", "1", "--width", "64", "--height", "64"},
          words({s})});
-    add({"report", "report over " + s + " link", Expect::kRefuse, setup, {"report", "run", "--force"},
+    add({"report",
+         "report over " + s + " link",
+         Expect::kRefuse,
+         setup,
+         {"report", "run", "--force"},
          words({s})});
   }
 
@@ -861,7 +966,9 @@ std::vector<Case> build_cases() {
         {"timestep", "--workers", timestep, 'i'},
         {"timestep", "--tolerance", timestep, 'f'},
         {"measure", "--mm-per-px", {"measure", "side.png", "--no-overlay"}, 'f'},
-        {"measure", "--top-mm-per-px", {"measure", "side.png", "--top", "top.png", "--no-overlay"},
+        {"measure",
+         "--top-mm-per-px",
+         {"measure", "side.png", "--top", "top.png", "--no-overlay"},
          'f'},
         {"loop", "--max-effects", loop, 'i'},
         {"loop", "--refit-follow-ups", loop, 'i'},
@@ -882,8 +989,7 @@ std::vector<Case> build_cases() {
         {"export", "--seed", {"export", "tiny.toml", "-o", "out"}, 'i'},
         {"report", "--lab-mm-per-px", {"report", "run", "--lab-photo", "side.png"}, 'f', true},
     };
-    const std::vector<std::string> ints = {"0x10", "1e1", "-1", "99999999999999999999",
-                                           "\xd9\xa3"};
+    const std::vector<std::string> ints = {"0x10", "1e1", "-1", "99999999999999999999", "\xd9\xa3"};
     const std::vector<std::string> floats = {"0x1p3", "inf", "nan", "1e999", "1,5"};
     for (const Opt& o : opts)
       for (const std::string& v : (o.kind == 'i' ? ints : floats)) {
@@ -903,20 +1009,33 @@ std::vector<Case> build_cases() {
       std::vector<std::string> values;
     };
     const std::vector<ListOpt> lists = {
-        {"loop", "--mu-grid", loop,
+        {"loop",
+         "--mu-grid",
+         loop,
          {"0.1,,0.2", "0.1,0x1p-2", "0.1,inf", "0.2,0.1", "0.1;0.2", "0.1,0.1"}},
-        {"loop", "--seeds", loop,
+        {"loop",
+         "--seeds",
+         loop,
          {"1,0x2", "1,,2", "1,1", "1,-2", "1,99999999999999999999", "1.0,2"}},
-        {"loop", "--mu-range", cat(loop, {"--mu-range-reason", "r"}),
+        {"loop",
+         "--mu-range",
+         cat(loop, {"--mu-range-reason", "r"}),
          {"0.1,0x1", "0.1,inf", "nan,0.2", "0.1", "0.1,0.2,0.3", "0.1,,"}},
         {"timestep", "--fractions", timestep, {"0x1p-2", "inf", "nan", "-0.1", "0", "1e999"}},
-        {"timestep", "--seeds", timestep,
+        {"timestep",
+         "--seeds",
+         timestep,
          {"1,1", "0x1", "-1", "1.5", "99999999999999999999", "1,,2"}},
-        {"measure", "--flank-band", {"measure", "side.png", "--no-overlay"},
+        {"measure",
+         "--flank-band",
+         {"measure", "side.png", "--no-overlay"},
          {"0x1p-3,0.8", "0.2,0x1p-1", "inf,0.8", "0.2", "0.2,0.5,0.8", "0.2,nan"}},
-        {"measure", "--roi", {"measure", "side.png", "--no-overlay"},
+        {"measure",
+         "--roi",
+         {"measure", "side.png", "--no-overlay"},
          {"0x10,0,300,170", "1e1,0,300,170", "0,0,10", "0,0,10,10,10", "0,0,-10,10", "0,0,10,0"}},
-        {"calibrate", "--mu-r-range",
+        {"calibrate",
+         "--mu-r-range",
          cat({"calibrate", "--tests", "tests.csv", "--scene", "tiny.toml", "-o", "out"}, one),
          {"0.1 0x1p-2", "0.1 inf", "nan 0.2", "0.1 0.1", "0.1 1e999"}},
     };
@@ -934,42 +1053,74 @@ std::vector<Case> build_cases() {
   // --- F9. valid inputs under hostile names: accepted, nothing run from a name, nothing
   // written elsewhere.
   {
-    const std::vector<std::string> names = {"it's",           "a;touch INJECTED;b",
-                                            "$(touch INJECTED)", "`touch INJECTED`",
-                                            "sp a  ce",       "new\nline",
-                                            "\xc3\xbcn\xc3\xaf-\xe6\xb5\x8b", "a|b&c>d",
-                                            "%s%n%x",         "'\"both\"'",
-                                            "tab\there",      "bad\xff\xfeutf8"};
+    const std::vector<std::string> names = {"it's",
+                                            "a;touch INJECTED;b",
+                                            "$(touch INJECTED)",
+                                            "`touch INJECTED`",
+                                            "sp a  ce",
+                                            "new\nline",
+                                            "\xc3\xbcn\xc3\xaf-\xe6\xb5\x8b",
+                                            "a|b&c>d",
+                                            "%s%n%x",
+                                            "'\"both\"'",
+                                            "tab\there",
+                                            "bad\xff\xfeutf8"};
     for (std::size_t i = 0; i < names.size(); ++i) {
       const std::string n = names[i];
       const std::string tag = "name " + std::to_string(i);
-      add({"measure", tag + " (folder)", Expect::kAccept, with([n](const fs::path& d) {
+      add({"measure",
+           tag + " (folder)",
+           Expect::kAccept,
+           with([n](const fs::path& d) {
              fs::create_directories(d / n);
              fs::copy_file(d / "side.png", d / n / "side.png");
              fs::copy_file(d / "side.json", d / n / "side.json");
            }),
-           {"measure", n + "/side.png"}, {}});
-      add({"measure", tag + " (file)", Expect::kAccept, with([n](const fs::path& d) {
+           {"measure", n + "/side.png"},
+           {}});
+      add({"measure",
+           tag + " (file)",
+           Expect::kAccept,
+           with([n](const fs::path& d) {
              fs::copy_file(d / "side.png", d / (n + ".png"));
              fs::copy_file(d / "side.json", d / (n + ".json"));
            }),
-           {"measure", n + ".png"}, {}});
+           {"measure", n + ".png"},
+           {}});
       add({"export", tag, Expect::kAccept, with(nullptr), {"export", "tiny.toml", "-o", n}, {}});
-      add({"run", tag, Expect::kAccept, with(nullptr),
-           {"run", "tiny.toml", "-o", n, "--no-images", "-q"}, {}});
-      add({"report", tag, Expect::kAccept, with([n](const fs::path& d) { with_run(d, n); }),
-           {"report", n}, {}});
-      add({"measure-particles", tag, Expect::kAccept, with([n](const fs::path& d) {
-             fs::copy_file(d / "grains.vtp", d / (n + ".vtp"));
-           }),
-           {"measure-particles", n + ".vtp", "--scene", "tiny.toml"}, {}});
-      add({"campaign", tag + " as a case name", Expect::kRefuse,
+      add({"run",
+           tag,
+           Expect::kAccept,
+           with(nullptr),
+           {"run", "tiny.toml", "-o", n, "--no-images", "-q"},
+           {}});
+      add({"report",
+           tag,
+           Expect::kAccept,
+           with([n](const fs::path& d) { with_run(d, n); }),
+           {"report", n},
+           {}});
+      add({"measure-particles",
+           tag,
+           Expect::kAccept,
+           with([n](const fs::path& d) { fs::copy_file(d / "grains.vtp", d / (n + ".vtp")); }),
+           {"measure-particles", n + ".vtp", "--scene", "tiny.toml"},
+           {}});
+      add({"campaign",
+           tag + " as a case name",
+           Expect::kRefuse,
            with([n](const fs::path& d) {
              std::string esc;
              for (char c : n) {
                if (c == '"' || c == '\\') esc += '\\';
-               if (c == '\n') { esc += "\\n"; continue; }
-               if (c == '\t') { esc += "\\t"; continue; }
+               if (c == '\n') {
+                 esc += "\\n";
+                 continue;
+               }
+               if (c == '\t') {
+                 esc += "\\t";
+                 continue;
+               }
                esc += c;
              }
              write(d / "bad.toml", replaced(kCampaign, "name = \"a\"", "name = \"" + esc + "\""));
@@ -989,8 +1140,9 @@ std::vector<Case> build_cases() {
         {"count_huge", dump_text("99999999", cone_rows(1))},
         {"count_negative", dump_text("-5", cone_rows(1))},
         {"one_grain", dump_text("1", cone_rows(1))},
-        {"grains_at_one_point", dump_text("3", "1 0 0 0.0015 0.0015\n2 0 0 0.0015 0.0015\n"
-                                               "3 0 0 0.0015 0.0015\n")},
+        {"grains_at_one_point", dump_text("3",
+                                          "1 0 0 0.0015 0.0015\n2 0 0 0.0015 0.0015\n"
+                                          "3 0 0 0.0015 0.0015\n")},
         {"radius_zero", dump_text("1", "1 0 0 0.0015 0\n")},
         {"x_hex", dump_text("1", "1 0x1p-3 0 0.0015 0.0015\n")},
         {"x_inf", dump_text("1", "1 inf 0 0.0015 0.0015\n")},
@@ -1000,16 +1152,22 @@ std::vector<Case> build_cases() {
     };
     for (const auto& [name, text] : dumps) {
       const std::string t = text;
-      add({"measure-particles", "dump " + name, Expect::kRefuse,
+      add({"measure-particles",
+           "dump " + name,
+           Expect::kRefuse,
            with([t](const fs::path& d) { write(d / "bad.dump", t); }),
-           {"measure-particles", "bad.dump", "--scene", "tiny.toml"}, words({"bad.dump"})});
+           {"measure-particles", "bad.dump", "--scene", "tiny.toml"},
+           words({"bad.dump"})});
     }
-    add({"measure-particles", "dump a 2 GB line", Expect::kRefuse,
+    add({"measure-particles",
+         "dump a 2 GB line",
+         Expect::kRefuse,
          with([](const fs::path& d) {
            write(d / "bad.dump", "ITEM: TIMESTEP\n");
            fs::resize_file(d / "bad.dump", std::uintmax_t{2} << 30);
          }),
-         {"measure-particles", "bad.dump", "--scene", "tiny.toml"}, words({"bad.dump"})});
+         {"measure-particles", "bad.dump", "--scene", "tiny.toml"},
+         words({"bad.dump"})});
   }
 
   // --- F11. the command line itself.
@@ -1049,17 +1207,25 @@ std::vector<Case> build_cases() {
         {"scene_empty", replaced(kCampaign, "\"tiny.toml\"", "\"\"")},
         {"scene_outside", replaced(kCampaign, "tiny.toml", "../outside/none.toml")},
         {"override_table", replaced(kCampaign, "= 0.1 }", "= { a = 1 } }")},
-        {"no_cases", replaced(kCampaign, "[[case]]\nname = \"a\"\noverrides = { \"contacts.rock-rock.rolling_friction\" = 0.1 }\n", "")},
+        {"no_cases", replaced(kCampaign,
+                              "[[case]]\nname = \"a\"\noverrides = { "
+                              "\"contacts.rock-rock.rolling_friction\" = 0.1 }\n",
+                              "")},
     };
     for (const auto& [name, text] : camps) {
       const std::string t = text;
-      add({"campaign", "campaign " + name, Expect::kRefuse,
+      add({"campaign",
+           "campaign " + name,
+           Expect::kRefuse,
            with([t](const fs::path& d) { write(d / "bad.toml", t); }),
            {"campaign", "bad.toml", "-o", "out", "--max-particles", "1"},
            words({"bad.toml~scene"})});
     }
     // Plans above the limits on commands that simulate, loop-synth included.
-    add({"loop-synth", "plan above the limits", Expect::kRefuse, with(nullptr),
+    add({"loop-synth",
+         "plan above the limits",
+         Expect::kRefuse,
+         with(nullptr),
          {"loop-synth", "design.toml", "-o", "out", "--max-particles", "10"},
          words({"--yes", "particles"})});
   }
@@ -1083,7 +1249,8 @@ fs::path make_base_run(const Pass& pass) {
   const fs::path d = pass.root.parent_path() / "base";
   fs::create_directories(d);
   write(d / "tiny.toml", tiny());
-  const Spawned s = spawn({pass.bin, "run", "tiny.toml", "-o", "run", "-q"}, d, d / "log", pass.env);
+  const Spawned s =
+      spawn({pass.bin, "run", "tiny.toml", "-o", "run", "-q"}, d, d / "log", pass.env);
   EXPECT_EQ(s.code, 0) << read_all(d / "log");
   fs::remove(d / "run" / ".run.lock");
   return d / "run";
@@ -1133,8 +1300,8 @@ TEST(HostilePass, EveryCaseRefusedCleanlyOrAcceptedWithoutHarm) {
     char secs[32];
     std::snprintf(secs, sizeof secs, "%.2f", r.seconds);
     csv << csv_field(c.command) << "," << csv_field(c.name) << ","
-        << (c.expect == Expect::kAccept ? "accept" : "refuse") << "," << r.code << "," << oc
-        << "," << r.data_lost << "," << r.escape << "," << r.injection << "," << secs << ","
+        << (c.expect == Expect::kAccept ? "accept" : "refuse") << "," << r.code << "," << oc << ","
+        << r.data_lost << "," << r.escape << "," << r.injection << "," << secs << ","
         << csv_field(r.why) << "," << csv_field(r.message) << "\n";
     const bool fault = (r.outcome != Outcome::kClean && r.outcome != Outcome::kAccepted) ||
                        r.data_lost || r.escape || r.injection;
@@ -1149,15 +1316,15 @@ TEST(HostilePass, EveryCaseRefusedCleanlyOrAcceptedWithoutHarm) {
       if (p.filename() == "INJECTED") fs::remove(p, ec);
     });
   }
-  const double wall =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   std::ostringstream table;
   const auto line = [&](const std::string& name, const auto& a) {
     int tried = 0;
     for (std::size_t k = 0; k < kOutcomeNames.size(); ++k) tried += a[k];
     char buf[256];
-    std::snprintf(buf, sizeof buf, "| %-18s | %5d | %7d | %8d | %7d | %6d | %4d | %7d | %8d | %9d | %11d | %9d |\n",
+    std::snprintf(buf, sizeof buf,
+                  "| %-18s | %5d | %7d | %8d | %7d | %6d | %4d | %7d | %8d | %9d | %11d | %9d |\n",
                   name.c_str(), tried, a[0], a[6], a[1], a[2], a[3], a[4], a[5], a[7], a[8], a[9]);
     table << buf;
   };
