@@ -505,24 +505,25 @@ Prediction predict(const MonotoneFit& fit, const CalibrationResult& calibrated,
 
 void check_calibration_record(const nlohmann::json& j, const std::string& file) {
   const std::string what = file + ": not a calibration record (as `reposetwin calibrate` writes)";
-  if (!j.is_object()) throw InputError(what + ": the top level is " + j.type_name() + ", not an object");
+  if (!j.is_object())
+    throw InputError(what + ": the top level is " + j.type_name() + ", not an object");
   const auto shown = [](const nlohmann::json& v) {
     const std::string s = v.dump();
     return s.size() > 40 ? s.substr(0, 40) + "..." : s;
   };
   if (!j.contains("status")) throw InputError(what + ": the key \"status\" is missing");
   bool known = false;
-  for (CalibrationStatus s : {CalibrationStatus::kCalibrated, CalibrationStatus::kBudgetSpent,
-                              CalibrationStatus::kSeedNoiseLimited,
-                              CalibrationStatus::kCannotReachLow,
-                              CalibrationStatus::kCannotReachHigh})
+  for (CalibrationStatus s :
+       {CalibrationStatus::kCalibrated, CalibrationStatus::kBudgetSpent,
+        CalibrationStatus::kSeedNoiseLimited, CalibrationStatus::kCannotReachLow,
+        CalibrationStatus::kCannotReachHigh})
     known = known || (j["status"].is_string() && j["status"].get<std::string>() == to_string(s));
   if (!known)
     throw InputError(what + ": \"status\" is " + shown(j["status"]) +
                      ", not one of calibrated, budget_spent, seed_noise_limited, "
                      "cannot_reach_low, cannot_reach_high");
-  if (!j.contains("target") || !j["target"].is_object() ||
-      !j["target"].contains("angle_deg") || !j["target"]["angle_deg"].is_number())
+  if (!j.contains("target") || !j["target"].is_object() || !j["target"].contains("angle_deg") ||
+      !j["target"]["angle_deg"].is_number())
     throw InputError(what + ": the key \"target.angle_deg\" is missing or not a number");
   if (!j.contains("mu_r")) throw InputError(what + ": the key \"mu_r\" is missing");
   const nlohmann::json& mu = j["mu_r"];

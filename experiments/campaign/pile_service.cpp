@@ -357,8 +357,8 @@ void PileService::photograph_missing(const std::vector<PileRequest>& requests,
       photos, settings_.workers, WorkerMode::kThreads,
       [&](std::size_t i) {
         const PileOutcome pile = finished_run(requests[i]);
-        const PileRun run = pile_run_from_json(
-            read_json_file((fs::path(pile.run_dir) / "result.json").string()));
+        const PileRun run =
+            pile_run_from_json(read_json_file((fs::path(pile.run_dir) / "result.json").string()));
         bool started = false;
         photo_stage(requests[i], run, pile.run_dir, photo_dir(requests[i]), started);
       },

@@ -91,8 +91,9 @@ ParticleDump read_particle_dump(const std::string& path) {
       snap.x.reserve(static_cast<std::size_t>(n));
       for (long long i = 0; i < n; ++i) {
         ++n_line;
-        if (!getline(f, line)) bad("the snapshot ends after " + std::to_string(i) + " of " +
-                                        std::to_string(n) + " atoms");
+        if (!getline(f, line))
+          bad("the snapshot ends after " + std::to_string(i) + " of " + std::to_string(n) +
+              " atoms");
         // The columns measured are read by the one strict number reader (io/numbers.hpp): a
         // "nan", "inf", hex or out-of-range value is refused by name; the others are skipped.
         std::istringstream row(line);

@@ -2,14 +2,14 @@
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
-#include <vtkFieldData.h>
-#include <vtkStringArray.h>
 #include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
 #include <vtkIntArray.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkStringArray.h>
 #include <vtkTypeInt64Array.h>
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
@@ -17,10 +17,10 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <numbers>
-#include <optional>
 #include <fstream>
 #include <iomanip>
+#include <numbers>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
@@ -294,7 +294,8 @@ SnapshotParticles read_vtp(const std::string& path) {
   vtkObject::SetGlobalWarningDisplay(warnings);
   vtkPolyData* poly = reader->GetOutput();
   if (reader->GetErrorCode() != 0 || !poly || !poly->GetPoints())
-    throw std::runtime_error(path + ": not a particle snapshot (a VTK XML PolyData file with "
+    throw std::runtime_error(path +
+                             ": not a particle snapshot (a VTK XML PolyData file with "
                              "the points and their \"radius\" is expected)");
   auto* radius = vtkDoubleArray::SafeDownCast(poly->GetPointData()->GetArray("radius"));
   auto* material = vtkIntArray::SafeDownCast(poly->GetPointData()->GetArray("material"));

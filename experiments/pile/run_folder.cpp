@@ -151,11 +151,11 @@ void check_output_folder(const std::string& out, const std::string& option) {
   if (::access(existing.c_str(), W_OK | X_OK) != 0) {
     const std::string why = std::error_code(errno, std::generic_category()).message();
     const bool itself = existing == fs::absolute(dir, ec).lexically_normal();
-    throw InputError(out + ": " + option + ": cannot " +
-                         (itself ? std::string("write into the folder: ")
-                                 : std::string("make the folder: ")) +
-                         existing.string() + " is not writable (" + why + ")",
-                     option);
+    throw InputError(
+        out + ": " + option + ": cannot " +
+            (itself ? std::string("write into the folder: ") : std::string("make the folder: ")) +
+            existing.string() + " is not writable (" + why + ")",
+        option);
   }
 }
 

@@ -170,8 +170,10 @@ void refuse_part_folder(const fs::path& dir) {
   if (record.is_object() && record.contains("spec"))
     throw InputError(dir.string() + ": one seed's record of the case '" +
                      d_clean.parent_path().filename().string() + "' of the campaign in " +
-                     cases.parent_path().string() + ", not a run folder; report the campaign: "
-                     "reposetwin report " + cases.parent_path().string());
+                     cases.parent_path().string() +
+                     ", not a run folder; report the campaign: "
+                     "reposetwin report " +
+                     cases.parent_path().string());
 }
 
 bool is_calibration_dir(const fs::path& d) { return fs::is_regular_file(d / "calibration.json"); }
