@@ -248,7 +248,9 @@ void add_loop_command(CLI::App& app) {
     const experiments::BatchPlan bp = experiments::plan_synth_dataset(d, sargs->workers);
     if (!accept_plan(
             "The synthetic lab's piles:\n" + experiments::plan_text(bp, synth_plan->limits),
-            experiments::plan_refusal(bp, synth_plan->limits), *synth_plan, false)) {
+            experiments::plan_refusal(bp, {experiments::KeySource::Kind::kSceneFile, d.scene},
+                                      synth_plan->limits),
+            *synth_plan, false)) {
       set_exit_code(ExitCode::kPlanRefused);
       return;
     }
