@@ -4,8 +4,9 @@
 
 #include "apps/reposetwin/commands.hpp"
 #include "apps/reposetwin/plan_gate.hpp"
-#include "experiments/calibration/calibration.hpp"
+#include "apps/reposetwin/validators.hpp"
 #include "experiments/calibration/calibrate_campaign.hpp"
+#include "experiments/calibration/calibration.hpp"
 #include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/campaign.hpp"
 #include "experiments/campaign/case_runner.hpp"
@@ -34,16 +35,14 @@ void add_pool_options(CLI::App* cmd, PoolArgs& a, const char* force_help,
   auto* file = cmd->add_option("campaign", a.file, "Campaign file (TOML)");
   if (campaign_required) file->required();
   cmd->add_option("--out,-o", a.out, "Output folder (default: runs/<campaign name>)");
-  cmd->add_option("--workers", a.workers, "Runs side by side on this machine")
-      ->check(CLI::Range(1, 1024))
-      ->capture_default_str();
+  add_workers_option(cmd, a.workers, "Runs side by side on this machine");
   cmd->add_option("--mode", a.mode, "Local pool: processes or threads")
       ->check(CLI::IsMember({"processes", "threads"}))
       ->capture_default_str();
   cmd->add_flag("--force", a.force, force_help);
   cmd->add_flag("--no-images", a.no_images, "Skip renders and vision (particle angles only)");
   cmd->add_option("--views", a.views, "Side views per pile for the image angle")
-      ->check(CLI::Range(1, 64))
+      ->check(whole_number_in(1, 64))
       ->capture_default_str();
   cmd->add_option("--cache", a.cache,
                   "Pile store (default OUT/cache): piles already poured there by a campaign, a "
@@ -85,6 +84,7 @@ void add_campaign_command(CLI::App& app) {
     experiments::check_pile_cases(c);
     const std::string out = a->out.empty() ? "runs/" + c.name : a->out;
     experiments::check_output_folder(out);
+    if (!a->cache.empty()) experiments::check_output_folder(a->cache, "--cache");
     const experiments::BatchPlan bp = experiments::plan_campaign(c, a->workers);
     if (!accept_plan(experiments::plan_text(bp, plan->limits),
                      experiments::plan_refusal(
@@ -228,6 +228,7 @@ void add_calibrate_command(CLI::App& app) {
   cmd->add_option("--mu-r-range", sheets->mu_r_range,
                   "With --tests: the mu_r range searched, its two ends first")
       ->delimiter(',')
+      ->check(plain_number())
       ->expected(2)
       ->capture_default_str();
   cmd->add_option("--angle", *angle,
@@ -250,6 +251,7 @@ void add_calibrate_command(CLI::App& app) {
     std::string out, sheet_text;
     experiments::Campaign c = calibrate_campaign(*a, *sheets, *angle, out, sheet_text);
     experiments::check_output_folder(out);
+    if (!a->cache.empty()) experiments::check_output_folder(a->cache, "--cache");
     if (!only->empty()) experiments::keep_only_predictions(c, *only);
     if (!c.calibration)
       throw std::invalid_argument(c.file + ": [calibration] is missing (target_deg, mu_r_range)");

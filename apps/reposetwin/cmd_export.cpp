@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/reposetwin/commands.hpp"
+#include "apps/reposetwin/validators.hpp"
 #include "experiments/io/calibration_record.hpp"
 #include "experiments/io/format.hpp"
 #include "experiments/io/hash.hpp"
@@ -19,6 +20,7 @@
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/scene_overrides.hpp"
+#include "experiments/pile/run_folder.hpp"
 #include "sim/pile_geometry.hpp"
 
 namespace reposetwin::cli {
@@ -44,7 +46,7 @@ void add_export_command(CLI::App& app) {
                   "Folder for the deck (default for a calibration folder: FOLDER/liggghts)");
   cmd->add_option("--set", a->sets, "Override a scene key: dotted.key=value (repeatable)");
   cmd->add_option("--seed", a->seed, "Seed of LIGGGHTS' random streams")
-      ->check(CLI::NonNegativeNumber)  // checked as typed: -1 would wrap to 2^64 - 1
+      ->check(seed_number())  // checked as typed: -1 would wrap to 2^64 - 1
       ->capture_default_str();
   cmd->add_option("--initial-state", a->initial,
                   "Start from the twin's filled sample (a run's frames/filled.vtp) instead of "
@@ -81,14 +83,12 @@ void add_export_command(CLI::App& app) {
                                       "the deck)");
       scene = experiments::load_scene(a->scene, a->sets);
     }
+    experiments::check_output_folder(out_folder);
     experiments::LiggghtsDeckSettings s;
     s.seed = a->seed;
     if (from_calibration) s.calibration = &calibration;
     std::optional<experiments::SnapshotParticles> initial;
     if (!a->initial.empty()) {
-      std::error_code ec;
-      if (!fs::is_regular_file(a->initial, ec))
-        throw experiments::InputError(a->initial + ": --initial-state: no such file");
       try {
         initial = experiments::read_vtp(a->initial);
       } catch (const std::exception& e) {

@@ -75,17 +75,17 @@ void add_loop_command(CLI::App& app) {
                   "you bring; reported as declared, with the trace's own verdict)");
   cmd->add_option("--max-effects", args->settings.max_effects,
                   "Stop after this many effects (0: trace and rank only, no refit)")
-      ->check(CLI::Range(0, 10))
+      ->check(whole_number_in(0, 10))
       ->capture_default_str();
   cmd->add_option("--refit-follow-ups", args->settings.refit_follow_ups,
                   "Trials a refit adds where its fit lands, until it lands on a simulated value "
                   "(0: the effect's value may be read off a chord beyond the trials)")
-      ->check(CLI::Range(0, 10))
+      ->check(whole_number_in(0, 10))
       ->capture_default_str();
   cmd->add_option("--max-pours", args->settings.max_pours,
                   "Pours per pile: a pour that forms no pile (the funnel jammed) is repeated with "
                   "a new seed, as a lab repeats it, up to this many pours in all")
-      ->check(CLI::Range(1, 100))
+      ->check(whole_number_in(1, 100))
       ->capture_default_str();
   cmd->add_option("--min-t", args->settings.rule.min_t, "Significance threshold |c|/se")
       ->check(positive_number())
@@ -94,7 +94,7 @@ void add_loop_command(CLI::App& app) {
                   "A candidate is named only when its joint chi^2 (angle, H, D) beats every "
                   "other accepted candidate's by more than this; else they are reported as "
                   "indistinguishable")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   cmd->add_option("--at-bound", args->at_bound,
                   "When the calibrated mu_r sits on an end of the grid: extend (add grid points "
@@ -103,7 +103,7 @@ void add_loop_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--grid-extensions", args->settings.grid_extensions,
                   "Grid points the loop may add beyond a bound mu_r lands on")
-      ->check(CLI::Range(0, 10))
+      ->check(whole_number_in(0, 10))
       ->capture_default_str();
   cmd->add_option("--mu-range", args->mu_range,
                   "mu_r's plausible range LO,HI (a prior, e.g. 0.02,0.4 for rock in our "
@@ -117,19 +117,17 @@ void add_loop_command(CLI::App& app) {
   cmd->add_option("--probe-scalings", args->settings.probe_scalings,
                   "Doublings of a candidate's probe while its fingerprint does not stand out "
                   "of the seed noise")
-      ->check(CLI::Range(0, 10))
+      ->check(whole_number_in(0, 10))
       ->capture_default_str();
-  cmd->add_option("--workers", args->settings.workers, "Concurrent simulations")
-      ->check(CLI::Range(1, 1024))
-      ->capture_default_str();
+  add_workers_option(cmd, args->settings.workers, "Concurrent simulations");
   cmd->add_option("--width", args->settings.image.width_px, "Render width [px]")
-      ->check(CLI::Range(64, 16384))
+      ->check(whole_number_in(64, 16384))
       ->capture_default_str();
   cmd->add_option("--height", args->settings.image.height_px, "Render height [px]")
-      ->check(CLI::Range(64, 16384))
+      ->check(whole_number_in(64, 16384))
       ->capture_default_str();
   cmd->add_option("--views", args->settings.image.side_views, "Side views per pile")
-      ->check(CLI::Range(1, 64))
+      ->check(whole_number_in(1, 64))
       ->capture_default_str();
   cmd->add_flag("--own-cameras", args->own_cameras,
                 "Photograph the twin's piles with its own framing (--width, --height, --views) "
@@ -185,6 +183,7 @@ void add_loop_command(CLI::App& app) {
     s.image.use_lab_cameras = !args->own_cameras;
     s.page = experiments::write_loop_html;
     experiments::check_output_folder(args->out);
+    if (!s.cache_dir.empty()) experiments::check_output_folder(s.cache_dir, "--cache");
     // The page goes where the user pointed --out (`-o .` is a folder of theirs): a page there
     // that reposetwin did not make stays unless --force.
     experiments::OutputPlan plan(s.force);
@@ -231,21 +230,32 @@ void add_loop_command(CLI::App& app) {
   syn->add_option("--truth", sargs->truth,
                   "Also write the hidden settings as JSON to this file, outside the dataset's "
                   "folder (for a validation to compare the loop's answer with)");
-  syn->add_option("--workers", sargs->workers, "Concurrent simulations")
-      ->check(CLI::Range(1, 1024))
-      ->capture_default_str();
+  add_workers_option(syn, sargs->workers, "Concurrent simulations");
   syn->add_flag("--force", sargs->force,
                 "Replace an existing --truth file that reposetwin did not make");
-  syn->callback([sargs]() {
+  auto synth_plan = std::make_shared<PlanArgs>();
+  add_plan_options(syn, synth_plan);
+  syn->callback([sargs, synth_plan]() {
     experiments::OutputPlan plan(sargs->force);
     plan.add_input(sargs->design);
     if (!sargs->truth.empty()) plan.add_output(sargs->truth, "--truth");
     plan.check();
     const experiments::SynthDesign d = experiments::read_synth_design(sargs->design);
+    experiments::check_output_folder(sargs->out);
+    const std::string cache_dir =
+        experiments::synth_cache_dir(sargs->out, sargs->cache, sargs->truth);
+    experiments::check_output_folder(cache_dir, "--cache");
+    const experiments::BatchPlan bp = experiments::plan_synth_dataset(d, sargs->workers);
+    if (!accept_plan(
+            "The synthetic lab's piles:\n" + experiments::plan_text(bp, synth_plan->limits),
+            experiments::plan_refusal(bp, {experiments::KeySource::Kind::kSceneFile, d.scene},
+                                      synth_plan->limits),
+            *synth_plan, false)) {
+      set_exit_code(ExitCode::kPlanRefused);
+      return;
+    }
     // The loop reads the dataset's folder; the truth and the cache must not be where it could.
-    experiments::SimCache cache(
-        experiments::synth_cache_dir(sargs->out, sargs->cache, sargs->truth),
-        {sargs->workers, true});
+    experiments::SimCache cache(cache_dir, {sargs->workers, true});
     std::cout << experiments::make_synthetic_dataset(d, sargs->out, cache) << "\n";
     if (!sargs->truth.empty()) {
       nlohmann::json truth = experiments::synth_truth_json(d, sargs->design);

@@ -301,10 +301,12 @@ void add_measure_command(CLI::App& app) {
                 "(never an input image or sidecar)");
   cmd->add_option("--roi", opts->roi, "Region of interest in the side images: x,y,width,height")
       ->delimiter(',')
+      ->check(integer_number())
       ->expected(4);
   cmd->add_option("--flank-band", opts->flank_band,
                   "Flank fit band as fractions of H (default 0.2,0.8)")
       ->delimiter(',')
+      ->check(plain_number())
       ->expected(2);
   cmd->add_flag("--trust-photo-pose", opts->trust_photo_pose,
                 "Measure a photo whose lines contradict its declared camera through the pose the "

@@ -5,7 +5,9 @@
 
 #include "apps/reposetwin/commands.hpp"
 #include "apps/reposetwin/plan_gate.hpp"
+#include "apps/reposetwin/validators.hpp"
 #include "experiments/campaign/case_runner.hpp"
+#include "experiments/pile/run_folder.hpp"
 #include "experiments/reproduce/paper_index.hpp"
 #include "experiments/reproduce/paper_page.hpp"
 
@@ -108,12 +110,12 @@ void add_paper_command(CLI::App& app) {
                 "run nothing");
   cmd->add_flag("--force", a->force, "Rebuild the page over an earlier one");
   cmd->add_option("--only", a->only, "Run only these items (by name)")->delimiter(',');
-  cmd->add_option("--workers", a->workers, "Runs side by side on this machine")
-      ->capture_default_str();
+  add_workers_option(cmd, a->workers, "Runs side by side on this machine");
   cmd->add_option("--mode", a->mode, "Local pool: processes or threads")
       ->check(CLI::IsMember({"processes", "threads"}))
       ->capture_default_str();
   cmd->add_option("--views", a->views, "Side views per pile for the image angle")
+      ->check(whole_number_in(1, 64))
       ->capture_default_str();
   add_plan_options(cmd, a->plan);
   cmd->callback([a]() {
@@ -127,6 +129,7 @@ void add_paper_command(CLI::App& app) {
       std::cout << "paper page " << page << "\n";
       return;
     }
+    experiments::check_output_folder(a->out);
     // The listing is the plan: printed before anything runs, and above the limits only with
     // --yes.
     const PaperCost planned = paper_cost(index, {});

@@ -34,13 +34,13 @@ void add_render_command(CLI::App& app) {
   // measure the angle (the lab takes four), and a frame above 16k pixels a side is no camera's.
   cmd->add_option("--views", args->images.side_views, "Side views over 180 degrees")
       ->capture_default_str()
-      ->check(CLI::Range(1, 64));
+      ->check(whole_number_in(1, 64));
   cmd->add_option("--width", args->images.width_px, "Image width [px]")
       ->capture_default_str()
-      ->check(CLI::Range(64, 16384));
+      ->check(whole_number_in(64, 16384));
   cmd->add_option("--height", args->images.height_px, "Image height [px]")
       ->capture_default_str()
-      ->check(CLI::Range(64, 16384));
+      ->check(whole_number_in(64, 16384));
   cmd->add_option("--camera-height", args->images.camera_height_m,
                   "Side camera height above the plate [m]")
       ->capture_default_str()

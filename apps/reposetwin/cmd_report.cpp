@@ -5,7 +5,9 @@
 
 #include "apps/reposetwin/commands.hpp"
 #include "apps/reposetwin/validators.hpp"
+#include "experiments/io/files.hpp"
 #include "experiments/io/input_error.hpp"
+#include "experiments/pile/run_folder.hpp"
 #include "experiments/pile/run_state.hpp"
 #include "experiments/report/folder_results.hpp"
 #include "experiments/report/report.hpp"
@@ -57,6 +59,7 @@ void add_report_command(CLI::App& app) {
   cmd->callback([a]() {
     namespace fs = std::filesystem;
     std::string out = a->out;
+    if (!out.empty()) experiments::check_output_folder(out);
     // A report is a result: an earlier one stays unless asked (checked before anything is read).
     // Over several folders, each folder's own report is rebuilt too.
     std::vector<fs::path> pages;
@@ -68,6 +71,12 @@ void add_report_command(CLI::App& app) {
                                       ": a report is already there; pass --force to rebuild it");
     // A report writes into each run folder it reads (RUN_DIR/report/): it holds the folder's
     // lock for the whole command, so no run or render changes the stages under it.
+    // A report writes into each folder's report/ and reads the runs' files: a link inside a
+    // folder that leads outside it is refused, as run and render refuse it.
+    for (const auto& d : a->dirs) {
+      experiments::report::refuse_part_folder(d);
+      experiments::refuse_escaping_links(d);
+    }
     std::vector<std::unique_ptr<experiments::RunFolderLock>> locks;
     for (const auto& d : a->dirs)
       if (experiments::report::is_run_dir(d))

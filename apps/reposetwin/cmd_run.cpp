@@ -75,7 +75,7 @@ void add_run_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--set", args->sets, "Override a scene key: dotted.key=value; the value is TOML or a bare word (repeatable)");
   cmd->add_option("--threads", args->run.threads, "OpenMP threads (0: the scene's setting)")
-      ->check(CLI::Range(0, 4096));
+      ->check(whole_number_in(0, 4096));
   auto* force = cmd->add_flag("--force", args->run.force,
                               "Overwrite a finished result in the run folder (start again)");
   // Continue the run and start it again are opposite requests: one of them, never both.

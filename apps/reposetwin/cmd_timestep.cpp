@@ -6,6 +6,7 @@
 #include "apps/reposetwin/validators.hpp"
 #include "experiments/calibration/timestep_study.hpp"
 #include "experiments/io/numbers.hpp"
+#include "experiments/pile/run_folder.hpp"
 
 namespace reposetwin::cli {
 
@@ -24,20 +25,20 @@ void add_timestep_command(CLI::App& app) {
   cmd->add_option("scene", a->scene, "Scene file")->required();
   cmd->add_option("--out,-o", a->out, "Output folder")->capture_default_str();
   cmd->add_option("--fractions", a->s.rayleigh_fractions, "dt as fractions of the Rayleigh time")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(plain_number());
   cmd->add_option("--seeds", a->seeds, "Seeds per dt, comma separated (default 1)");
   cmd->add_option("--tolerance", a->s.tolerance_deg, "Stable within this of the finest [deg]")
       ->capture_default_str()
       ->check(positive_number());
-  cmd->add_option("--workers", a->workers, "Runs side by side")
-      ->capture_default_str()
-      ->check(CLI::Range(1, 1024));
+  add_workers_option(cmd, a->workers, "Runs side by side");
   cmd->add_flag("--images", a->s.images, "Use the vision angle on renders");
   add_plan_options(cmd, a->plan);
   cmd->callback([a]() {
     if (!a->seeds.empty()) a->s.seeds = experiments::parse_seed_list(a->seeds, "--seeds");
     for (double f : a->s.rayleigh_fractions) experiments::positive_finite(f, "--fractions");
     a->s.runner.workers = a->workers;
+    experiments::check_output_folder(a->out);
     // The plan of every run (the finest dt costs the most), before anything is written.
     const experiments::BatchPlan plan = experiments::plan_campaign(
         experiments::timestep_campaign(a->scene, a->out, a->s), a->workers);

@@ -4,11 +4,13 @@
 #include <algorithm>
 #include <csignal>
 #include <exception>
+#include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
 
 #include "apps/reposetwin/commands.hpp"
+#include "experiments/io/files.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/suggest.hpp"
 
@@ -54,6 +56,35 @@ std::string unknown_options(CLI::App& app, const CLI::ExtrasError& e, int argc, 
   return msg;
 }
 
+// An empty argument is no value anywhere on this command line: `--out ""` would fall back to a
+// default folder and `--overlay ""` to the default file, each silently. Returns the message for
+// the first one, naming the option it was given to, or "".
+std::string empty_argument(CLI::App& app, int argc, char** argv) {
+  // "-o" named as the help names it, "--out".
+  const auto long_name = [&](const std::string& flag) {
+    CLI::App* sub = nullptr;
+    for (CLI::App* s : app.get_subcommands({}))
+      if (argc > 1 && s->get_name() == argv[1]) sub = s;
+    const CLI::Option* opt = sub ? sub->get_option_no_throw(flag) : nullptr;
+    return opt ? opt->get_name() : flag;
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const std::size_t eq = a.find('=');
+    if (a.rfind("--", 0) == 0 && eq != std::string::npos && eq + 1 == a.size())
+      return "reposetwin: error: " + long_name(a.substr(0, eq)) +
+             " is empty: give a value (an empty argument never stands for a default)";
+    if (!a.empty()) continue;
+    const std::string before = i > 1 ? argv[i - 1] : "";
+    if (before.size() > 1 && before[0] == '-')
+      return "reposetwin: error: " + long_name(before) +
+             " is empty: give a value (an empty argument never stands for a default)";
+    return "reposetwin: error: argument " + std::to_string(i) +
+           " is empty; give a file, a folder or a value";
+  }
+  return "";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -78,6 +109,10 @@ int main(int argc, char** argv) {
   reposetwin::cli::add_paper_command(app);
   reposetwin::cli::add_export_command(app);
   reposetwin::cli::add_measure_particles_command(app);
+  if (const std::string msg = empty_argument(app, argc, argv); !msg.empty()) {
+    std::cerr << msg << "\n";
+    return static_cast<int>(reposetwin::cli::ExitCode::kError);
+  }
   if (argc > 1 && argv[1][0] != '-') {
     if (const std::string msg = unknown_command(app, argv[1]); !msg.empty()) {
       std::cerr << msg << "\n";
@@ -96,6 +131,16 @@ int main(int argc, char** argv) {
     // without a word is worse than one that says who holds the folder.
     std::cerr << "reposetwin: error: " << e.what() << "\n";
     return static_cast<int>(reposetwin::cli::ExitCode::kBusy);
+  } catch (const std::filesystem::filesystem_error& e) {
+    // The library's "filesystem error: status: ... [path]" as a sentence naming the path.
+    std::cerr << "reposetwin: error: " << e.path1().string() << ": " << e.code().message();
+    if (!e.path2().empty()) std::cerr << " (with " << e.path2().string() << ")";
+    std::cerr << "\n";
+    return static_cast<int>(reposetwin::cli::ExitCode::kError);
+  } catch (const nlohmann::json::exception& e) {
+    std::cerr << "reposetwin: error: a JSON record: " << reposetwin::experiments::json_error_text(e)
+              << "\n";
+    return static_cast<int>(reposetwin::cli::ExitCode::kError);
   } catch (const std::exception& e) {
     std::cerr << "reposetwin: error: " << e.what() << "\n";
     return static_cast<int>(reposetwin::cli::ExitCode::kError);

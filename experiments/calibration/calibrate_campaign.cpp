@@ -105,7 +105,7 @@ void refuse_to_replace_other_calibration(const Campaign& c, const std::string& o
   if (force || !fs::exists(file)) return;
   nlohmann::json old;
   try {
-    old = nlohmann::json::parse(read_file(file));
+    old = read_json_file(file);
   } catch (const std::exception& e) {
     throw std::runtime_error(file + ": a calibration file that cannot be read (" + e.what() +
                              "); move it away or use --force");
@@ -130,6 +130,7 @@ struct CalibratedMu {
   double mu = 0.0, lo = 0.0, hi = 0.0;
 };
 CalibratedMu calibrated_mu_of(const nlohmann::json& cal, const std::string& cal_file) {
+  check_calibration_record(cal, cal_file);
   if (!cal.contains("mu_r") || !cal["mu_r"].is_number())
     throw std::runtime_error(cal_file + ": status '" + cal.value("status", std::string("?")) +
                              "': no calibrated mu_r to predict with (" +
@@ -263,7 +264,7 @@ nlohmann::json merge_with_earlier(const fs::path& file, double mu,
   if (!fs::is_regular_file(file, ec)) return list;
   nlohmann::json old;
   try {
-    old = nlohmann::json::parse(read_file(file.string()));
+    old = read_json_file(file.string());
   } catch (const std::exception&) {
     return list;
   }
@@ -421,7 +422,7 @@ nlohmann::json read_calibration(const Campaign& c, const std::string& out_dir,
                              c.file + "` first, or give its --out folder)");
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(read_file(file));
+    j = read_json_file(file);
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error(file + ": not a calibration file (" + e.what() + ")");
   }

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "experiments/io/format.hpp"
+#include "experiments/io/input_error.hpp"
 #include "sim/random.hpp"
 
 namespace reposetwin::experiments {
@@ -500,6 +501,40 @@ Prediction predict(const MonotoneFit& fit, const CalibrationResult& calibrated,
   p.low_deg = quantile(angles, kLowQuantile);
   p.high_deg = quantile(angles, kHighQuantile);
   return p;
+}
+
+void check_calibration_record(const nlohmann::json& j, const std::string& file) {
+  const std::string what = file + ": not a calibration record (as `reposetwin calibrate` writes)";
+  if (!j.is_object())
+    throw InputError(what + ": the top level is " + j.type_name() + ", not an object");
+  const auto shown = [](const nlohmann::json& v) {
+    const std::string s = v.dump();
+    return s.size() > 40 ? s.substr(0, 40) + "..." : s;
+  };
+  if (!j.contains("status")) throw InputError(what + ": the key \"status\" is missing");
+  bool known = false;
+  for (CalibrationStatus s :
+       {CalibrationStatus::kCalibrated, CalibrationStatus::kBudgetSpent,
+        CalibrationStatus::kSeedNoiseLimited, CalibrationStatus::kCannotReachLow,
+        CalibrationStatus::kCannotReachHigh})
+    known = known || (j["status"].is_string() && j["status"].get<std::string>() == to_string(s));
+  if (!known)
+    throw InputError(what + ": \"status\" is " + shown(j["status"]) +
+                     ", not one of calibrated, budget_spent, seed_noise_limited, "
+                     "cannot_reach_low, cannot_reach_high");
+  if (!j.contains("target") || !j["target"].is_object() || !j["target"].contains("angle_deg") ||
+      !j["target"]["angle_deg"].is_number())
+    throw InputError(what + ": the key \"target.angle_deg\" is missing or not a number");
+  if (!j.contains("mu_r")) throw InputError(what + ": the key \"mu_r\" is missing");
+  const nlohmann::json& mu = j["mu_r"];
+  if (!mu.is_number() && !mu.is_null())
+    throw InputError(what + ": \"mu_r\" is " + shown(mu) + ", not a number or null");
+  if (mu.is_number()) {
+    const nlohmann::json iv = j.value("mu_r_interval", nlohmann::json());
+    if (!iv.is_array() || iv.size() != 2 || !iv[0].is_number() || !iv[1].is_number())
+      throw InputError(what + ": \"mu_r_interval\" is " + shown(iv) +
+                       ", not two numbers (a calibrated mu_r carries its interval)");
+  }
 }
 
 nlohmann::json to_json(const MonotoneFit& fit) {

@@ -100,6 +100,13 @@ enum class CalibrationStatus {
 /// The status as a word for files and messages ("calibrated", "budget_spent", ...).
 std::string to_string(CalibrationStatus status);
 
+/// Throws InputError naming `file`, the key as written and what it holds unless `j` has the
+/// shape to_json(const CalibrationResult&) writes: an object whose "status" is one of the status
+/// words, whose "target"."angle_deg" is a number and whose "mu_r" is a number or null, with
+/// "mu_r_interval" two numbers when "mu_r" is one. A reader of a calibration.json calls it before
+/// it reads a value, so an empty or foreign file is an error, never a page of dashes.
+void check_calibration_record(const nlohmann::json& j, const std::string& file);
+
 /// Result of a calibration: the calibrated mu_r (absent when the target cannot be reached) with
 /// its 95% interval, the reachable angle range, and every observation used.
 struct CalibrationResult {

@@ -41,7 +41,7 @@ std::optional<nlohmann::json> read_json(const fs::path& p) {
   std::error_code ec;
   if (!fs::is_regular_file(p, ec)) return std::nullopt;
   try {
-    return nlohmann::json::parse(read_file(p.string()));
+    return read_json_file(p.string());
   } catch (const std::exception&) {
     return std::nullopt;
   }

@@ -197,9 +197,9 @@ PileRun pile_stage(const PileRequest& r, const std::string& entry, const PileSer
   const fs::path run_dir = fs::path(entry) / "run";
   const fs::path done = run_dir / "result.json";
   started = false;
-  if (fs::exists(done)) return pile_run_from_json(json::parse(read_file(done.string())));
+  if (fs::exists(done)) return pile_run_from_json(read_json_file(done.string()));
   const auto lock = lock_entry(entry, "another process pouring the same pile");
-  if (fs::exists(done)) return pile_run_from_json(json::parse(read_file(done.string())));
+  if (fs::exists(done)) return pile_run_from_json(read_json_file(done.string()));
   started = true;
   write_json_atomic((fs::path(entry) / "request.json").string(), to_json(r));
   RunOptions opt;
@@ -218,9 +218,9 @@ PhotoOutcome photo_stage(const PileRequest& r, const PileRun& run, const std::st
                          const std::string& entry, bool& started) {
   const fs::path done = fs::path(entry) / "result.json";
   started = false;
-  if (fs::exists(done)) return photo_outcome_of(json::parse(read_file(done.string())), entry);
+  if (fs::exists(done)) return photo_outcome_of(read_json_file(done.string()), entry);
   const auto lock = lock_entry(entry, "another process photographing the same pile");
-  if (fs::exists(done)) return photo_outcome_of(json::parse(read_file(done.string())), entry);
+  if (fs::exists(done)) return photo_outcome_of(read_json_file(done.string()), entry);
   started = true;
   PileSpheres spheres = run.final_spheres;
   if (spheres.x.empty()) {
@@ -357,8 +357,8 @@ void PileService::photograph_missing(const std::vector<PileRequest>& requests,
       photos, settings_.workers, WorkerMode::kThreads,
       [&](std::size_t i) {
         const PileOutcome pile = finished_run(requests[i]);
-        const PileRun run = pile_run_from_json(
-            json::parse(read_file((fs::path(pile.run_dir) / "result.json").string())));
+        const PileRun run =
+            pile_run_from_json(read_json_file((fs::path(pile.run_dir) / "result.json").string()));
         bool started = false;
         photo_stage(requests[i], run, pile.run_dir, photo_dir(requests[i]), started);
       },
@@ -369,7 +369,7 @@ void PileService::photograph_missing(const std::vector<PileRequest>& requests,
 // A finished pile run of the store, without its photographs.
 PileOutcome PileService::finished_run(const PileRequest& r) const {
   const fs::path run_dir = fs::path(pile_dir(r)) / "run";
-  return outcome_of(pile_run_from_json(json::parse(read_file((run_dir / "result.json").string()))),
+  return outcome_of(pile_run_from_json(read_json_file((run_dir / "result.json").string())),
                     run_dir.string());
 }
 

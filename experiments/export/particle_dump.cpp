@@ -18,6 +18,7 @@ namespace {
 // Dumps are streamed, not held: the bound is on time, a LIGGGHTS run of many snapshots of
 // millions of grains.
 constexpr std::uintmax_t kMaxDumpBytes = std::uintmax_t{64} << 30;
+constexpr std::size_t kMaxLineBytes = std::size_t{1} << 20;
 }  // namespace
 
 ParticleDump read_particle_dump(const std::string& path) {
@@ -32,23 +33,45 @@ ParticleDump read_particle_dump(const std::string& path) {
   auto bad = [&](const std::string& what) {
     throw InputError(path + ":" + std::to_string(n_line) + ": " + what);
   };
-  while (std::getline(f, line)) {
+  // A dump's lines are short (a header word, or a grain's dozen numbers); a file of one
+  // gigabyte-long line is not a dump, and reading it whole would hold it all in memory first.
+  std::vector<char> buffer(kMaxLineBytes + 1);
+  auto getline = [&](std::ifstream& in, std::string& out) {
+    in.getline(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    if (in.fail() && !in.eof() && in.gcount() == static_cast<std::streamsize>(buffer.size()) - 1) {
+      bad("a line longer than " + std::to_string(kMaxLineBytes) + " bytes: not a dump file");
+    }
+    if (in.gcount() == 0 && in.fail()) return false;
+    out.assign(buffer.data());
+    in.clear(in.rdstate() & ~std::ios::failbit);
+    return true;
+  };
+  // A count or a time step is decimal digits: atoll would read "0x10" as 0 and "1e2" as 1.
+  auto count_of = [&](std::string text, const std::string& what) -> long long {
+    while (!text.empty() && (text.back() == ' ' || text.back() == '\r' || text.back() == '\t'))
+      text.pop_back();
+    while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.erase(0, 1);
+    const std::optional<std::uint64_t> v = parse_seed(text);
+    if (!v || *v > 100'000'000'000ull) bad(what + " = \"" + text + "\" is not a whole number");
+    return static_cast<long long>(*v);
+  };
+  while (getline(f, line)) {
     ++n_line;
     if (line.rfind("ITEM: TIMESTEP", 0) == 0) {
       ParticleDump snap;
       std::string v, count;
       ++n_line;
-      if (!std::getline(f, v)) bad("a TIMESTEP without its value");
-      snap.timestep = std::atoll(v.c_str());
+      if (!getline(f, v)) bad("a TIMESTEP without its value");
+      snap.timestep = count_of(v, "TIMESTEP");
       long long n = -1;
       int ix = -1, iy = -1, iz = -1, ir = -1, columns = 0;
-      while (std::getline(f, line)) {
+      while (getline(f, line)) {
         ++n_line;
         if (line.rfind("ITEM: NUMBER OF ATOMS", 0) == 0) {
           ++n_line;
-          if (!std::getline(f, count)) bad("NUMBER OF ATOMS without its value");
-          n = std::atoll(count.c_str());
-          if (n < 0 || n > 100'000'000) bad("NUMBER OF ATOMS = " + count + " is not a count");
+          if (!getline(f, count)) bad("NUMBER OF ATOMS without its value");
+          n = count_of(count, "NUMBER OF ATOMS");
+          if (n > 100'000'000) bad("NUMBER OF ATOMS = " + count + " is above 100 million");
         } else if (line.rfind("ITEM: ATOMS", 0) == 0) {
           std::istringstream names(line.substr(11));
           std::string name;
@@ -68,8 +91,9 @@ ParticleDump read_particle_dump(const std::string& path) {
       snap.x.reserve(static_cast<std::size_t>(n));
       for (long long i = 0; i < n; ++i) {
         ++n_line;
-        if (!std::getline(f, line)) bad("the snapshot ends after " + std::to_string(i) + " of " +
-                                        std::to_string(n) + " atoms");
+        if (!getline(f, line))
+          bad("the snapshot ends after " + std::to_string(i) + " of " + std::to_string(n) +
+              " atoms");
         // The columns measured are read by the one strict number reader (io/numbers.hpp): a
         // "nan", "inf", hex or out-of-range value is refused by name; the others are skipped.
         std::istringstream row(line);

@@ -144,6 +144,22 @@ std::string read_file(const std::string& path, std::uintmax_t max_bytes) {
   return text;
 }
 
+std::string json_error_text(const std::exception& e) {
+  std::string why = e.what();
+  const std::size_t tag = why.find("] ");
+  if (why.rfind("[json.", 0) == 0 && tag != std::string::npos) why.erase(0, tag + 2);
+  return why;
+}
+
+nlohmann::json read_json_file(const std::string& path, std::uintmax_t max_bytes) {
+  const std::string text = read_file(path, max_bytes);
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": not valid JSON (" + json_error_text(e) + ")");
+  }
+}
+
 void refuse_repeated_contents(const std::vector<std::string>& paths, const std::string& option) {
   std::vector<std::pair<std::string, std::string>> seen;  // content hash, path
   for (const std::string& p : paths) {
@@ -194,7 +210,9 @@ void write_file_atomic(const std::string& path, const std::string& text) {
 }
 
 void write_json_atomic(const std::string& path, const nlohmann::json& j) {
-  write_file_atomic(path, j.dump(2) + "\n");
+  // A file name on Linux is any bytes and JSON text is UTF-8: a name that is not UTF-8 is
+  // written with U+FFFD in place of its stray bytes rather than failing the write.
+  write_file_atomic(path, j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
 void write_made_file(const std::string& path, const std::string& text) {
@@ -218,7 +236,7 @@ void write_made_file(const std::string& path, const std::string& text) {
                                     "size, modification time); a listed file may be "
                                     "replaced by reposetwin, any other is the user's"},
                                    {"files", files}}
-                            .dump(2) +
+                            .dump(2, ' ', false, nlohmann::json::error_handler_t::replace) +
                         "\n");
 }
 
@@ -280,6 +298,15 @@ void OutputPlan::check() const {
       if (const std::string why = not_regular(st.st_mode); !why.empty())
         throw OutputRefused(OutputRefusal::kNotRegular,
                             name + ": " + why + "; an output replaces only a regular file");
+    } else {
+      // Its folder exists or can be made: a path under a regular file ("notes.txt/x.png") is
+      // refused now, not after the outputs before it were written.
+      fs::path up = fs::absolute(o.path, ec).lexically_normal().parent_path();
+      while (!up.empty() && !fs::exists(up, ec) && up != up.parent_path()) up = up.parent_path();
+      if (!fs::is_directory(up, ec))
+        throw OutputRefused(OutputRefusal::kNotRegular,
+                            name + ": cannot be written: " + up.string() +
+                                " is not a folder; give a path in a folder");
     }
     // Two outputs at one file: by name before either exists, by inode once one does.
     const fs::path a = fs::weakly_canonical(fs::absolute(o.path, ec), ec);

@@ -46,6 +46,14 @@ void check_input_file(const std::string& path, std::uintmax_t max_bytes = kMaxRe
 /// the descriptor it reads from; throws InputError naming the path and the reason.
 std::string read_file(const std::string& path, std::uintmax_t max_bytes = kMaxReadBytes);
 
+/// A whole JSON file read through read_file(): InputError `path: not valid JSON (why)` for text
+/// that does not parse, with the parser's reason and place but not its internal tag, so every
+/// reader of a record names the file the same way.
+nlohmann::json read_json_file(const std::string& path, std::uintmax_t max_bytes = kMaxReadBytes);
+
+/// The text of a JSON parser's exception without its "[json.exception.parse_error.101] " tag.
+std::string json_error_text(const std::exception& e);
+
 /// Throws InputError naming both paths when two of `paths` hold the same bytes (compared by
 /// content, so a copy under another name is caught too): one photo listed twice is one view,
 /// not two independent ones, and would shrink the spread it feeds by the square root of the

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "experiments/io/input_error.hpp"
+#include "experiments/io/numbers.hpp"
 #include "experiments/io/scene_keys.hpp"
 #include "experiments/io/toml_edit.hpp"
 
@@ -14,6 +15,22 @@ namespace {
 
 std::string where(std::string_view origin) {
   return origin.empty() ? std::string("override") : std::string(origin);
+}
+
+// Whether TOML reads `text` as an integer or a float.
+bool is_toml_number(std::string_view text) {
+  try {
+    const toml::table t = toml::parse("v = " + std::string(text));
+    const toml::node* v = t.get("v");
+    return v != nullptr && (v->is_integer() || v->is_floating_point());
+  } catch (const toml::parse_error&) {
+    return false;
+  }
+}
+
+bool is_inf_or_nan(std::string_view text) {
+  if (!text.empty() && (text.front() == '+' || text.front() == '-')) text.remove_prefix(1);
+  return text == "inf" || text == "nan";
 }
 
 bool is_index(const std::string& s) {
@@ -177,7 +194,17 @@ void apply_overrides(toml::table& doc, const std::vector<Override>& overrides,
 
 Override typed_override(std::string key, std::string_view text, std::string_view origin) {
   if (text.empty()) throw InputError(where(origin) + " \"" + key + "=\": the value is empty");
-  if (is_toml_value(text)) return {std::move(key), std::string(text)};
+  if (is_toml_value(text)) {
+    // TOML reads 0x1A, 0o17, 0b101 and 1_000 as numbers; a person typing a value means a plain
+    // decimal, so those spellings are refused here, once for --set and sheet columns alike.
+    // inf and nan pass on to the scene's own checks, which name the key and its finite range.
+    if (is_toml_number(text) && !parse_plain_decimal(text) && !is_inf_or_nan(text))
+      throw InputError(where(origin) + " \"" + key + "=" + std::string(text) + "\": \"" +
+                       std::string(text) +
+                       "\" is not a plain decimal (digits, an optional point and exponent; no "
+                       "hex, octal, binary or '_' separators)");
+    return {std::move(key), std::string(text)};
+  }
   // Text that starts like a TOML string, array or table but is not one is a typo in it; any
   // other text is a word.
   if (std::string_view("\"'[{").find(text.front()) != std::string_view::npos) {

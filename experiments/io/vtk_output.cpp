@@ -2,28 +2,30 @@
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
-#include <vtkFieldData.h>
-#include <vtkStringArray.h>
 #include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
 #include <vtkIntArray.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkStringArray.h>
 #include <vtkTypeInt64Array.h>
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
 
 #include <cmath>
 #include <cstdio>
-#include <numbers>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <numbers>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
 
+#include "experiments/io/numbers.hpp"
 #include "experiments/io/provenance.hpp"
 #include "sim/world.hpp"
 
@@ -277,14 +279,24 @@ constexpr std::uintmax_t kMaxSnapshotBytes = std::uintmax_t{16} << 30;
 }  // namespace
 
 SnapshotParticles read_vtp(const std::string& path) {
-  if (!std::filesystem::exists(path)) throw std::runtime_error(path + ": snapshot does not exist");
+  std::error_code ec;
+  if (!std::filesystem::exists(std::filesystem::symlink_status(path, ec)))
+    throw std::runtime_error(path + ": snapshot does not exist");
   // VTK opens the file itself: a FIFO or a device is refused before it does.
   check_input_file(path, kMaxSnapshotBytes);
   vtkNew<vtkXMLPolyDataReader> reader;
   reader->SetFileName(path.c_str());
+  // VTK prints a reader's errors itself, as coloured log lines with its source file and line; a
+  // file that is not a snapshot is this function's message, naming the file, and nothing else.
+  const bool warnings = vtkObject::GetGlobalWarningDisplay();
+  vtkObject::GlobalWarningDisplayOff();
   reader->Update();
+  vtkObject::SetGlobalWarningDisplay(warnings);
   vtkPolyData* poly = reader->GetOutput();
-  if (!poly || !poly->GetPoints()) throw std::runtime_error(path + ": not a particle snapshot");
+  if (reader->GetErrorCode() != 0 || !poly || !poly->GetPoints())
+    throw std::runtime_error(path +
+                             ": not a particle snapshot (a VTK XML PolyData file with "
+                             "the points and their \"radius\" is expected)");
   auto* radius = vtkDoubleArray::SafeDownCast(poly->GetPointData()->GetArray("radius"));
   auto* material = vtkIntArray::SafeDownCast(poly->GetPointData()->GetArray("material"));
   // (The reader may give the 64-bit ids as any integer array type; ids are exact in a double.)
@@ -327,7 +339,14 @@ void PvdSeries::load() {
   std::string line;
   while (std::getline(in, line)) {
     std::smatch m;
-    if (std::regex_search(line, m, re)) entries_.push_back({std::stod(m[1]), std::stoi(m[2]), m[3]});
+    if (std::regex_search(line, m, re)) {
+      const std::optional<double> t = parse_plain_decimal(m[1].str());
+      const std::optional<std::uint64_t> part = parse_seed(m[2].str());
+      if (!t || !part || *part > 1000000)
+        throw std::runtime_error(path_ + ": a series entry with timestep \"" + m[1].str() +
+                                 "\" and part \"" + m[2].str() + "\" is not one of ours");
+      entries_.push_back({*t, static_cast<int>(*part), m[3]});
+    }
   }
 }
 

@@ -243,7 +243,7 @@ void read_overrides(LabTest& test, const Row& row, const Where& w, const LabShee
     if (h.rfind("set:", 0) != 0) continue;
     const std::string v = row.get(h);
     if (v.empty()) continue;
-    test.overrides.emplace_back(h.substr(4), typed_override(h.substr(4), v, h).value);
+    test.overrides.emplace_back(h.substr(4), typed_override(h.substr(4), v, w.at(h)).value);
     test.override_columns.push_back(h);
     // A number is plotted on an axis; anything else (a file name, a model keyword) as a
     // category.

@@ -9,6 +9,7 @@
 
 #include "experiments/io/format.hpp"
 #include "experiments/io/provenance.hpp"
+#include "experiments/io/scene_overrides.hpp"
 #include "experiments/io/synth_design_file.hpp"
 #include "experiments/loop/loop_effects.hpp"
 
@@ -200,6 +201,19 @@ nlohmann::json synth_truth_json(const SynthDesign& d, const std::string& design_
            {{"width_px", c.width_px}, {"height_px", c.height_px}, {"side_views", c.side_views},
             {"distance_radii", c.distance_radii}, {"height_m", c.camera_height_m},
             {"aim_at_axis_foot", c.aim_at_axis_foot}, {"k1", c.k1}, {"noise_sd", c.noise_sd}}}};
+}
+
+BatchPlan plan_synth_dataset(const SynthDesign& d, int workers) {
+  std::vector<BatchPlan::Part> parts;
+  const int runs = static_cast<int>(d.seeds.size());
+  for (const SynthTest& st : d.tests) {
+    const LabTest t = lab_test(st, d.scene);
+    std::vector<std::string> sets;
+    for (const auto& [key, value] : t.overrides) sets.push_back(key + "=" + value);
+    parts.push_back({"hidden piles of test " + t.id + " (" + std::to_string(runs) + " seeds)",
+                     plan_run(load_scene(t.scene_path, sets), 1), runs});
+  }
+  return plan_batch(std::move(parts), workers);
 }
 
 std::string make_synthetic_dataset(const SynthDesign& d, const std::string& out_dir,

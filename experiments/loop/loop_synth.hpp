@@ -39,14 +39,15 @@
 #pragma once
 
 #include <cstdint>
-#include <nlohmann/json.hpp>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "experiments/io/synth_design_file.hpp"
 #include "experiments/loop/loop_sim.hpp"
+#include "experiments/pile/run_plan.hpp"
 
 namespace reposetwin::experiments {
 
@@ -82,5 +83,10 @@ std::string synth_cache_dir(const std::string& out_dir, const std::string& cache
 /// condition columns, std::runtime_error when a run fails or forms no pile.
 std::string make_synthetic_dataset(const SynthDesign& design, const std::string& out_dir,
                                    SimCache& cache);
+
+/// The piles make_synthetic_dataset() pours, before any is poured: one part per test (its scene
+/// with the test's conditions), one run per hidden seed, `workers` side by side. The hidden
+/// effects change a pile's physics, not its particle count, so the plan is the base scene's.
+BatchPlan plan_synth_dataset(const SynthDesign& design, int workers);
 
 }  // namespace reposetwin::experiments

@@ -163,7 +163,7 @@ json render_and_measure_run(const std::string& run_dir, const ImageSettings& set
   if (!fs::exists(result))
     throw InputError(run_dir + ": not a finished run (result.json is missing)");
   if (!fs::exists(snapshot)) throw InputError(snapshot.string() + ": snapshot does not exist");
-  const PileRun run = pile_run_from_json(json::parse(read_file(result.string())));
+  const PileRun run = pile_run_from_json(read_json_file(result.string()));
   if (frame.empty() && run.pile.status == sim::PileStatus::kNoPile)
     throw InputError(run_dir + ": the run formed no pile (" + run.stop.detail +
                      "); nothing to photograph");

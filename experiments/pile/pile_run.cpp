@@ -159,7 +159,7 @@ class PileRunner {
                        ": no checkpoint to resume from (checkpoint.bin, controller.json)");
     if (resuming) {
       try {
-        ctl_ = Controller::from_json(json::parse(read_file(path("controller.json").string())));
+        ctl_ = Controller::from_json(read_json_file(path("controller.json").string()));
       } catch (const std::exception& e) {
         throw ResumeError(path("controller.json").string() +
                           ": cannot resume from it: " + e.what());
@@ -596,7 +596,7 @@ std::optional<PileRun> run_pile_test_or_continue(const SceneConfig& scene, const
   std::error_code ec;
   if (fs::is_regular_file(out / "result.json", ec)) {
     try {
-      return pile_run_from_json(json::parse(read_file((out / "result.json").string())));
+      return pile_run_from_json(read_json_file((out / "result.json").string()));
     } catch (const std::exception&) {  // a damaged or foreign file: run again
     }
   }

@@ -130,33 +130,32 @@ RunFolderState run_folder_state(const fs::path& dir, std::vector<std::string>* f
   return RunFolderState::kStarted;
 }
 
-void check_output_folder(const std::string& out) {
+void check_output_folder(const std::string& out, const std::string& option) {
   if (out.empty())
-    throw InputError("--out is empty: name the run folder (for example --out runs/my_pile)",
-                     "--out");
+    throw InputError(option + " is empty: name a folder (for example " + option + " runs/my_pile)",
+                     option);
   const fs::path dir(out);
   std::error_code ec;
   const fs::file_status st = fs::status(dir, ec);
   if (fs::exists(st) && !fs::is_directory(st))
-    throw InputError(out + ": --out names a file, not a folder; give a folder for the run",
-                     "--out");
+    throw InputError(out + ": " + option + " names a file, not a folder; give a folder", option);
   // Where the folder would be created: the nearest part of the path that exists must be a
   // folder this process can write into.
   fs::path existing = fs::absolute(dir, ec).lexically_normal();
   while (!existing.empty() && !fs::exists(existing, ec) && existing != existing.parent_path())
     existing = existing.parent_path();
   if (!is_dir(existing))
-    throw InputError(
-        out + ": cannot make the run folder: " + existing.string() + " is a file, not a folder",
-        "--out");
+    throw InputError(out + ": " + option + ": cannot make the folder: " + existing.string() +
+                         " is a file, not a folder",
+                     option);
   if (::access(existing.c_str(), W_OK | X_OK) != 0) {
     const std::string why = std::error_code(errno, std::generic_category()).message();
     const bool itself = existing == fs::absolute(dir, ec).lexically_normal();
-    throw InputError(out + ": cannot " +
-                         (itself ? std::string("write into the run folder: ")
-                                 : std::string("make the run folder: ")) +
-                         existing.string() + " is not writable (" + why + ")",
-                     "--out");
+    throw InputError(
+        out + ": " + option + ": cannot " +
+            (itself ? std::string("write into the folder: ") : std::string("make the folder: ")) +
+            existing.string() + " is not writable (" + why + ")",
+        option);
   }
 }
 

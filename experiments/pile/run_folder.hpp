@@ -45,8 +45,9 @@ void check_run_folder(const std::string& out, bool resume, bool force);
 
 /// The part of check_run_folder about the place alone, for any command's output folder (a
 /// campaign's, a calibration's, a loop's): --out names a folder, or one that can be made in a
-/// writable folder. Throws InputError naming --out and the path.
-void check_output_folder(const std::string& out);
+/// writable folder. Throws InputError naming `option` (the command's --out, --cache) and the
+/// path.
+void check_output_folder(const std::string& out, const std::string& option = "--out");
 
 /// Removes the files a run makes from `dir` (and then-empty folders of its own), leaving every
 /// other file; the lock file stays (the caller holds it).

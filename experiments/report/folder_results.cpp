@@ -5,6 +5,7 @@
 #include <sstream>
 #include <utility>
 
+#include "experiments/calibration/calibration.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/report/format.hpp"
 #include "experiments/io/provenance.hpp"
@@ -140,6 +141,41 @@ void read_campaign_runs(FolderResults& f) {
 
 }  // namespace
 
+void refuse_part_folder(const fs::path& dir) {
+  std::error_code ec;
+  const fs::path d = fs::absolute(dir, ec).lexically_normal();
+  const fs::path d_clean = d.filename().empty() ? d.parent_path() : d;
+  const auto is_file = [&](const fs::path& p) { return fs::is_regular_file(p, ec); };
+  std::string store_entry;
+  if (d_clean.filename() == "run" && is_file(d_clean.parent_path() / "request.json"))
+    store_entry = d_clean.parent_path().string();
+  else if (is_file(d_clean / "request.json") && fs::is_directory(d_clean / "run", ec))
+    store_entry = d_clean.string();
+  if (!store_entry.empty())
+    throw InputError(dir.string() + ": a pile of a pile store (entry " + store_entry +
+                     "), not a folder of `reposetwin run`: its photographs, headline and stage "
+                     "record are kept by the campaign, calibration or loop that asked for it; "
+                     "report that folder instead");
+  const std::string leaf = d_clean.filename().string();
+  const fs::path cases = d_clean.parent_path().parent_path();
+  if (leaf.rfind("seed_", 0) != 0 || cases.filename() != "cases" ||
+      !is_file(d_clean / "result.json"))
+    return;
+  nlohmann::json record;
+  try {
+    record = read_json_file((d_clean / "result.json").string());
+  } catch (const std::exception&) {
+    return;  // not a case record; the folder's own reader names what is wrong with it
+  }
+  if (record.is_object() && record.contains("spec"))
+    throw InputError(dir.string() + ": one seed's record of the case '" +
+                     d_clean.parent_path().filename().string() + "' of the campaign in " +
+                     cases.parent_path().string() +
+                     ", not a run folder; report the campaign: "
+                     "reposetwin report " +
+                     cases.parent_path().string());
+}
+
 bool is_calibration_dir(const fs::path& d) { return fs::is_regular_file(d / "calibration.json"); }
 
 bool is_run_dir(const fs::path& d) {
@@ -155,21 +191,19 @@ bool holds_results(const fs::path& d) {
          is_calibration_dir(d) || fs::is_regular_file(d / "campaign.json");
 }
 
-json read_json(const fs::path& p) {
-  try {
-    return json::parse(read_file(p.string()));
-  } catch (const json::exception& e) {
-    throw InputError(p.string() + ": not valid JSON (" + e.what() + ")");
-  }
-}
+json read_json(const fs::path& p) { return read_json_file(p.string()); }
 
 FolderResults read_folder_results(const std::string& dir, const std::string& title) {
+  refuse_part_folder(dir);
   FolderResults f;
   f.dir = dir;
   f.title = title;
   if (is_run_dir(f.dir)) read_single_run(f);
   if (fs::exists(f.dir / "cases")) read_campaign_runs(f);
-  if (fs::exists(f.dir / "calibration.json")) f.calibration = read_json(f.dir / "calibration.json");
+  if (fs::exists(f.dir / "calibration.json")) {
+    f.calibration = read_json(f.dir / "calibration.json");
+    check_calibration_record(f.calibration, (f.dir / "calibration.json").string());
+  }
   if (fs::is_regular_file(f.dir / "predictions.json"))
     f.predictions = read_json(f.dir / "predictions.json");
   if (f.cases.empty() && f.calibration.is_null())

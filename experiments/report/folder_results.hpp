@@ -46,6 +46,13 @@ struct CaseStats {
   SampleStats image, particle, slice, flank;
 };
 
+/// Throws InputError naming `dir`, what it is and which folder to report instead when it is
+/// part of another command's results rather than a folder of its own: a pile of a pile store
+/// (STORE/piles/KEY or its run/, whose photographs and headline the store's caller keeps) or one
+/// seed's record of a campaign case (cases/CASE/seed_N). Such a folder has no stage record
+/// because it is not a `reposetwin run` folder, which `report` must say rather than call it an
+/// incomplete run.
+void refuse_part_folder(const std::filesystem::path& dir);
 /// A folder is a calibration folder when it holds calibration.json.
 bool is_calibration_dir(const std::filesystem::path& d);
 /// The folder is a single run's (its result, stage record or checkpoint, and no campaign).

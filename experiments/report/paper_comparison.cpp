@@ -33,11 +33,7 @@ namespace {
 std::optional<json> read_json_if_present(const fs::path& p) {
   std::error_code ec;
   if (!fs::is_regular_file(p, ec)) return std::nullopt;
-  try {
-    return json::parse(read_file(p.string()));
-  } catch (const json::exception& e) {
-    throw InputError(p.string() + ": not valid JSON (" + e.what() + ")");
-  }
+  return read_json_file(p.string());
 }
 
 json num_or_null(const json& j, const char* key) {

@@ -557,8 +557,16 @@ json build_report(const std::string& dir, const ReportSettings& settings) {
     summary["predictions"] = *f.predictions;
   }
   if (!f.cases.empty()) {
-    angles_plot(f, out);
-    sections.push_back(templates::kAngles);
+    // A plot needs a point: when no case has an angle (an incomplete run, jams only), the cases
+    // are listed in the table alone, and gnuplot, which refuses a plot of no points, is not run.
+    const bool any_angle = std::any_of(f.cases.begin(), f.cases.end(), [](const CaseRows& c) {
+      const CaseStats s = case_stats(c);
+      return s.image.n + s.particle.n + s.flank.n > 0;
+    });
+    if (any_angle) {
+      angles_plot(f, out);
+      sections.push_back(templates::kAngles);
+    }
     sections.push_back(cases_section(f, out));
   } else if (is_calibration_dir(f.dir)) {
     sections.push_back(no_cases_section(f, out));

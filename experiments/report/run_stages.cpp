@@ -27,7 +27,7 @@ void photographs_stages(const PileRun& run, const RunStagesRequest& req, RunStat
   const std::string& dir = req.run_dir;
   const fs::path measurement = fs::path(dir) / "images" / "measurement.json";
   if (index(state.stage) >= index(RunStage::kMeasured)) {
-    in.images = json::parse(read_file(measurement.string()));
+    in.images = read_json_file(measurement.string());
     return;
   }
   // Photographs without their measurement are taken again with it.

@@ -256,7 +256,7 @@ RunSummary summarise_run(const PileRun& run, const SceneConfig& scene, const Run
   RunSummary s = run_headline(run, in);
   const fs::path dir(in.run_dir);
   const fs::path result = dir / "result.json";
-  json r = json::parse(read_file(result.string()));
+  json r = read_json_file(result.string());
   // The fields a summary adds, all of them, so an earlier summary's (other views, a headline
   // that is now none) cannot survive beside this one.
   const json headline_fields = to_json(Headline{}), no_headline_fields = to_json(NoHeadline{});

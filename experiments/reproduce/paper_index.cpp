@@ -304,7 +304,7 @@ ItemStatus item_status(const PaperItem& item, const std::string& out_dir) {
     st.detail = std::to_string(st.finished) + " runs finished, calibration not finished";
     return st;
   }
-  const nlohmann::json j = nlohmann::json::parse(read_file(cal.string()));
+  const nlohmann::json j = read_json_file(cal.string());
   if (!j.contains("mu_r") || !j["mu_r"].is_number()) {
     st.state = "cannot reach";
     st.detail = j.value("message", std::string());
@@ -312,7 +312,7 @@ ItemStatus item_status(const PaperItem& item, const std::string& out_dir) {
   }
   std::set<std::string> predicted;
   if (fs::is_regular_file(dir / "predictions.json", ec)) {
-    const nlohmann::json p = nlohmann::json::parse(read_file((dir / "predictions.json").string()));
+    const nlohmann::json p = read_json_file((dir / "predictions.json").string());
     for (const auto& q : p.value("predictions", nlohmann::json::array()))
       predicted.insert(q.value("name", std::string()));
   }

@@ -27,11 +27,11 @@ using namespace report;
 
 namespace {
 
-std::optional<json> read_json_file(const fs::path& p) {
+std::optional<json> json_if_present(const fs::path& p) {
   std::error_code ec;
   if (!fs::is_regular_file(p, ec)) return std::nullopt;
   try {
-    return json::parse(read_file(p.string()));
+    return experiments::read_json_file(p.string());
   } catch (const std::exception&) {
     return std::nullopt;
   }
@@ -58,7 +58,7 @@ std::vector<OurPoint> campaign_points(const PaperItem& item, const fs::path& dir
   std::sort(files.begin(), files.end());
   const AngleMeasure measure = parse_angle_measure(item.angle, item.name);
   for (const fs::path& f : files) {
-    auto meta = read_json_file(f);
+    auto meta = json_if_present(f);
     if (!meta || !meta->contains("result") || !meta->contains("spec")) continue;
     const std::string name = (*meta)["spec"].value("case", std::string("?"));
     auto it =
@@ -238,7 +238,7 @@ std::optional<double> scene_x(const SceneDoc& doc, const std::string& key) {
 // paper draws a lodged funnel), and the calibration test itself at its fitted angle.
 bool prediction_figure(const PaperItem& item, const json& cal, const fs::path& dir,
                        const fs::path& page_dir) {
-  const auto pred = read_json_file(dir / "predictions.json");
+  const auto pred = json_if_present(dir / "predictions.json");
   if (!pred || !cal.value("mu_r", json()).is_number()) return false;
   const Campaign c = read_campaign_file(item.file);
   const double mu = cal["mu_r"].get<double>();
@@ -274,7 +274,7 @@ bool prediction_figure(const PaperItem& item, const json& cal, const fs::path& d
 // Our part of a calibration item: mu_r, runs, jam rates, predictions.
 void calibration_part(const PaperItem& item, const fs::path& dir, const fs::path& page_dir,
                       mustache::data& d, ItemSection& s) {
-  auto cal = read_json_file(dir / "calibration.json");
+  auto cal = json_if_present(dir / "calibration.json");
   if (!cal) return;
   Table t;
   t.numeric = true;
@@ -305,7 +305,7 @@ void calibration_part(const PaperItem& item, const fs::path& dir, const fs::path
                          std::to_string(q.value("piles", 0)) + " piles of " +
                              std::to_string(q.value("pours", 0)),
                          "jam rate " + fixed_or_dash(q["jam_rate"], 2)}});
-  if (auto pred = read_json_file(dir / "predictions.json"))
+  if (auto pred = json_if_present(dir / "predictions.json"))
     for (json& q : (*pred)["predictions"])
       t.rows.push_back(
           {{Cell("predicted: " + q.value("name", std::string())),
@@ -322,7 +322,7 @@ void calibration_part(const PaperItem& item, const fs::path& dir, const fs::path
   // against mass, W/d_max, d_max); the calibration plot (angle against mu_r) is its source's.
   const bool own_axes = !item.calibrated_by.empty() && !item.x_key.empty();
   if (own_axes ? prediction_figure(item, *cal, dir, page_dir)
-               : calibration_plot(*cal, read_json_file(dir / "predictions.json").value_or(json()),
+               : calibration_plot(*cal, json_if_present(dir / "predictions.json").value_or(json()),
                                   page_dir, item.name))
     d.set("plot", item.name + ".png");
 }
@@ -337,7 +337,7 @@ void derived_part(const PaperItem& item, const PaperIndex& index, const fs::path
   for (const std::string& src : item.from) {
     const auto it = std::find_if(index.items.begin(), index.items.end(),
                                  [&](const PaperItem& p) { return p.name == src; });
-    auto cal = read_json_file(out / src / "calibration.json");
+    auto cal = json_if_present(out / src / "calibration.json");
     if (it == index.items.end() || !cal || !cal->value("mu_r", json()).is_number()) continue;
     const ItemPlan plan = plan_item(*it);
     const double dmax = plan.groups.empty() ? 0.0 : plan.groups.front().plan.d_max_mm;

@@ -30,7 +30,7 @@ nlohmann::json read_provenance(const fs::path& dir, const PaperIndex& index,
   nlohmann::json p;
   if (fs::is_regular_file(dir / kProvenanceFile, ec)) {
     try {
-      p = nlohmann::json::parse(read_file((dir / kProvenanceFile).string()));
+      p = read_json_file((dir / kProvenanceFile).string());
     } catch (const std::exception&) {
       p = nlohmann::json();
     }
@@ -95,7 +95,7 @@ std::string run_item(const PaperItem& item, const fs::path& dir, const CaseFn& c
     if (!fs::is_regular_file(src, ec))
       return "failed: " + item.calibrated_by + " has no finished calibration (" + src.string() +
              ")";
-    nlohmann::json cal = nlohmann::json::parse(read_file(src.string()));
+    nlohmann::json cal = read_json_file(src.string());
     if (!cal.contains("mu_r") || !cal["mu_r"].is_number()) {
       const auto closest =
           item.closest_if_not_calibrated ? closest_point(cal, item.calibrated_by) : std::nullopt;
