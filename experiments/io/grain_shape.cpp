@@ -22,7 +22,7 @@ sim::Vec3 read_point(const toml::node& node, const TableReader& t, const std::st
   if (!a || a->size() != 3) t.fail(at, "= " + show_node(node) + " must be [x, y, z]");
   sim::Vec3 p;
   for (int c = 0; c < 3; ++c) {
-    const auto v = (*a)[static_cast<std::size_t>(c)].value<double>();
+    const std::optional<double> v = number_of((*a)[static_cast<std::size_t>(c)]);
     if (!v || !std::isfinite(*v)) t.fail(at, "= " + show_node(node) + " must be three numbers");
     p[c] = *v;
   }

@@ -17,6 +17,7 @@
 #include "experiments/io/format.hpp"
 #include "experiments/io/suggest.hpp"
 #include "experiments/io/toml_tables.hpp"
+#include "experiments/io/toml_reader.hpp"
 
 namespace reposetwin::experiments {
 
@@ -99,7 +100,7 @@ bool read_number(const toml::table& t, const std::string& key, const std::string
   if (!node->is_number()) {
     bad(locate(source, where, key, node), show(*node) + " must be a number");
   }
-  out = *node->value<double>();
+  out = *number_of(*node);
   if (!std::isfinite(out)) bad(locate(source, where, key, node), show(*node) + " must be finite");
   return true;
 }
@@ -121,11 +122,11 @@ std::vector<double> read_numbers(const toml::table& t, const std::string& key,
       bad(locate(source, where, key + "[" + std::to_string(i) + "]", &item),
           show(item) + " must be a number");
     }
-    if (!std::isfinite(*item.value<double>())) {
+    if (!std::isfinite(*number_of(item))) {
       bad(locate(source, where, key + "[" + std::to_string(i) + "]", &item),
           show(item) + " must be finite");
     }
-    values.push_back(*item.value<double>());
+    values.push_back(*number_of(item));
   }
   return values;
 }
@@ -311,6 +312,10 @@ PsdFile parse_psd_table(const toml::table& t, const std::string& source, const s
     f.spec.d_min = value * 1e-3;
   }
   if (read_number(t, "interval_sd_fraction", source, where, value)) {
+    if (!(value > 0.0 && value <= 1.0)) {
+      bad(locate(source, where, "interval_sd_fraction", t.get("interval_sd_fraction")),
+          show(*t.get("interval_sd_fraction")) + " must lie in (0, 1]");
+    }
     f.spec.interval_sd_fraction = value;
   }
   if (const toml::node* node = t.get("fines")) {

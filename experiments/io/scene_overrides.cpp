@@ -69,7 +69,9 @@ void SceneDoc::final_frame_only() {
 }
 
 std::optional<double> SceneDoc::number(std::string_view dotted_key) const {
-  return tree_->doc.at_path(dotted_key).value<double>();
+  const toml::node* n = tree_->doc.at_path(dotted_key).node();
+  if (n == nullptr) return std::nullopt;
+  return number_of(*n);
 }
 
 std::optional<std::string> SceneDoc::string(std::string_view dotted_key) const {

@@ -29,6 +29,12 @@ std::string show_node(const toml::node& node) {
   return os.str();
 }
 
+std::optional<double> number_of(const toml::node& node) {
+  if (const auto* f = node.as_floating_point()) return f->get();
+  if (const auto* i = node.as_integer()) return static_cast<double>(i->get());
+  return std::nullopt;
+}
+
 toml::table parse_toml(const std::string& text, const std::string& file) {
   try {
     return toml::parse(text, file);
@@ -62,7 +68,7 @@ const toml::node* TableReader::get(const std::string& key) {
 double TableReader::number(const std::string& key, double fallback) {
   const toml::node* n = get(key);
   if (!n) return fallback;
-  if (auto v = n->value<double>(); v && (n->is_floating_point() || n->is_integer())) {
+  if (const std::optional<double> v = number_of(*n)) {
     // TOML has inf and nan; no key of ours means either, and a nan passes every `<` check.
     if (!std::isfinite(*v)) fail(key, "= " + show_node(*n) + " must be a finite number");
     return *v;
@@ -109,8 +115,8 @@ std::vector<double> TableReader::numbers(const std::string& key) {
   std::vector<double> out;
   for (std::size_t i = 0; i < a->size(); ++i) {
     const toml::node& item = *a->get(i);
-    auto v = item.value<double>();
-    if (!v || !(item.is_floating_point() || item.is_integer()))
+    const std::optional<double> v = number_of(item);
+    if (!v)
       fail(key + "[" + std::to_string(i) + "]", "must be a number, got " + show_node(item));
     if (!std::isfinite(*v))
       fail(key + "[" + std::to_string(i) + "]",

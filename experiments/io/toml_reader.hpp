@@ -71,4 +71,11 @@ toml::table parse_toml(const std::string& text, const std::string& file);
 /// The text of a TOML value for messages.
 std::string show_node(const toml::node& node);
 
+/// A TOML number as a double: a float as written, an integer rounded to the nearest double
+/// (9223372036854775807 reads 9.2e18, so a range check refuses it by its size); nullopt for
+/// anything else. Every number of our files is read through this: toml++'s value<double>()
+/// gives nothing for an integer beyond 2^53, and a read that dereferenced that took whatever
+/// the empty optional held (a huge integer for a fraction passed on one machine, not another).
+std::optional<double> number_of(const toml::node& node);
+
 }  // namespace reposetwin::experiments

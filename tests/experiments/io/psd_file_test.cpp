@@ -171,6 +171,20 @@ sieve_mm = [0.5, 1.0, 2.0]
 passing_percent = [10, 30, 100]
 )",
                {"extra", "unknown top-level key"});
+  // An integer beyond 2^53 where a number is expected is read by its size (toml++'s
+  // value<double>() gives nothing for it, and a dereference read garbage that passed on one
+  // machine): a fraction of 2^63 - 1 is refused as out of range, naming the key.
+  for (const char* huge : {"9223372036854775807", "-9223372036854775808"})
+    expect_error("huge_fraction.toml", std::string(R"([psd]
+sieve_mm = [0.5, 1.0, 2.0]
+passing_percent = [10, 30, 100]
+interval_sd_fraction = )") + huge + "\n",
+                 {"psd.interval_sd_fraction", huge, "must lie in (0, 1]"});
+  expect_error("huge_size.toml", R"([psd]
+sieve_mm = [0.5, 1.0, 9007199254740993]
+passing_percent = [10, 30, 100]
+)",
+               {"sieve_mm[2]"});
 }
 
 TEST(PsdFile, SyntaxErrorAndMissingFileNameTheFile) {
