@@ -57,11 +57,27 @@ RunPlan plan_run(const SceneConfig& scene, int threads, const PlanSettings& sett
   const sim::ResolvedPsd psd = sim::resolve_psd(scene.psd.spec);
   const double density =
       scene.materials[material_index(scene, scene.sample_material, "sample.material")].density;
-  p.particles = std::llround(sim::expected_particle_count(scene.psd.spec, scene.mass, density));
+  // The sampler's count of spheres, turned into grains of the shape mix: shape s takes a mass
+  // share f_s in grains of volume v_s d^3 against a sphere's pi/6 d^3 (as sim/psd.cpp draws).
+  const double spheres = sim::expected_particle_count(scene.psd.spec, scene.mass, density);
+  double grains_per_sphere = 1.0, components_per_sphere = 1.0;
+  if (!scene.shapes.empty()) {
+    grains_per_sphere = components_per_sphere = 0.0;
+    for (const GrainShape& g : scene.shapes) {
+      const double grains = std::numbers::pi / 6.0 * g.mass_fraction / g.volume_per_cube();
+      grains_per_sphere += grains;
+      components_per_sphere += grains * static_cast<double>(g.unit.size());
+    }
+  }
+  p.particles = std::llround(spheres * grains_per_sphere);
+  p.components = std::llround(spheres * components_per_sphere);
   p.fines_fraction = psd.fines_fraction;
   p.d_min_mm = 1e3 * psd.d_min;
   p.d_max_mm = 1e3 * psd.d_max;
-  p.time_step_s = build_model(scene, 0.5 * psd.d_min, 0.5 * psd.d_max).dt;
+  // The step of the smallest component, as the run and the scene's bounds take it: a clump's
+  // spheres are smaller than its sieve size (tetrahedra of d_min: 1.9x the spheres' steps).
+  const auto [r_min, r_max] = grain_radius_range(scene, psd.d_min, psd.d_max);
+  p.time_step_s = build_model(scene, r_min, r_max).dt;
   const double bulk = scene.mass * psd.simulated_mass_factor / (density * kLooseSolidFraction);
   p.fill_height_m = fill_height(scene.container, bulk);
   p.simulated_time_s = std::min(
@@ -71,7 +87,7 @@ RunPlan plan_run(const SceneConfig& scene, int threads, const PlanSettings& sett
   p.threads = std::max(1, threads);
   p.particle_steps_per_s = settings.particle_steps_per_s_per_thread * p.threads;
   p.wall_s =
-      static_cast<double>(p.steps) * static_cast<double>(p.particles) / p.particle_steps_per_s;
+      static_cast<double>(p.steps) * static_cast<double>(p.components) / p.particle_steps_per_s;
   p.representative = representativeness(scene);
   p.psd_source = scene.psd.source;
   p.psd_note = scene.psd.note;
@@ -79,7 +95,12 @@ RunPlan plan_run(const SceneConfig& scene, int threads, const PlanSettings& sett
 }
 
 std::string plan_text(const RunPlan& p, const PlanSettings& s) {
-  std::string t = "plan: " + std::to_string(p.particles) + " particles (d " +
+  const std::string grains =
+      p.components == p.particles
+          ? std::to_string(p.particles) + " particles"
+          : std::to_string(p.particles) + " grains of " + std::to_string(p.components) +
+                " spheres (clumps)";
+  std::string t = "plan: " + grains + " (d " +
                   printf_text("%.3g", p.d_min_mm) + "-" + printf_text("%.3g", p.d_max_mm) +
                   " mm); " + printf_text("%.1f", 100.0 * p.fines_fraction) +
                   "% of the mass is finer than d_min and not simulated\n";
