@@ -3,7 +3,8 @@
 // Design note. `reposetwin calibrate` writes calibration.json and every later command (predict,
 // report, export, the paper's page and runs) reads it. It is written by the one to_json of
 // CalibrationRecord and read by the one calibration_record_from_json, and the commands work on
-// the record's fields, never on the file's keys, so a key is spelled in this file's .cpp alone.
+// the record's fields, never on the file's keys, so the file's keys are spelled in this file's
+// .cpp (and the bracketing driver's working, written and never read, in bracket_calibration.cpp).
 //  * Required: what every calibrate writes today, whichever driver: the status and its message,
 //    the target, mu_r (a number or null), the reachable range, the simulations, the fit and the
 //    observations (with the search runs the confirmation replaced), the campaign, the keys, the
@@ -21,8 +22,8 @@
 //    are absent (none counted) in the bracketing records written before they were counted.
 //  * Strict where it reads: a top level that is not an object, a required key missing, a value
 //    of the wrong type, a status word that is not one of CalibrationStatus, a mu_r without a
-//    two-number interval around it: each an InputError naming the file, the key as written and
-//    the value. Inside a sub-record we write (target, fit, observations, pour counts, the rolling
+//    two-number interval: each an InputError naming the file, the key as written and the value.
+//    The interval is not required to hold mu_r: a bootstrap's central 95% need not. Inside a sub-record we write (target, fit, observations, pour counts, the rolling
 //    model, not_calibrated, material) an unknown key is refused too, with the nearest known one.
 //  * Tolerant at the top level only: the bracketing driver writes its working there (the pours,
 //    the seeds, its stop rule's numbers), which no command reads by key. Such keys are kept in
