@@ -176,27 +176,23 @@ void write_sheet_campaign(const experiments::Campaign& c, const std::string& tex
 }
 
 // The calibration's one line: mu_r and its interval, or why there is none.
-std::string calibration_line(const nlohmann::json& cal, const std::string& out) {
-  const auto num = [](const nlohmann::json& v) {
-    return v.is_number() ? experiments::significant(v.get<double>(), 3) : std::string("?");
-  };
-  const nlohmann::json target = cal.value("target", nlohmann::json::object());
+std::string calibration_line(const experiments::CalibrationRecord& cal, const std::string& out) {
+  const auto num = [](double v) { return experiments::significant(v, 3); };
+  const std::string status = experiments::to_string(cal.status);
   std::string t;
-  if (cal.contains("mu_r") && cal["mu_r"].is_number())
-    t = "mu_r " + num(cal["mu_r"]) + " (95% " + num(cal["mu_r_interval"][0]) + " to " +
-        num(cal["mu_r_interval"][1]) + ") for the target " + num(target.value("angle_deg", nlohmann::json())) +
-        " deg; status " + cal.value("status", std::string());
+  if (cal.mu_r)
+    t = "mu_r " + num(*cal.mu_r) + " (95% " + num(cal.mu_r_lo) + " to " + num(cal.mu_r_hi) +
+        ") for the target " + num(cal.target.angle_deg) + " deg; status " + status;
   else
-    t = "no mu_r: the target " + num(target.value("angle_deg", nlohmann::json())) +
-        " deg is out of reach (" + cal.value("status", std::string()) + ")";
+    t = "no mu_r: the target " + num(cal.target.angle_deg) + " deg is out of reach (" + status +
+        ")";
   // The line ends with what to run next, on the folder as typed (the user's shell stands where
   // it was typed).
   std::string next;
-  for (const auto& step :
-       experiments::calibration_next_steps(out, cal.contains("mu_r") && cal["mu_r"].is_number()))
+  for (const auto& step : experiments::calibration_next_steps(out, cal.reached()))
     next += (next.empty() ? "; next: `" : ", `") + step.command + "` (" + step.what + ")";
-  return t + "; " + std::to_string(cal.value("simulations", 0)) + " pile runs; " + out +
-         "/calibration.json" + next;
+  return t + "; " + std::to_string(cal.simulations) + " pile runs; " + out + "/calibration.json" +
+         next;
 }
 
 }  // namespace
@@ -283,8 +279,8 @@ void add_calibrate_command(CLI::App& app) {
     if (!sheet_text.empty()) write_sheet_campaign(c, sheet_text, a->force);
     const experiments::CalibrateOutcome o = experiments::calibrate_and_predict(
         c, out, measure, case_fn(pa), runner(*a), *predict_only);
-    const nlohmann::json& cal = o.calibration;
-    if (*json && !*predict_only) std::cout << cal.dump(2) << "\n";
+    const experiments::CalibrationRecord& cal = o.calibration;
+    if (*json && !*predict_only) std::cout << experiments::to_json(cal).dump(2) << "\n";
     if (!o.reached) {  // cannot reach: exit code 5
       std::cerr << experiments::cannot_reach_advice(c, cal, measure)
                 << (c.predictions.empty() ? "" : "no predictions run\n");
@@ -316,8 +312,8 @@ void add_calibrate_command(CLI::App& app) {
                          .dump(2)
                   << "\n";
     }
-    if (cal.value("status", std::string()) != "calibrated")
-      std::cerr << "reposetwin calibrate: " << cal.value("message", std::string()) << "\n";
+    if (cal.status != experiments::CalibrationStatus::kCalibrated)
+      std::cerr << "reposetwin calibrate: " << cal.message << "\n";
     std::cout << calibration_line(cal, out) << std::endl;
   });
 }

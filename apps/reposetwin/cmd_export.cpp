@@ -11,6 +11,7 @@
 
 #include "apps/reposetwin/commands.hpp"
 #include "apps/reposetwin/validators.hpp"
+#include "experiments/calibration/calibration_file.hpp"
 #include "experiments/io/calibration_record.hpp"
 #include "experiments/io/format.hpp"
 #include "experiments/io/hash.hpp"

@@ -392,49 +392,45 @@ BracketCalibration calibrate_bracket(const PourBatchFn& pour, const Target& targ
   }
 }
 
-nlohmann::json to_json(const BracketCalibration& c, const BracketSettings& s) {
-  nlohmann::json j = to_json(c.result);
-  nlohmann::json pours = nlohmann::json::array(), points = nlohmann::json::array();
+CalibrationRecord calibration_record(const BracketCalibration& c, const BracketSettings& s) {
+  CalibrationRecord r = calibration_record(c.result);
+  r.method = CalibrationMethod::kBracket;
+  for (const PourPoint& q : c.points)
+    r.pour_counts.push_back({q.mu_r, q.pours, q.piles, q.jams, q.physics_stops, q.time_limits,
+                             q.unsettled, q.jam_rate(),
+                             q.piles > 0 && q.jam_rate() <= s.max_jam_rate});
+  nlohmann::json pours = nlohmann::json::array();
   for (const Pour& p : c.pours) {
     nlohmann::json e = {{"mu_r", p.mu_r}, {"seed", p.seed}, {"outcome", to_string(p.outcome)}};
     e["angle_deg"] = p.outcome == PourOutcome::kPile ? nlohmann::json(p.angle_deg) : nullptr;
     if (!p.detail.empty()) e["detail"] = p.detail;
     pours.push_back(e);
   }
-  for (const PourPoint& q : c.points)
-    points.push_back({{"mu_r", q.mu_r},
-                      {"pours", q.pours},
-                      {"piles", q.piles},
-                      {"jams", q.jams},
-                      {"physics_stops", q.physics_stops},
-                      {"time_limits", q.time_limits},
-                      {"not_settled", q.unsettled},
-                      {"jam_rate", q.jam_rate()},
-                      {"in_fit", q.piles > 0 && q.jam_rate() <= s.max_jam_rate}});
   const auto finite_or_null = [](double x) {
     return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json();
   };
-  j["method"] = "bracket";
-  j["method_text"] =
-      "bracketing with a monotone fit and common random numbers (the same seeds at every mu_r); "
-      "stops when the target is bracketed and the mu_r uncertainty (seed spread and "
-      "interpolation, in quadrature) is below the tolerance; jammed pours counted as a jam rate";
-  j["pile_runs"] = c.pours.size();
-  j["pours"] = pours;
-  j["jam_rate_per_mu_r"] = points;
-  j["bracketed"] = c.bracketed;
-  j["seeds"] = s.seeds;
-  j["seed_roots"] = c.seed_roots;
-  j["mu_r_seed_se"] = finite_or_null(c.mu_r_seed_se);
-  j["mu_r_interpolation_error"] = c.mu_r_interpolation;
-  j["mu_r_uncertainty"] = finite_or_null(c.mu_r_uncertainty);
-  j["mu_r_tolerance"] = s.mu_r_tolerance;
-  j["max_runs"] = s.max_runs;
-  j["max_jam_rate"] = s.max_jam_rate;
-  j["slope_guess_deg"] = s.slope_guess_deg;
-  j["mu_r_start"] = s.mu_r_start.value_or(0.5 * (s.mu_r_lo + s.mu_r_hi));
-  j["ends_first"] = s.ends_first;
-  return j;
+  // The driver's working, written beside the record and read by no command (a person's, and
+  // the tests'): the pours in order, the seeds, and the numbers of its stop rule.
+  r.working = {
+      {"method_text",
+       "bracketing with a monotone fit and common random numbers (the same seeds at every mu_r); "
+       "stops when the target is bracketed and the mu_r uncertainty (seed spread and "
+       "interpolation, in quadrature) is below the tolerance; jammed pours counted as a jam rate"},
+      {"pile_runs", c.pours.size()},
+      {"pours", pours},
+      {"bracketed", c.bracketed},
+      {"seeds", s.seeds},
+      {"seed_roots", c.seed_roots},
+      {"mu_r_seed_se", finite_or_null(c.mu_r_seed_se)},
+      {"mu_r_interpolation_error", c.mu_r_interpolation},
+      {"mu_r_uncertainty", finite_or_null(c.mu_r_uncertainty)},
+      {"mu_r_tolerance", s.mu_r_tolerance},
+      {"max_runs", s.max_runs},
+      {"max_jam_rate", s.max_jam_rate},
+      {"slope_guess_deg", s.slope_guess_deg},
+      {"mu_r_start", s.mu_r_start.value_or(0.5 * (s.mu_r_lo + s.mu_r_hi))},
+      {"ends_first", s.ends_first}};
+  return r;
 }
 
 }  // namespace reposetwin::experiments

@@ -47,6 +47,7 @@
 #include <vector>
 
 #include "experiments/calibration/calibration.hpp"
+#include "experiments/calibration/calibration_file.hpp"
 #include "experiments/io/calibration_settings.hpp"
 
 namespace reposetwin::experiments {
@@ -107,8 +108,9 @@ struct BracketCalibration {
 BracketCalibration calibrate_bracket(const PourBatchFn& pour, const Target& target,
                                      const BracketSettings& settings);
 
-/// The calibration file's JSON: to_json(result) plus the method, the pours, the jam rate per
-/// mu_r, the seed roots and the uncertainty terms.
-nlohmann::json to_json(const BracketCalibration& c, const BracketSettings& settings);
+/// The calibration file's record of it: calibration_record(result) with the method and the pours
+/// per mu_r by outcome, and the driver's working (the pours in order, the seed roots, the
+/// uncertainty terms, the settings) kept for the file as it is written.
+CalibrationRecord calibration_record(const BracketCalibration& c, const BracketSettings& settings);
 
 }  // namespace reposetwin::experiments

@@ -37,7 +37,7 @@ std::vector<std::string> keys_of(const CampaignCalibration& cc) {
 
 // The rolling law behind the calibrated key: the scene's rolling_model beside the key (the
 // scene format's default "epsd" when the scene does not say), described by sim::kRollingModels.
-nlohmann::json rolling_model_of(const Campaign& c) {
+RollingModelRecord rolling_model_of(const Campaign& c) {
   const auto& cc = calibration_of(c);
   const SceneDoc doc = build_case_scene(calibration_run(c, cc.settings.mu_r_lo, 1));
   const auto dot = cc.key.rfind('.');
@@ -50,23 +50,13 @@ nlohmann::json rolling_model_of(const Campaign& c) {
       stated = true;
     }
   }
-  nlohmann::json j = {{"keyword", keyword}, {"stated_in_scene", stated}};
+  RollingModelRecord m{keyword, stated, "", "", ""};
   if (const sim::RollingModelInfo* info = sim::find_rolling_model(keyword)) {
-    j["torque"] = std::string(info->torque);
-    j["radius"] = std::string(info->radius);
-    j["angular_velocity"] = std::string(info->angular_velocity);
+    m.torque = info->torque;
+    m.radius = info->radius;
+    m.angular_velocity = info->angular_velocity;
   }
-  return j;
-}
-
-std::vector<Observation> observations_of(const nlohmann::json& cal, const std::string& file) {
-  std::vector<Observation> obs;
-  if (!cal.contains("observations") || !cal["observations"].is_array())
-    throw std::runtime_error(file + ": field 'observations' is missing");
-  for (const auto& o : cal["observations"])
-    obs.push_back({o.at("mu_r").get<double>(), o.at("seed").get<std::uint64_t>(),
-                   o.at("angle_deg").get<double>()});
-  return obs;
+  return m;
 }
 
 // The first field in which a stored calibration.json answered another question than campaign `c`
@@ -75,22 +65,21 @@ struct FieldDifference {
   std::string field;
   nlohmann::json stored, now;
 };
-std::optional<FieldDifference> calibration_difference(const nlohmann::json& j, const Campaign& c,
+std::optional<FieldDifference> calibration_difference(const CalibrationRecord& r, const Campaign& c,
                                                       const std::string& angle_method) {
   const CampaignCalibration& cc = calibration_of(c);
-  const nlohmann::json target =
-      j.contains("target") ? j["target"].value("angle_deg", nlohmann::json()) : nlohmann::json();
-  const nlohmann::json stored_angle = j.value("angle_method", nlohmann::json());
+  const auto method = [](CalibrationMethod m) {
+    return m == CalibrationMethod::kBracket ? "bracket" : "sequential";
+  };
   const std::vector<FieldDifference> fields = {
-      {"campaign_name", j.value("campaign_name", nlohmann::json()), c.name},
-      {"keys", j.value("keys", nlohmann::json()), keys_of(cc)},
-      {"target.angle_deg", target, cc.target.angle_deg},
-      {"mu_r_range", j.value("mu_r_range", nlohmann::json()),
+      {"campaign_name", r.campaign_name, c.name},
+      {"keys", r.keys, keys_of(cc)},
+      {"target.angle_deg", r.target.angle_deg, cc.target.angle_deg},
+      {"mu_r_range",
+       {r.mu_r_range_lo, r.mu_r_range_hi},
        nlohmann::json{cc.settings.mu_r_lo, cc.settings.mu_r_hi}},
-      {"angle_method", stored_angle,
-       angle_method.empty() ? stored_angle : nlohmann::json(angle_method)},
-      {"method", j.value("method", nlohmann::json("sequential")),
-       cc.method == CalibrationMethod::kBracket ? "bracket" : "sequential"}};
+      {"angle_method", r.angle_method, angle_method.empty() ? r.angle_method : angle_method},
+      {"method", method(r.method), method(cc.method)}};
   for (const FieldDifference& f : fields)
     if (f.stored != f.now) return f;
   return std::nullopt;
@@ -103,9 +92,9 @@ void refuse_to_replace_other_calibration(const Campaign& c, const std::string& o
                                          const CalibrateOptions& options, bool force) {
   const std::string file = (fs::path(out_dir) / kCalibrationFile).string();
   if (force || !fs::exists(file)) return;
-  nlohmann::json old;
+  CalibrationRecord old;
   try {
-    old = read_json_file(file);
+    old = read_calibration_record(file);
   } catch (const std::exception& e) {
     throw std::runtime_error(file + ": a calibration file that cannot be read (" + e.what() +
                              "); move it away or use --force");
@@ -116,27 +105,22 @@ void refuse_to_replace_other_calibration(const Campaign& c, const std::string& o
                              "; give another --out, move the file away, or use --force");
 }
 
-// Adds the caller's extra fields and writes `j` to OUT/NAME on rank 0 (or without MPI).
-void write_result(nlohmann::json& j, const std::string& out_dir, const char* name,
-                  const RunnerSettings& runner, const CalibrateOptions& options) {
-  if (options.extra.is_object())
-    for (const auto& [k, v] : options.extra.items()) j[k] = v;
+// Writes `j` to OUT/NAME on rank 0 (or without MPI).
+void write_result(const nlohmann::json& j, const std::string& out_dir, const char* name,
+                  const RunnerSettings& runner) {
   if (!runner.rank || runner.rank->rank == 0)
     write_json_atomic((fs::path(out_dir) / name).string(), j);
 }
 
-// The calibrated mu_r and its 95% interval, from calibration.json.
+// The calibrated mu_r and its 95% interval.
 struct CalibratedMu {
   double mu = 0.0, lo = 0.0, hi = 0.0;
 };
-CalibratedMu calibrated_mu_of(const nlohmann::json& cal, const std::string& cal_file) {
-  check_calibration_record(cal, cal_file);
-  if (!cal.contains("mu_r") || !cal["mu_r"].is_number())
-    throw std::runtime_error(cal_file + ": status '" + cal.value("status", std::string("?")) +
-                             "': no calibrated mu_r to predict with (" +
-                             cal.value("message", std::string()) + ")");
-  return {cal["mu_r"].get<double>(), cal.at("mu_r_interval").at(0).get<double>(),
-          cal.at("mu_r_interval").at(1).get<double>()};
+CalibratedMu calibrated_mu_of(const CalibrationRecord& cal, const std::string& cal_file) {
+  if (!cal.mu_r)
+    throw std::runtime_error(cal_file + ": status '" + to_string(cal.status) +
+                             "': no calibrated mu_r to predict with (" + cal.message + ")");
+  return {*cal.mu_r, cal.mu_r_lo, cal.mu_r_hi};
 }
 
 // The angle of every prediction run, by run id: one batch for every prediction, the calibrated
@@ -310,9 +294,9 @@ Pour pour_of(const nlohmann::json& run, const AngleFn& angle_of) {
 }
 
 // The bracketing driver (method = "bracket") over the campaign's runs.
-nlohmann::json bracket_calibration_json(const Campaign& c, const std::string& out_dir,
-                                        const CaseFn& case_fn, const AngleFn& angle_of,
-                                        const RunnerSettings& runner) {
+CalibrationRecord bracket_calibration_record(const Campaign& c, const std::string& out_dir,
+                                             const CaseFn& case_fn, const AngleFn& angle_of,
+                                             const RunnerSettings& runner) {
   const CampaignCalibration& cc = calibration_of(c);
   auto pour = [&](const std::vector<std::pair<double, std::uint64_t>>& points) {
     std::vector<CaseSpec> runs;
@@ -322,16 +306,16 @@ nlohmann::json bracket_calibration_json(const Campaign& c, const std::string& ou
       out.push_back(pour_of(r, angle_of));
     return out;
   };
-  return to_json(calibrate_bracket(pour, cc.target, cc.bracket), cc.bracket);
+  return calibration_record(calibrate_bracket(pour, cc.target, cc.bracket), cc.bracket);
 }
 
 // The calibrated material (io/calibration_record.hpp) of a calibration that reached mu_r: the
 // calibration test as its runs were built (calibration_run), its keys apart, so a later command
 // rebuilds the same scene at mu_r.
-CalibratedMaterial calibrated_material(const Campaign& c, const nlohmann::json& cal,
-                                       const std::string& angle) {
+CalibratedMaterial calibrated_material(const Campaign& c, const CalibrationRecord& cal,
+                                       AngleMeasure angle) {
   const CampaignCalibration& cc = calibration_of(c);
-  const CaseSpec run = calibration_run(c, cal.at("mu_r").get<double>(), cc.settings.first_seed);
+  const CaseSpec run = calibration_run(c, *cal.mu_r, cc.settings.first_seed);
   CalibratedMaterial m;
   m.scene = run.scene_path;
   m.scene_fnv1a = run.scene_hash;
@@ -343,11 +327,11 @@ CalibratedMaterial calibrated_material(const Campaign& c, const nlohmann::json& 
     if (o.key == "sample.psd_file")
       m.sieve_sheet = overrides_to_json({o}).at(o.key).get<std::string>();
   }
-  m.mu_r = cal.at("mu_r").get<double>();
-  m.mu_r_lo = cal.at("mu_r_interval").at(0).get<double>();
-  m.mu_r_hi = cal.at("mu_r_interval").at(1).get<double>();
+  m.mu_r = *cal.mu_r;
+  m.mu_r_lo = cal.mu_r_lo;
+  m.mu_r_hi = cal.mu_r_hi;
   m.target_deg = cc.target.angle_deg;
-  m.angle = angle;
+  m.angle = angle_measure_name(angle);
   return m;
 }
 
@@ -369,9 +353,9 @@ void keep_only_predictions(Campaign& c, const std::vector<std::string>& names) {
   c.predictions = std::move(kept);
 }
 
-nlohmann::json run_calibration(const Campaign& c, const std::string& out_dir, const CaseFn& case_fn,
-                               const AngleFn& angle_of, const RunnerSettings& runner,
-                               const CalibrateOptions& options) {
+CalibrationRecord run_calibration(const Campaign& c, const std::string& out_dir,
+                                  const CaseFn& case_fn, const AngleFn& angle_of,
+                                  const RunnerSettings& runner, const CalibrateOptions& options) {
   const CampaignCalibration& cc = calibration_of(c);
   if (!angle_of) throw std::invalid_argument("run_calibration: no angle function");
   refuse_to_replace_other_calibration(c, out_dir, options, runner.force);
@@ -383,49 +367,40 @@ nlohmann::json run_calibration(const Campaign& c, const std::string& out_dir, co
       angles.push_back(angle_of(r));
     return angles;
   };
-  nlohmann::json j =
-      cc.method == CalibrationMethod::kBracket
-          ? bracket_calibration_json(c, out_dir, case_fn, angle_of, runner)
-          : to_json(calibrate_batch(simulate, cc.target, cc.settings));
-  if (cc.method == CalibrationMethod::kSequential) j["method"] = "sequential";
-  j["campaign"] = c.file;
-  j["campaign_name"] = c.name;
-  j["key"] = cc.key;
-  j["keys"] = keys_of(cc);
-  j["mu_r_range"] = {cc.settings.mu_r_lo, cc.settings.mu_r_hi};
-  j["tolerance_deg"] = cc.settings.tolerance_deg;
-  j["seeds_per_point"] = cc.settings.seeds_per_point;
-  j["table1_sample"] = cc.table1_sample ? nlohmann::json(*cc.table1_sample) : nlohmann::json();
-  j["scene"] = c.scene_path;
-  j["rolling_model"] = rolling_model_of(c);
-  j["angle_method"] = options.angle_method;
-  if (!cc.target_photos.is_null()) j["target_photos"] = cc.target_photos;
-  const std::string angle = options.extra.is_object() && options.extra.contains("angle")
-                                ? options.extra["angle"].get<std::string>()
-                                : angle_measure_name(cc.angle);
-  j["material"] = j.contains("mu_r") && j["mu_r"].is_number()
-                      ? to_json(calibrated_material(c, j, angle))
-                      : nlohmann::json();
-  j["created_utc"] = utc_now();
+  CalibrationRecord r = cc.method == CalibrationMethod::kBracket
+                            ? bracket_calibration_record(c, out_dir, case_fn, angle_of, runner)
+                            : calibration_record(calibrate_batch(simulate, cc.target, cc.settings));
+  r.campaign = c.file;
+  r.campaign_name = c.name;
+  r.keys = keys_of(cc);
+  r.mu_r_range_lo = cc.settings.mu_r_lo;
+  r.mu_r_range_hi = cc.settings.mu_r_hi;
+  r.tolerance_deg = cc.settings.tolerance_deg;
+  r.seeds_per_point = cc.settings.seeds_per_point;
+  r.table1_sample = cc.table1_sample;
+  r.scene = c.scene_path;
+  r.rolling_model = rolling_model_of(c);
+  r.angle_method = options.angle_method;
+  r.angle = options.angle;
+  r.code_version = options.code_version;
+  if (!cc.target_photos.is_null())
+    r.target_photos = target_photos_from_json(cc.target_photos, c.file);
+  if (r.mu_r) r.material = calibrated_material(c, r, options.angle.value_or(cc.angle));
+  r.created_utc = utc_now();
   fs::create_directories(fs::path(out_dir));
-  write_result(j, out_dir, kCalibrationFile, runner, options);
-  return j;
+  write_result(to_json(r), out_dir, kCalibrationFile, runner);
+  return r;
 }
 
-nlohmann::json read_calibration(const Campaign& c, const std::string& out_dir,
-                                const std::string& angle_method) {
+CalibrationRecord read_calibration(const Campaign& c, const std::string& out_dir,
+                                   const std::string& angle_method) {
   calibration_of(c);
   const std::string file = (fs::path(out_dir) / kCalibrationFile).string();
   std::error_code ec;
   if (!fs::is_regular_file(file, ec))
     throw std::runtime_error(file + ": no finished calibration here (run `reposetwin calibrate " +
                              c.file + "` first, or give its --out folder)");
-  nlohmann::json j;
-  try {
-    j = read_json_file(file);
-  } catch (const nlohmann::json::exception& e) {
-    throw std::runtime_error(file + ": not a calibration file (" + e.what() + ")");
-  }
+  const CalibrationRecord j = read_calibration_record(file);
   if (const auto d = calibration_difference(j, c, angle_method))
     throw std::runtime_error(file + ": field '" + d->field + "' = " + d->stored.dump() +
                              " differs from the campaign file's " + d->now.dump() + " (" + c.file +
@@ -433,7 +408,7 @@ nlohmann::json read_calibration(const Campaign& c, const std::string& out_dir,
   return j;
 }
 
-nlohmann::json run_predictions(const Campaign& c, const nlohmann::json& cal,
+nlohmann::json run_predictions(const Campaign& c, const CalibrationRecord& cal,
                                const std::string& out_dir, const CaseFn& case_fn,
                                const AngleFn& angle_of, const RunnerSettings& runner,
                                const CalibrateOptions& options) {
@@ -441,7 +416,7 @@ nlohmann::json run_predictions(const Campaign& c, const nlohmann::json& cal,
   if (!angle_of) throw std::invalid_argument("run_predictions: no angle function");
   const std::string cal_file = (fs::path(out_dir) / kCalibrationFile).string();
   const CalibratedMu m = calibrated_mu_of(cal, cal_file);
-  const MonotoneFit fit = fit_monotone(observations_of(cal, cal_file));
+  const MonotoneFit fit = fit_monotone(cal.observations);
   const std::map<std::string, double> angle =
       prediction_angles(c, m, out_dir, case_fn, angle_of, runner);
   nlohmann::json list = nlohmann::json::array();
@@ -450,14 +425,16 @@ nlohmann::json run_predictions(const Campaign& c, const nlohmann::json& cal,
   nlohmann::json out = {{"campaign", c.file},
                         {"campaign_name", c.name},
                         {"calibration_file", kCalibrationFile},
-                        {"calibration_status", cal.value("status", std::string())},
+                        {"calibration_status", to_string(cal.status)},
                         {"mu_r", m.mu},
                         {"mu_r_interval", {m.lo, m.hi}},
                         {"keys", keys_of(cc)},
                         {"angle_method", options.angle_method},
                         {"created_utc", utc_now()},
                         {"predictions", merge_with_earlier(file, m.mu, keys_of(cc), list)}};
-  write_result(out, out_dir, kPredictionsFile, runner, options);
+  if (!options.code_version.empty()) out["code_version"] = options.code_version;
+  if (options.angle) out["angle"] = angle_measure_name(*options.angle);
+  write_result(out, out_dir, kPredictionsFile, runner);
   return out;
 }
 
@@ -536,22 +513,20 @@ std::string calibration_order_text(const Campaign& c) {
   return t;
 }
 
-std::string cannot_reach_advice(const Campaign& c, const nlohmann::json& cal,
+std::string cannot_reach_advice(const Campaign& c, const CalibrationRecord& cal,
                                 AngleMeasure measure) {
-  if (cal.contains("mu_r") && cal["mu_r"].is_number()) return "";
+  if (cal.mu_r) return "";
   const CampaignCalibration& cc = calibration_of(c);
   const double target = cc.target.angle_deg;
   const std::string lo = significant(cc.settings.mu_r_lo, 3), hi = significant(cc.settings.mu_r_hi, 3);
   const std::string angle = angle_measure_name(measure);
-  const bool high = cal.value("status", std::string()) == to_string(CalibrationStatus::kCannotReachHigh);
-  const bool low = cal.value("status", std::string()) == to_string(CalibrationStatus::kCannotReachLow);
-  const int runs = cal.value("simulations", 0);
+  const bool high = cal.status == CalibrationStatus::kCannotReachHigh;
+  const bool low = cal.status == CalibrationStatus::kCannotReachLow;
+  const int runs = cal.simulations;
   std::string t;
-  const nlohmann::json reach = cal.value("reachable_deg", nlohmann::json());
-  const bool have_reach = cal.contains("observations") && !cal["observations"].empty() &&
-                          reach.is_array() && reach.size() == 2;
+  const bool have_reach = !cal.observations.empty();
   if (have_reach) {
-    const double a = reach[0].get<double>(), b = reach[1].get<double>();
+    const double a = cal.reachable_low_deg, b = cal.reachable_high_deg;
     t = "cannot reach: the target " + significant(target, 4) + " deg (angle '" + angle + "') is " +
         (high ? "above" : low ? "below" : "outside") + " what mu_r " + lo + " to " + hi +
         " reaches, " + significant(a, 4) + " to " + significant(b, 4) + " deg (" +
@@ -559,16 +534,16 @@ std::string cannot_reach_advice(const Campaign& c, const nlohmann::json& cal,
         std::to_string(runs) + " pile runs)\n";
   } else {
     t = "cannot reach: no pour formed a pile to measure in " + std::to_string(runs) +
-        " pile runs between mu_r " + lo + " and " + hi + " (" + cal.value("message", "") + ")\n";
+        " pile runs between mu_r " + lo + " and " + hi + " (" + cal.message + ")\n";
   }
   // Without a pile, the advice is on the stop that took the pours: a time limit is cured by
   // time, not by the grain shape.
   std::map<NoHeadlineReason, int> stopped;
-  for (const auto& q : cal.value("jam_rate_per_mu_r", nlohmann::json::array())) {
-    stopped[NoHeadlineReason::kJammed] += q.value("jams", 0);
-    stopped[NoHeadlineReason::kTimeLimit] += q.value("time_limits", 0);
-    stopped[NoHeadlineReason::kNotSettled] += q.value("not_settled", 0);
-    stopped[NoHeadlineReason::kPhysicsStop] += q.value("physics_stops", 0);
+  for (const PourCount& q : cal.pour_counts) {
+    stopped[NoHeadlineReason::kJammed] += q.jams;
+    stopped[NoHeadlineReason::kTimeLimit] += q.time_limits;
+    stopped[NoHeadlineReason::kNotSettled] += q.not_settled;
+    stopped[NoHeadlineReason::kPhysicsStop] += q.physics_stops;
   }
   if (!have_reach && (stopped[NoHeadlineReason::kTimeLimit] > 0 ||
                       stopped[NoHeadlineReason::kNotSettled] > 0 ||
@@ -589,10 +564,7 @@ std::string cannot_reach_advice(const Campaign& c, const nlohmann::json& cal,
          "material's contacts (contacts.rock-plate.friction, rolling_friction), or calibrate "
          "both rolling keys: calibration.key = [\"contacts.rock-rock.rolling_friction\", "
          "\"contacts.rock-plate.rolling_friction\"]\n";
-    int jams = 0;
-    for (const auto& q : cal.value("jam_rate_per_mu_r", nlohmann::json::array()))
-      jams += q.value("jams", 0);
-    if (jams > 0)
+    if (stopped[NoHeadlineReason::kJammed] > 0)
       t += "  - the pours jam near the top of the range: a wider funnel outlet (W_mm, "
            "container.bottom_diameter_m) lets a higher mu_r flow\n";
     else
@@ -625,12 +597,13 @@ CalibrateOutcome calibrate_and_predict(const Campaign& c, const std::string& out
                                        const RunnerSettings& rs, bool predict_only) {
   CalibrateOptions opt;
   opt.angle_method = angle_measure_method(measure);
-  opt.extra = {{"code_version", code_version()}, {"angle", angle_measure_name(measure)}};
+  opt.code_version = code_version();
+  opt.angle = measure;
   CalibrateOutcome o;
   o.calibration = predict_only
                       ? read_calibration(c, out, opt.angle_method)
                       : run_calibration(c, out, fn, calibration_angle(measure), rs, opt);
-  o.reached = o.calibration.contains("mu_r") && o.calibration["mu_r"].is_number();
+  o.reached = o.calibration.reached();
   if (o.reached && !c.predictions.empty())
     o.predictions = run_predictions(c, o.calibration, out, fn, prediction_angle(measure), rs, opt);
   return o;

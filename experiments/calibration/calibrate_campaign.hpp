@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "experiments/calibration/calibration_file.hpp"
 #include "experiments/campaign/campaign.hpp"
 #include "experiments/pile/run_plan.hpp"
 
@@ -30,10 +31,12 @@ namespace reposetwin::experiments {
 /// are listed and counted (no_pile), never averaged.
 using AngleFn = std::function<double(const nlohmann::json& case_result)>;
 
-/// What the calibrate command records beside the numbers.
+/// What the calibrate command records beside the numbers, in calibration.json and
+/// predictions.json.
 struct CalibrateOptions {
-  std::string angle_method;  // how the angle is measured, in words (stored in the JSON files)
-  nlohmann::json extra;      // more fields for calibration.json (e.g. code version)
+  std::string angle_method;           // how the angle is measured, in words
+  std::string code_version;           // the code that made them; empty: not recorded
+  std::optional<AngleMeasure> angle;  // the measure matched; none: the campaign's, unrecorded
 };
 
 /// Keeps only the [[predict]] tests named in `names`, in that order; std::invalid_argument naming
@@ -41,27 +44,28 @@ struct CalibrateOptions {
 void keep_only_predictions(Campaign& c, const std::vector<std::string>& names);
 
 /// Calibrates the campaign's [calibration] through run_batch (resumable: finished runs are
-/// reused) and writes OUT/calibration.json atomically; returns its content. Besides to_json of the
-/// result it records the campaign (file, name), the keys, the mu_r range, table1_sample, the
-/// scene and the scene's rolling model (keyword and the exact law, from sim::kRollingModels).
-/// Throws std::invalid_argument if the campaign has no [calibration].
-nlohmann::json run_calibration(const Campaign& campaign, const std::string& out_dir,
-                               const CaseFn& case_fn, const AngleFn& angle_of,
-                               const RunnerSettings& runner = {},
-                               const CalibrateOptions& options = {});
+/// reused) and writes OUT/calibration.json atomically; returns its record. Besides the result it
+/// records the campaign (file, name), the keys, the mu_r range, table1_sample, the scene, the
+/// scene's rolling model (keyword and the exact law, from sim::kRollingModels) and the
+/// calibrated material. Throws std::invalid_argument if the campaign has no [calibration].
+CalibrationRecord run_calibration(const Campaign& campaign, const std::string& out_dir,
+                                  const CaseFn& case_fn, const AngleFn& angle_of,
+                                  const RunnerSettings& runner = {},
+                                  const CalibrateOptions& options = {});
 
 /// Reads OUT/calibration.json and checks that it is this campaign's finished calibration (same
 /// campaign name, keys, target and mu_r range, and the angle method when `angle_method` is given).
-/// Throws std::runtime_error naming the file and the field that differs or is missing.
-nlohmann::json read_calibration(const Campaign& campaign, const std::string& out_dir,
-                                const std::string& angle_method = "");
+/// Throws std::runtime_error naming the file and the field that differs, InputError for a file
+/// that is not a calibration record.
+CalibrationRecord read_calibration(const Campaign& campaign, const std::string& out_dir,
+                                   const std::string& angle_method = "");
 
 /// Runs every [[predict]] test at the calibration's mu_r (and at its interval ends unless the
 /// entry says interval_ends = false) through run_batch, and writes OUT/predictions.json
 /// atomically; returns its content: per prediction the angles per seed, mean, seed sd, the
 /// measured angle, the error (mean - measured) and the mu_r interval's effect with its method.
 /// Throws std::runtime_error if the calibration has no calibrated mu_r (cannot reach).
-nlohmann::json run_predictions(const Campaign& campaign, const nlohmann::json& calibration,
+nlohmann::json run_predictions(const Campaign& campaign, const CalibrationRecord& calibration,
                                const std::string& out_dir, const CaseFn& case_fn,
                                const AngleFn& angle_of, const RunnerSettings& runner = {},
                                const CalibrateOptions& options = {});
@@ -86,8 +90,8 @@ std::string calibration_order_text(const Campaign& campaign);
 /// Why a calibration did not reach its target, in numbers (the target against the interval the
 /// mu_r range reaches, after how many runs), and what to try, one suggestion a line: the grain
 /// shape (blocky grains), the plate friction, the mu_r range, and the flank measure as a declared
-/// fallback. Empty when calibration.json has a calibrated mu_r.
-std::string cannot_reach_advice(const Campaign& campaign, const nlohmann::json& calibration,
+/// fallback. Empty when the calibration has a mu_r.
+std::string cannot_reach_advice(const Campaign& campaign, const CalibrationRecord& calibration,
                                 AngleMeasure measure);
 
 /// A command to run after a calibration, and what it makes.
@@ -103,7 +107,7 @@ std::vector<NextStep> calibration_next_steps(const std::string& folder, bool rea
 
 /// What calibrate_and_predict() wrote.
 struct CalibrateOutcome {
-  nlohmann::json calibration;                // calibration.json's content
+  CalibrationRecord calibration;              // calibration.json
   std::optional<nlohmann::json> predictions;  // predictions.json's, when predictions ran
   bool reached = false;                      // a calibrated mu_r exists (else: cannot reach)
 };

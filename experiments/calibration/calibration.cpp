@@ -8,7 +8,6 @@
 #include <stdexcept>
 
 #include "experiments/io/format.hpp"
-#include "experiments/io/input_error.hpp"
 #include "sim/random.hpp"
 
 namespace reposetwin::experiments {
@@ -503,40 +502,6 @@ Prediction predict(const MonotoneFit& fit, const CalibrationResult& calibrated,
   return p;
 }
 
-void check_calibration_record(const nlohmann::json& j, const std::string& file) {
-  const std::string what = file + ": not a calibration record (as `reposetwin calibrate` writes)";
-  if (!j.is_object())
-    throw InputError(what + ": the top level is " + j.type_name() + ", not an object");
-  const auto shown = [](const nlohmann::json& v) {
-    const std::string s = v.dump();
-    return s.size() > 40 ? s.substr(0, 40) + "..." : s;
-  };
-  if (!j.contains("status")) throw InputError(what + ": the key \"status\" is missing");
-  bool known = false;
-  for (CalibrationStatus s :
-       {CalibrationStatus::kCalibrated, CalibrationStatus::kBudgetSpent,
-        CalibrationStatus::kSeedNoiseLimited, CalibrationStatus::kCannotReachLow,
-        CalibrationStatus::kCannotReachHigh})
-    known = known || (j["status"].is_string() && j["status"].get<std::string>() == to_string(s));
-  if (!known)
-    throw InputError(what + ": \"status\" is " + shown(j["status"]) +
-                     ", not one of calibrated, budget_spent, seed_noise_limited, "
-                     "cannot_reach_low, cannot_reach_high");
-  if (!j.contains("target") || !j["target"].is_object() || !j["target"].contains("angle_deg") ||
-      !j["target"]["angle_deg"].is_number())
-    throw InputError(what + ": the key \"target.angle_deg\" is missing or not a number");
-  if (!j.contains("mu_r")) throw InputError(what + ": the key \"mu_r\" is missing");
-  const nlohmann::json& mu = j["mu_r"];
-  if (!mu.is_number() && !mu.is_null())
-    throw InputError(what + ": \"mu_r\" is " + shown(mu) + ", not a number or null");
-  if (mu.is_number()) {
-    const nlohmann::json iv = j.value("mu_r_interval", nlohmann::json());
-    if (!iv.is_array() || iv.size() != 2 || !iv[0].is_number() || !iv[1].is_number())
-      throw InputError(what + ": \"mu_r_interval\" is " + shown(iv) +
-                       ", not two numbers (a calibrated mu_r carries its interval)");
-  }
-}
-
 nlohmann::json to_json(const MonotoneFit& fit) {
   nlohmann::json pts = nlohmann::json::array();
   for (const auto& p : fit.points)
@@ -545,38 +510,10 @@ nlohmann::json to_json(const MonotoneFit& fit) {
                    {"mean_deg", p.mean_deg},
                    {"sd_deg", p.sd_deg},
                    {"fitted_deg", p.fitted_deg}});
-  return {{"method", "isotonic (PAV, weights = seeds) + piecewise-linear"},
+  return {{"method", kMonotoneFitMethod},
           {"points", pts},
           {"noise_sd_deg", fit.noise_sd_deg},
           {"noise_dof", fit.noise_dof}};
-}
-
-nlohmann::json to_json(const CalibrationResult& r) {
-  nlohmann::json obs = nlohmann::json::array();
-  for (const auto& o : r.observations)
-    obs.push_back({{"mu_r", o.mu_r}, {"seed", o.seed}, {"angle_deg", o.angle_deg}});
-  nlohmann::json excluded = nlohmann::json::array();
-  for (const auto& o : r.excluded)
-    excluded.push_back({{"mu_r", o.mu_r}, {"seed", o.seed}, {"angle_deg", o.angle_deg}});
-  nlohmann::json j = {{"status", to_string(r.status)},
-                      {"message", r.message},
-                      {"target", {{"angle_deg", r.target.angle_deg}, {"sd_deg", r.target.sd_deg}}},
-                      {"reachable_deg", {r.reachable_low_deg, r.reachable_high_deg}},
-                      {"simulations", r.simulations},
-                      {"fit", to_json(r.fit)},
-                      {"observations", obs},
-                      {"excluded_search_observations", excluded}};
-  if (r.mu_r) {
-    j["mu_r"] = *r.mu_r;
-    j["mu_r_interval"] = {r.mu_r_low, r.mu_r_high};
-    j["interval_level"] = r.interval_level;
-    j["interval_open"] = {r.interval_open_low, r.interval_open_high};
-    j["fitted_angle_deg"] = r.fitted_angle_deg;
-    j["fitted_angle_halfwidth_deg"] = r.fitted_angle_halfwidth_deg;
-  } else {
-    j["mu_r"] = nullptr;
-  }
-  return j;
 }
 
 nlohmann::json to_json(const Prediction& p) {

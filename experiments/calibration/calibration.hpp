@@ -61,6 +61,7 @@ struct Observation {
   double mu_r = 0.0;       // rolling resistance coefficient [-]
   std::uint64_t seed = 0;  // run seed
   double angle_deg = 0.0;  // measured angle of repose [deg], in [0, 90]
+  bool operator==(const Observation&) const = default;
 };
 
 /// Count, mean and sample standard deviation (n - 1; 0 for fewer than two values) of angles.
@@ -78,6 +79,7 @@ struct FitPoint {
   double mean_deg = 0.0;    // mean angle over the seeds [deg]
   double sd_deg = 0.0;      // sample standard deviation over the seeds (0 if n == 1) [deg]
   double fitted_deg = 0.0;  // isotonic fit at this point [deg]
+  bool operator==(const FitPoint&) const = default;
 };
 
 /// A non-decreasing piecewise-linear fit of angle against mu_r.
@@ -85,7 +87,12 @@ struct MonotoneFit {
   std::vector<FitPoint> points;  // sorted by mu_r, one per distinct mu_r
   double noise_sd_deg = 0.0;     // pooled within-point standard deviation [deg]
   int noise_dof = 0;             // its degrees of freedom, sum(n_i - 1); 0 = noise not estimated
+  bool operator==(const MonotoneFit&) const = default;
 };
+
+/// The fit in words, as result files state it.
+inline constexpr const char* kMonotoneFitMethod =
+    "isotonic (PAV, weights = seeds) + piecewise-linear";
 
 /// Outcome of a calibration.
 enum class CalibrationStatus {
@@ -99,13 +106,6 @@ enum class CalibrationStatus {
 
 /// The status as a word for files and messages ("calibrated", "budget_spent", ...).
 std::string to_string(CalibrationStatus status);
-
-/// Throws InputError naming `file`, the key as written and what it holds unless `j` has the
-/// shape to_json(const CalibrationResult&) writes: an object whose "status" is one of the status
-/// words, whose "target"."angle_deg" is a number and whose "mu_r" is a number or null, with
-/// "mu_r_interval" two numbers when "mu_r" is one. A reader of a calibration.json calls it before
-/// it reads a value, so an empty or foreign file is an error, never a page of dashes.
-void check_calibration_record(const nlohmann::json& j, const std::string& file);
 
 /// Result of a calibration: the calibrated mu_r (absent when the target cannot be reached) with
 /// its 95% interval, the reachable angle range, and every observation used.
@@ -186,9 +186,8 @@ Prediction predict(const MonotoneFit& fit, double mu_r, const BootstrapSettings&
 Prediction predict(const MonotoneFit& fit, const CalibrationResult& calibrated,
                    const BootstrapSettings& bootstrap = {});
 
-/// JSON forms for result files and reports.
+/// JSON forms for result files (calibration.json is CalibrationRecord's, calibration_file.hpp).
 nlohmann::json to_json(const MonotoneFit& fit);
-nlohmann::json to_json(const CalibrationResult& result);
 nlohmann::json to_json(const Prediction& prediction);
 
 }  // namespace reposetwin::experiments

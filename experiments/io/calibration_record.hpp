@@ -8,11 +8,14 @@
 // sample.psd_file), the calibrated keys, mu_r and its 95% interval, and the target it was fitted
 // to. That is this record, written whole under calibration.json's key "material" by the one
 // to_json and read back by the one from_json, which is strict within it: a missing key, an
-// unknown key (with the nearest known one) or a value of the wrong type is an InputError naming
-// the file, the key and the value. calibration.json's other keys belong to the calibration and
-// are not read here. A calibration that reached no mu_r writes "material": null, which a reader
-// refuses with the calibration's status. Paths are absolute when written; a relative one (a
-// record edited by hand) is read relative to the file's folder, as every path written in a file.
+// unknown key (with the nearest known one) or a value of the wrong type is an error naming the
+// key and the value. The rest of calibration.json is the calibration's record
+// (calibration/calibration_file.hpp), whose reader reads this one under "material" and whose
+// read_calibrated_material() hands it to the export; it lives there because it needs the
+// calibration's types, while this record stays here for export/, which sees io/ only. A
+// calibration that reached no mu_r writes "material": null. Paths are absolute when written; a
+// relative one (a record edited by hand) is read relative to the file's folder, as every path
+// written in a file.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -38,22 +41,19 @@ struct CalibratedMaterial {
                             // scene's own sieve table
   /// Every override a run of the calibrated material applies: the test's, then each key = mu_r.
   std::vector<Override> scene_overrides() const;
+  bool operator==(const CalibratedMaterial&) const = default;
 };
 
 /// The record as calibration.json stores it.
 nlohmann::json to_json(const CalibratedMaterial& m);
 
-/// The record from its JSON; `file` names it in errors. Throws InputError naming the file, the
-/// key (as "material.key") and the value for a missing, unknown or mistyped key.
+/// The record from its JSON (the value of calibration.json's "material"); `file` is the file it
+/// is read from, for relative paths. Throws JsonFieldError (json_read.hpp) at the key, relative
+/// to the record, for a missing, unknown or mistyped key; the reader of the whole file names the
+/// file and puts "material" in front.
 CalibratedMaterial calibrated_material_from_json(const nlohmann::json& j, const std::string& file);
 
 /// The file a calibration folder keeps its record in.
 inline constexpr const char* kCalibrationRecordFile = "calibration.json";
-
-/// Reads the calibrated material of the calibration in `folder` (its calibration.json). Throws
-/// InputError naming the folder or the file for a folder without one, a file that is not JSON,
-/// a calibration without a calibrated mu_r (its status and message), a record missing or
-/// malformed, and a base scene that is gone or was edited since.
-CalibratedMaterial read_calibrated_material(const std::string& folder);
 
 }  // namespace reposetwin::experiments

@@ -17,6 +17,7 @@ namespace reposetwin::experiments {
 struct Target {
   double angle_deg = 0.0;  // [deg], must lie in (0, 90)
   double sd_deg = 0.0;     // 1-sigma uncertainty of the measured angle [deg], >= 0
+  bool operator==(const Target&) const = default;
 };
 
 /// Settings of the bootstrap that gives the uncertainty intervals.

@@ -8,6 +8,7 @@
 // the document. The top-level reader of a file catches the error once and names the file.
 #pragma once
 
+#include <algorithm>
 #include <initializer_list>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -18,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "experiments/io/input_error.hpp"
 #include "experiments/io/suggest.hpp"
 
 namespace reposetwin::experiments {
@@ -158,6 +160,39 @@ inline std::vector<double> numbers_field(const nlohmann::json& j, const char* ke
 /// The array `a` of numbers, null as NaN.
 inline std::vector<double> number_values(const nlohmann::json& a) {
   return elements(a, number_value);
+}
+
+/// A JSON pointer as the user reads a key: "/material/overrides/0/key" as
+/// material.overrides[0].key.
+inline std::string dotted_key(const std::string& pointer) {
+  std::string out;
+  std::size_t from = 1;
+  while (from <= pointer.size()) {
+    const std::size_t slash = std::min(pointer.find('/', from), pointer.size());
+    const std::string token = pointer.substr(from, slash - from);
+    const bool index = !token.empty() && token.find_first_not_of("0123456789") == std::string::npos;
+    out += index ? "[" + token + "]" : (out.empty() ? "" : ".") + token;
+    from = slash + 1;
+  }
+  return out;
+}
+
+/// The error `e`, met reading the document `doc` of `file`, as the InputError the user reads:
+/// the file, the key as written (quoted, dotted) or "the top level", its value when it has one,
+/// and what is wrong: FILE: key "mu_r" = "0.3": is string, not a number.
+inline InputError file_field_error(const JsonFieldError& e, const std::string& file,
+                                   const nlohmann::json& doc) {
+  std::string value;
+  const nlohmann::json::json_pointer p(e.pointer());
+  if (doc.contains(p)) {
+    value = doc.at(p).dump();
+    if (value.size() > 80) value = value.substr(0, 80) + "...";
+    // known_fields puts the value in its own words already.
+    value = e.problem().find("(value ") == std::string::npos ? " = " + value : std::string();
+  }
+  const std::string where = e.pointer().empty() ? std::string("the top level")
+                                                : "key \"" + dotted_key(e.pointer()) + "\"";
+  return InputError(file + ": " + where + value + ": " + e.problem());
 }
 
 }  // namespace reposetwin::experiments

@@ -1,5 +1,6 @@
 #include "experiments/report/calibration_section.hpp"
 
+#include <cmath>
 #include <sstream>
 
 #include "experiments/io/provenance.hpp"
@@ -16,18 +17,19 @@ namespace {
 
 // A file path of a record as the page shows it: its name only (the record holds the path on the
 // machine that made it, which means nothing to a reader of a copied report).
-std::string file_name(const json& v) {
-  return v.is_string() ? fs::path(v.get<std::string>()).filename().string() : std::string("-");
+std::string file_name(const std::string& path) {
+  return path.empty() ? std::string("-") : fs::path(path).filename().string();
 }
 
-std::string mu_r_text(const json& cal) {
-  if (!cal.value("mu_r", json()).is_number()) return "none (" + cal.value("status", std::string("-")) + ")";
-  std::string t = fixed(cal["mu_r"].get<double>(), 3);
-  if (cal.contains("mu_r_interval") && cal["mu_r_interval"].is_array())
-    t += " [" + std::string(interval_open_at(cal, 0) ? "\u2264" : "") +
-         fixed_or_dash(cal["mu_r_interval"][0], 3) + ", " +
-         fixed_or_dash(cal["mu_r_interval"][1], 3) + (interval_open_at(cal, 1) ? "+" : "") + "]";
-  return t;
+std::string mu_r_text(const CalibrationRecord& cal) {
+  if (!cal.mu_r) return "none (" + to_string(cal.status) + ")";
+  return fixed(*cal.mu_r, 3) + " [" + (cal.interval_open_low ? "\u2264" : "") +
+         fixed(cal.mu_r_lo, 3) + ", " + fixed(cal.mu_r_hi, 3) +
+         (cal.interval_open_high ? "+" : "") + "]";
+}
+
+std::string range_text(double lo, double hi, int digits) {
+  return fixed(lo, digits) + " to " + fixed(hi, digits);
 }
 
 std::string range_text(const json& v, int digits, const std::string& unit) {
@@ -35,58 +37,53 @@ std::string range_text(const json& v, int digits, const std::string& unit) {
   return fixed_or_dash(v[0], digits) + " to " + fixed_or_dash(v[1], digits) + unit;
 }
 
-Table summary_table(const json& cal) {
+// A number, or a dash for NaN (a noise the fit could not estimate).
+std::string number_or_dash(double v, int digits = 2) {
+  return std::isfinite(v) ? fixed(v, digits) : std::string("-");
+}
+
+Table summary_table(const CalibrationRecord& cal) {
   Table t;
   t.header = {"what", "value"};
-  const json target = cal.value("target", json::object());
   std::string keys;
-  for (const json& k : cal.value("keys", json::array()))
-    keys += (keys.empty() ? "" : ", ") + k.get<std::string>();
+  for (const std::string& k : cal.keys) keys += (keys.empty() ? "" : ", ") + k;
+  const auto or_dash = [](const std::string& s) { return s.empty() ? std::string("-") : s; };
   t.rows = {
       text_row("calibrated mu_r [95% interval]", mu_r_text(cal)),
-      text_row("status", cal.value("status", std::string("-"))),
-      text_row("target angle [deg]", fixed_or_dash(target.value("angle_deg", json())) + " \u00b1 " +
-                                         fixed_or_dash(target.value("sd_deg", json()))),
-      text_row("angle matched", cal.value("angle", std::string("-")) + ": " +
-                                    cal.value("angle_method", std::string("-"))),
-      text_row("fitted angle at mu_r [deg]",
-               fixed_or_dash(cal.value("fitted_angle_deg", json())) + " \u00b1 " +
-                   fixed_or_dash(cal.value("fitted_angle_halfwidth_deg", json())) +
-                   " (95% half-width of the fitted mean)"),
+      text_row("status", to_string(cal.status)),
+      text_row("target angle [deg]",
+               fixed(cal.target.angle_deg) + " \u00b1 " + fixed(cal.target.sd_deg)),
+      text_row("angle matched", (cal.angle ? angle_measure_name(*cal.angle) : std::string("-")) +
+                                    ": " + or_dash(cal.angle_method)),
+      text_row(
+          "fitted angle at mu_r [deg]",
+          (cal.fitted_angle_deg ? fixed(*cal.fitted_angle_deg) : std::string("-")) + " \u00b1 " +
+              (cal.fitted_angle_deg ? fixed(cal.fitted_angle_halfwidth_deg) : std::string("-")) +
+              " (95% half-width of the fitted mean)"),
       text_row("angles reachable in the mu_r range [deg]",
-               range_text(cal.value("reachable_deg", json()), 2, "")),
-      text_row("mu_r range searched", range_text(cal.value("mu_r_range", json()), 3, "")),
-      text_row("pile runs (simulations)", std::to_string(cal.value("simulations", 0)) + ", " +
-                                              std::to_string(cal.value("seeds_per_point", 0)) +
-                                              " seed(s) per point, tolerance " +
-                                              fixed_or_dash(cal.value("tolerance_deg", json())) +
-                                              " deg"),
-      text_row("fit",
-               cal.value("fit", json::object()).value("method", std::string("-")) +
-                   "; seed noise sd " +
-                   fixed_or_dash(cal.value("fit", json::object()).value("noise_sd_deg", json())) +
-                   " deg"),
-      text_row("keys set to mu_r", keys.empty() ? cal.value("key", std::string("-")) : keys),
-      text_row("rolling model",
-               cal.value("rolling_model", json::object()).value("keyword", std::string("-"))),
-      text_row("campaign, scene", file_name(cal.value("campaign", json())) + ", " +
-                                      file_name(cal.value("scene", json()))),
-      text_row("code version, created (UTC)", cal.value("code_version", std::string("-")) + ", " +
-                                                  cal.value("created_utc", std::string("-"))),
-      text_row("message", cal.value("message", std::string("-")))};
+               range_text(cal.reachable_low_deg, cal.reachable_high_deg, 2)),
+      text_row("mu_r range searched", range_text(cal.mu_r_range_lo, cal.mu_r_range_hi, 3)),
+      text_row("pile runs (simulations)",
+               std::to_string(cal.simulations) + ", " + std::to_string(cal.seeds_per_point) +
+                   " seed(s) per point, tolerance " + fixed(cal.tolerance_deg) + " deg"),
+      text_row("fit", or_dash(cal.fit_method) + "; seed noise sd " +
+                          number_or_dash(cal.fit.noise_sd_deg) + " deg"),
+      text_row("keys set to mu_r", or_dash(keys)),
+      text_row("rolling model", or_dash(cal.rolling_model.keyword)),
+      text_row("campaign, scene", file_name(cal.campaign) + ", " + file_name(cal.scene)),
+      text_row("code version, created (UTC)",
+               or_dash(cal.code_version) + ", " + or_dash(cal.created_utc)),
+      text_row("message", or_dash(cal.message))};
   return t;
 }
 
-Table fit_table(const json& cal) {
+Table fit_table(const CalibrationRecord& cal) {
   Table t;
   t.numeric = true;
   t.header = {"mu_r", "seeds", "mean angle [deg] \u00b1 seed sd", "fitted angle [deg]"};
-  for (const json& p : cal.value("fit", json::object()).value("points", json::array()))
-    t.rows.push_back({{fixed_or_dash(p.value("mu_r", json()), 3),
-                       std::to_string(p.value("n", 0)),
-                       fixed_or_dash(p.value("mean_deg", json())) + " \u00b1 " +
-                           fixed_or_dash(p.value("sd_deg", json())),
-                       fixed_or_dash(p.value("fitted_deg", json()))}});
+  for (const FitPoint& p : cal.fit.points)
+    t.rows.push_back({{fixed(p.mu_r, 3), std::to_string(p.n),
+                       fixed(p.mean_deg) + " \u00b1 " + fixed(p.sd_deg), fixed(p.fitted_deg)}});
   return t;
 }
 
@@ -111,18 +108,14 @@ std::string series(const fs::path& out, const std::string& name, const std::stri
 
 }  // namespace
 
-bool calibration_plot(const json& cal, const json& predictions, const fs::path& out,
+bool calibration_plot(const CalibrationRecord& cal, const json& predictions, const fs::path& out,
                       const std::string& stem) {
   std::ostringstream runs, excluded, fit, checks;
-  for (const json& o : cal.value("observations", json::array()))
-    runs << o.value("mu_r", 0.0) << " " << o.value("angle_deg", 0.0) << "\n";
-  for (const json& o : cal.value("excluded_search_observations", json::array()))
-    excluded << o.value("mu_r", 0.0) << " " << o.value("angle_deg", 0.0) << "\n";
-  for (const json& p : cal.value("fit", json::object()).value("points", json::array()))
-    fit << p.value("mu_r", 0.0) << " " << p.value("fitted_deg", 0.0) << "\n";
-  const bool calibrated = cal.value("mu_r", json()).is_number();
+  for (const Observation& o : cal.observations) runs << o.mu_r << " " << o.angle_deg << "\n";
+  for (const Observation& o : cal.excluded) excluded << o.mu_r << " " << o.angle_deg << "\n";
+  for (const FitPoint& p : cal.fit.points) fit << p.mu_r << " " << p.fitted_deg << "\n";
   for (double a : check_angles(predictions))
-    if (calibrated) checks << cal["mu_r"].get<double>() << " " << a << "\n";
+    if (cal.mu_r) checks << *cal.mu_r << " " << a << "\n";
   std::vector<std::string> clauses = {
       series(out, stem + "_fit.dat", fit.str(),
              "using 1:2 with linespoints lw 2 pt 6 lc rgb '#1f77b4' title 'monotone fit'"),
@@ -139,20 +132,15 @@ bool calibration_plot(const json& cal, const json& predictions, const fs::path& 
     if (!c.empty()) plot += (plot.empty() ? "plot " : ", ") + c;
   if (plot.empty()) return false;
   std::string marks;
-  if (cal.contains("target") && cal["target"].value("angle_deg", json()).is_number()) {
-    const std::string target = fixed(cal["target"]["angle_deg"].get<double>());
-    plot += ", " + target + " with lines dt 2 lc rgb '#2ca02c' title 'target " + target + " deg'";
-  }
-  if (calibrated) {
-    const std::string mu = fixed(cal["mu_r"].get<double>(), 4);
-    if (cal.contains("mu_r_interval") && cal["mu_r_interval"].is_array() &&
-        cal["mu_r_interval"][0].is_number() && cal["mu_r_interval"][1].is_number())
-      marks += "set object 1 rect from " + fixed(cal["mu_r_interval"][0].get<double>(), 4) +
-               ", graph 0 to " + fixed(cal["mu_r_interval"][1].get<double>(), 4) +
-               ", graph 1 behind fc rgb '#dde8f5' fs solid noborder\n";
+  const std::string target = fixed(cal.target.angle_deg);
+  plot += ", " + target + " with lines dt 2 lc rgb '#2ca02c' title 'target " + target + " deg'";
+  if (cal.mu_r) {
+    const std::string mu = fixed(*cal.mu_r, 4);
+    marks += "set object 1 rect from " + fixed(cal.mu_r_lo, 4) + ", graph 0 to " +
+             fixed(cal.mu_r_hi, 4) + ", graph 1 behind fc rgb '#dde8f5' fs solid noborder\n";
     marks += "set arrow 1 from " + mu + ", graph 0 to " + mu +
              ", graph 1 nohead dt 3 lw 2 lc rgb '#d62728'\nset label 1 'calibrated mu_r " +
-             fixed(cal["mu_r"].get<double>(), 3) + " (95% band)' at " + mu +
+             fixed(*cal.mu_r, 3) + " (95% band)' at " + mu +
              ", graph 0.05 offset 0.5,0 tc rgb '#d62728'\n";
   }
   run_gnuplot(out / (stem + ".gp"),
@@ -165,8 +153,8 @@ bool calibration_plot(const json& cal, const json& predictions, const fs::path& 
   return true;
 }
 
-std::string calibration_section(const json& cal, const json& predictions, const fs::path& out,
-                                const std::string& link) {
+std::string calibration_section(const CalibrationRecord& cal, const json& predictions,
+                                const fs::path& out, const std::string& link) {
   mustache::data d;
   d.set("plot",
         text_or_false(calibration_plot(cal, predictions, out, "calibration") ? "calibration.png"
@@ -192,7 +180,8 @@ std::string predictions_section(const json& predictions, const std::string& link
     range.small = effect.value("method", std::string()) == "runs" ? "(run at both ends)"
                                                                   : "(from the calibration slope)";
     const int n = p.value("n", 0);
-    Cell scene(file_name(p.value("scene", json())));
+    const json& scene_path = p.value("scene", json());
+    Cell scene(file_name(scene_path.is_string() ? scene_path.get<std::string>() : ""));
     scene.left = true;
     t.rows.push_back(
         {{name, fixed_or_dash(p.value("mu_r", json()), 3),

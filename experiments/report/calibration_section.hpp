@@ -13,19 +13,21 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "experiments/calibration/calibration_file.hpp"
+
 namespace reposetwin::experiments::report {
 
-/// The calibration plot of calibration.json `cal` (runs, the monotone fit, the target, the
+/// The calibration plot of the calibration `cal` (runs, the monotone fit, the target, the
 /// calibrated mu_r in its interval band, the check runs of `predictions` at it): writes
 /// out/STEM.png with its script STEM.gp and data STEM_*.dat. Returns false when there is
 /// nothing to plot; throws when gnuplot fails (gnuplot.hpp).
-bool calibration_plot(const nlohmann::json& cal, const nlohmann::json& predictions,
+bool calibration_plot(const CalibrationRecord& cal, const nlohmann::json& predictions,
                       const std::filesystem::path& out, const std::string& stem);
 
-/// The calibration section for calibration.json `cal`; writes the plot (script, data, PNG) into
+/// The calibration section for the calibration `cal`; writes the plot (script, data, PNG) into
 /// `out`. `predictions` (predictions.json, or null) gives the check runs at the calibrated mu_r.
 /// `link` is calibration.json relative to `out`.
-std::string calibration_section(const nlohmann::json& cal, const nlohmann::json& predictions,
+std::string calibration_section(const CalibrationRecord& cal, const nlohmann::json& predictions,
                                 const std::filesystem::path& out, const std::string& link);
 
 /// The predictions section for predictions.json; `link` is that file relative to the page.

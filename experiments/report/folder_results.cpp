@@ -200,13 +200,11 @@ FolderResults read_folder_results(const std::string& dir, const std::string& tit
   f.title = title;
   if (is_run_dir(f.dir)) read_single_run(f);
   if (fs::exists(f.dir / "cases")) read_campaign_runs(f);
-  if (fs::exists(f.dir / "calibration.json")) {
-    f.calibration = read_json(f.dir / "calibration.json");
-    check_calibration_record(f.calibration, (f.dir / "calibration.json").string());
-  }
+  if (fs::exists(f.dir / "calibration.json"))
+    f.calibration = read_calibration_record((f.dir / "calibration.json").string());
   if (fs::is_regular_file(f.dir / "predictions.json"))
     f.predictions = read_json(f.dir / "predictions.json");
-  if (f.cases.empty() && f.calibration.is_null())
+  if (f.cases.empty() && !f.calibration)
     throw InputError(dir + ": no run, campaign or calibration results to report");
   if (f.title.empty()) f.title = f.dir.filename().string();
   return f;
@@ -218,13 +216,8 @@ CaseStats case_stats(const CaseRows& c) {
 }
 
 bool same_test_as_calibration(const FolderResults& f, const CaseRows& c) {
-  std::vector<std::string> keys;
-  if (f.calibration.is_object()) {
-    for (const json& k : f.calibration.value("keys", json::array()))
-      if (k.is_string()) keys.push_back(k.get<std::string>());
-    if (f.calibration.contains("key") && f.calibration["key"].is_string())
-      keys.push_back(f.calibration["key"].get<std::string>());
-  }
+  const std::vector<std::string> keys =
+      f.calibration ? f.calibration->keys : std::vector<std::string>{};
   const auto conditions = [&keys](const json& overrides) {
     json o = overrides.is_object() ? overrides : json::object();
     for (const std::string& k : keys) o.erase(k);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "experiments/calibration/calibration.hpp"
+#include "experiments/calibration/calibration_file.hpp"
 
 namespace reposetwin::experiments::report {
 
@@ -33,7 +34,7 @@ struct FolderResults {
   std::filesystem::path dir;
   std::string title;
   std::vector<CaseRows> cases;  // in the order first met
-  nlohmann::json calibration;   // calibration.json, or null
+  std::optional<CalibrationRecord> calibration;  // calibration.json, when the folder has one
   std::optional<nlohmann::json> predictions;
   // A single run folder stopped between its stages (pile/run_state.hpp): what its record says
   // and what is missing; "" for a complete run or another kind of folder. Such a run is listed
@@ -65,8 +66,8 @@ nlohmann::json read_json(const std::filesystem::path& p);
 /// it holds none. `title` empty: the campaign's name or the folder's.
 FolderResults read_folder_results(const std::string& dir, const std::string& title);
 CaseStats case_stats(const CaseRows& c);
-/// Whether case `c` ran the calibration's own test: its overrides, but the calibrated keys (the
-/// calibration's "keys", or its "key"), are a calibration run's ("calib_*"). A prediction of
+/// Whether case `c` ran the calibration's own test: its overrides, but the calibrated keys, are a
+/// calibration run's ("calib_*"). A prediction of
 /// another test at the calibrated mu_r shares the scene but not its conditions (another mass,
 /// another funnel), so a render of it is no picture of the test the lab photographed. True when
 /// the folder holds no calibration run to compare with.

@@ -14,6 +14,7 @@
 #include <set>
 #include <sstream>
 
+#include "experiments/calibration/calibration_file.hpp"
 #include "experiments/io/csv.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
@@ -43,7 +44,7 @@ json num_or_null(const json& j, const char* key) {
 // The calibration folders' result files, with where to look for the paper's CSVs.
 struct CalibrationFolders {
   std::vector<std::string> dirs;
-  std::vector<json> calibrations;  // calibration.json of each folder
+  std::vector<CalibrationRecord> calibrations;  // calibration.json of each folder
   std::vector<json> predictions;   // predictions.json of each folder, or null
   std::vector<fs::path> hints;     // folders of their campaign files
 };
@@ -52,13 +53,14 @@ CalibrationFolders read_calibration_folders(const std::vector<std::string>& dirs
   CalibrationFolders f;
   f.dirs = dirs;
   for (const std::string& d : dirs) {
-    const auto cal = read_json_if_present(fs::path(d) / "calibration.json");
-    if (!cal) throw InputError(d + ": no calibration.json (not a calibration folder)");
-    f.calibrations.push_back(*cal);
+    const fs::path file = fs::path(d) / "calibration.json";
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec))
+      throw InputError(d + ": no calibration.json (not a calibration folder)");
+    f.calibrations.push_back(read_calibration_record(file.string()));
     const auto p = read_json_if_present(fs::path(d) / "predictions.json");
     f.predictions.push_back(p ? *p : json());
-    if (cal->contains("campaign") && (*cal)["campaign"].is_string())
-      f.hints.push_back(fs::path((*cal)["campaign"].get<std::string>()).parent_path());
+    f.hints.push_back(fs::path(f.calibrations.back().campaign).parent_path());
   }
   return f;
 }
@@ -167,26 +169,34 @@ int interval_runs(const json& effect) {
 
 // A calibration's row: its angle from the check runs at the calibrated mu_r when the campaign
 // ran them, else the fit's value there with the pooled seed sd.
-json calibration_row(const json& cal, const json& pj, const std::string& dir,
+// The calibration's measure as the rows name it: "image" when it was not recorded.
+std::string angle_word(const CalibrationRecord& cal) {
+  return angle_measure_name(cal.angle.value_or(AngleMeasure::kImage));
+}
+
+json interval_open(const CalibrationRecord& cal) {
+  return json::array({cal.interval_open_low, cal.interval_open_high});
+}
+
+json calibration_row(const CalibrationRecord& cal, const json& pj, const std::string& dir,
                      const std::string& from) {
   json check;
   if (pj.is_object() && pj.contains("predictions"))
     for (const json& p : pj["predictions"])
       if (p.value("check", false) && check.is_null()) check = p;
-  json r = {
-      {"kind", "calibration"},
-      {"source", dir},
-      {"from", from},
-      {"angle_measure", cal.value("angle", std::string("image"))},
-      {"status", cal.value("status", std::string())},
-      {"mu_r", num_or_null(cal, "mu_r")},
-      {"mu_r_interval", cal.value("mu_r_interval", json())},
-      {"interval_open", cal.value("interval_open", json::array({false, false}))},
-      {"measured_deg", cal.contains("target") ? num_or_null(cal["target"], "angle_deg") : json()},
-      {"measured_source", "campaign target"},
-      {"simulations", cal.value("simulations", 0)},
-      {"angle_mean_deg", json()},
-      {"angle_seed_sd_deg", json()}};
+  json r = {{"kind", "calibration"},
+            {"source", dir},
+            {"from", from},
+            {"angle_measure", angle_word(cal)},
+            {"status", to_string(cal.status)},
+            {"mu_r", cal.mu_r ? json(*cal.mu_r) : json()},
+            {"mu_r_interval", cal.mu_r ? json::array({cal.mu_r_lo, cal.mu_r_hi}) : json()},
+            {"interval_open", interval_open(cal)},
+            {"measured_deg", cal.target.angle_deg},
+            {"measured_source", "campaign target"},
+            {"simulations", cal.simulations},
+            {"angle_mean_deg", json()},
+            {"angle_seed_sd_deg", json()}};
   if (!check.is_null()) {
     r["angle_mean_deg"] = check["mean_deg"];
     r["angle_seed_sd_deg"] = check["seed_sd_deg"];
@@ -196,26 +206,29 @@ json calibration_row(const json& cal, const json& pj, const std::string& dir,
     if (e.is_object() && e.value("method", "") == "runs")
       r["interval_effect_deg"] = e["angle_range_deg"];
     r["simulations"] = r["simulations"].get<int>() + check.value("n", 0) + interval_runs(e);
-  } else if (cal["mu_r"].is_number()) {
-    r["angle_mean_deg"] = num_or_null(cal, "fitted_angle_deg");
-    r["angle_seed_sd_deg"] = cal.contains("fit") ? num_or_null(cal["fit"], "noise_sd_deg") : json();
+  } else if (cal.mu_r) {
+    const auto finite_or_null = [](std::optional<double> x) {
+      return x && std::isfinite(*x) ? json(*x) : json();
+    };
+    r["angle_mean_deg"] = finite_or_null(cal.fitted_angle_deg);
+    r["angle_seed_sd_deg"] = finite_or_null(cal.fit.noise_sd_deg);
     r["angle_how"] = "fit at the calibrated mu_r, pooled seed sd";
   }
   return r;
 }
 
 // A prediction's row: the other test run at the calibrated mu_r.
-json prediction_row(const json& p, const json& cal, const std::string& dir,
+json prediction_row(const json& p, const CalibrationRecord& cal, const std::string& dir,
                     const std::string& from) {
   const json& e = p.value("interval_effect", json::object());
   return {{"kind", "prediction"},
           {"name", p.value("name", std::string())},
-          {"angle_measure", cal.value("angle", std::string("image"))},
+          {"angle_measure", angle_word(cal)},
           {"source", dir},
           {"from", from},
           {"mu_r", num_or_null(p, "mu_r")},
           {"mu_r_interval", p.value("mu_r_interval", json())},
-          {"interval_open", cal.value("interval_open", json::array({false, false}))},
+          {"interval_open", interval_open(cal)},
           {"measured_deg", num_or_null(p, "measured_deg")},
           {"measured_source", "campaign [[predict]]"},
           {"angle_mean_deg", num_or_null(p, "mean_deg")},
@@ -257,18 +270,17 @@ std::vector<json> sorted_rows(std::vector<json> rows) {
 
 // Our mu_r conventions, one per rolling model the calibrations used, as sim::kRollingModels
 // words them (the calibration's own record when the model is unknown to this build).
-json rolling_conventions(const std::vector<json>& calibrations) {
-  std::map<std::string, json> models;
-  for (const json& cal : calibrations)
-    if (cal.contains("rolling_model") && cal["rolling_model"].is_object())
-      models[cal["rolling_model"].value("keyword", std::string("?"))] = cal["rolling_model"];
+json rolling_conventions(const std::vector<CalibrationRecord>& calibrations) {
+  std::map<std::string, RollingModelRecord> models;
+  for (const CalibrationRecord& cal : calibrations)
+    models[cal.rolling_model.keyword] = cal.rolling_model;
+  const auto or_unknown = [](const std::string& s) { return s.empty() ? std::string("?") : s; };
   json conventions = json::array();
   for (const auto& [kw, m] : models) {
     const sim::RollingModelInfo* info = sim::find_rolling_model(kw);
-    conventions.push_back(
-        {{"keyword", kw},
-         {"torque", info ? std::string(info->torque) : m.value("torque", std::string("?"))},
-         {"radius", info ? std::string(info->radius) : m.value("radius", std::string("?"))}});
+    conventions.push_back({{"keyword", kw},
+                           {"torque", info ? std::string(info->torque) : or_unknown(m.torque)},
+                           {"radius", info ? std::string(info->radius) : or_unknown(m.radius)}});
   }
   return conventions;
 }
@@ -330,10 +342,11 @@ json paper_comparison(const std::vector<std::string>& dirs, const std::string& p
     rows.push_back(join_paper(r, sample, paper));
   };
   for (std::size_t i = 0; i < dirs.size(); ++i) {
-    const json& cal = folders.calibrations[i];
+    const CalibrationRecord& cal = folders.calibrations[i];
     const json& pj = folders.predictions[i];
-    const std::string from = cal.value("campaign_name", fs::path(dirs[i]).filename().string());
-    add(calibration_row(cal, pj, dirs[i], from), cal.value("table1_sample", json()));
+    const std::string& from = cal.campaign_name;
+    add(calibration_row(cal, pj, dirs[i], from),
+        cal.table1_sample ? json(*cal.table1_sample) : json());
     if (!pj.is_object() || !pj.contains("predictions")) continue;
     for (const json& p : pj["predictions"])
       if (!p.value("check", false))

@@ -86,11 +86,10 @@ fs::path overlay_of(const FolderResults& f, const CaseRows& c) {
 // at it when there is one); otherwise the first case with a measured render.
 RenderBeside render_beside_lab(const FolderResults& f) {
   RenderBeside b;
-  const json& cal = f.calibration;
-  if (cal.is_object() && cal.contains("mu_r") && cal["mu_r"].is_number()) {
-    const double mu = cal["mu_r"].get<double>();
-    const std::string key = cal.value("key", std::string());
-    const std::string scene = cal.value("scene", std::string());
+  if (f.calibration && f.calibration->mu_r) {
+    const double mu = *f.calibration->mu_r;
+    const std::string& key = f.calibration->keys.front();
+    const std::string& scene = f.calibration->scene;
     double best = std::numeric_limits<double>::infinity();
     for (const CaseRows& c : f.cases) {
       if (!c.overrides.contains(key) || !c.overrides[key].is_number()) continue;
@@ -171,14 +170,13 @@ std::optional<LabView> given_lab_view(const ReportSettings& settings, json& summ
 // calibration measured it (the same camera sidecar or declared scale), with its overlay; none when
 // the calibration's target was typed, or when the photo is no longer where it was (said on the
 // page through `note`).
-std::optional<LabView> target_lab_view(const json& cal, std::string& note) {
-  const json tp = cal.is_object() ? cal.value("target_photos", json()) : json();
-  if (!tp.is_object() || !tp.contains("photos") || tp["photos"].empty()) return std::nullopt;
-  const std::string photo = tp["photos"][0].get<std::string>();
+std::optional<LabView> target_lab_view(const CalibrationRecord& cal, std::string& note) {
+  if (!cal.target_photos) return std::nullopt;
+  const TargetPhotosRecord& tp = *cal.target_photos;
+  const std::string photo = tp.photos.front();
   LabPhotoScale scale;
-  if (tp.value("camera_sidecar", json()).is_string()) scale.camera_json = tp["camera_sidecar"];
-  if (tp.value("declared_mm_per_px", json()).is_number())
-    scale.mm_per_px = tp["declared_mm_per_px"].get<double>();
+  scale.camera_json = tp.camera_sidecar;
+  if (tp.declared_mm_per_px) scale.mm_per_px = *tp.declared_mm_per_px;
   try {
     const LabPhotoMeasurement m = measure_lab_photos(
         {photo}, scale, {"calibration.json: target_photos", "target_photos.camera_sidecar",
@@ -399,7 +397,7 @@ std::string built_section(const std::string& dir, std::size_t folders) {
 // where the report was built), else its name (run from the folder that holds it), and the page
 // says which.
 std::string next_steps_section(const FolderResults& f) {
-  const bool reached = f.calibration.contains("mu_r") && f.calibration["mu_r"].is_number();
+  const bool reached = f.calibration && f.calibration->reached();
   const fs::path given = f.dir.lexically_normal();
   const bool relative = given.is_relative() && !given.empty();
   fs::path whole = fs::absolute(f.dir).lexically_normal();
@@ -451,18 +449,11 @@ std::string reasons_of(const json& without) {
   return t;
 }
 
-std::string calibration_line(const json& c) {
-  const json target = c.value("target", json::object());
-  if (!c.contains("mu_r") || !c["mu_r"].is_number())
-    return "no calibrated mu_r (" + c.value("status", std::string("?")) +
-           "): " + c.value("message", std::string());
-  std::string line = "calibrated mu_r " + fixed_or_dash(c["mu_r"], 3);
-  if (c.contains("mu_r_interval") && c["mu_r_interval"].size() == 2)
-    line += " (" + fixed(100.0 * c.value("interval_level", 0.95), 0) + "% interval " +
-            fixed_or_dash(c["mu_r_interval"][0], 3) + "-" +
-            fixed_or_dash(c["mu_r_interval"][1], 3) + ")";
-  return line + " for the target " + fixed_or_dash(target.value("angle_deg", json()), 2) +
-         " deg, " + std::to_string(c.value("simulations", 0)) + " simulations";
+std::string calibration_line(const CalibrationRecord& c) {
+  if (!c.mu_r) return "no calibrated mu_r (" + to_string(c.status) + "): " + c.message;
+  return "calibrated mu_r " + fixed(*c.mu_r, 3) + " (" + fixed(100.0 * c.interval_level, 0) +
+         "% interval " + fixed(c.mu_r_lo, 3) + "-" + fixed(c.mu_r_hi, 3) + ") for the target " +
+         fixed(c.target.angle_deg, 2) + " deg, " + std::to_string(c.simulations) + " simulations";
 }
 
 std::string cases_line(const json& cases) {
@@ -504,7 +495,8 @@ std::string report_line(const json& summary, const std::string& page) {
     what = summary.value("title", std::string("run")) + ": incomplete run, no headline: " +
            summary["incomplete"].get<std::string>() + "; finish it with run --resume";
   else if (summary.contains("calibration") && summary["calibration"].is_object())
-    what = calibration_line(summary["calibration"]);
+    what = calibration_line(
+        calibration_record_from_json(summary["calibration"], "the report's calibration"));
   else if (summary.contains("cases") && !summary["cases"].empty())
     what = cases_line(summary["cases"]);
   else if (summary.contains("folders"))
@@ -544,11 +536,11 @@ json build_report(const std::string& dir, const ReportSettings& settings) {
   // sample's calibration only.
   std::string photo_note;
   std::optional<LabView> lab = given_lab_view(settings, summary);
-  if (!lab && !f.calibration.is_null()) lab = target_lab_view(f.calibration, photo_note);
-  if (!f.calibration.is_null()) {
-    sections.push_back(calibration_section(f.calibration, f.predictions ? *f.predictions : json(),
+  if (!lab && f.calibration) lab = target_lab_view(*f.calibration, photo_note);
+  if (f.calibration) {
+    sections.push_back(calibration_section(*f.calibration, f.predictions ? *f.predictions : json(),
                                            out, "../calibration.json"));
-    summary["calibration"] = f.calibration;
+    summary["calibration"] = to_json(*f.calibration);
     sections.push_back(next_steps_section(f));
   }
   sections.push_back(lab_photo_section(lab, out, render_beside_lab(f), summary, photo_note));
@@ -571,7 +563,7 @@ json build_report(const std::string& dir, const ReportSettings& settings) {
   } else if (is_calibration_dir(f.dir)) {
     sections.push_back(no_cases_section(f, out));
   }
-  if (is_calibration_dir(f.dir) && f.calibration.value("table1_sample", json()).is_number()) {
+  if (is_calibration_dir(f.dir) && f.calibration && f.calibration->table1_sample) {
     const json cmp = paper_comparison({dir}, settings.paper_dir);
     sections.push_back(comparison_section(cmp, out));
     summary["paper_comparison"] = cmp;

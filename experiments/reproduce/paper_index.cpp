@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "experiments/calibration/calibration_file.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 #include "experiments/io/scene_overrides.hpp"
@@ -304,10 +305,10 @@ ItemStatus item_status(const PaperItem& item, const std::string& out_dir) {
     st.detail = std::to_string(st.finished) + " runs finished, calibration not finished";
     return st;
   }
-  const nlohmann::json j = read_json_file(cal.string());
-  if (!j.contains("mu_r") || !j["mu_r"].is_number()) {
+  const CalibrationRecord j = read_calibration_record(cal.string());
+  if (!j.mu_r) {
     st.state = "cannot reach";
-    st.detail = j.value("message", std::string());
+    st.detail = j.message;
     return st;
   }
   std::set<std::string> predicted;
@@ -319,9 +320,8 @@ ItemStatus item_status(const PaperItem& item, const std::string& out_dir) {
   int missing = 0;
   for (const PredictionCase& q : c.predictions) missing += predicted.count(q.name) ? 0 : 1;
   st.state = missing == 0 ? "done" : "partial";
-  st.detail = "mu_r " + std::to_string(j["mu_r"].get<double>()) + " (" +
-              j.value("status", std::string()) + ", " + std::to_string(j.value("simulations", 0)) +
-              " pile runs)" +
+  st.detail = "mu_r " + std::to_string(*j.mu_r) + " (" + to_string(j.status) + ", " +
+              std::to_string(j.simulations) + " pile runs)" +
               (missing ? ", " + std::to_string(missing) + " prediction(s) to run" : std::string());
   return st;
 }

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "experiments/calibration/calibration.hpp"
+#include "experiments/calibration/calibration_file.hpp"
 #include "experiments/campaign/case_runner.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
@@ -236,12 +237,12 @@ std::optional<double> scene_x(const SceneDoc& doc, const std::string& key) {
 // The figure of an item whose [[predict]] tests run at another item's calibrated mu_r: each
 // test's angle (mean and seed sd) against its x, the tests that made no pile at angle 0 (as the
 // paper draws a lodged funnel), and the calibration test itself at its fitted angle.
-bool prediction_figure(const PaperItem& item, const json& cal, const fs::path& dir,
+bool prediction_figure(const PaperItem& item, const CalibrationRecord& cal, const fs::path& dir,
                        const fs::path& page_dir) {
   const auto pred = json_if_present(dir / "predictions.json");
-  if (!pred || !cal.value("mu_r", json()).is_number()) return false;
+  if (!pred || !cal.mu_r) return false;
   const Campaign c = read_campaign_file(item.file);
-  const double mu = cal["mu_r"].get<double>();
+  const double mu = *cal.mu_r;
   const std::string angle = pred->value("angle", item.angle);
   Series piles{"ours: predicted at mu_r " + fixed(mu, 3) + " (" + angle + ", mean and seed sd)",
                "ours", {}, {}};
@@ -262,11 +263,11 @@ bool prediction_figure(const PaperItem& item, const json& cal, const fs::path& d
   }
   Series fit{"ours: the calibration test, its fit at mu_r (95% half-width)", "calibration",
              {}, {}, 9};
-  if (cal.value("fitted_angle_deg", json()).is_number() && c.calibration)
+  if (cal.fitted_angle_deg && c.calibration)
     if (const auto x = scene_x(build_case_scene(calibration_run(c, mu, c.calibration->settings.first_seed)),
                                item.x_key))
-      fit.rows.push_back({*x * item.x_scale, cal["fitted_angle_deg"].get<double>(),
-                          cal.value("fitted_angle_halfwidth_deg", 0.0)});
+      fit.rows.push_back(
+          {*x * item.x_scale, *cal.fitted_angle_deg, cal.fitted_angle_halfwidth_deg});
   const std::string x_label = item.x_label.empty() ? item.x_key : item.x_label;
   return item_figure(item, {piles, none, fit}, x_label, "angle of repose [deg]", page_dir);
 }
@@ -274,37 +275,32 @@ bool prediction_figure(const PaperItem& item, const json& cal, const fs::path& d
 // Our part of a calibration item: mu_r, runs, jam rates, predictions.
 void calibration_part(const PaperItem& item, const fs::path& dir, const fs::path& page_dir,
                       mustache::data& d, ItemSection& s) {
-  auto cal = json_if_present(dir / "calibration.json");
-  if (!cal) return;
+  const fs::path file = dir / "calibration.json";
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) return;
+  const CalibrationRecord cal = read_calibration_record(file.string());
   Table t;
   t.numeric = true;
   t.header = {"what", "ours", "detail"};
-  const bool reached = cal->value("mu_r", json()).is_number() && cal->contains("mu_r_interval");
   std::string mu = "cannot reach";
-  if (reached)
-    mu = fixed((*cal)["mu_r"].get<double>(), 3) + " [" +
-         fixed_or_dash((*cal)["mu_r_interval"][0], 3) + ", " +
-         fixed_or_dash((*cal)["mu_r_interval"][1], 3) + "]";
-  if (cal->contains("not_calibrated")) {
+  if (cal.mu_r)
+    mu = fixed(*cal.mu_r, 3) + " [" + fixed(cal.mu_r_lo, 3) + ", " + fixed(cal.mu_r_hi, 3) + "]";
+  if (cal.not_calibrated) {
     // Predictions at the closest usable point of a calibration that found no mu_r.
-    const json& nc = (*cal)["not_calibrated"];
-    mu = fixed((*cal)["mu_r"].get<double>(), 3) + " (not calibrated)";
-    t.rows.push_back({{Cell("mu_r used"), mu,
-                       nc.value("mu_r_basis", std::string()) + "; the calibration: " +
-                           nc.value("message", std::string())}});
+    mu = fixed(*cal.mu_r, 3) + " (not calibrated)";
+    t.rows.push_back(
+        {{Cell("mu_r used"), mu,
+          cal.not_calibrated->mu_r_basis + "; the calibration: " + cal.not_calibrated->message}});
   } else {
     t.rows.push_back(
         {{Cell("calibrated mu_r (95% interval)"), mu,
-          cal->value("status", std::string()) + ", " +
-              std::to_string(cal->value("simulations", 0)) + " pile runs (" +
-              cal->value("method", std::string("sequential")) + ")"}});
+          to_string(cal.status) + ", " + std::to_string(cal.simulations) + " pile runs (" +
+              (cal.method == CalibrationMethod::kBracket ? "bracket" : "sequential") + ")"}});
   }
-  if (cal->contains("jam_rate_per_mu_r"))
-    for (json& q : (*cal)["jam_rate_per_mu_r"])
-      t.rows.push_back({{Cell("pours at mu_r " + fixed_or_dash(q["mu_r"], 3)),
-                         std::to_string(q.value("piles", 0)) + " piles of " +
-                             std::to_string(q.value("pours", 0)),
-                         "jam rate " + fixed_or_dash(q["jam_rate"], 2)}});
+  for (const PourCount& q : cal.pour_counts)
+    t.rows.push_back({{Cell("pours at mu_r " + fixed(q.mu_r, 3)),
+                       std::to_string(q.piles) + " piles of " + std::to_string(q.pours),
+                       "jam rate " + fixed(q.jam_rate, 2)}});
   if (auto pred = json_if_present(dir / "predictions.json"))
     for (json& q : (*pred)["predictions"])
       t.rows.push_back(
@@ -317,12 +313,12 @@ void calibration_part(const PaperItem& item, const fs::path& dir, const fs::path
             "measured " + fixed_or_dash(q["measured_deg"]) + ", error " +
                 fixed_or_dash(q["error_deg"])}});
   d.set("ours", to_data(t));
-  s.ours_text = "mu_r " + mu + ", " + std::to_string(cal->value("simulations", 0)) + " pile runs";
+  s.ours_text = "mu_r " + mu + ", " + std::to_string(cal.simulations) + " pile runs";
   // An item that predicts at another item's calibration is drawn on its own axes (angle
   // against mass, W/d_max, d_max); the calibration plot (angle against mu_r) is its source's.
   const bool own_axes = !item.calibrated_by.empty() && !item.x_key.empty();
-  if (own_axes ? prediction_figure(item, *cal, dir, page_dir)
-               : calibration_plot(*cal, json_if_present(dir / "predictions.json").value_or(json()),
+  if (own_axes ? prediction_figure(item, cal, dir, page_dir)
+               : calibration_plot(cal, json_if_present(dir / "predictions.json").value_or(json()),
                                   page_dir, item.name))
     d.set("plot", item.name + ".png");
 }
@@ -337,17 +333,17 @@ void derived_part(const PaperItem& item, const PaperIndex& index, const fs::path
   for (const std::string& src : item.from) {
     const auto it = std::find_if(index.items.begin(), index.items.end(),
                                  [&](const PaperItem& p) { return p.name == src; });
-    auto cal = json_if_present(out / src / "calibration.json");
-    if (it == index.items.end() || !cal || !cal->value("mu_r", json()).is_number()) continue;
+    const fs::path file = out / src / "calibration.json";
+    std::error_code ec;
+    if (it == index.items.end() || !fs::is_regular_file(file, ec)) continue;
+    const CalibrationRecord cal = read_calibration_record(file.string());
+    if (!cal.mu_r) continue;
     const ItemPlan plan = plan_item(*it);
     const double dmax = plan.groups.empty() ? 0.0 : plan.groups.front().plan.d_max_mm;
-    const double mu = (*cal)["mu_r"].get<double>();
-    const json iv = cal->value("mu_r_interval", json::array({mu, mu}));
-    const double lo = iv[0].get<double>(), hi = iv[1].get<double>();
+    const double mu = *cal.mu_r, lo = cal.mu_r_lo, hi = cal.mu_r_hi;
     Cell c(src);
     c.left = true;
-    const std::string model =
-        cal->value("rolling_model", json::object()).value("keyword", std::string("?"));
+    const std::string& model = cal.rolling_model.keyword;
     t.rows.push_back({{c, fixed(dmax, 2), fixed(mu, 3),
                        "[" + fixed(lo, 3) + ", " + fixed(hi, 3) + "]", model}});
     pts[model].push_back({dmax, mu, 0.5 * (hi - lo)});

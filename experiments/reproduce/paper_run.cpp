@@ -7,6 +7,7 @@
 #include <set>
 
 #include "experiments/calibration/calibrate_campaign.hpp"
+#include "experiments/calibration/calibration_file.hpp"
 #include "experiments/calibration/campaign_target.hpp"
 #include "experiments/io/format.hpp"
 #include "experiments/io/hash.hpp"
@@ -60,27 +61,22 @@ void write_provenance(const fs::path& dir, nlohmann::json& p) {
 // model's best answer is still the usable point whose fitted angle came closest to the target;
 // an item declaring `if_not_calibrated = "closest_point"` predicts there, and the record says
 // it is not a calibrated value. Nothing when the calibration has no usable point at all.
-std::optional<nlohmann::json> closest_point(nlohmann::json cal, const std::string& from) {
-  const double target = cal.value("target", nlohmann::json::object()).value("angle_deg", NAN);
-  if (!std::isfinite(target) || !cal.contains("fit")) return std::nullopt;
-  const nlohmann::json points = cal["fit"].value("points", nlohmann::json::array());
-  const nlohmann::json* best = nullptr;
-  for (const auto& q : points)
-    if (q.value("mu_r", nlohmann::json()).is_number() &&
-        (!best || std::abs(q.value("fitted_deg", NAN) - target) <
-                      std::abs(best->value("fitted_deg", NAN) - target)))
-      best = &q;
+std::optional<CalibrationRecord> closest_point(CalibrationRecord cal, const std::string& from) {
+  const double target = cal.target.angle_deg;
+  const FitPoint* best = nullptr;
+  for (const FitPoint& q : cal.fit.points)
+    if (!best || std::abs(q.fitted_deg - target) < std::abs(best->fitted_deg - target)) best = &q;
   if (!best) return std::nullopt;
-  const double mu = (*best)["mu_r"].get<double>();
-  cal["not_calibrated"] = {
-      {"status", cal.value("status", std::string())},
-      {"message", cal.value("message", std::string())},
-      {"mu_r_basis", "the usable point of " + from + " closest to the target " +
-                         shortest_text(target) + " deg (fitted " +
-                         shortest_text((*best)["fitted_deg"].get<double>()) +
-                         " deg); not a calibrated value"}};
-  cal["mu_r"] = mu;
-  cal["mu_r_interval"] = {mu, mu};
+  const double mu = best->mu_r;
+  cal.not_calibrated = NotCalibrated{
+      cal.status, cal.message,
+      "the usable point of " + from + " closest to the target " + shortest_text(target) +
+          " deg (fitted " + shortest_text(best->fitted_deg) + " deg); not a calibrated value"};
+  // A point, not an interval: it stands with none of a calibration's own (its fitted angle).
+  cal.mu_r = mu;
+  cal.mu_r_lo = cal.mu_r_hi = mu;
+  cal.fitted_angle_deg.reset();
+  cal.fitted_angle_halfwidth_deg = 0.0;
   return cal;
 }
 
@@ -95,17 +91,17 @@ std::string run_item(const PaperItem& item, const fs::path& dir, const CaseFn& c
     if (!fs::is_regular_file(src, ec))
       return "failed: " + item.calibrated_by + " has no finished calibration (" + src.string() +
              ")";
-    nlohmann::json cal = read_json_file(src.string());
-    if (!cal.contains("mu_r") || !cal["mu_r"].is_number()) {
+    CalibrationRecord cal = read_calibration_record(src.string());
+    if (!cal.mu_r) {
       const auto closest =
           item.closest_if_not_calibrated ? closest_point(cal, item.calibrated_by) : std::nullopt;
       if (!closest) return "cannot reach";
       cal = *closest;
     }
     if (!fs::is_regular_file(dir / "calibration.json", ec)) {
-      cal["copied_from"] = src.string();
+      cal.copied_from = src.string();
       if (!runner.rank || runner.rank->rank == 0)
-        write_json_atomic((dir / "calibration.json").string(), cal);
+        write_json_atomic((dir / "calibration.json").string(), to_json(cal));
     }
     calibrate_and_predict(c, dir.string(), c.calibration->angle, case_fn, runner, true);
     return "finished";

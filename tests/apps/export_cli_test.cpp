@@ -35,8 +35,40 @@ TEST(ExportCli, FromACalibrationFolderNothingRetyped) {
       {"target_deg", 31.5},
       {"angle", "image"},
       {"sieve_sheet", (d.path() / "sieve.csv").string()}};
-  write_text(cal / "calibration.json",
-             nlohmann::json{{"status", "calibrated"}, {"material", material}}.dump(2));
+  // A whole calibration record around it, as `reposetwin calibrate` writes one.
+  const nlohmann::json record = {
+      {"status", "calibrated"},
+      {"message", "converged"},
+      {"target", {{"angle_deg", 31.5}, {"sd_deg", 0.5}}},
+      {"mu_r", 0.297},
+      {"mu_r_interval", {0.258, 0.339}},
+      {"interval_level", 0.95},
+      {"interval_open", {false, false}},
+      {"fitted_angle_deg", 31.5},
+      {"fitted_angle_halfwidth_deg", 0.2},
+      {"reachable_deg", {25.0, 40.0}},
+      {"method", "sequential"},
+      {"simulations", 6},
+      {"fit",
+       {{"method", "isotonic"},
+        {"points", nlohmann::json::array()},
+        {"noise_sd_deg", 0.3},
+        {"noise_dof", 3}}},
+      {"observations", nlohmann::json::array()},
+      {"excluded_search_observations", nlohmann::json::array()},
+      {"campaign", (d.path() / "c.toml").string()},
+      {"campaign_name", "c"},
+      {"keys", {"contacts.rock-rock.rolling_friction"}},
+      {"mu_r_range", {0.05, 0.6}},
+      {"tolerance_deg", 0.3},
+      {"seeds_per_point", 2},
+      {"table1_sample", nullptr},
+      {"scene", (d.path() / "base.toml").string()},
+      {"rolling_model", {{"keyword", "epsd"}, {"stated_in_scene", false}}},
+      {"angle_method", "vision on renders"},
+      {"created_utc", "2026-12-08T00:00:00Z"},
+      {"material", material}};
+  write_text(cal / "calibration.json", record.dump(2));
   const CliResult r = run_cli_argv({"export", cal.string()}, d.path());
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(has(r.out, "at the calibrated mu_r 0.297 (95% 0.258 to 0.339")) << r.out;
@@ -64,7 +96,7 @@ TEST(ExportCli, AFolderWithoutARecordIsRefusedNamingFileAndKey) {
   write_text(cal / "calibration.json", "{}");
   const CliResult empty = run_cli_argv({"export", cal.string()}, d.path());
   EXPECT_NE(empty.code, 0);
-  EXPECT_TRUE(has(empty.out, (cal / "calibration.json").string() + ": key material is missing"))
+  EXPECT_TRUE(has(empty.out, (cal / "calibration.json").string() + ": key \"status\": missing"))
       << empty.out;
   EXPECT_FALSE(fs::exists(cal / "liggghts"));
 }

@@ -161,7 +161,7 @@ TEST(BracketCalibration, JamsCountAsJamRateNotAngles) {
   for (const Pour& p : c.pours) jams += p.outcome == PourOutcome::kJam;
   EXPECT_EQ(static_cast<int>(c.result.observations.size()),
             static_cast<int>(c.pours.size()) - jams);
-  const nlohmann::json j = to_json(c, s);
+  const nlohmann::json j = to_json(calibration_record(c, s));
   EXPECT_EQ(j["method"], "bracket");
   EXPECT_EQ(j["pile_runs"], c.pours.size());
   EXPECT_TRUE(j["jam_rate_per_mu_r"].is_array());
@@ -213,7 +213,7 @@ TEST(BracketCalibration, ATimeLimitIsNamedNotTakenForAJam) {
   EXPECT_NE(c.result.message.find("4 stopped by the time limit procedure.max_time_s"),
             std::string::npos)
       << c.result.message;
-  const nlohmann::json j = to_json(c, s);
+  const nlohmann::json j = to_json(calibration_record(c, s));
   int limits = 0;
   for (const auto& q : j["jam_rate_per_mu_r"]) limits += q["time_limits"].get<int>();
   EXPECT_EQ(limits, 4);
@@ -241,7 +241,7 @@ TEST(BracketCalibration, EndsFirstKnowsAnUnreachableTargetAfterTwoPoints) {
   EXPECT_EQ(c.pours[3].mu_r, s.mu_r_hi);
   EXPECT_NEAR(c.result.reachable_low_deg, curve(s.mu_r_lo), 1e-9);
   EXPECT_NEAR(c.result.reachable_high_deg, curve(s.mu_r_hi), 1e-9);
-  const nlohmann::json j = to_json(c, s);
+  const nlohmann::json j = to_json(calibration_record(c, s));
   EXPECT_TRUE(j["ends_first"].get<bool>());
 }
 

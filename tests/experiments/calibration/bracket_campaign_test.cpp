@@ -133,36 +133,38 @@ TEST(BracketCampaign, CalibratesThroughThePoolAndCountsJams) {
                     campaign("mu_r_start = 0.5\nslope_guess_deg = 40.0\nmax_simulations = 8\n"));
   const Campaign c = load_campaign((d.path / "c.toml").string());
   const fs::path out = d.path / "out", log = d.path / "log";
-  const json cal = run_calibration(c, out.string(), jamming_case(log),
-                                   calibration_angle(AngleMeasure::kParticles), quiet());
-  EXPECT_EQ(cal["method"], "bracket");
-  ASSERT_TRUE(cal["mu_r"].is_number()) << cal["message"];
-  EXPECT_NEAR(cal["mu_r"].get<double>(), 0.3, 0.02);
-  EXPECT_LE(cal["pile_runs"].get<int>(), 8);
+  const CalibrationRecord cal = run_calibration(
+      c, out.string(), jamming_case(log), calibration_angle(AngleMeasure::kParticles), quiet());
+  EXPECT_EQ(cal.method, CalibrationMethod::kBracket);
+  ASSERT_TRUE(cal.mu_r) << cal.message;
+  EXPECT_NEAR(*cal.mu_r, 0.3, 0.02);
+  EXPECT_LE(cal.working.at("pile_runs").get<int>(), 8);
   bool saw_jams = false;
-  for (const json& q : cal["jam_rate_per_mu_r"])
-    if (q["mu_r"].get<double>() > 0.45) {
+  for (const PourCount& q : cal.pour_counts)
+    if (q.mu_r > 0.45) {
       saw_jams = true;
-      EXPECT_EQ(q["jams"], 1);
-      EXPECT_DOUBLE_EQ(q["jam_rate"].get<double>(), 0.5);
+      EXPECT_EQ(q.jams, 1);
+      EXPECT_DOUBLE_EQ(q.jam_rate, 0.5);
     }
   EXPECT_TRUE(saw_jams);
-  for (const json& o : cal["observations"]) EXPECT_GT(o["angle_deg"].get<double>(), 20.0);
+  for (const Observation& o : cal.observations) EXPECT_GT(o.angle_deg, 20.0);
+  // The file says the same: read back through the one reader, it is the record returned.
+  EXPECT_EQ(read_calibration_record((out / "calibration.json").string()), cal);
   // Resumed: every pour is reused, none is run again.
   std::map<std::string, int> runs;
   {
     std::ifstream in(log);
     for (std::string line; std::getline(in, line);) ++runs[line];
   }
-  const json again = run_calibration(c, out.string(), jamming_case(log),
-                                     calibration_angle(AngleMeasure::kParticles), quiet());
+  const CalibrationRecord again = run_calibration(
+      c, out.string(), jamming_case(log), calibration_angle(AngleMeasure::kParticles), quiet());
   std::map<std::string, int> after;
   {
     std::ifstream in(log);
     for (std::string line; std::getline(in, line);) ++after[line];
   }
   EXPECT_EQ(runs, after);
-  EXPECT_EQ(again["mu_r"], cal["mu_r"]);
+  EXPECT_EQ(again.mu_r, cal.mu_r);
 }
 
 // Every pour stopped by procedure.max_time_s: the calibration names the time limit and advises
@@ -178,10 +180,11 @@ TEST(BracketCampaign, AdviceIsOnTheRealStop) {
                 {"provenance", {{"time_step_s", 1e-6}, {"code_version", "test"}}},
                 {"run_dir", "run"}};
   };
-  const json cal = run_calibration(c, (d.path / "out").string(), timed_out,
-                                   calibration_angle(AngleMeasure::kParticles), quiet());
-  ASSERT_FALSE(cal["mu_r"].is_number()) << cal.dump(2);
-  EXPECT_TRUE(cal["material"].is_null());
+  const CalibrationRecord cal =
+      run_calibration(c, (d.path / "out").string(), timed_out,
+                      calibration_angle(AngleMeasure::kParticles), quiet());
+  ASSERT_FALSE(cal.mu_r) << to_json(cal).dump(2);
+  EXPECT_FALSE(cal.material);
   const std::string advice = cannot_reach_advice(c, cal, AngleMeasure::kParticles);
   EXPECT_NE(advice.find("time_limit (4 pour(s)): raise procedure.max_time_s"), std::string::npos)
       << advice;

@@ -1,4 +1,5 @@
 #include "experiments/calibration/calibration.hpp"
+#include "experiments/calibration/calibration_file.hpp"
 
 #include <gtest/gtest.h>
 
@@ -188,7 +189,7 @@ TEST(Calibration, CannotReachIsReportedNotClamped) {
   EXPECT_EQ(calls, 6);  // the two range ends, three seeds each, nothing more
   EXPECT_EQ(high.simulations, 6);
   EXPECT_NE(high.message.find("cannot reach"), std::string::npos);
-  EXPECT_EQ(to_json(high)["mu_r"], nullptr);
+  EXPECT_EQ(to_json(calibration_record(high))["mu_r"], nullptr);
   const auto low = calibrate(sim, {10.0, 0.0}, s);
   EXPECT_EQ(low.status, CalibrationStatus::kCannotReachLow);
   EXPECT_FALSE(low.mu_r.has_value());

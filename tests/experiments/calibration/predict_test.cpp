@@ -210,17 +210,20 @@ TEST(Predict, CalibratesOnOneTestAndPredictsTheOthers) {
   write_file_atomic((d.path / "c.toml").string(), calibration_campaign());
   const Campaign c = load_campaign((d.path / "c.toml").string());
   const fs::path out = d.path / "out", log = d.path / "log";
-  const json cal = run_calibration(c, out.string(), synthetic_case(log), kAngle, quiet());
-  ASSERT_TRUE(cal["mu_r"].is_number()) << cal.dump(2);
-  const double mu = cal["mu_r"].get<double>();
+  const CalibrationRecord cal =
+      run_calibration(c, out.string(), synthetic_case(log), kAngle, quiet());
+  ASSERT_TRUE(cal.mu_r) << to_json(cal).dump(2);
+  const double mu = *cal.mu_r;
   EXPECT_NEAR(mu, 0.3, 1e-9);  // the seed effects cancel in every point's mean
-  EXPECT_EQ(cal["rolling_model"]["keyword"], "epsd");
-  EXPECT_EQ(cal["rolling_model"]["radius"], std::string(sim::find_rolling_model("epsd")->radius));
-  EXPECT_EQ(cal["table1_sample"], 3);
-  const double lo = cal["mu_r_interval"][0].get<double>();
-  const double hi = cal["mu_r_interval"][1].get<double>();
+  EXPECT_EQ(cal.rolling_model.keyword, "epsd");
+  EXPECT_EQ(cal.rolling_model.radius, std::string(sim::find_rolling_model("epsd")->radius));
+  EXPECT_EQ(cal.table1_sample, 3);
+  const double lo = cal.mu_r_lo;
+  const double hi = cal.mu_r_hi;
   EXPECT_LT(lo, mu);  // target sd 0.3 deg: a real interval
   EXPECT_GT(hi, mu);
+  // The file the sequential driver wrote is the record it returned, read by the one reader.
+  EXPECT_TRUE(read_calibration_record((out / "calibration.json").string()) == cal);
 
   const json pj = run_predictions(c, cal, out.string(), synthetic_case(log), kAngle, quiet());
   ASSERT_TRUE(fs::exists(out / "predictions.json"));
@@ -280,13 +283,13 @@ TEST(Predict, PredictOnlyReusesTheCalibrationAndNeverOverwrites) {
     EXPECT_NE(std::string(e.what()).find("calibration.json"), std::string::npos) << e.what();
   }
   run_calibration(c, out.string(), synthetic_case(log), kAngle, quiet());
-  const json cal = read_calibration(c, out.string());
+  const CalibrationRecord cal = read_calibration(c, out.string());
   const std::string cal_text = read_file((out / "calibration.json").string());
   const auto cal_time = fs::last_write_time(out / "calibration.json");
   const auto calibration_runs = read_log(log);
 
   // Kill a prediction mid-way: it leaves only started.json in one run folder.
-  const CaseSpec victim = prediction_run(c, c.predictions[0], cal["mu_r"].get<double>(), 2);
+  const CaseSpec victim = prediction_run(c, c.predictions[0], *cal.mu_r, 2);
   fs::create_directories(out / victim.relative_dir());
   write_file_atomic((out / victim.relative_dir() / "started.json").string(), "{}");
   const json first = run_predictions(c, cal, out.string(), synthetic_case(log), kAngle, quiet());
@@ -330,9 +333,9 @@ TEST(Predict, PredictOnlyReusesTheCalibrationAndNeverOverwrites) {
   write_file_atomic((d.path / "c.toml").string(), calibration_campaign(3, 89.0));
   const Campaign unreachable = load_campaign((d.path / "c.toml").string());
   const fs::path out2 = d.path / "out2";
-  const json none =
+  const CalibrationRecord none =
       run_calibration(unreachable, out2.string(), synthetic_case(log), kAngle, quiet());
-  EXPECT_TRUE(none["mu_r"].is_null());
+  EXPECT_FALSE(none.mu_r);
   EXPECT_THROW(
       run_predictions(unreachable, none, out2.string(), synthetic_case(log), kAngle, quiet()),
       std::runtime_error);
@@ -343,8 +346,9 @@ TEST(Predict, AClogIsCountedNeverAveraged) {
   write_file_atomic((d.path / "c.toml").string(), calibration_campaign());
   const Campaign c = load_campaign((d.path / "c.toml").string());
   const fs::path out = d.path / "out", log = d.path / "log";
-  const json cal = run_calibration(c, out.string(), synthetic_case(log), kAngle, quiet());
-  const double hi = cal["mu_r_interval"][1].get<double>();
+  const CalibrationRecord cal =
+      run_calibration(c, out.string(), synthetic_case(log), kAngle, quiet());
+  const double hi = cal.mu_r_hi;
   // Test B's seed 2 arches the outlet at the high end of the interval: no pile there.
   const CaseSpec clogged = prediction_run(c, c.predictions[0], hi, 2);
   const CaseFn base = synthetic_case(log);
@@ -377,7 +381,7 @@ TEST(Predict, SeparateSelectionsAddUpInOneFile) {
   const Campaign full = load_campaign((d.path / "c.toml").string());
   const fs::path out = d.path / "out", log = d.path / "log";
   run_calibration(full, out.string(), synthetic_case(log), kAngle, quiet());
-  const json cal = read_calibration(full, out.string());
+  const CalibrationRecord cal = read_calibration(full, out.string());
   auto names = [&]() {
     std::vector<std::string> n;
     const json pj = json::parse(read_file((out / "predictions.json").string()));
@@ -448,8 +452,9 @@ TEST(Predict, ASecondCalibrationNeverReplacesAnotherFinishedOneUnasked) {
   // Asked (--force): replaced.
   RunnerSettings forced = quiet();
   forced.force = true;
-  const json again = run_calibration(edited, out.string(), synthetic_case(log), kAngle, forced);
-  EXPECT_DOUBLE_EQ(again["target"]["angle_deg"].get<double>(), 36.0);
+  const CalibrationRecord again =
+      run_calibration(edited, out.string(), synthetic_case(log), kAngle, forced);
+  EXPECT_DOUBLE_EQ(again.target.angle_deg, 36.0);
 }
 
 // The paper's CSV read independently of the report's reader: sample -> field -> value.
@@ -491,7 +496,8 @@ TEST(Report, PaperComparisonHasEverySampleAndReadsTheCsv) {
     write_file_atomic(file.string(), text);
     const Campaign c = load_campaign(file.string());
     const fs::path out = parent / ("s" + std::to_string(sample));
-    const json cal = run_calibration(c, out.string(), synthetic_case(log), kAngle, quiet());
+    const CalibrationRecord cal =
+        run_calibration(c, out.string(), synthetic_case(log), kAngle, quiet());
     if (!c.predictions.empty())
       run_predictions(c, cal, out.string(), synthetic_case(log), kAngle, quiet());
   }
@@ -586,12 +592,12 @@ TEST(Report, LabPhotoBesideTheRenderForCalibrationAndCampaign) {
   write_file_atomic((d.path / "c.toml").string(), calibration_campaign());
   const Campaign c = load_campaign((d.path / "c.toml").string());
   const fs::path out = d.path / "cal", log = d.path / "log";
-  const json cal = run_calibration(c, out.string(), synthetic_case(log, true), kAngle, quiet());
+  const CalibrationRecord cal =
+      run_calibration(c, out.string(), synthetic_case(log, true), kAngle, quiet());
   run_predictions(c, cal, out.string(), synthetic_case(log, true), kAngle, quiet());
   const json s = build_report(out.string(), rs);
   EXPECT_NEAR(s["lab_photo"]["theta_deg"].get<double>(), theta, 0.3) << s["lab_photo"];
-  const std::string self =
-      prediction_run(c, c.predictions[2], cal["mu_r"].get<double>(), 1).case_name;
+  const std::string self = prediction_run(c, c.predictions[2], *cal.mu_r, 1).case_name;
   EXPECT_NE(s["lab_photo_render"].get<std::string>().find(self), std::string::npos)
       << s["lab_photo_render"];
   EXPECT_TRUE(fs::exists(out / "report" / "lab_photo.measured.png"));

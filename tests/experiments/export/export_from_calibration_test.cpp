@@ -13,6 +13,7 @@
 #include "../../support/scratch.hpp"
 #include "../../support/tiny_scene.hpp"
 #include "experiments/calibration/calibrate_campaign.hpp"
+#include "experiments/calibration/calibration_file.hpp"
 #include "experiments/calibration/campaign_target.hpp"
 #include "experiments/campaign/campaign.hpp"
 #include "experiments/campaign/case_runner.hpp"
@@ -73,15 +74,16 @@ TEST(ExportFromCalibration, TheDeckCarriesWhatWasCalibratedNothingRetyped) {
   write_inputs(d.path());
   const Campaign c = load_campaign((d.path() / "campaign.toml").string());
   const fs::path out = d.path() / "out";
-  const json cal = run_calibration(c, out.string(), closed_form_case(),
-                                   calibration_angle(AngleMeasure::kImage), quiet());
-  ASSERT_TRUE(cal["mu_r"].is_number()) << cal.dump(2);
+  const CalibrationRecord cal = run_calibration(c, out.string(), closed_form_case(),
+                                                calibration_angle(AngleMeasure::kImage), quiet());
+  ASSERT_TRUE(cal.mu_r) << to_json(cal).dump(2);
 
   const CalibratedMaterial m = read_calibrated_material(out.string());
-  EXPECT_DOUBLE_EQ(m.mu_r, cal["mu_r"].get<double>());
+  EXPECT_EQ(cal.material, m);
+  EXPECT_DOUBLE_EQ(m.mu_r, *cal.mu_r);
   EXPECT_NEAR(m.mu_r, 0.3, 0.02);
-  EXPECT_DOUBLE_EQ(m.mu_r_lo, cal["mu_r_interval"][0].get<double>());
-  EXPECT_DOUBLE_EQ(m.mu_r_hi, cal["mu_r_interval"][1].get<double>());
+  EXPECT_DOUBLE_EQ(m.mu_r_lo, cal.mu_r_lo);
+  EXPECT_DOUBLE_EQ(m.mu_r_hi, cal.mu_r_hi);
   EXPECT_LT(m.mu_r_lo, m.mu_r_hi);
   EXPECT_EQ(m.keys, std::vector<std::string>{kKey});
   EXPECT_EQ(m.scene, fs::absolute(d.path() / "base.toml").lexically_normal().string());
@@ -134,10 +136,26 @@ TEST(ExportFromCalibration, BadRecordsNameTheFileTheKeyAndTheValue) {
             std::string::npos);
   EXPECT_NE(refusal(d.path().string()).find("holds no calibration.json"), std::string::npos);
   write_file_atomic(file, "{}");
-  EXPECT_NE(refusal(d.path().string()).find(file + ": key material is missing"), std::string::npos)
+  EXPECT_NE(refusal(d.path().string()).find(file + ": key \"status\": missing"), std::string::npos)
       << refusal(d.path().string());
-  write_file_atomic(file, "{\"status\": \"cannot_reach_high\", \"material\": null}");
-  EXPECT_NE(refusal(d.path().string()).find("status \"cannot_reach_high\""), std::string::npos);
+  // A whole calibration record around the material (calibration_file.hpp reads all of it).
+  CalibrationRecord unreached;
+  unreached.status = CalibrationStatus::kCannotReachHigh;
+  unreached.target = {35.0, 0.3};
+  unreached.keys = {kKey};
+  write_file_atomic(file, to_json(unreached).dump());
+  EXPECT_NE(refusal(d.path().string()).find("status \"cannot_reach_high\""), std::string::npos)
+      << refusal(d.path().string());
+  CalibrationRecord reached = unreached;
+  reached.status = CalibrationStatus::kCalibrated;
+  reached.mu_r = 0.3;
+  reached.mu_r_lo = 0.25;
+  reached.mu_r_hi = 0.35;
+  reached.fitted_angle_deg = 35.0;
+  write_file_atomic(file, to_json(reached).dump());
+  EXPECT_NE(refusal(d.path().string()).find("written before calibrations recorded their material"),
+            std::string::npos)
+      << refusal(d.path().string());
 
   CalibratedMaterial m;
   m.scene = "base.toml";  // relative: beside the record
@@ -149,7 +167,12 @@ TEST(ExportFromCalibration, BadRecordsNameTheFileTheKeyAndTheValue) {
   m.target_deg = 35.0;
   m.angle = "image";
   const json good = to_json(m);
-  write_file_atomic(file, json{{"material", good}}.dump());
+  const auto with_material = [&](const json& material) {
+    json j = to_json(reached);
+    j["material"] = material;
+    return j.dump();
+  };
+  write_file_atomic(file, with_material(good));
   EXPECT_EQ(refusal(d.path().string()), "(accepted)");
 
   struct Bad {
@@ -164,11 +187,11 @@ TEST(ExportFromCalibration, BadRecordsNameTheFileTheKeyAndTheValue) {
   outside["mu_r_interval"] = {0.4, 0.5};
   for (const Bad& b :
        {Bad{typo,
-            file + ": key material.mu_rr: is not a known key (value 0.3); did you mean mu_r?"},
-        Bad{missing, file + ": key material.keys: missing"},
-        Bad{wrong, file + ": key material.mu_r = \"0.3\": is string, not a number"},
-        Bad{outside, file + ": key material.mu_r_interval = [0.4,0.5]: must be two finite"}}) {
-    write_file_atomic(file, json{{"material", b.record}}.dump());
+            file + ": key \"material.mu_rr\": is not a known key (value 0.3); did you mean mu_r?"},
+        Bad{missing, file + ": key \"material.keys\": missing"},
+        Bad{wrong, file + ": key \"material.mu_r\" = \"0.3\": is string, not a number"},
+        Bad{outside, file + ": key \"material.mu_r_interval\" = [0.4,0.5]: must be two finite"}}) {
+    write_file_atomic(file, with_material(b.record));
     const std::string what = refusal(d.path().string());
     EXPECT_EQ(what.substr(0, b.says.size()), b.says) << what;
   }

@@ -10,6 +10,7 @@
 #include "../../support/scratch.hpp"
 #include "../../support/tiny_scene.hpp"
 #include "experiments/calibration/campaign_target.hpp"
+#include "experiments/calibration/calibration_file.hpp"
 #include "experiments/io/calibration_record.hpp"
 #include "experiments/io/files.hpp"
 #include "experiments/io/psd_file.hpp"
@@ -77,7 +78,13 @@ TEST(DidYouMean, EveryStrictReaderNamesTheNearestKnownName) {
   EXPECT_NE(tests.find("did you mean \"angle_deg\"?"), std::string::npos) << tests;
   // A calibration record's key.
   fs::create_directories(d.path() / "cal");
-  file("cal/calibration.json", R"({"material": {"scen": "x"}})");
+  CalibrationRecord reached;
+  reached.mu_r = 0.3;
+  reached.fitted_angle_deg = 30.0;
+  reached.keys = {"contacts.rock-rock.rolling_friction"};
+  nlohmann::json cal = to_json(reached);
+  cal["material"] = {{"scen", "x"}};
+  file("cal/calibration.json", cal.dump());
   const std::string record =
       refusal([&] { read_calibrated_material((d.path() / "cal").string()); });
   EXPECT_NE(record.find("did you mean scene?"), std::string::npos) << record;

@@ -56,9 +56,10 @@ TEST(PileStore, ACalibrationFollowedByALoopOnTheSameTestPoursNoPileAgain) {
   runner.progress = false;
   runner.rank = std::nullopt;
   runner.mode = WorkerMode::kThreads;  // this test binary may have rendered before: no fork
-  const nlohmann::json cal = run_calibration(c, (root / "calibration").string(), pile_case_fn(cs),
-                                             calibration_angle(AngleMeasure::kImage), runner);
-  ASSERT_EQ(cal.at("simulations").get<int>(), 2) << cal.dump(2);
+  const CalibrationRecord cal =
+      run_calibration(c, (root / "calibration").string(), pile_case_fn(cs),
+                      calibration_angle(AngleMeasure::kImage), runner);
+  ASSERT_EQ(cal.simulations, 2) << to_json(cal).dump(2);
 
   // The loop on the same test, grid and seed, from the same store.
   SimCache cache(store.string(), {2, false});

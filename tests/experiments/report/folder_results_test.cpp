@@ -53,7 +53,9 @@ TEST(AnglesPlot, RunsWithoutAnAngleAreNeverAZero) {
 TEST(LabPhotoPair, OnlyTheCalibrationTestsRunsStandBesideItsPhoto) {
   const std::string key = "contacts.rock-rock.rolling_friction";
   FolderResults f;
-  f.calibration = {{"key", key}, {"keys", {key}}, {"mu_r", 0.3}};
+  f.calibration.emplace();
+  f.calibration->keys = {key};
+  f.calibration->mu_r = 0.3;
   CaseRows calib, self, other;
   calib.name = "calib_rolling_friction_0.3";
   calib.overrides = {{key, 0.3}, {"sample.mass_kg", 0.008}};

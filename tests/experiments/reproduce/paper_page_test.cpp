@@ -11,6 +11,7 @@
 #include <regex>
 
 #include "../../support/tiny_scene.hpp"
+#include "experiments/calibration/calibration_file.hpp"
 #include "experiments/io/input_error.hpp"
 #include "experiments/io/provenance.hpp"
 
@@ -86,20 +87,22 @@ struct Tree {
     put("mass/cases/m_0.004/seed_2/result.json", fake_run("m_0.004", 0.004, 2, 22.0));
     put("mass/cases/m_0.006/seed_1/result.json", fake_run("m_0.006", 0.006, 1, 25.0));
     put("mass/cases/m_0.006/seed_2/result.json", fake_run("m_0.006", 0.006, 2, 0.0, "no pile"));
-    put("cal/calibration.json",
-        {{"status", "calibrated"},
-         {"method", "bracket"},
-         {"mu_r", 0.31},
-         {"mu_r_interval", {0.29, 0.33}},
-         {"simulations", 6},
-         {"rolling_model", {{"keyword", "epsd"}}},
-         {"observations", {{{"mu_r", 0.3}, {"seed", 1}, {"angle_deg", 33.0}}}},
-         {"fit",
-          {{"points",
-            {{{"mu_r", 0.3}, {"n", 1}, {"fitted_deg", 33.0}},
-             {{"mu_r", 0.35}, {"n", 1}, {"fitted_deg", 34.0}}}}}},
-         {"jam_rate_per_mu_r",
-          {{{"mu_r", 0.3}, {"pours", 2}, {"piles", 1}, {"jams", 1}, {"jam_rate", 0.5}}}}});
+    // A bracketing calibration's record, written by its one writer.
+    CalibrationRecord cal;
+    cal.status = CalibrationStatus::kCalibrated;
+    cal.target = {33.0, 0.5};
+    cal.method = CalibrationMethod::kBracket;
+    cal.mu_r = 0.31;
+    cal.mu_r_lo = 0.29;
+    cal.mu_r_hi = 0.33;
+    cal.fitted_angle_deg = 33.5;
+    cal.simulations = 6;
+    cal.keys = {"contacts.rock-rock.rolling_friction"};
+    cal.rolling_model.keyword = "epsd";
+    cal.observations = {{0.3, 1, 33.0}};
+    cal.fit.points = {{0.3, 1, 33.0, 0.0, 33.0}, {0.35, 1, 34.0, 0.0, 34.0}};
+    cal.pour_counts = {{0.3, 2, 1, 1, 0, 0, 0, 0.5, true}};
+    put("cal/calibration.json", to_json(cal));
   }
   ~Tree() {
     std::error_code ec;
