@@ -20,7 +20,7 @@
 #
 # Usage: scripts/verify_field_deck.sh [CAL_FOLDER] [--np-list 1,2] [--out DIR] [--build DIR]
 #                                     [--mass-kg M] [--rate-kg-s R] [--settle-max-s T]
-#                                     [--size-scale S] [--results DIR]
+#                                     [--height-m H] [--size-scale S] [--results DIR]
 # Results: DIR/scaling.csv, DIR/angle.csv and the tables on stdout; with --results, a copy of the
 # tables with provenance (command, commit, date) in that folder.
 set -euo pipefail
@@ -32,6 +32,7 @@ out=runs/verify_field_deck
 build="${root}/build"
 mass=0.3
 rate=0.3
+height=0.1
 settle=2.0
 scale=1
 results=""
@@ -44,6 +45,7 @@ while [[ $# -gt 0 ]]; do
     --mass-kg) mass="$2"; shift 2 ;;
     --rate-kg-s) rate="$2"; shift 2 ;;
     --settle-max-s) settle="$2"; shift 2 ;;
+    --height-m) height="$2"; shift 2 ;;
     --size-scale) scale="$2"; shift 2 ;;
     --results) results="$2"; shift 2 ;;
     -h|--help) sed -n '2,27p' "$0"; exit 0 ;;
@@ -110,15 +112,19 @@ mpi_base=(mpirun)
 mpi_base+=(--oversubscribe --mca mpi_yield_when_idle 1)
 
 echo "calibration ${cal}: mu_r ${mu_r}, target ${target} deg (${angle_name}); scene ${scene}"
-echo "ranks,wall_s,loop_s,steps,particle_steps,particle_steps_per_s,per_rank,atoms" > "${out}/scaling.csv"
+echo "ranks,wall_s,loop_s,steps,particle_steps,particle_steps_per_s,per_rank,atoms,load_1min" > "${out}/scaling.csv"
 echo "ranks,status,particles,pile_count,H_mm,D_mm,theta_hd_deg,slice_angle_deg" > "${out}/angle.csv"
 IFS=, read -r -a nps <<< "${np_list}"
 for np in "${nps[@]}"; do
   deck="${out}/np${np}"
   "${bin}" export "${cal}" --field dump --ranks "${np}" --out "${deck}" --force \
     --dump-mass-kg "${mass}" --dump-rate-kg-s "${rate}" --size-scale "${scale}" \
+    --dump-height-m "${height}" \
     --set "procedure.final_settle_max_s=${settle}" | tee "${deck}.export.txt"
   if [[ ! -f "${deck}/final.dump" ]]; then
+    # The machine's load as the run starts: on shared cores a rank count's timing is only as good
+    # as the cores it had.
+    cut -d' ' -f1 /proc/loadavg > "${deck}.load"
     t0=$(date +%s.%N)
     (cd "${deck}" && "${mpi_base[@]}" -np "${np}" liggghts -in in.dump > liggghts.log 2>&1) ||
       { echo "verify_field_deck.sh: LIGGGHTS failed on ${np} rank(s): ${deck}/liggghts.log" >&2; exit 1; }
@@ -126,9 +132,9 @@ for np in "${nps[@]}"; do
   fi
   # "Loop time of T on P procs for S steps with A atoms", one per `run`: particle-steps are
   # S x A summed, over the loop times summed (set-up and output excluded).
-  awk -v np="${np}" -v wall="$(cat "${deck}.wall")" '
+  awk -v np="${np}" -v wall="$(cat "${deck}.wall")" -v load="$(cat "${deck}.load" 2>/dev/null || echo nan)" '
     /^Loop time of/ { t += $4; s += $9; ps += $9 * $12; a = $12 }
-    END { r = (t > 0 ? ps / t : 0); printf "%d,%.1f,%.1f,%d,%.4g,%.4g,%.4g,%d\n", np, wall, t, s, ps, r, r / np, a }' \
+    END { r = (t > 0 ? ps / t : 0); printf "%d,%.1f,%.1f,%d,%.4g,%.4g,%.4g,%d,%s\n", np, wall, t, s, ps, r, r / np, a, load }' \
     "${deck}/liggghts.log" >> "${out}/scaling.csv"
   "${bin}" measure-particles "${deck}/final.dump" --scene "${scene}" "${cal_sets[@]}" --json |
     jq -r --arg np "${np}" '[$np, .status, .particles, .pile_count,
@@ -138,10 +144,10 @@ for np in "${nps[@]}"; do
 done
 
 report() {
-  echo "Strong scaling (LIGGGHTS 3.8, field dump deck, ${mass} kg at ${rate} kg/s, size scale ${scale}):"
+  echo "Strong scaling (LIGGGHTS 3.8, field dump deck, ${mass} kg at ${rate} kg/s from ${height} m, size scale ${scale}; $(nproc) cores):"
   awk -F, 'NR == 1 { next } NR == 2 { base = $6 }
-    { printf "  %2d rank(s): %6.1f s wall, %6.1f s in loops, %7d steps, %5d grains: %.3g particle-steps/s, %.3g per rank, speed-up %.2f, efficiency %.0f%%\n",
-        $1, $2, $3, $4, $8, $6, $7, $6 / base, 100 * $6 / base / $1 }' "${out}/scaling.csv"
+    { printf "  %2d rank(s): %6.1f s wall, %6.1f s in loops, %7d steps, %5d grains: %.3g particle-steps/s, %.3g per rank, speed-up %.2f, efficiency %.0f%% (load %s at the start)\n",
+        $1, $2, $3, $4, $8, $6, $7, $6 / base, 100 * $6 / base / $1, $9 }' "${out}/scaling.csv"
   echo "The pile's free surface, measured the twin's way (reposetwin measure-particles):"
   awk -F, 'NR > 1 { gsub(/"/, ""); printf "  %2d rank(s): %s, %d of %d grains in the pile, H %.1f mm, D %.1f mm: atan(2H/D) %.2f deg, mean slice angle %.2f deg\n",
       $1, $2, $4, $3, $5, $6, $7, $8 }' "${out}/angle.csv"

@@ -88,6 +88,11 @@ inline constexpr double kWarnSizeScale = 3.0;
 inline constexpr double kAssumedCoordination = 6.0;
 /// Bulk solid fraction assumed for the pile's volume (a poured, settled heap) [-].
 inline constexpr double kAssumedSolidFraction = 0.6;
+/// A fall onto the pile faster than this is warned of: the lab's lifted funnel lets grains out
+/// slower, and a dump's impacts flatten its pile (docs/calibration.md, "To the field"). The
+/// lowest release the deck accepts, a grain above the pile's top with a release cylinder 4
+/// grains high, already falls faster for grains above 2.5 mm: for them the warning stands [m/s].
+inline constexpr double kWarnImpactSpeed = 0.5;
 
 /// The free dump of the field deck (`export --field dump`): grains released from a vertical
 /// cylinder above the domain's centre at a mass rate, forming a pile on a flat ground. Defaults
@@ -123,6 +128,8 @@ struct FieldScaling {
   double grains = 0;                // expected number of grains [-]
   double overlap_lab = 0, overlap = 0;  // mean overlap / radius at the pile's base (estimate) [-]
   double mu_r = 0;                  // the grains' rolling coefficient, epsd2 convention [-]
+  double impact_speed = 0;          // a grain's speed falling from the release's top onto the
+                                    // expected pile's top, sqrt(2 g (z_top - H)) [m/s]
   double release_radius = 0;        // the release cylinder's radius in use [m]
   double release_zone_height = 0;   // its height [m]
   long long insert_every = 0;       // steps between insertions [-]

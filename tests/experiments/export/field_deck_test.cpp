@@ -164,6 +164,13 @@ TEST(FieldDeck, GroundAndReleaseLieInsideTheDomainAboveThePile) {
   EXPECT_TRUE(x.angle_calibrated);
   EXPECT_DOUBLE_EQ(x.angle_deg, 31.5);
   EXPECT_GE(x.grains_high, kMinGrainsHigh);
+  // Grains fall from the cylinder's top onto the expected pile's top: the lift test saw no such
+  // impacts, and the deck says so.
+  EXPECT_NEAR(x.impact_speed, std::sqrt(2.0 * 9.81 * (c[4] - x.pile_height)), 1e-9);
+  EXPECT_TRUE(std::any_of(x.warnings.begin(), x.warnings.end(), [](const std::string& w) {
+    return has(w, "grains fall onto the pile at about");
+  }));
+  EXPECT_TRUE(has(d.scaling, "fall onto the pile")) << d.scaling;
   EXPECT_TRUE(has(d.input, "insert/rate/region seed"));
   EXPECT_TRUE(has(d.input, " mass 0.3 massrate 0.3 insert_every "));
 }
