@@ -39,7 +39,8 @@ void add_export_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "export", "Write a calibration's material (its folder) or a scene as a LIGGGHTS 3.8 input "
                 "deck: in.pile, container.stl and README.md (the calibrated mu_r and its "
-                "interval, what is carried, and mu_r in other conventions)");
+                "interval, what is carried, and mu_r in other conventions); with --field dump, "
+                "a field-scale free dump (in.dump) and what it scales");
   cmd->add_option("scene", a->scene,
                   "A calibration's folder (the --out of `reposetwin calibrate`: its scene, "
                   "sieve sheet and calibrated mu_r, nothing retyped), or a scene file")
