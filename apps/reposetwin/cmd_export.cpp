@@ -33,12 +33,15 @@ void add_export_command(CLI::App& app) {
     std::vector<std::string> sets;
     std::uint64_t seed = 1;
     bool force = false;
+    std::string field;
+    experiments::FieldDumpSettings dump;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
       "export", "Write a calibration's material (its folder) or a scene as a LIGGGHTS 3.8 input "
                 "deck: in.pile, container.stl and README.md (the calibrated mu_r and its "
-                "interval, what is carried, and mu_r in other conventions)");
+                "interval, what is carried, and mu_r in other conventions); with --field dump, "
+                "a field-scale free dump (in.dump) and what it scales");
   cmd->add_option("scene", a->scene,
                   "A calibration's folder (the --out of `reposetwin calibrate`: its scene, "
                   "sieve sheet and calibrated mu_r, nothing retyped), or a scene file")
@@ -53,7 +56,74 @@ void add_export_command(CLI::App& app) {
                   "Start from the twin's filled sample (a run's frames/filled.vtp) instead of "
                   "inserting one: the two engines then compare the pour from one state");
   cmd->add_flag("--force", a->force, "Replace a deck already in --out");
+  // The field deck (experiments/export/liggghts_deck.hpp): its geometry in SI units, defaults a
+  // small verification dump, each refused by field_scaling naming the option and the value.
+  auto* field =
+      cmd->add_option("--field", a->field,
+                      "Write a field-scale deck instead of the lab test: 'dump' (a free dump "
+                      "forming a large pile on a flat ground, in.dump). It carries the calibrated "
+                      "material as the lab deck does and prints what is scaled and how (grain "
+                      "size, dt, E, mu_r's convention), refusing a pile fewer than 10 grains "
+                      "high. Default --out for a calibration folder: FOLDER/liggghts_dump");
+  cmd->add_option("--dump-mass-kg", a->dump.mass, "Field dump: total mass released [kg]")
+      ->check(plain_number())
+      ->capture_default_str()
+      ->needs(field);
+  cmd->add_option("--dump-rate-kg-s", a->dump.rate, "Field dump: release rate [kg/s]")
+      ->check(plain_number())
+      ->capture_default_str()
+      ->needs(field);
+  cmd->add_option("--dump-height-m", a->dump.release_height,
+                  "Field dump: height of the release above the ground [m]")
+      ->check(plain_number())
+      ->capture_default_str()
+      ->needs(field);
+  cmd->add_option("--release-radius-m", a->dump.release_radius,
+                  "Field dump: radius of the release cylinder; 0: the smallest that takes the "
+                  "rate [m]")
+      ->check(plain_number())
+      ->capture_default_str()
+      ->needs(field);
+  cmd->add_option("--domain-width-m", a->dump.width, "Field dump: the ground along x [m]")
+      ->check(plain_number())
+      ->capture_default_str()
+      ->needs(field);
+  cmd->add_option("--domain-length-m", a->dump.length, "Field dump: the ground along y [m]")
+      ->check(plain_number())
+      ->capture_default_str()
+      ->needs(field);
+  cmd->add_option("--size-scale", a->dump.size_scale,
+                  "Field dump: coarse-graining factor S, every grain's diameter times S; dt "
+                  "grows as S, mu_r is kept (warned above 3) [-]")
+      ->check(plain_number())
+      ->capture_default_str()
+      ->needs(field);
+  cmd->add_option("--ranks", a->dump.ranks,
+                  "Field dump: MPI ranks the deck is split for (processors px py 1, run with "
+                  "exactly that many); 0: processors * * 1, any number")
+      ->check(integer_number())
+      ->capture_default_str()
+      ->needs(field);
+  cmd->footer(
+      "To the field: `reposetwin export CAL_FOLDER --field dump --ranks 2` writes "
+      "CAL_FOLDER/liggghts_dump/in.dump; run it with `mpirun -np 2 liggghts -in in.dump`. The "
+      "table it prints says what is scaled (grain size by --size-scale, dt with it, E and mu_r "
+      "kept) and what the scaling strains. Install LIGGGHTS with `apt-get install "
+      "--no-install-recommends liggghts`: its recommended paraview removes the VTK the twin "
+      "builds with. scripts/verify_field_deck.sh runs a reduced dump on 1 and 2 ranks.");
   cmd->callback([a]() {
+    if (!a->field.empty() && a->field != "dump")
+      throw experiments::InputError("--field " + a->field +
+                                        ": not a field deck this version writes; the one written "
+                                        "is 'dump' (a free dump forming a pile)",
+                                    "--field");
+    if (!a->field.empty() && !a->initial.empty())
+      throw experiments::InputError("--initial-state " + a->initial +
+                                        ": the field deck releases its own grains; a filled "
+                                        "sample is the lab test's (drop --initial-state or "
+                                        "--field)",
+                                    "--initial-state");
+    const bool field = !a->field.empty();
     std::error_code dir_ec;
     const bool from_calibration = fs::is_directory(a->scene, dir_ec);
     std::optional<experiments::CalibratedMaterial> material;
@@ -71,7 +141,8 @@ void add_export_command(CLI::App& app) {
       scene = doc.config_after_command_line();
       for (const std::string& key : material->keys)
         calibration.deck_values.emplace_back(key, doc.number(key).value_or(material->mu_r));
-      if (out_folder.empty()) out_folder = (fs::path(a->scene) / "liggghts").string();
+      if (out_folder.empty())
+        out_folder = (fs::path(a->scene) / (field ? "liggghts_dump" : "liggghts")).string();
       inputs = {calibration.file, material->scene};
       if (!material->sieve_sheet.empty()) inputs.push_back(material->sieve_sheet);
     } else {
@@ -88,6 +159,7 @@ void add_export_command(CLI::App& app) {
     experiments::LiggghtsDeckSettings s;
     s.seed = a->seed;
     if (from_calibration) s.calibration = &calibration;
+    if (field) s.field_dump = &a->dump;
     std::optional<experiments::SnapshotParticles> initial;
     if (!a->initial.empty()) {
       try {
@@ -120,14 +192,14 @@ void add_export_command(CLI::App& app) {
       throw experiments::InputError(a->initial + ": " + e.what());
     }
     const fs::path out(out_folder);
-    if (fs::exists(out / "in.pile") && !a->force)
-      throw experiments::InputError(out_folder +
-                                    ": holds a deck already (in.pile); --force replaces it");
+    if (fs::exists(out / deck.input_name) && !a->force)
+      throw experiments::InputError(out_folder + ": holds a deck already (" + deck.input_name +
+                                    "); --force replaces it");
     // --out may be a folder of the user's (`--out .` beside their own README.md): every file of
     // the deck is checked against the inputs and the folder before one is written.
     const std::vector<std::pair<std::string, const std::string*>> files = {
-        {"in.pile", &deck.input},
-        {"container.stl", &deck.funnel_stl},
+        {deck.input_name, &deck.input},
+        {"container.stl", deck.funnel_stl.empty() ? nullptr : &deck.funnel_stl},
         {"README.md", &deck.notes},
         {"initial.data", deck.initial_data.empty() ? nullptr : &deck.initial_data}};
     experiments::OutputPlan plan(a->force);
@@ -142,6 +214,20 @@ void add_export_command(CLI::App& app) {
       throw experiments::InputError(out_folder + ": cannot create the folder: " + ec.message());
     for (const auto& [name, text] : files)
       if (text) plan.write((out / name).string(), *text);
+    if (field) {
+      std::cout << "What the field deck scales and how:\n" << deck.scaling;
+      for (const std::string& w : deck.warnings) std::cout << "WARNING: " << w << "\n";
+      std::cout << "LIGGGHTS field deck (free dump) of " << scene.name;
+      if (material)
+        std::cout << " at the calibrated mu_r " << experiments::significant(material->mu_r, 3)
+                  << " (95% " << experiments::significant(material->mu_r_lo, 3) << " to "
+                  << experiments::significant(material->mu_r_hi, 3) << ")";
+      std::cout << " in " << out_folder << ": run `"
+                << (a->dump.ranks > 0 ? "mpirun -np " + std::to_string(a->dump.ranks)
+                                      : std::string("mpirun -np N"))
+                << " liggghts -in in.dump` there\n";
+      return;
+    }
     std::cout << "LIGGGHTS deck of " << scene.name;
     if (material)
       std::cout << " at the calibrated mu_r " << experiments::significant(material->mu_r, 3)
