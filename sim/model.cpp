@@ -1,5 +1,6 @@
 #include "sim/model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -45,7 +46,7 @@ double Model::youngs_modulus_used(int m) const {
                                                 : materials[m].youngs_modulus;
 }
 
-void Model::finalize(double rmin, double rmax) {
+void Model::finalize(double rmin, double rmax, double r_step) {
   const int n = static_cast<int>(materials.size());
   if (n == 0) throw std::invalid_argument("materials: at least one material is required");
   if (static_cast<int>(pairs.size()) != n * n) pairs.resize(n * n, PairParams{});
@@ -125,6 +126,9 @@ void Model::finalize(double rmin, double rmax) {
   if (!(rmax >= rmin)) bad("particle radius (largest)", rmax, "must not be below the smallest");
   r_min = rmin;
   r_max = rmax;
+  if (!(r_step >= 0.0 && std::isfinite(r_step)))
+    bad("time-step radius", r_step, "must be finite and not negative [m]");
+  step_radius = std::max(r_step, rmin);
   // The stiffest, lightest material in use (a particle's or a wall's) sets the Rayleigh time of
   // the smallest particle.
   std::vector<char> in_use(static_cast<std::size_t>(n), particle_materials.empty() ? 1 : 0);
@@ -159,7 +163,9 @@ void Model::finalize(double rmin, double rmax) {
           settings.rayleigh_fraction <= settings.max_rayleigh_fraction))
       bad("settings.rayleigh_fraction", settings.rayleigh_fraction,
           "must lie in (0, max_rayleigh_fraction]");
-    dt = settings.rayleigh_fraction * rayleigh_time;
+    // T_R is linear in the radius.
+    dt = std::min(settings.rayleigh_fraction * rayleigh_time * (step_radius / rmin),
+                  settings.max_rayleigh_fraction * rayleigh_time);
   }
   if (settings.skin < 0.0) bad("settings.skin", settings.skin, "must not be negative [m]");
 }

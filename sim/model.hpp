@@ -101,7 +101,8 @@ struct Model {
   // Derived by finalize():
   PairTable table;
   double dt = 0.0;               // the time step used [s]
-  double rayleigh_time = 0.0;    // of the smallest particle [s]
+  double rayleigh_time = 0.0;    // of the smallest particle (a clump's smallest sphere) [s]
+  double step_radius = 0.0;      // the radius whose Rayleigh time dt is a fraction of [m]
   double r_min = 0.0;            // smallest particle radius the model was finalised for [m]
   double r_max = 0.0;            // largest [m]
 
@@ -119,7 +120,11 @@ struct Model {
 
   /// Validates every input and derives the pair constants and the time step for particle radii
   /// in [r_min, r_max]. Throws std::invalid_argument naming the field and the value.
-  void finalize(double r_min, double r_max);
+  /// The step is rayleigh_fraction of the Rayleigh time at `r_step` (0: r_min), never above
+  /// max_rayleigh_fraction of the smallest particle's. A rigid clump's contacts move its whole
+  /// mass, so a scene of clumps passes the radius of its smallest grain's sphere of equal volume
+  /// (experiments' build_model): the step of its 1.06 mm spheres against the grain's.
+  void finalize(double r_min, double r_max, double r_step = 0.0);
 };
 
 /// Rayleigh wave time of a sphere, T_R = pi R sqrt(rho/G) / (0.1631 nu + 0.8766) [s].

@@ -598,6 +598,17 @@ std::pair<double, double> grain_radius_range(const SceneConfig& scene, double d_
   return {lo * d_min, hi * d_max};
 }
 
+double clump_step_ratio(const SceneConfig& scene) {
+  if (scene.shapes.empty()) return 1.0;
+  double sphere = std::numeric_limits<double>::infinity();
+  double step = std::numeric_limits<double>::infinity();
+  for (const GrainShape& g : scene.shapes) {
+    for (double r : g.unit.radii) sphere = std::min(sphere, r);
+    step = std::min(step, std::cbrt(3.0 * g.volume_per_cube() / (4.0 * std::numbers::pi)));
+  }
+  return std::max(1.0, step / sphere);
+}
+
 sim::Model build_model(const SceneConfig& scene, double r_min, double r_max) {
   sim::Model m;
   m.materials = scene.materials;
@@ -625,7 +636,7 @@ sim::Model build_model(const SceneConfig& scene, double r_min, double r_max) {
   // material in [materials] changes nothing).
   m.particle_materials = {material_index(scene, scene.sample_material, "sample.material")};
   try {
-    m.finalize(r_min, r_max);
+    m.finalize(r_min, r_max, r_min * clump_step_ratio(scene));
   } catch (const std::invalid_argument& e) {
     throw engine_error(scene.file, e.what());
   }

@@ -92,8 +92,15 @@ int material_index(const SceneConfig& scene, const std::string& name, const std:
 /// d / 2 for spheres, the components' radii scaled by d for shapes.
 std::pair<double, double> grain_radius_range(const SceneConfig& scene, double d_min, double d_max);
 
+/// The radius whose Rayleigh time a clump's step is a fraction of, over its smallest sphere's
+/// radius [-]: for the scene's smallest grain of each shape, the sphere of the grain's volume
+/// against the smallest sphere of any (1 for spheres). Both scale with the sieve size, so it
+/// carries a drawn sample's smallest sphere to its step radius.
+double clump_step_ratio(const SceneConfig& scene);
+
 /// The engine model of a scene for particle radii in [r_min, r_max] (walls: plate, container).
-/// Wall 0 is the plate, wall 1 the container.
+/// Wall 0 is the plate, wall 1 the container. A scene of clumps steps at its grains' scale:
+/// r_min x clump_step_ratio (sim::Model::finalize).
 sim::Model build_model(const SceneConfig& scene, double r_min, double r_max);
 
 }  // namespace reposetwin::experiments

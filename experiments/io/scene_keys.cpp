@@ -194,7 +194,8 @@ std::vector<SceneKey> numerics_keys() {
   const sim::Settings s;
   return {
       {"numerics.rayleigh_fraction", "number", n(s.rayleigh_fraction), "-",
-       "dt as a fraction of the smallest particle's Rayleigh time"},
+       "dt as a fraction of the smallest particle's Rayleigh time (clumps: of the sphere of the "
+       "smallest grain's volume, at most 0.5 of its smallest sphere's)"},
       {"numerics.time_step_s", "number", n(s.time_step), "s",
        "explicit dt; 0 = from rayleigh_fraction"},
       {"numerics.softened_youngs_modulus_pa", "number", n(s.softened_youngs_modulus), "Pa",
