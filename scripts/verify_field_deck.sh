@@ -26,6 +26,8 @@
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# shellcheck source=lib/need.sh
+source "${root}/scripts/lib/need.sh"
 cal=""
 np_list=1,2
 out=runs/verify_field_deck
@@ -56,21 +58,9 @@ done
 [[ "${np_list}" =~ ^[1-9][0-9]*(,[1-9][0-9]*)*$ ]] ||
   { echo "verify_field_deck.sh: --np-list must be a list like 1,2 (got '${np_list}')" >&2; exit 2; }
 
-missing=()
-command -v liggghts >/dev/null || missing+=(liggghts)
-command -v mpirun >/dev/null || missing+=(openmpi-bin)
-command -v jq >/dev/null || missing+=(jq)
-if [[ ${#missing[@]} -gt 0 ]]; then
-  echo "installing ${missing[*]} (Debian packages, --no-install-recommends) ..." >&2
-  sudo_cmd=(); [[ "$(id -u)" -ne 0 ]] && sudo_cmd=(sudo)
-  "${sudo_cmd[@]}" apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends \
-    "${missing[@]}" >&2
-fi
+need_packages liggghts=liggghts mpirun=openmpi-bin jq=jq
+need_binary "${root}" "${build}"
 bin="${build}/apps/reposetwin/reposetwin"
-if [[ ! -x "${bin}" ]]; then
-  cmake -S "${root}" -B "${build}" >/dev/null && cmake --build "${build}" -j2 --target reposetwin
-fi
 mkdir -p "${out}"
 out="$(cd "${out}" && pwd)"
 

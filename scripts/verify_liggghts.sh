@@ -20,6 +20,8 @@
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# shellcheck source=lib/need.sh
+source "${root}/scripts/lib/need.sh"
 scene="${root}/data/scenes/paper/table1_s4_dmax8p0_900g_reduced.toml"
 seeds=1,2,3
 np=2
@@ -55,20 +57,9 @@ for c in $(grep -oE '^\[contacts\.[A-Za-z0-9_]+-[A-Za-z0-9_]+\]' "${scene}" | tr
   sets+=(--set "${c}.rolling_damping=0")
 done
 
-missing=()
-command -v liggghts >/dev/null || missing+=(liggghts)
-command -v mpirun >/dev/null || missing+=(openmpi-bin)
-if [[ ${#missing[@]} -gt 0 ]]; then
-  echo "installing ${missing[*]} (Debian packages) ..." >&2
-  sudo_cmd=(); [[ "$(id -u)" -ne 0 ]] && sudo_cmd=(sudo)
-  "${sudo_cmd[@]}" apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends \
-    "${missing[@]}" >&2
-fi
+need_packages liggghts=liggghts mpirun=openmpi-bin
+need_binary "${root}" "${build}"
 bin="${build}/apps/reposetwin/reposetwin"
-if [[ ! -x "${bin}" ]]; then
-  cmake -S "${root}" -B "${build}" >/dev/null && cmake --build "${build}" -j2 --target reposetwin
-fi
 mpi=(mpirun -np "${np}")
 [[ "$(id -u)" -eq 0 ]] && mpi+=(--allow-run-as-root)
 # Ranks that yield while they wait: busy-polling ranks starve each other on shared cores.
